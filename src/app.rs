@@ -1,0 +1,298 @@
+//! The application layer behind the `hvi` commands: reading inputs, running, and the sinks
+//! that turn steps into files (VTK series, Γ₃ CSV, summary) or keep them in memory (tests).
+
+use crate::contact::active_set::{ContactOutcome, ContactState};
+use crate::fem::stress::cell_stresses;
+use crate::mesh::{self, Mesh};
+use crate::output::{self, CsvTable, Field, FieldValues, Frame, SeriesWriter};
+use crate::scene::{OutputField, Scene};
+use crate::solver::stats::timed;
+use crate::solver::{timeloop, FrameSink, Plan, RunStats, Simulation, SolveError, StepView};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+/// One step kept in memory by [`MemorySink`].
+#[derive(Clone, Debug)]
+pub struct StoredStep {
+    pub step: usize,
+    pub time: f64,
+    /// u_n over the free unknowns.
+    pub displacement: Vec<f64>,
+    pub memory_displacement: Option<Vec<f64>>,
+    pub contact: Option<ContactState>,
+    pub outcome: Option<ContactOutcome>,
+}
+
+/// Keeps every output step in memory (for tests and studies).
+#[derive(Default)]
+pub struct MemorySink {
+    pub steps: Vec<StoredStep>,
+}
+
+impl FrameSink for MemorySink {
+    fn write_frame(&mut self, _sim: &Simulation, view: &StepView) -> Result<(), SolveError> {
+        self.steps.push(StoredStep {
+            step: view.step,
+            time: view.time,
+            displacement: view.displacement.to_vec(),
+            memory_displacement: view.memory_displacement.map(|m| m.to_vec()),
+            contact: view.contact.cloned(),
+            outcome: view.outcome,
+        });
+        Ok(())
+    }
+}
+
+/// Writes the VTK series, `gamma3.csv`, and shows progress.
+pub struct FileSink {
+    series: SeriesWriter,
+    gamma3: Option<CsvTable>,
+    fields: Vec<OutputField>,
+    progress: Option<indicatif::ProgressBar>,
+    pub stress_seconds: f64,
+}
+
+impl FileSink {
+    /// Prepares the output directory (checked writable before any solving).
+    pub fn create(dir: &Path, sim: &Simulation, fields: &[OutputField], progress: bool) -> Result<Self, SolveError> {
+        let series = SeriesWriter::create(dir, "solution")?;
+        let gamma3 = match &sim.contact {
+            Some(_) if fields.contains(&OutputField::Contact) => Some(CsvTable::create(
+                &dir.join("gamma3.csv"),
+                &["time", "x", "y", "u_nu", "force", "pressure", "status"],
+            )?),
+            _ => None,
+        };
+        let progress = progress.then(|| {
+            let bar = indicatif::ProgressBar::new(sim.time.steps as u64 + 1);
+            bar.set_style(
+                indicatif::ProgressStyle::with_template("{spinner} step {pos}/{len} [{bar:30}] {elapsed_precise} eta {eta} {msg}")
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+                    .progress_chars("=> "),
+            );
+            bar
+        });
+        Ok(FileSink { series, gamma3, fields: fields.to_vec(), progress, stress_seconds: 0.0 })
+    }
+
+    fn wants(&self, f: OutputField) -> bool {
+        self.fields.contains(&f)
+    }
+
+    /// Clears the progress bar.
+    pub fn finish(&self) {
+        if let Some(bar) = &self.progress {
+            bar.finish_and_clear();
+        }
+    }
+}
+
+impl FrameSink for FileSink {
+    fn step_done(&mut self, _sim: &Simulation, view: &StepView) {
+        if let Some(bar) = &self.progress {
+            bar.set_position(view.step as u64 + 1);
+            if let Some(o) = view.outcome {
+                bar.set_message(format!("{} Newton it., {} on bound", o.iterations, o.active));
+            }
+        }
+    }
+
+    fn write_frame(&mut self, sim: &Simulation, view: &StepView) -> Result<(), SolveError> {
+        let mesh = &sim.mesh;
+        let nodal = sim.dofs.to_nodal(view.displacement);
+        let displacement: Vec<f64> = nodal.iter().flat_map(|u| [u[0], u[1], 0.0]).collect();
+        let mut point_fields = Vec::new();
+        let mut cell_fields = Vec::new();
+        if self.wants(OutputField::Displacement) {
+            point_fields.push(Field { name: "displacement", components: 3, values: FieldValues::F64(&displacement) });
+        }
+        let stresses = (self.wants(OutputField::Stress) || self.wants(OutputField::VonMises)).then(|| {
+            timed(&mut self.stress_seconds, || {
+                let memory = view.memory_displacement.map(|m| sim.dofs.to_nodal(m));
+                cell_stresses(&mesh.cells, &mesh.points, &sim.elasticity, &nodal, memory.as_deref())
+            })
+        });
+        if let Some(s) = &stresses {
+            if self.wants(OutputField::Stress) {
+                cell_fields.push(Field { name: "stress", components: 9, values: FieldValues::F64(&s.tensor) });
+            }
+            if self.wants(OutputField::VonMises) {
+                cell_fields.push(Field { name: "von_mises", components: 1, values: FieldValues::F64(&s.von_mises) });
+            }
+        }
+        let n_points = mesh.points.len();
+        let (mut u_nu, mut force, mut pressure, mut status) =
+            (vec![0.0; n_points], vec![0.0; n_points], vec![0.0; n_points], vec![-1i32; n_points]);
+        let mut rows = Vec::new();
+        if let (Some(c), Some(state)) = (&sim.contact, view.contact) {
+            let mut normal = vec![0.0; c.nodes.len()];
+            c.nodes.normal_displacements(view.displacement, &mut normal);
+            for (k, &p) in c.nodes.nodes.iter().enumerate() {
+                u_nu[p] = normal[k];
+                force[p] = state.force[k];
+                pressure[p] = state.force[k] / c.nodes.weights[k];
+                status[p] = state.status[k].code();
+                let x = mesh.points[p];
+                rows.push(vec![view.time, x[0], x[1], normal[k], force[p], pressure[p], status[p] as f64]);
+            }
+            if self.wants(OutputField::Contact) {
+                point_fields.push(Field { name: "u_nu", components: 1, values: FieldValues::F64(&u_nu) });
+                point_fields.push(Field { name: "contact_force", components: 1, values: FieldValues::F64(&force) });
+                point_fields.push(Field { name: "contact_pressure", components: 1, values: FieldValues::F64(&pressure) });
+                point_fields.push(Field { name: "contact_status", components: 1, values: FieldValues::I32(&status) });
+            }
+        }
+        let frame = Frame {
+            step: view.step,
+            time: view.time,
+            points: &mesh.points,
+            cells: &mesh.cells,
+            point_fields,
+            cell_fields,
+        };
+        self.series.write_frame(&frame)?;
+        if let Some(csv) = &mut self.gamma3 {
+            csv.append(&rows)?;
+        }
+        Ok(())
+    }
+}
+
+/// What `summary.json` holds.
+#[derive(Serialize)]
+pub struct Summary<'a> {
+    pub hvi_version: &'static str,
+    pub mesh: String,
+    pub scene: String,
+    pub output: String,
+    #[serde(flatten)]
+    pub stats: &'a RunStats,
+}
+
+/// Options of `hvi solve`.
+pub struct SolveOptions {
+    pub mesh: PathBuf,
+    pub scene: Option<PathBuf>,
+    pub out: PathBuf,
+    pub overrides: Vec<String>,
+    pub progress: bool,
+}
+
+/// Reads mesh and scene, runs, writes the series, `gamma3.csv`, `scene.toml` and `summary.json`.
+pub fn solve(opts: &SolveOptions, stop: Option<&AtomicBool>) -> Result<RunStats, SolveError> {
+    let scene = Scene::load(opts.scene.as_deref(), &opts.overrides)?;
+    let t0 = Instant::now();
+    let mesh = mesh::read_msh(&opts.mesh)?;
+    let mesh_seconds = t0.elapsed().as_secs_f64();
+    let sim = Simulation::new(&scene, mesh)?;
+    let mut sink = FileSink::create(&opts.out, &sim, &scene.output.fields, opts.progress)?;
+    output::write_atomic(&opts.out.join("scene.toml"), scene.to_toml_string().as_bytes())?;
+    let result = timeloop::run(&sim, &mut sink, stop);
+    sink.finish();
+    let mut stats = result?;
+    stats.phases.mesh = mesh_seconds;
+    stats.phases.stress = sink.stress_seconds;
+    stats.phases.total += mesh_seconds;
+    let summary = Summary {
+        hvi_version: env!("CARGO_PKG_VERSION"),
+        mesh: opts.mesh.display().to_string(),
+        scene: opts.scene.as_ref().map_or("<embedded default: examples/paper.toml>".into(), |p| p.display().to_string()),
+        output: opts.out.display().to_string(),
+        stats: &stats,
+    };
+    output::write_json_atomic(&opts.out.join("summary.json"), &summary)?;
+    Ok(stats)
+}
+
+/// Solves in memory (no files): for tests, studies and examples.
+pub fn solve_in_memory(scene: &Scene, mesh: Mesh) -> Result<(Simulation, RunStats, MemorySink), SolveError> {
+    let sim = Simulation::new(scene, mesh)?;
+    let mut sink = MemorySink::default();
+    let stats = timeloop::run(&sim, &mut sink, None)?;
+    Ok((sim, stats, sink))
+}
+
+/// The report of `hvi check`.
+pub fn check(mesh_path: &Path, scene_path: Option<&Path>, overrides: &[String]) -> Result<String, SolveError> {
+    use std::fmt::Write;
+    let scene = Scene::load(scene_path, overrides)?;
+    let mesh = mesh::read_msh(mesh_path)?;
+    let mut out = String::new();
+    let _ = writeln!(out, "mesh {}", mesh_path.display());
+    let tris = mesh.cells.iter().filter(|c| matches!(c, crate::mesh::Cell::Tri3(_))).count();
+    let _ = writeln!(out, "  {} nodes, {} cells ({} triangles, {} quadrilaterals)", mesh.points.len(), mesh.cells.len(), tris, mesh.cells.len() - tris);
+    let (hmin, hmax) = mesh.cell_size();
+    let _ = writeln!(out, "  cell size h: {hmin:.4e} … {hmax:.4e}");
+    let _ = writeln!(out, "  physical groups:");
+    for g in &mesh.groups {
+        let _ = writeln!(
+            out,
+            "    dim {} tag {:>3} {:<14} {} facets, {} cells",
+            g.dim,
+            g.tag,
+            g.name.as_deref().unwrap_or("(no name)"),
+            g.facets.len(),
+            g.cells.len()
+        );
+    }
+    let sim = Simulation::new(&scene, mesh)?;
+    let _ = writeln!(out, "scene {}", scene_path.map_or("<embedded default: examples/paper.toml>".to_string(), |p| p.display().to_string()));
+    let _ = writeln!(out, "  unknowns: {} (clamped nodes eliminated)", sim.dofs.n_free());
+    let _ = writeln!(out, "  time: T = {}, {} steps of k = {:.4e}", sim.time.final_time, sim.time.steps, sim.time.step());
+    let _ = writeln!(out, "plan:");
+    let _ = write!(out, "{}", Plan::new(&sim));
+    if let Some(c) = &sim.contact {
+        let _ = writeln!(out, "contact: {} nodes on {}", c.nodes.len(), scene.groups.contact);
+        if let Some(law) = &c.law {
+            let ratio = smallness_ratio(&sim, law)?;
+            let _ = writeln!(
+                out,
+                "  smallness condition (discrete, energy norm of A): α_j·c² = {:.3} ({})",
+                ratio,
+                if ratio < 1.0 { "holds: every step's energy is convex" } else { "FAILS: the step energy is non-convex; the globalised solver handles it, but uniqueness is not guaranteed" }
+            );
+        }
+    }
+    Ok(out)
+}
+
+/// α_j λ_max(D^{1/2} C K_A⁻¹ Cᵀ D^{1/2}) (see [`crate::contact::CondensedOperator::trace_constant`]).
+pub fn smallness_ratio(sim: &Simulation, law: &crate::contact::ContactLaw) -> Result<f64, SolveError> {
+    let c = sim.contact.as_ref().ok_or_else(|| SolveError::Setup("no contact".into()))?;
+    let [k_a] = crate::fem::assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.voigt()]);
+    let counters = crate::linalg::Counters::default();
+    let symbolic = crate::linalg::Factor::analyse(&k_a).map_err(|e| SolveError::Setup(e.to_string()))?;
+    let factor = crate::linalg::Factor::new(&symbolic, &k_a, &counters)
+        .map_err(|e| SolveError::Singular { mesh: sim.mesh.path.display().to_string(), detail: e.to_string() })?;
+    let op = crate::contact::CondensedOperator::new(&c.nodes, &factor, &counters).map_err(SolveError::Setup)?;
+    Ok(law.relaxed_monotonicity() * op.trace_constant(&c.nodes.weights))
+}
+
+/// The one-screen summary printed at the end of `hvi solve`.
+pub fn report(stats: &RunStats, out: &Path) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let p = &stats.phases;
+    let _ = writeln!(s, "hvi: {} steps of k = {:.4e} to T = {} on {} nodes / {} cells ({} unknowns, {} contact nodes)", stats.steps, stats.time_step, stats.final_time, stats.nodes, stats.cells, stats.unknowns, stats.contact_nodes);
+    let _ = writeln!(s, "  effects: {}", stats.effects.join(", "));
+    if !stats.newton_iterations.is_empty() {
+        let total: usize = stats.newton_iterations.iter().sum();
+        let max = stats.newton_iterations.iter().max().copied().unwrap_or(0);
+        let active = stats.contact.last().map_or(0, |o| o.active);
+        let _ = writeln!(s, "  contact: {total} Newton iterations in all (max {max} per step), {active} nodes on the bound at T, max residual {:.2e}", stats.max_contact_residual);
+    }
+    if let Some(h) = &stats.history_algorithm {
+        let _ = writeln!(s, "  memory: {h}, {:.1} MiB held", stats.history_bytes as f64 / 1048576.0);
+    }
+    let _ = writeln!(s, "  work: {} factorisation(s), {} sparse solves", stats.factorisations, stats.solves);
+    let _ = writeln!(
+        s,
+        "  time [s]: mesh {:.3}, assembly {:.3}, factorisation {:.3}, condensation {:.3}, steps {:.3} (history {:.3}, solves {:.3}, contact {:.3}), output {:.3}; total {:.3}",
+        p.mesh, p.assembly, p.factorisation, p.condensation,
+        p.loads + p.history + p.free_solve + p.contact + p.recover, p.history, p.free_solve + p.recover, p.contact, p.output, p.total
+    );
+    let _ = write!(s, "  wrote {} frames to {} (solution.pvd, gamma3.csv, summary.json)", stats.frames_written, out.display());
+    s
+}

@@ -1,0 +1,368 @@
+//! The contact problem of one time step on the m contact normals, solved by a globalised
+//! primal–dual active-set method (METHOD.md §4).
+//!
+//! With u_ν = r and the condensed stiffness Q = W⁻¹, one step is the bound-constrained
+//! minimisation (METHOD.md §3, condensed)
+//!
+//! ```text
+//!     minimise  E(r) = ½ (r − d)ᵀ Q (r − d) + Σ_p w_p j_ε(r_p)   subject to  r_p ≤ g_p,
+//! ```
+//!
+//! whose KKT conditions are the contact law: λ = Q(d − r) = ξ + η, ξ_p = w_p j_ε'(r_p),
+//! η ≥ 0, r ≤ g, η(r − g) = 0. Each iteration
+//!
+//! 1. computes the gradient G = Q(r − d) + w j_ε'(r) and the multiplier estimate η = −G;
+//! 2. takes the active set of the PDAS rule 𝒜 = {p : η_p + c_p(r_p − g_p) > 0}, c_p = Q_pp,
+//!    enlarged by the nodes within δ of the bound that are pushed into it (this keeps every
+//!    direction a descent direction, Bertsekas' projected Newton);
+//! 3. solves the Newton system on the inactive set ℐ with the Hessian Q_ℐℐ + diag(w j_ε''),
+//!    replacing j_ε'' by max(j_ε'', 0) when the non-monotone law makes it indefinite (the
+//!    convex part only: still a descent direction), and moves 𝒜 onto the bound;
+//! 4. backtracks along the projected path until the energy E decreases (Armijo).
+//!
+//! It stops when the complementarity residual is below tolerance, and after a capped number
+//! of iterations reports failure instead of looping.
+
+use super::condensed::CondensedOperator;
+use super::law::ContactLaw;
+use faer::linalg::solvers::Solve;
+use faer::Mat;
+
+/// Tolerance and iteration cap of the contact solve.
+#[derive(Clone, Copy, Debug)]
+pub struct ContactSettings {
+    /// Relative complementarity residual at which a step is converged.
+    pub tolerance: f64,
+    /// Newton iterations per step before giving up.
+    pub max_iterations: usize,
+}
+
+/// Where a contact node ends a step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NodeStatus {
+    /// u_ν ≤ 0: not pressing into the layer.
+    Separated,
+    /// 0 < u_ν < g: compressing the layer.
+    InLayer,
+    /// u_ν = g: on the rigid bound (active).
+    OnBound,
+}
+
+impl NodeStatus {
+    /// Integer code for output files.
+    pub fn code(self) -> i32 {
+        match self {
+            NodeStatus::Separated => 0,
+            NodeStatus::InLayer => 1,
+            NodeStatus::OnBound => 2,
+        }
+    }
+}
+
+/// The contact unknowns of one step, kept between steps as the warm start.
+#[derive(Clone, Debug)]
+pub struct ContactState {
+    /// r = u_ν at the contact nodes.
+    pub normal_displacement: Vec<f64>,
+    /// λ = ξ + η: total nodal contact force (positive pushes the body back).
+    pub force: Vec<f64>,
+    /// ξ_p = w_p j_ε'(r_p): the compliance of the layer.
+    pub compliance_force: Vec<f64>,
+    /// η_p ≥ 0: the reaction of the rigid bound (zero off the bound).
+    pub bound_force: Vec<f64>,
+    /// Status of each node.
+    pub status: Vec<NodeStatus>,
+}
+
+impl ContactState {
+    /// An initial state with no contact.
+    pub fn new(m: usize) -> Self {
+        ContactState {
+            normal_displacement: vec![0.0; m],
+            force: vec![0.0; m],
+            compliance_force: vec![0.0; m],
+            bound_force: vec![0.0; m],
+            status: vec![NodeStatus::Separated; m],
+        }
+    }
+}
+
+/// What one contact solve did.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct ContactOutcome {
+    pub iterations: usize,
+    /// Final complementarity residual relative to the force scale.
+    pub residual: f64,
+    /// Line-search step halvings over the solve.
+    pub line_search_cuts: usize,
+    /// Iterations whose Hessian was indefinite and was convexified.
+    pub convexified: usize,
+    /// Nodes on the bound at the end.
+    pub active: usize,
+}
+
+/// Why a contact solve stopped without converging.
+#[derive(Clone, Debug)]
+pub struct ContactFailure {
+    pub outcome: ContactOutcome,
+    pub reason: String,
+}
+
+/// The contact problem data of a run: condensed operator, nodal weights, law and bound.
+pub struct ActiveSetSolver<'a> {
+    pub operator: &'a CondensedOperator,
+    pub weights: &'a [f64],
+    pub law: Option<&'a ContactLaw>,
+    /// g_p per node, or `None` for no bound.
+    pub bound: Option<&'a [f64]>,
+    pub settings: ContactSettings,
+}
+
+const ARMIJO: f64 = 1e-4;
+const MIN_STEP: f64 = 1e-12;
+
+impl ActiveSetSolver<'_> {
+    fn m(&self) -> usize {
+        self.operator.m
+    }
+
+    fn g(&self, p: usize) -> f64 {
+        self.bound.map_or(f64::INFINITY, |g| g[p])
+    }
+
+    fn law_derivative(&self, r: f64) -> f64 {
+        self.law.map_or(0.0, |l| l.derivative(r))
+    }
+
+    /// Q(r − d) and the gradient G of E at r.
+    fn gradient(&self, r: &[f64], d: &[f64], qrd: &mut [f64], grad: &mut [f64]) {
+        let diff: Vec<f64> = r.iter().zip(d).map(|(a, b)| a - b).collect();
+        self.operator.apply_q(&diff, qrd);
+        for p in 0..self.m() {
+            grad[p] = qrd[p] + self.weights[p] * self.law_derivative(r[p]);
+        }
+    }
+
+    /// max_p |min(c_p(g_p − r_p), −G_p)| (|G_p| without a bound), in force units.
+    fn complementarity_residual(&self, r: &[f64], grad: &[f64]) -> f64 {
+        (0..self.m())
+            .map(|p| {
+                let g = self.g(p);
+                if g.is_finite() {
+                    (self.c(p) * (g - r[p])).min(-grad[p]).abs()
+                } else {
+                    grad[p].abs()
+                }
+            })
+            .fold(0.0, f64::max)
+    }
+
+    fn c(&self, p: usize) -> f64 {
+        self.operator.q[p * self.m() + p]
+    }
+
+    /// E(r + Δ) − E(r), formed from differences to avoid cancellation:
+    /// GᵀΔ + ½ΔᵀQΔ + Σ_p w_p [j(r_p + Δ_p) − j(r_p) − j'(r_p)Δ_p], the bracket from its
+    /// Taylor expansion ½ j''(r_p) Δ_p² when Δ_p is tiny (the difference of j values would be
+    /// below their rounding near convergence, and Armijo could not see the decrease).
+    fn energy_change(&self, r: &[f64], delta: &[f64], grad: &[f64]) -> f64 {
+        let m = self.m();
+        let mut qdelta = vec![0.0; m];
+        self.operator.apply_q(delta, &mut qdelta);
+        let mut change = 0.0;
+        for p in 0..m {
+            change += delta[p] * (grad[p] + 0.5 * qdelta[p]);
+            if let Some(law) = self.law {
+                let (rp, dp) = (r[p], delta[p]);
+                let rest = if dp.abs() <= 1e-4 * rp.abs().max(law.epsilon) {
+                    0.5 * law.second_derivative(rp) * dp * dp
+                } else {
+                    law.potential(rp + dp) - law.potential(rp) - law.derivative(rp) * dp
+                };
+                change += self.weights[p] * rest;
+            }
+        }
+        change
+    }
+
+    /// The complementarity residual at r + Δ.
+    fn trial_residual(&self, r: &[f64], delta: &[f64], d: &[f64]) -> f64 {
+        let m = self.m();
+        let moved: Vec<f64> = (0..m).map(|p| r[p] + delta[p]).collect();
+        let (mut qrd, mut grad) = (vec![0.0; m], vec![0.0; m]);
+        self.gradient(&moved, d, &mut qrd, &mut grad);
+        self.complementarity_residual(&moved, &grad)
+    }
+
+    /// The force scale of the step: max(‖Q d‖∞, max_p w_p S sup μ).
+    fn force_scale(&self, d: &[f64]) -> f64 {
+        let mut qd = vec![0.0; self.m()];
+        self.operator.apply_q(d, &mut qd);
+        let load = qd.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        let law = self.law.map_or(0.0, |l| l.force_scale()) * self.weights.iter().fold(0.0f64, |a, b| a.max(*b));
+        load.max(law).max(f64::MIN_POSITIVE)
+    }
+
+    /// Solves the step for free normal displacements `d` = C K⁻¹ F̃, warm-started from `state`.
+    pub fn solve(&self, d: &[f64], state: &mut ContactState) -> Result<ContactOutcome, ContactFailure> {
+        let m = self.m();
+        let r = &mut state.normal_displacement;
+        for p in 0..m {
+            r[p] = r[p].min(self.g(p));
+        }
+        let scale = self.force_scale(d);
+        let tol = self.settings.tolerance * scale;
+        let (mut qrd, mut grad) = (vec![0.0; m], vec![0.0; m]);
+        let mut outcome = ContactOutcome::default();
+        let mut direction = vec![0.0; m];
+        let mut trial = vec![0.0; m];
+        loop {
+            // 1. gradient and residual
+            self.gradient(r, d, &mut qrd, &mut grad);
+            let residual = self.complementarity_residual(r, &grad);
+            outcome.residual = residual / scale;
+            if std::env::var_os("HVI_TRACE_CONTACT").is_some() {
+                eprintln!("  contact it {} residual {:.3e} cuts {}", outcome.iterations, residual / scale, outcome.line_search_cuts);
+                for p in 0..m {
+                    let g = self.g(p);
+                    let phi = if g.is_finite() { (self.c(p) * (g - r[p])).min(-grad[p]).abs() } else { grad[p].abs() };
+                    if phi > 0.5 * residual && residual > tol {
+                        eprintln!("    node {p}: r {:.6e} g-r {:.3e} G {:.3e} j'' {:.3e} c {:.3e}", r[p], g - r[p], grad[p], self.law.map_or(0.0, |l| l.second_derivative(r[p])), self.c(p));
+                    }
+                }
+            }
+            if residual <= tol {
+                break;
+            }
+            if outcome.iterations == self.settings.max_iterations {
+                return Err(ContactFailure {
+                    outcome,
+                    reason: format!("no convergence in {} iterations", self.settings.max_iterations),
+                });
+            }
+            outcome.iterations += 1;
+
+            // 2. active set: the PDAS rule, plus nodes within δ of the bound pushed into it
+            let projected_step = (0..m)
+                .map(|p| (r[p] - (r[p] - grad[p] / self.c(p)).min(self.g(p))).abs())
+                .fold(0.0, f64::max);
+            let delta = projected_step.min(1e-3 * self.bound.map_or(1.0, |g| g.iter().fold(0.0f64, |a, b| a.max(*b)).max(1e-3)));
+            let active: Vec<bool> = (0..m)
+                .map(|p| {
+                    let g = self.g(p);
+                    g.is_finite() && (r[p] - grad[p] / self.c(p) >= g || (g - r[p] <= delta && grad[p] < 0.0))
+                })
+                .collect();
+            let free: Vec<usize> = (0..m).filter(|&p| !active[p]).collect();
+
+            // 3. Newton direction on the inactive set, diagonal scaling on the active set
+            let curvature: Vec<f64> = free.iter().map(|&p| self.weights[p] * self.law.map_or(0.0, |l| l.second_derivative(r[p]))).collect();
+            let free_dir = self.newton_direction(&free, &curvature, &grad, &mut outcome);
+            let mut predicted_slope = 0.0;
+            for (k, &p) in free.iter().enumerate() {
+                direction[p] = free_dir[k];
+                predicted_slope += grad[p] * free_dir[k];
+            }
+            for p in (0..m).filter(|&p| active[p]) {
+                direction[p] = grad[p] / self.c(p);
+            }
+
+            // 4. projected Armijo backtracking on the energy
+            let mut alpha = 1.0;
+            loop {
+                let mut decrease_bound = alpha * predicted_slope;
+                for p in 0..m {
+                    let moved = (r[p] - alpha * direction[p]).min(self.g(p));
+                    trial[p] = moved - r[p];
+                    if active[p] {
+                        decrease_bound -= grad[p] * trial[p];
+                    }
+                }
+                let change = self.energy_change(r, &trial, &grad);
+                if change <= -ARMIJO * decrease_bound || (change <= 0.0 && decrease_bound <= 1e-300) {
+                    break;
+                }
+                // Local phase: a full step that halves the complementarity residual is kept
+                // even where the energy change is below its rounding.
+                if alpha == 1.0 && self.trial_residual(r, &trial, d) <= 0.5 * residual {
+                    break;
+                }
+                alpha *= 0.5;
+                outcome.line_search_cuts += 1;
+                if alpha < MIN_STEP {
+                    // At the round-off floor the energy cannot decrease measurably: accept a
+                    // residual within 100× the tolerance, otherwise report the stall.
+                    if residual <= 100.0 * tol {
+                        self.finish(d, state, &qrd, &mut outcome);
+                        return Ok(outcome);
+                    }
+                    return Err(ContactFailure {
+                        outcome,
+                        reason: "the line search could not decrease the energy (the regularised law may be too steep: increase `contact.law.regularisation` or reduce the time step)".into(),
+                    });
+                }
+            }
+            for p in 0..m {
+                r[p] += trial[p];
+                if r[p] > self.g(p) {
+                    r[p] = self.g(p);
+                }
+            }
+        }
+        self.finish(d, state, &qrd, &mut outcome);
+        Ok(outcome)
+    }
+
+    /// Solves (Q_ℐℐ + diag(curvature)) x = G_ℐ, convexifying when indefinite.
+    fn newton_direction(&self, free: &[usize], curvature: &[f64], grad: &[f64], outcome: &mut ContactOutcome) -> Vec<f64> {
+        let nf = free.len();
+        if nf == 0 {
+            return Vec::new();
+        }
+        let m = self.m();
+        let rhs = Mat::<f64>::from_fn(nf, 1, |i, _| grad[free[i]]);
+        let build = |diag: &dyn Fn(usize) -> f64| Mat::<f64>::from_fn(nf, nf, |i, j| self.operator.q[free[i] * m + free[j]] + if i == j { diag(i) } else { 0.0 });
+        if let Ok(llt) = build(&|i| curvature[i]).llt(faer::Side::Lower) {
+            let x = llt.solve(&rhs);
+            return (0..nf).map(|i| x[(i, 0)]).collect();
+        }
+        outcome.convexified += 1;
+        let mut shift = 0.0;
+        loop {
+            let h = build(&|i| curvature[i].max(0.0) + shift);
+            if let Ok(llt) = h.llt(faer::Side::Lower) {
+                let x = llt.solve(&rhs);
+                return (0..nf).map(|i| x[(i, 0)]).collect();
+            }
+            shift = if shift == 0.0 { 1e-12 * self.c(free[0]) } else { shift * 10.0 };
+        }
+    }
+
+    /// Forces and statuses at the converged r: λ = Q(d − r), ξ = w j_ε'(r), η = λ − ξ on the
+    /// bound and 0 elsewhere.
+    fn finish(&self, _d: &[f64], state: &mut ContactState, qrd: &[f64], outcome: &mut ContactOutcome) {
+        let m = self.m();
+        let mut qrd_final = vec![0.0; m];
+        let diff: Vec<f64> = state.normal_displacement.iter().zip(_d).map(|(a, b)| a - b).collect();
+        self.operator.apply_q(&diff, &mut qrd_final);
+        let _ = qrd;
+        outcome.active = 0;
+        for p in 0..m {
+            let r = state.normal_displacement[p];
+            let lambda = -qrd_final[p];
+            let xi = self.weights[p] * self.law_derivative(r);
+            let on_bound = r >= self.g(p);
+            state.force[p] = lambda;
+            state.compliance_force[p] = xi;
+            state.bound_force[p] = if on_bound { lambda - xi } else { 0.0 };
+            state.status[p] = if on_bound {
+                outcome.active += 1;
+                NodeStatus::OnBound
+            } else if r > 0.0 {
+                NodeStatus::InLayer
+            } else {
+                NodeStatus::Separated
+            };
+        }
+    }
+}

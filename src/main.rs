@@ -1,0 +1,77 @@
+//! `hvi`: the command line. A thin clap layer over the library (`hvi::app`).
+
+use clap::{Parser, Subcommand};
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "hvi", version, about = "Quasistatic contact of viscoelastic bodies with long memory (history-dependent hemivariational inequalities)")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Solve a scene on a gmsh mesh and write a ParaView time series.
+    Solve {
+        /// The mesh (.msh, MSH 4.1 ASCII/binary or 2.2 ASCII) with physical groups.
+        mesh: PathBuf,
+        /// Scene file (TOML); default: the paper's example (examples/paper.toml, embedded).
+        #[arg(long)]
+        scene: Option<PathBuf>,
+        /// Output directory.
+        #[arg(long, default_value = "hvi-out")]
+        out: PathBuf,
+        /// Override a scene key, e.g. --set time.steps=64 (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        overrides: Vec<String>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Validate a mesh and a scene and print what would be computed.
+    Check {
+        mesh: PathBuf,
+        #[arg(long)]
+        scene: Option<PathBuf>,
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        overrides: Vec<String>,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Solve { mesh, scene, out, overrides, quiet } => {
+            let opts = hvi::app::SolveOptions {
+                mesh,
+                scene,
+                out: out.clone(),
+                overrides,
+                progress: !quiet && std::io::stderr().is_terminal(),
+            };
+            match hvi::app::solve(&opts, None) {
+                Ok(stats) => {
+                    println!("{}", hvi::app::report(&stats, &out));
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
+        Command::Check { mesh, scene, overrides } => match hvi::app::check(&mesh, scene.as_deref(), &overrides) {
+            Ok(report) => {
+                print!("{report}");
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        },
+    }
+}

@@ -1,0 +1,7 @@
+//! Constitutive data: the elasticity tensor A and the relaxation kernel B(s) = b(s)·B₀.
+
+pub mod elasticity;
+pub mod kernel;
+
+pub use elasticity::{Elasticity, PlaneModel, VoigtMatrix, IDENTITY_TENSOR};
+pub use kernel::RelaxationKernel;

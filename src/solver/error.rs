@@ -1,0 +1,28 @@
+//! Errors of setting up and running a simulation.
+
+use crate::mesh::MeshError;
+use crate::output::OutputError;
+use crate::scene::SceneError;
+
+/// What can stop a run, each with what to do about it.
+#[derive(Debug, thiserror::Error)]
+pub enum SolveError {
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    #[error("{mesh}: the clamped group {group} has no nodes, so the body can move freely and the problem is singular; tag the clamped boundary (Γ₁) in the mesh or set `groups.clamped` in the scene")]
+    NoClampedNodes { mesh: String, group: String },
+    #[error("{mesh}: {detail}")]
+    Singular { mesh: String, detail: String },
+    #[error("contact solve failed at step {step} (t = {time}): {reason}; residual {residual:.3e} after {iterations} iterations (tolerance {tolerance:.1e}). Try: a smaller time step (`--set time.steps=...`), a larger `contact.law.regularisation`, or more `solver.max_iterations`")]
+    ContactFailed { step: usize, time: f64, iterations: usize, residual: f64, tolerance: f64, reason: String },
+    #[error("step {step} (t = {time}) produced a non-finite displacement; check the load expressions and material data of the scene")]
+    NonFinite { step: usize, time: f64 },
+    #[error("run interrupted after step {last_written}: frames up to it and the .pvd are valid")]
+    Interrupted { last_written: usize },
+    #[error("{0}")]
+    Setup(String),
+}

@@ -1,0 +1,152 @@
+//! The discrete problem of a scene on a mesh, holding only the effects the scene names:
+//! no `[memory]` → no kernel, no `[contact]` → no contact nodes, no load → no load terms.
+
+use super::error::SolveError;
+use crate::contact::{ComplianceProfile, ContactLaw, ContactNodes, ContactSettings, Symmetry};
+use crate::fem::loads::Loads;
+use crate::fem::DofMap;
+use crate::material::{Elasticity, PlaneModel, RelaxationKernel};
+use crate::mesh::Mesh;
+use crate::scene::{self, Expr, Scene};
+
+/// Uniform time steps t_n = n k, k = T / N (METHOD.md §2).
+#[derive(Clone, Copy, Debug)]
+pub struct TimeGrid {
+    pub final_time: f64,
+    pub steps: usize,
+}
+
+impl TimeGrid {
+    /// k = T / N.
+    pub fn step(&self) -> f64 {
+        self.final_time / self.steps as f64
+    }
+    /// t_n (exactly T at n = N).
+    pub fn time(&self, n: usize) -> f64 {
+        if n == self.steps {
+            self.final_time
+        } else {
+            n as f64 * self.step()
+        }
+    }
+}
+
+/// Contact on Γ₃: nodes, the compliance law and/or the bound, and the solver settings.
+#[derive(Clone, Debug)]
+pub struct ContactSetup {
+    pub nodes: ContactNodes,
+    pub law: Option<ContactLaw>,
+    /// g_p per contact node.
+    pub bound: Option<Vec<f64>>,
+    pub settings: ContactSettings,
+}
+
+/// Everything a run needs, built once from scene + mesh.
+pub struct Simulation {
+    pub mesh: Mesh,
+    pub dofs: DofMap,
+    pub elasticity: Elasticity,
+    pub kernel: Option<RelaxationKernel>,
+    pub loads: Loads,
+    pub contact: Option<ContactSetup>,
+    pub time: TimeGrid,
+    pub output_every: usize,
+    pub threads: usize,
+}
+
+fn exprs(value: &[String; 2], origin: &str, key: &str) -> Result<[Expr; 2], SolveError> {
+    let parse = |i: usize| {
+        Expr::parse(&value[i], &["x", "y", "t"])
+            .map_err(|e| SolveError::Setup(format!("{origin}: {key}[{i}] = \"{}\": {e}", value[i])))
+    };
+    Ok([parse(0)?, parse(1)?])
+}
+
+impl Simulation {
+    /// Builds the discrete problem of `scene` on `mesh`.
+    pub fn new(scene: &Scene, mesh: Mesh) -> Result<Self, SolveError> {
+        let clamped = mesh.group_nodes(&scene.groups.clamped)?;
+        if clamped.is_empty() {
+            return Err(SolveError::NoClampedNodes {
+                mesh: mesh.path.display().to_string(),
+                group: scene.groups.clamped.to_string(),
+            });
+        }
+        let dofs = DofMap::new(mesh.points.len(), &clamped);
+        let elasticity = Elasticity {
+            youngs_modulus: scene.material.youngs_modulus,
+            poisson_ratio: scene.material.poisson_ratio,
+            plane: match scene.material.plane {
+                scene::Plane::Stress => PlaneModel::Stress,
+                scene::Plane::Strain => PlaneModel::Strain,
+            },
+        };
+        let kernel = match &scene.memory {
+            None => None,
+            Some(scene::MemoryKernelSpec::Polynomial { coefficients }) => {
+                Some(RelaxationKernel::Polynomial { coefficients: coefficients.clone() })
+            }
+            Some(scene::MemoryKernelSpec::Exponential { terms }) => Some(RelaxationKernel::Exponentials {
+                terms: terms.iter().map(|t| (t.coefficient, t.relaxation_time)).collect(),
+            }),
+            Some(scene::MemoryKernelSpec::Expression { expression }) => Some(RelaxationKernel::General {
+                expression: Expr::parse(expression, &["s"])
+                    .map_err(|e| SolveError::Setup(format!("memory.expression = \"{expression}\": {e}")))?,
+            }),
+        };
+        let origin = mesh.path.display().to_string();
+        let mut loads = Loads::new();
+        for (i, t) in scene.traction.iter().enumerate() {
+            let part = mesh.boundary(&t.group)?;
+            loads.add_traction(&part, &mesh.points, exprs(&t.value, &origin, &format!("traction[{i}].value"))?);
+        }
+        if let Some(f) = &scene.body_force {
+            loads.add_body_force(&mesh.cells, &mesh.points, exprs(&f.value, &origin, "body_force.value")?);
+        }
+        let contact = match &scene.contact {
+            None => None,
+            Some(spec) if spec.bound.is_none() && spec.law.is_none() => None,
+            Some(spec) => {
+                let part = mesh.boundary(&scene.groups.contact)?;
+                let nodes = ContactNodes::new(&part, &dofs);
+                let law = spec.law.as_ref().map(|l| {
+                    let (scale, profile) = match l.kind {
+                        scene::LawKind::Paper { scale, a, b, alpha } => (scale, ComplianceProfile::Paper { a, b, alpha }),
+                    };
+                    ContactLaw {
+                        scale,
+                        profile,
+                        symmetry: if l.one_sided { Symmetry::OneSided } else { Symmetry::Odd },
+                        epsilon: l.regularisation,
+                    }
+                });
+                let bound = spec.bound.map(|g| vec![g; nodes.len()]);
+                Some(ContactSetup {
+                    nodes,
+                    law,
+                    bound,
+                    settings: ContactSettings {
+                        tolerance: scene.solver.tolerance,
+                        max_iterations: scene.solver.max_iterations,
+                    },
+                })
+            }
+        };
+        Ok(Simulation {
+            mesh,
+            dofs,
+            elasticity,
+            kernel,
+            loads,
+            contact,
+            time: TimeGrid { final_time: scene.time.final_time, steps: scene.time.steps },
+            output_every: scene.output.every,
+            threads: 1,
+        })
+    }
+
+    /// True if step n is written (every `output_every`-th step and always the last).
+    pub fn is_output_step(&self, n: usize) -> bool {
+        n % self.output_every == 0 || n == self.time.steps
+    }
+}

@@ -1,0 +1,61 @@
+//! Run statistics: sizes, per-phase wall time, counters and per-step contact iterations,
+//! written to `summary.json` (ARCHITECTURE.md: timing per phase is collected in one place).
+
+use crate::contact::active_set::ContactOutcome;
+use serde::Serialize;
+use std::time::{Duration, Instant};
+
+/// Wall time per phase, in seconds.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct PhaseTimes {
+    pub mesh: f64,
+    pub assembly: f64,
+    pub factorisation: f64,
+    pub condensation: f64,
+    pub loads: f64,
+    pub history: f64,
+    pub free_solve: f64,
+    pub contact: f64,
+    pub recover: f64,
+    pub stress: f64,
+    pub output: f64,
+    pub total: f64,
+}
+
+/// Adds the elapsed time of a closure to a phase.
+pub fn timed<T>(slot: &mut f64, f: impl FnOnce() -> T) -> T {
+    let start = Instant::now();
+    let out = f();
+    *slot += start.elapsed().as_secs_f64();
+    out
+}
+
+/// Seconds of a duration.
+pub fn secs(d: Duration) -> f64 {
+    d.as_secs_f64()
+}
+
+/// Everything `summary.json` reports about a run.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct RunStats {
+    pub nodes: usize,
+    pub cells: usize,
+    pub unknowns: usize,
+    pub matrix_nonzeros: usize,
+    pub contact_nodes: usize,
+    pub steps: usize,
+    pub time_step: f64,
+    pub final_time: f64,
+    pub effects: Vec<String>,
+    pub history_algorithm: Option<String>,
+    pub history_bytes: usize,
+    pub factorisations: usize,
+    pub solves: usize,
+    pub contact_solves: usize,
+    pub frames_written: usize,
+    pub newton_iterations: Vec<usize>,
+    pub contact: Vec<ContactOutcome>,
+    pub max_contact_residual: f64,
+    pub smallness: Option<f64>,
+    pub phases: PhaseTimes,
+}
