@@ -128,6 +128,7 @@ fn contact_solve(
 /// Runs the whole time series, handing every step to `sink`. `stop` is polled once per step.
 pub fn run(sim: &Simulation, sink: &mut dyn FrameSink, stop: Option<&AtomicBool>) -> Result<RunStats, SolveError> {
     let started = Instant::now();
+    crate::linalg::set_parallelism(sim.threads);
     let counters = Counters::default();
     let mut stats = RunStats {
         nodes: sim.mesh.points.len(),

@@ -1,0 +1,94 @@
+//! End to end: the `hvi` binary on a shipped mesh writes a readable series, the Γ₃ table and
+//! the summary; `hvi check` reports the plan; bad input gives a clear error and exit code ≠ 0.
+
+use std::path::Path;
+use std::process::Command;
+
+fn hvi() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_hvi"))
+}
+
+fn mesh(name: &str) -> String {
+    format!("{}/meshes/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+#[test]
+fn solve_writes_a_readable_series() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let status = hvi()
+        .args(["solve", &mesh("rect_q1_h8.msh"), "--out", out.to_str().unwrap(), "--set", "time.steps=4", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(status.status.success(), "{}", String::from_utf8_lossy(&status.stderr));
+    let stdout = String::from_utf8_lossy(&status.stdout);
+    assert!(stdout.contains("wrote 5 frames"), "{stdout}");
+
+    // the .pvd lists five frames with their real times
+    let pvd = std::fs::read_to_string(out.join("solution.pvd")).unwrap();
+    for t in ["0", "0.25", "0.5", "0.75", "1"] {
+        assert!(pvd.contains(&format!("timestep=\"{t}\"")), "{pvd}");
+    }
+    // the last frame reads back with every field
+    let vtu = hvi::output::read_vtu_arrays(&out.join("solution_00004.vtu")).unwrap();
+    let n = vtu.points.len();
+    assert_eq!(vtu.point_data["displacement"].0, 3);
+    assert_eq!(vtu.point_data["displacement"].1.len(), 3 * n);
+    for name in ["u_nu", "contact_force", "contact_pressure", "contact_status"] {
+        assert_eq!(vtu.point_data[name].1.len(), n, "{name}");
+    }
+    assert_eq!(vtu.cell_data["stress"].0, 9);
+    assert_eq!(vtu.cell_data["von_mises"].1.len(), vtu.connectivity.len());
+    // u_ν ≤ g = 0.2 on Γ₃, and some node sits on the bound at T
+    let status = &vtu.point_data["contact_status"].1;
+    assert!(status.iter().any(|s| *s == 2.0));
+    assert!(vtu.point_data["u_nu"].1.iter().all(|u| *u <= 0.2 + 1e-12));
+
+    // gamma3.csv: header and one row per Γ₃ node per frame
+    let csv = std::fs::read_to_string(out.join("gamma3.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert!(lines.next().unwrap().starts_with("time,x,y,u_nu,force"));
+    let gamma3_nodes = status.iter().filter(|s| **s >= 0.0).count();
+    assert_eq!(lines.count(), 5 * gamma3_nodes);
+
+    // summary.json: sizes, iterations per step, phases
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["steps"], 4);
+    assert_eq!(summary["newton_iterations"].as_array().unwrap().len(), 5);
+    assert!(summary["phases"]["factorisation"].as_f64().unwrap() >= 0.0);
+    assert_eq!(summary["factorisations"], 1, "the paper's step 0 is unloaded: only K is factorised");
+    assert!(Path::new(&out.join("scene.toml")).exists());
+}
+
+#[test]
+fn check_reports_groups_plan_and_smallness() {
+    let out = hvi().args(["check", &mesh("rect_q1_h8.msh")]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    for want in ["Gamma1", "Gamma3", "unknowns", "memory", "contact", "smallness"] {
+        assert!(text.contains(want), "missing {want} in\n{text}");
+    }
+}
+
+#[test]
+fn bad_input_fails_with_a_message_and_nonzero_exit() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = hvi().args(["solve", "no/such/mesh.msh", "--out", dir.path().to_str().unwrap()]).output().unwrap();
+    assert!(!missing.status.success());
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("no/such/mesh.msh"));
+
+    let bad_key = hvi()
+        .args(["solve", &mesh("rect_q1_h8.msh"), "--out", dir.path().to_str().unwrap(), "--set", "material.youngs_modulus=-1"])
+        .output()
+        .unwrap();
+    assert!(!bad_key.status.success());
+    assert!(String::from_utf8_lossy(&bad_key.stderr).contains("youngs_modulus"));
+
+    let bad_group = hvi()
+        .args(["solve", &mesh("rect_q1_h8.msh"), "--out", dir.path().to_str().unwrap(), "--set", "groups.contact=Bottom"])
+        .output()
+        .unwrap();
+    assert!(!bad_group.status.success());
+    let err = String::from_utf8_lossy(&bad_group.stderr);
+    assert!(err.contains("Bottom") && err.contains("Gamma3"), "{err}");
+}
