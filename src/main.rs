@@ -4,6 +4,11 @@ use clap::{Parser, Subcommand};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Set by Ctrl-C: the run stops after the current step, leaving every written frame and a
+/// valid `.pvd`.
+static STOP: AtomicBool = AtomicBool::new(false);
 
 #[derive(Parser)]
 #[command(name = "hvi", version, about = "Quasistatic contact of viscoelastic bodies with long memory (history-dependent hemivariational inequalities)")]
@@ -52,10 +57,15 @@ fn main() -> ExitCode {
                 overrides,
                 progress: !quiet && std::io::stderr().is_terminal(),
             };
-            match hvi::app::solve(&opts, None) {
+            let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::Relaxed));
+            match hvi::app::solve(&opts, Some(&STOP)) {
                 Ok(stats) => {
                     println!("{}", hvi::app::report(&stats, &out));
                     ExitCode::SUCCESS
+                }
+                Err(e @ hvi::solver::SolveError::Interrupted { .. }) => {
+                    eprintln!("hvi: {e}");
+                    ExitCode::from(130)
                 }
                 Err(e) => {
                     eprintln!("error: {e}");
