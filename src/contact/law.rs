@@ -16,37 +16,105 @@
 pub enum ComplianceProfile {
     /// φ(s) = b s + (a − b)(1 − e^{−αs})/α, i.e. μ(s) = (a − b)e^{−αs} + b (EXAMPLE.md (5.3)).
     Paper { a: f64, b: f64, alpha: f64 },
+    /// μ(s) = s^p (classical normal compliance c·(u_ν)₊^p, with c = S), p ≥ 1.
+    Power { exponent: f64 },
+    /// μ piecewise linear through (s_i, μ_i), s_0 = 0 < s_1 < …, constant beyond the last
+    /// point: any non-monotone law, several local maxima included (also used for tabulated laws).
+    PiecewiseLinear { table: PiecewiseLinear },
+}
+
+/// A piecewise-linear μ with its exact integral φ (piecewise quadratic).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PiecewiseLinear {
+    s: Vec<f64>,
+    mu: Vec<f64>,
+    /// φ(s_i), the integral of μ up to each breakpoint.
+    phi: Vec<f64>,
+}
+
+impl PiecewiseLinear {
+    /// From breakpoints (s_i, μ_i) with s_0 = 0 and s strictly increasing.
+    pub fn new(points: &[(f64, f64)]) -> Result<Self, String> {
+        if points.is_empty() || points[0].0 != 0.0 {
+            return Err("the table must start at s = 0".into());
+        }
+        if points.windows(2).any(|w| w[1].0 <= w[0].0) {
+            return Err("the table's s values must increase strictly".into());
+        }
+        if points.iter().any(|(s, m)| !s.is_finite() || !m.is_finite()) {
+            return Err("the table has a non-finite entry".into());
+        }
+        let s: Vec<f64> = points.iter().map(|p| p.0).collect();
+        let mu: Vec<f64> = points.iter().map(|p| p.1).collect();
+        let mut phi = vec![0.0];
+        for i in 1..s.len() {
+            phi.push(phi[i - 1] + 0.5 * (mu[i] + mu[i - 1]) * (s[i] - s[i - 1]));
+        }
+        Ok(PiecewiseLinear { s, mu, phi })
+    }
+
+    /// (φ, μ, μ') at s ≥ 0 (μ extended by μ_0 for s < 0, by its last value beyond the table).
+    fn eval(&self, s: f64) -> (f64, f64, f64) {
+        if s <= 0.0 {
+            return (self.mu[0] * s, self.mu[0], 0.0);
+        }
+        let last = self.s.len() - 1;
+        if s >= self.s[last] {
+            return (self.phi[last] + self.mu[last] * (s - self.s[last]), self.mu[last], 0.0);
+        }
+        let i = self.s.partition_point(|v| *v <= s) - 1;
+        let slope = (self.mu[i + 1] - self.mu[i]) / (self.s[i + 1] - self.s[i]);
+        let ds = s - self.s[i];
+        (self.phi[i] + self.mu[i] * ds + 0.5 * slope * ds * ds, self.mu[i] + slope * ds, slope)
+    }
 }
 
 impl ComplianceProfile {
     /// φ(s) (analytic, also used slightly below 0 by the one-sided smoothing).
     pub fn value(&self, s: f64) -> f64 {
-        match *self {
+        match self {
             ComplianceProfile::Paper { a, b, alpha } => b * s - (a - b) * (-alpha * s).exp_m1() / alpha,
+            ComplianceProfile::Power { exponent } => s.max(0.0).powf(exponent + 1.0) / (exponent + 1.0),
+            ComplianceProfile::PiecewiseLinear { table } => table.eval(s).0,
         }
     }
     /// μ(s) = φ'(s).
     pub fn slope(&self, s: f64) -> f64 {
-        match *self {
+        match self {
             ComplianceProfile::Paper { a, b, alpha } => (a - b) * (-alpha * s).exp() + b,
+            ComplianceProfile::Power { exponent } => s.max(0.0).powf(*exponent),
+            ComplianceProfile::PiecewiseLinear { table } => table.eval(s).1,
         }
     }
     /// φ''(s).
     pub fn curvature(&self, s: f64) -> f64 {
-        match *self {
+        match self {
             ComplianceProfile::Paper { a, b, alpha } => -alpha * (a - b) * (-alpha * s).exp(),
+            ComplianceProfile::Power { exponent } if s > 0.0 => exponent * s.powf(exponent - 1.0),
+            ComplianceProfile::Power { .. } => 0.0,
+            ComplianceProfile::PiecewiseLinear { table } => table.eval(s).2,
         }
     }
     /// sup_s max(0, −φ''(s)): how non-convex the profile is (relaxed monotonicity, per unit S).
     pub fn max_negative_curvature(&self) -> f64 {
-        match *self {
+        match self {
             ComplianceProfile::Paper { a, b, alpha } => (alpha * (a - b)).max(0.0),
+            ComplianceProfile::Power { .. } => 0.0,
+            ComplianceProfile::PiecewiseLinear { table } => table
+                .s
+                .windows(2)
+                .zip(table.mu.windows(2))
+                .map(|(s, m)| -(m[1] - m[0]) / (s[1] - s[0]))
+                .fold(0.0, f64::max),
         }
     }
-    /// sup_s |φ'(s)|: the largest force per unit length and unit S.
+    /// sup_s |φ'(s)| (over the table, or at s = 1 for the unbounded power law): a force scale
+    /// per unit length and unit S.
     pub fn max_slope(&self) -> f64 {
-        match *self {
+        match self {
             ComplianceProfile::Paper { a, b, .. } => a.abs().max(b.abs()),
+            ComplianceProfile::Power { .. } => 1.0,
+            ComplianceProfile::PiecewiseLinear { table } => table.mu.iter().fold(0.0, |a, m| a.max(m.abs())),
         }
     }
 }
@@ -134,6 +202,18 @@ mod tests {
 
     fn paper(symmetry: Symmetry, epsilon: f64) -> ContactLaw {
         ContactLaw { scale: 0.1, profile: ComplianceProfile::Paper { a: 0.04, b: 0.02, alpha: 100.0 }, symmetry, epsilon }
+    }
+
+    #[test]
+    fn piecewise_linear_integrates_its_slope() {
+        let t = PiecewiseLinear::new(&[(0.0, 1.0), (0.1, 3.0), (0.2, 0.5), (0.3, 2.0)]).unwrap();
+        let p = ComplianceProfile::PiecewiseLinear { table: t };
+        // φ(0.3) = ∫ μ = 0.1·2 + 0.1·1.75 + 0.1·1.25
+        assert!((p.value(0.3) - 0.55).abs() < 1e-15);
+        assert!((p.value(0.4) - 0.75).abs() < 1e-15);
+        assert!((p.max_negative_curvature() - 25.0).abs() < 1e-12);
+        assert!(PiecewiseLinear::new(&[(0.0, 1.0), (0.0, 2.0)]).is_err());
+        assert!(PiecewiseLinear::new(&[(0.1, 1.0)]).is_err());
     }
 
     #[test]

@@ -8,4 +8,4 @@ pub mod law;
 
 pub use active_set::{ActiveSetSolver, ContactOutcome, ContactSettings, NodeStatus};
 pub use condensed::{CondensedOperator, ContactNodes};
-pub use law::{ComplianceProfile, ContactLaw, Symmetry};
+pub use law::{ComplianceProfile, ContactLaw, PiecewiseLinear, Symmetry};

@@ -21,8 +21,8 @@ pub enum SolveError {
     ContactFailed { step: usize, time: f64, iterations: usize, residual: f64, tolerance: f64, reason: String },
     #[error("step {step} (t = {time}) produced a non-finite displacement; check the load expressions and material data of the scene")]
     NonFinite { step: usize, time: f64 },
-    #[error("run interrupted after step {last_written}: frames up to it and the .pvd are valid")]
-    Interrupted { last_written: usize },
+    #[error("run interrupted; {}", match last_written { Some(n) => format!("the frames up to step {n} and the .pvd listing them are valid"), None => "no frame was written".to_string() })]
+    Interrupted { last_written: Option<usize> },
     #[error("{0}")]
     Setup(String),
 }

@@ -125,131 +125,213 @@ fn contact_solve(
     })
 }
 
+/// The state of a run between steps: the assembled matrices, the cached factor, the history
+/// and the contact warm start. [`Stepper::prepare`] does the one-off work, [`Stepper::advance`]
+/// one time step (METHOD.md §3–4).
+pub struct Stepper<'s> {
+    sim: &'s Simulation,
+    pub counters: Counters,
+    pub stats: RunStats,
+    k_a: SymmetricMatrix,
+    k_b: Option<SymmetricMatrix>,
+    symbolic: SymbolicLlt<usize>,
+    main: StepOperator,
+    /// (k/2) b(0), the memory term's share of K.
+    memory_diagonal: Option<f64>,
+    history: Option<History>,
+    contact: Option<ContactState>,
+    time_dependent_loads: bool,
+    /// No memory and constant loads: every step equals step 0.
+    single_solve: bool,
+    load: Vec<f64>,
+    memory_load: Vec<f64>,
+    memory_rhs: Vec<f64>,
+    displacement: Vec<f64>,
+    memory_displacement: Option<Vec<f64>>,
+    outcome: Option<ContactOutcome>,
+    next: usize,
+}
+
+impl<'s> Stepper<'s> {
+    /// Assembles K_A (and K_B with memory), factorises K = K_A + (k/2) b(0) K_B once, and
+    /// condenses the contact normals.
+    pub fn prepare(sim: &'s Simulation) -> Result<Self, SolveError> {
+        crate::linalg::set_parallelism(sim.threads);
+        let counters = Counters::default();
+        let mut stats = RunStats {
+            nodes: sim.mesh.points.len(),
+            cells: sim.mesh.cells.len(),
+            unknowns: sim.dofs.n_free(),
+            contact_nodes: sim.contact.as_ref().map_or(0, |c| c.nodes.len()),
+            steps: sim.time.steps,
+            time_step: sim.time.step(),
+            final_time: sim.time.final_time,
+            effects: super::plan::Plan::new(sim).effect_names(),
+            ..Default::default()
+        };
+        let k = sim.time.step();
+        let n_dof = sim.dofs.n_free();
+        let (points, cells) = (&sim.mesh.points, &sim.mesh.cells);
+        let d_a = sim.elasticity.voigt();
+        let (k_a, k_b) = timed(&mut stats.phases.assembly, || match &sim.kernel {
+            Some(_) => {
+                let [a, b] = assemble_stiffness(cells, points, &sim.dofs, &[d_a, IDENTITY_TENSOR]);
+                (a, Some(b))
+            }
+            None => {
+                let [a] = assemble_stiffness(cells, points, &sim.dofs, &[d_a]);
+                (a, None)
+            }
+        });
+        stats.matrix_nonzeros = k_a.values.len();
+        let memory_diagonal = sim.kernel.as_ref().map(|b| 0.5 * k * b.value(0.0));
+        let symbolic = timed(&mut stats.phases.factorisation, || Factor::analyse(&k_a))
+            .map_err(|e| SolveError::Setup(e.to_string()))?;
+        let main = match (&k_b, memory_diagonal) {
+            (Some(kb), Some(c)) => {
+                let k_step = timed(&mut stats.phases.assembly, || k_a.plus_scaled(c, kb));
+                StepOperator::new(sim, &symbolic, &k_step, &counters, &mut stats)?
+            }
+            _ => StepOperator::new(sim, &symbolic, &k_a, &counters, &mut stats)?,
+        };
+        if let (Some(op), Some(c)) = (&main.condensed, &sim.contact) {
+            if let Some(law) = &c.law {
+                stats.smallness = Some(law.relaxed_monotonicity() * op.trace_constant(&c.nodes.weights));
+            }
+        }
+        let history = sim.kernel.as_ref().map(|b| History::new(b, n_dof, k));
+        let contact = sim.contact.as_ref().map(|c| ContactState::new(c.nodes.len()));
+        let time_dependent_loads = sim.loads.is_time_dependent();
+        Ok(Stepper {
+            sim,
+            counters,
+            stats,
+            k_a,
+            k_b,
+            symbolic,
+            main,
+            memory_diagonal,
+            single_solve: history.is_none() && !time_dependent_loads,
+            history,
+            contact,
+            time_dependent_loads,
+            load: vec![0.0; n_dof],
+            memory_load: vec![0.0; n_dof],
+            memory_rhs: vec![0.0; n_dof],
+            displacement: vec![0.0; n_dof],
+            memory_displacement: None,
+            outcome: None,
+            next: 0,
+        })
+    }
+
+    /// The index of the step [`Stepper::advance`] will solve next.
+    pub fn next_step(&self) -> usize {
+        self.next
+    }
+
+    /// Solves the next step: loads, history, free solve, contact, recover, history update.
+    pub fn advance(&mut self) -> Result<StepView<'_>, SolveError> {
+        let n = self.next;
+        let sim = self.sim;
+        let t = sim.time.time(n);
+        if n == 0 || self.time_dependent_loads {
+            let load = &mut self.load;
+            timed(&mut self.stats.phases.loads, || sim.loads.assemble(t, &sim.dofs, load));
+        }
+        if self.single_solve && n > 0 {
+            // Nothing changes: the state of step 0 stands for every step.
+            if let Some(o) = self.outcome {
+                self.stats.newton_iterations.push(0);
+                self.stats.contact.push(ContactOutcome { iterations: 0, ..o });
+            }
+        } else {
+            let mut rhs = self.load.clone();
+            self.subtract_memory_load(n, &mut rhs);
+            let (u, outcome) = if n == 0 && self.history.is_some() {
+                step_zero(sim, &self.symbolic, &self.k_a, &mut rhs, self.contact.as_mut(), &self.counters, &mut self.stats)?
+            } else {
+                self.main.solve(sim, n, &mut rhs, self.contact.as_mut(), &self.counters, &mut self.stats)?
+            };
+            if u.iter().any(|v| !v.is_finite()) {
+                return Err(SolveError::NonFinite { step: n, time: t });
+            }
+            self.displacement = u;
+            self.outcome = outcome;
+            if let Some(o) = outcome {
+                self.stats.newton_iterations.push(o.iterations);
+                self.stats.max_contact_residual = self.stats.max_contact_residual.max(o.residual);
+                self.stats.contact.push(o);
+            }
+        }
+        self.update_history(n);
+        self.next += 1;
+        Ok(StepView {
+            step: n,
+            time: t,
+            displacement: &self.displacement,
+            memory_displacement: self.memory_displacement.as_deref(),
+            contact: self.contact.as_ref(),
+            outcome: self.outcome,
+        })
+    }
+
+    /// rhs ← rhs − K_B h_n (METHOD.md §3); h_0 = 0.
+    fn subtract_memory_load(&mut self, n: usize, rhs: &mut [f64]) {
+        let (Some(history), Some(k_b)) = (&self.history, &self.k_b) else { return };
+        let (h, kb_h) = (&mut self.memory_load, &mut self.memory_rhs);
+        timed(&mut self.stats.phases.history, || {
+            history.memory_load(h);
+            if n > 0 {
+                k_b.matvec(h, kb_h);
+                rhs.iter_mut().zip(kb_h.iter()).for_each(|(r, v)| *r -= v);
+            }
+        });
+    }
+
+    /// Records u_n in the history and keeps m_n = h_n + (k/2) b(0) u_n for the stresses.
+    fn update_history(&mut self, n: usize) {
+        let (Some(history), Some(c)) = (&mut self.history, self.memory_diagonal) else { return };
+        let (h, u) = (&self.memory_load, &self.displacement);
+        let memory_displacement = &mut self.memory_displacement;
+        timed(&mut self.stats.phases.history, || {
+            *memory_displacement = Some(h.iter().zip(u).map(|(hv, uv)| if n == 0 { c * uv } else { hv + c * uv }).collect());
+            history.push(u);
+        });
+    }
+
+    /// Closes the statistics of the run.
+    pub fn finish(mut self) -> RunStats {
+        self.stats.history_algorithm = self.history.as_ref().map(|h| h.algorithm().to_string());
+        self.stats.history_bytes = self.history.as_ref().map_or(0, |h| h.bytes_held());
+        self.stats.factorisations = self.counters.factorisations();
+        self.stats.solves = self.counters.solves();
+        self.stats
+    }
+}
+
 /// Runs the whole time series, handing every step to `sink`. `stop` is polled once per step.
 pub fn run(sim: &Simulation, sink: &mut dyn FrameSink, stop: Option<&AtomicBool>) -> Result<RunStats, SolveError> {
     let started = Instant::now();
-    crate::linalg::set_parallelism(sim.threads);
-    let counters = Counters::default();
-    let mut stats = RunStats {
-        nodes: sim.mesh.points.len(),
-        cells: sim.mesh.cells.len(),
-        unknowns: sim.dofs.n_free(),
-        contact_nodes: sim.contact.as_ref().map_or(0, |c| c.nodes.len()),
-        steps: sim.time.steps,
-        time_step: sim.time.step(),
-        final_time: sim.time.final_time,
-        effects: super::plan::Plan::new(sim).effect_names(),
-        ..Default::default()
-    };
-    let k = sim.time.step();
-    let n_dof = sim.dofs.n_free();
-    let (points, cells) = (&sim.mesh.points, &sim.mesh.cells);
-
-    // Assembly: K_A, and K_B only with a memory kernel.
-    let d_a = sim.elasticity.voigt();
-    let (k_a, k_b) = timed(&mut stats.phases.assembly, || match &sim.kernel {
-        Some(_) => {
-            let [a, b] = assemble_stiffness(cells, points, &sim.dofs, &[d_a, IDENTITY_TENSOR]);
-            (a, Some(b))
-        }
-        None => {
-            let [a] = assemble_stiffness(cells, points, &sim.dofs, &[d_a]);
-            (a, None)
-        }
-    });
-    stats.matrix_nonzeros = k_a.values.len();
-    // K = K_A + (k/2) b(0) K_B.
-    let memory_diagonal = sim.kernel.as_ref().map(|b| 0.5 * k * b.value(0.0));
-    let k_step = match (&k_b, memory_diagonal) {
-        (Some(kb), Some(c)) => timed(&mut stats.phases.assembly, || k_a.plus_scaled(c, kb)),
-        _ => k_a.clone(),
-    };
-    let symbolic = timed(&mut stats.phases.factorisation, || Factor::analyse(&k_step))
-        .map_err(|e| SolveError::Setup(e.to_string()))?;
-    let main = StepOperator::new(sim, &symbolic, &k_step, &counters, &mut stats)?;
-    drop(k_step);
-
-    let mut history = sim.kernel.as_ref().map(|b| History::new(b, n_dof, k));
-    let mut state = sim.contact.as_ref().map(|c| ContactState::new(c.nodes.len()));
-    if let (Some(state), Some(c)) = (&mut state, &sim.contact) {
-        if let Some(g) = &c.bound {
-            // start at no contact, inside the bound
-            state.normal_displacement.iter_mut().zip(g).for_each(|(r, g)| *r = r.min(*g));
-        }
-    }
-    let time_dependent = sim.loads.is_time_dependent();
-    let single_solve = history.is_none() && !time_dependent;
-
-    let mut f = vec![0.0; n_dof];
-    let mut h = vec![0.0; n_dof];
-    let mut kb_h = vec![0.0; n_dof];
-    let mut memory_disp: Option<Vec<f64>> = None;
-    let mut u: Vec<f64> = Vec::new();
-    let mut outcome: Option<ContactOutcome> = None;
+    let mut stepper = Stepper::prepare(sim)?;
+    let mut output_seconds = 0.0;
+    let mut frames = 0;
+    let mut last_written = None;
     for n in 0..=sim.time.steps {
         if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
-            return Err(SolveError::Interrupted { last_written: n.saturating_sub(1) });
+            return Err(SolveError::Interrupted { last_written });
         }
-        let t = sim.time.time(n);
-        if n == 0 || time_dependent {
-            timed(&mut stats.phases.loads, || sim.loads.assemble(t, &sim.dofs, &mut f));
-        }
-        if !(single_solve && n > 0) {
-            let mut rhs = f.clone();
-            if let (Some(hist), Some(kb)) = (&history, &k_b) {
-                timed(&mut stats.phases.history, || {
-                    hist.memory_load(&mut h);
-                    if n > 0 {
-                        kb.matvec(&h, &mut kb_h);
-                        rhs.iter_mut().zip(&kb_h).for_each(|(r, v)| *r -= v);
-                    }
-                });
-            }
-            let (un, out) = if n == 0 && history.is_some() {
-                step_zero(sim, &symbolic, &k_a, &mut rhs, state.as_mut(), &counters, &mut stats)?
-            } else {
-                main.solve(sim, n, &mut rhs, state.as_mut(), &counters, &mut stats)?
-            };
-            if un.iter().any(|v| !v.is_finite()) {
-                return Err(SolveError::NonFinite { step: n, time: t });
-            }
-            u = un;
-            outcome = out;
-            if let Some(o) = outcome {
-                stats.newton_iterations.push(o.iterations);
-                stats.max_contact_residual = stats.max_contact_residual.max(o.residual);
-                stats.contact.push(o);
-            }
-        } else if let Some(o) = outcome {
-            stats.newton_iterations.push(0);
-            stats.contact.push(ContactOutcome { iterations: 0, ..o });
-        }
-        if let (Some(hist), Some(c)) = (&mut history, memory_diagonal) {
-            timed(&mut stats.phases.history, || {
-                // m_n = h_n + (k/2) b(0) u_n (h_0 = 0)
-                let m: Vec<f64> = h.iter().zip(&u).map(|(hv, uv)| if n == 0 { c * uv } else { hv + c * uv }).collect();
-                memory_disp = Some(m);
-                hist.push(&u);
-            });
-        }
-        let view = StepView {
-            step: n,
-            time: t,
-            displacement: &u,
-            memory_displacement: memory_disp.as_deref(),
-            contact: state.as_ref(),
-            outcome,
-        };
+        let view = stepper.advance()?;
         sink.step_done(sim, &view);
         if sim.is_output_step(n) {
-            timed(&mut stats.phases.output, || sink.write_frame(sim, &view))?;
-            stats.frames_written += 1;
+            timed(&mut output_seconds, || sink.write_frame(sim, &view))?;
+            frames += 1;
+            last_written = Some(n);
         }
     }
-    stats.history_algorithm = history.as_ref().map(|h| h.algorithm().to_string());
-    stats.history_bytes = history.as_ref().map_or(0, |h| h.bytes_held());
-    stats.factorisations = counters.factorisations();
-    stats.solves = counters.solves();
+    let mut stats = stepper.finish();
+    stats.phases.output += output_seconds;
+    stats.frames_written = frames;
     stats.phases.total = started.elapsed().as_secs_f64();
     Ok(stats)
 }

@@ -1,0 +1,276 @@
+//! Point location and interpolation of nodal P1/Q1 fields between meshes (METHOD.md §6: a
+//! coarse solution is compared with the reference by carrying it onto the reference mesh).
+//!
+//! [`Locator`] puts the cells of a mesh into a uniform bucket grid over their bounding boxes,
+//! once; [`Locator::locate`] then finds the cell holding a point and its reference
+//! coordinates (barycentric for P1, Newton on the bilinear map for Q1). [`Transfer`] keeps
+//! the located weights for a fixed set of target points, so that many fields (one per output
+//! time) are carried at the cost of a sparse product each.
+//!
+//! Carrying is nodal interpolation: exact for nested meshes (a coarse Q1/P1 field is itself
+//! in the fine space) and for linear fields on any meshes.
+
+use crate::fem::element::{shape_at, MAX_NODES};
+use crate::mesh::{Cell, Mesh};
+
+/// Relative tolerance (of the mesh diameter) for points on or just outside the boundary.
+pub const OUTSIDE_TOLERANCE: f64 = 1e-10;
+
+/// A bucket grid over the cells of one mesh, for point location.
+pub struct Locator<'m> {
+    cells: &'m [Cell],
+    points: &'m [[f64; 2]],
+    origin: [f64; 2],
+    bucket: [f64; 2],
+    dims: [usize; 2],
+    /// CSR: cells of bucket b are `items[start[b]..start[b + 1]]`.
+    start: Vec<usize>,
+    items: Vec<u32>,
+    /// Physical tolerance for points outside every cell.
+    tolerance: f64,
+}
+
+impl<'m> Locator<'m> {
+    /// Builds the bucket grid of `mesh` (about one cell per bucket).
+    pub fn new(mesh: &'m Mesh) -> Self {
+        Self::from_parts(&mesh.cells, &mesh.points)
+    }
+
+    /// Builds the bucket grid of the given cells and points.
+    pub fn from_parts(cells: &'m [Cell], points: &'m [[f64; 2]]) -> Self {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for c in cells {
+            for &p in c.nodes() {
+                for d in 0..2 {
+                    lo[d] = lo[d].min(points[p][d]);
+                    hi[d] = hi[d].max(points[p][d]);
+                }
+            }
+        }
+        if cells.is_empty() {
+            (lo, hi) = ([0.0; 2], [0.0; 2]);
+        }
+        let diam = ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2)).sqrt();
+        let tolerance = OUTSIDE_TOLERANCE * diam;
+        let pad = 2.0 * tolerance + f64::MIN_POSITIVE;
+        let ext = [(hi[0] - lo[0]).max(diam * 1e-6) + 2.0 * pad, (hi[1] - lo[1]).max(diam * 1e-6) + 2.0 * pad];
+        let origin = [lo[0] - pad, lo[1] - pad];
+        // about one cell per bucket, buckets as square as the box allows
+        let n = cells.len().max(1) as f64;
+        let side = (ext[0] * ext[1] / n).sqrt().max(f64::MIN_POSITIVE);
+        let dims = [((ext[0] / side).ceil() as usize).clamp(1, 2048), ((ext[1] / side).ceil() as usize).clamp(1, 2048)];
+        let bucket = [ext[0] / dims[0] as f64, ext[1] / dims[1] as f64];
+        let range = |c: &Cell| {
+            let (mut a, mut b) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for &p in c.nodes() {
+                for d in 0..2 {
+                    a[d] = a[d].min(points[p][d] - pad);
+                    b[d] = b[d].max(points[p][d] + pad);
+                }
+            }
+            let i = |v: f64, d: usize| (((v - origin[d]) / bucket[d]).floor().max(0.0) as usize).min(dims[d] - 1);
+            ([i(a[0], 0), i(a[1], 1)], [i(b[0], 0), i(b[1], 1)])
+        };
+        let mut count = vec![0usize; dims[0] * dims[1] + 1];
+        for c in cells {
+            let (a, b) = range(c);
+            for j in a[1]..=b[1] {
+                for i in a[0]..=b[0] {
+                    count[j * dims[0] + i + 1] += 1;
+                }
+            }
+        }
+        for b in 1..count.len() {
+            count[b] += count[b - 1];
+        }
+        let start = count.clone();
+        let mut items = vec![0u32; *count.last().unwrap_or(&0)];
+        for (k, c) in cells.iter().enumerate() {
+            let (a, b) = range(c);
+            for j in a[1]..=b[1] {
+                for i in a[0]..=b[0] {
+                    let slot = &mut count[j * dims[0] + i];
+                    items[*slot] = k as u32;
+                    *slot += 1;
+                }
+            }
+        }
+        Locator { cells, points, origin, bucket, dims, start, items, tolerance }
+    }
+
+    /// The physical distance tolerated outside the mesh (1e-10 × its diameter).
+    pub fn tolerance(&self) -> f64 {
+        self.tolerance
+    }
+
+    /// The cell holding `x` and the reference coordinates of `x` in it (P1: (ξ, η) with
+    /// barycentrics (1 − ξ − η, ξ, η); Q1: (ξ, η) ∈ [−1, 1]²), or None if `x` is outside
+    /// the mesh by more than [`Locator::tolerance`].
+    pub fn locate(&self, x: [f64; 2]) -> Option<(usize, [f64; 2])> {
+        self.locate_with_distance(x).filter(|&(_, _, d)| d <= self.tolerance).map(|(c, xi, _)| (c, xi))
+    }
+
+    /// Like [`Locator::locate`], but returns the best candidate whatever its distance,
+    /// with that distance (None only if no cell's bucket covers `x`).
+    pub fn locate_with_distance(&self, x: [f64; 2]) -> Option<(usize, [f64; 2], f64)> {
+        let mut idx = [0usize; 2];
+        for d in 0..2 {
+            let f = (x[d] - self.origin[d]) / self.bucket[d];
+            if !(f >= 0.0 && f < self.dims[d] as f64) {
+                return None;
+            }
+            idx[d] = f as usize;
+        }
+        let b = idx[1] * self.dims[0] + idx[0];
+        let mut best: Option<(usize, [f64; 2], f64)> = None;
+        for &k in &self.items[self.start[b]..self.start[b + 1]] {
+            let k = k as usize;
+            let (xi, dist) = reference_coordinates(&self.cells[k], self.points, x);
+            if best.is_none_or(|(_, _, d)| dist < d) {
+                best = Some((k, xi, dist));
+                if dist == 0.0 {
+                    break;
+                }
+            }
+        }
+        best
+    }
+
+    /// Locates every point once, for carrying many fields to the same points.
+    pub fn transfer(&self, to_points: &[[f64; 2]]) -> Result<Transfer, String> {
+        let mut weights = Vec::with_capacity(to_points.len());
+        for &x in to_points {
+            let (c, xi) = self.locate(x).ok_or_else(|| self.outside_message(x))?;
+            let cell = &self.cells[c];
+            let s = shape_at(cell, self.points, xi);
+            let mut nodes = [0usize; MAX_NODES];
+            let mut w = [0.0; MAX_NODES];
+            for a in 0..s.n {
+                nodes[a] = cell.nodes()[a];
+                w[a] = s.value[a];
+            }
+            weights.push((s.n as u8, nodes, w));
+        }
+        Ok(Transfer { n_from: self.points.len(), weights })
+    }
+
+    fn outside_message(&self, x: [f64; 2]) -> String {
+        match self.locate_with_distance(x) {
+            Some((_, _, d)) => format!(
+                "point ({:.17e}, {:.17e}) lies outside the mesh: {:.3e} from the nearest cell (tolerance {:.3e})",
+                x[0], x[1], d, self.tolerance
+            ),
+            None => format!("point ({:.17e}, {:.17e}) lies outside the bounding box of the mesh", x[0], x[1]),
+        }
+    }
+}
+
+/// Interpolation weights from the nodes of one mesh to a fixed list of points.
+pub struct Transfer {
+    n_from: usize,
+    weights: Vec<(u8, [usize; MAX_NODES], [f64; MAX_NODES])>,
+}
+
+impl Transfer {
+    /// Number of target points.
+    pub fn len(&self) -> usize {
+        self.weights.len()
+    }
+
+    /// True if there are no target points.
+    pub fn is_empty(&self) -> bool {
+        self.weights.is_empty()
+    }
+
+    /// Evaluates the nodal field `u` (on the source mesh) at the target points.
+    pub fn apply(&self, u: &[[f64; 2]]) -> Vec<[f64; 2]> {
+        assert_eq!(u.len(), self.n_from, "field has {} nodes, the source mesh {}", u.len(), self.n_from);
+        self.weights
+            .iter()
+            .map(|(n, nodes, w)| {
+                let mut v = [0.0; 2];
+                for a in 0..*n as usize {
+                    v[0] += w[a] * u[nodes[a]][0];
+                    v[1] += w[a] * u[nodes[a]][1];
+                }
+                v
+            })
+            .collect()
+    }
+}
+
+/// Evaluates the FE field `u` (nodal values on `from`) at each of `to_points`. A point outside
+/// `from` by more than 1e-10 × its diameter is an error naming the point.
+pub fn interpolate_nodal(from: &Mesh, u: &[[f64; 2]], to_points: &[[f64; 2]]) -> Result<Vec<[f64; 2]>, String> {
+    if u.len() != from.points.len() {
+        return Err(format!("field has {} nodal values, the mesh {} nodes", u.len(), from.points.len()));
+    }
+    Ok(Locator::new(from).transfer(to_points)?.apply(u))
+}
+
+/// Reference coordinates of `x` in `cell` and the physical distance from `x` to the cell
+/// (0 inside; for P1 the largest signed distance to an edge line, for Q1 the distance to the
+/// image of the reference coordinates clamped to [−1, 1]²).
+pub fn reference_coordinates(cell: &Cell, points: &[[f64; 2]], x: [f64; 2]) -> ([f64; 2], f64) {
+    match cell {
+        Cell::Tri3(n) => {
+            let (a, b, c) = (points[n[0]], points[n[1]], points[n[2]]);
+            let (e1, e2) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
+            let det = e1[0] * e2[1] - e1[1] * e2[0];
+            let r = [x[0] - a[0], x[1] - a[1]];
+            let xi = [(r[0] * e2[1] - r[1] * e2[0]) / det, (e1[0] * r[1] - e1[1] * r[0]) / det];
+            let lambda = [1.0 - xi[0] - xi[1], xi[0], xi[1]];
+            // λ_i × (height over the edge opposite vertex i) is the signed distance to that edge
+            let len = |p: [f64; 2], q: [f64; 2]| ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt();
+            let heights = [det.abs() / len(b, c), det.abs() / len(c, a), det.abs() / len(a, b)];
+            let dist = (0..3).map(|i| -lambda[i] * heights[i]).fold(0.0, f64::max);
+            (xi, dist)
+        }
+        Cell::Quad4(n) => {
+            let p = [points[n[0]], points[n[1]], points[n[2]], points[n[3]]];
+            let map = |xi: [f64; 2]| {
+                const C: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+                let mut y = [0.0; 2];
+                let mut j = [[0.0; 2]; 2];
+                for a in 0..4 {
+                    let (sx, sy) = (1.0 + C[a][0] * xi[0], 1.0 + C[a][1] * xi[1]);
+                    let (v, g) = (0.25 * sx * sy, [0.25 * C[a][0] * sy, 0.25 * C[a][1] * sx]);
+                    for r in 0..2 {
+                        y[r] += v * p[a][r];
+                        j[r][0] += p[a][r] * g[0];
+                        j[r][1] += p[a][r] * g[1];
+                    }
+                }
+                (y, j)
+            };
+            let size = p.iter().map(|q| (q[0] - p[0][0]).abs() + (q[1] - p[0][1]).abs()).fold(0.0, f64::max);
+            let mut xi = [0.0; 2];
+            for _ in 0..50 {
+                let (y, j) = map(xi);
+                let r = [x[0] - y[0], x[1] - y[1]];
+                if r[0].abs() + r[1].abs() <= 1e-15 * size {
+                    break;
+                }
+                let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+                if det.abs() <= f64::MIN_POSITIVE {
+                    break;
+                }
+                let d = [(j[1][1] * r[0] - j[0][1] * r[1]) / det, (j[0][0] * r[1] - j[1][0] * r[0]) / det];
+                if !(d[0].is_finite() && d[1].is_finite()) {
+                    return ([0.0; 2], f64::INFINITY);
+                }
+                // keep far-away iterates bounded (the point is outside then anyway)
+                xi = [(xi[0] + d[0]).clamp(-1e3, 1e3), (xi[1] + d[1]).clamp(-1e3, 1e3)];
+                if d[0].abs() + d[1].abs() <= 1e-15 {
+                    break;
+                }
+            }
+            let clamped = [xi[0].clamp(-1.0, 1.0), xi[1].clamp(-1.0, 1.0)];
+            if clamped == xi {
+                return (xi, 0.0);
+            }
+            let (y, _) = map(clamped);
+            (xi, ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2)).sqrt())
+        }
+    }
+}

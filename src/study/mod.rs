@@ -1,0 +1,48 @@
+//! Convergence studies (METHOD.md §6, the paper's Tables 1–2): runs along refinement paths in
+//! h and in k, their errors against a reference run or an exact solution, observed orders,
+//! and the tables (Markdown, CSV) and plots (SVG, PNG) that report them.
+//!
+//! * [`interpolate`]: point location and interpolation of P1/Q1 fields between meshes;
+//! * [`runner`]: one run ([`run`]) and a [`Study`] that evaluates runs as they are added;
+//! * [`report`]: Markdown and CSV tables;
+//! * [`plot`]: log–log error plots, the Γ₃ normal displacement, the deformed mesh.
+//!
+//! ```no_run
+//! use hvi::mesh::structured::{rectangle, CellShape};
+//! use hvi::scene::Scene;
+//! use hvi::study::{self, Keep, Refinement, RunOptions, Study};
+//! let scene = |n: usize| Scene::load(None, &[format!("time.steps={n}")]).unwrap();
+//! let reference = study::run_with(rectangle(2.0, 1.0, 128, 64, CellShape::Quad), &scene(64),
+//!     &RunOptions { label: "reference".into(), h: Some(1.0 / 64.0), keep: Keep::MultiplesOf(0.0625) }).unwrap();
+//! let mut s = Study::against_run(reference);
+//! let mut path = vec![];
+//! for n in [8, 16, 32] {
+//!     let r = study::run(rectangle(2.0, 1.0, 2 * n, n, CellShape::Quad), &scene(64), format!("h=1/{n}")).unwrap();
+//!     path.push(s.add_run(&r).unwrap());
+//! }
+//! s.add_path("h", Refinement::H, path).unwrap();
+//! println!("{}", study::report::markdown(&s.rows()));
+//! ```
+
+pub mod interpolate;
+pub mod plot;
+pub mod report;
+pub mod runner;
+
+pub use interpolate::{interpolate_nodal, Locator, Transfer};
+pub use runner::{
+    observed_order, run, run_with, EvaluatedRun, ExactField, Keep, Reference, Refinement, RefinementPath, Row, RunErrors,
+    RunOptions, RunRecord, RunSummary, Study,
+};
+
+use crate::fem::norms::{errors, FieldErrors};
+use crate::mesh::Mesh;
+
+/// The H¹ seminorm and L² norm of `u_ref − u_carried`, two nodal fields on the reference
+/// mesh (the carried one typically from [`interpolate_nodal`]).
+pub fn seminorm_errors(reference: &Mesh, u_ref: &[[f64; 2]], u_carried: &[[f64; 2]]) -> FieldErrors {
+    assert_eq!(u_ref.len(), reference.points.len(), "reference field and mesh differ in size");
+    assert_eq!(u_carried.len(), reference.points.len(), "carried field and reference mesh differ in size");
+    let difference: Vec<[f64; 2]> = u_ref.iter().zip(u_carried).map(|(a, b)| [a[0] - b[0], a[1] - b[1]]).collect();
+    errors(&reference.cells, &reference.points, &difference, |_| ([0.0; 2], [[0.0; 2]; 2]))
+}

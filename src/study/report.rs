@@ -1,0 +1,177 @@
+//! A study's rows as a Markdown table and as CSV.
+
+use super::runner::{Refinement, Row};
+use std::fmt::Write;
+
+/// The CSV columns, in order.
+pub const CSV_COLUMNS: [&str; 18] = [
+    "path",
+    "h",
+    "k",
+    "nodes",
+    "unknowns",
+    "steps",
+    "h1_error",
+    "l2_error",
+    "h1_max_over_time",
+    "order",
+    "wall_s",
+    "assembly_s",
+    "factorisation_s",
+    "condensation_s",
+    "steps_s",
+    "output_s",
+    "newton",
+    "peak_rss_mb",
+];
+
+/// `1/n` when 1/x is within 1e-9 of an integer n ≥ 1, else x in scientific notation.
+pub fn fraction(x: f64) -> String {
+    let n = 1.0 / x;
+    if n >= 1.0 && (n - n.round()).abs() <= 1e-9 * n {
+        format!("1/{}", n.round() as u64)
+    } else {
+        format!("{x:.4e}")
+    }
+}
+
+fn mb(bytes: Option<u64>) -> Option<f64> {
+    bytes.map(|b| b as f64 / (1024.0 * 1024.0))
+}
+
+/// The rows as CSV (header [`CSV_COLUMNS`]; empty fields where there is no value).
+pub fn csv(rows: &[Row]) -> String {
+    let mut s = CSV_COLUMNS.join(",");
+    s.push('\n');
+    for r in rows {
+        let m = &r.summary;
+        let p = &m.phases;
+        let opt = |v: Option<f64>, prec: usize| v.map_or(String::new(), |v| format!("{v:.prec$}"));
+        let path = if r.path.contains([',', '"']) { format!("\"{}\"", r.path.replace('"', "\"\"")) } else { r.path.clone() };
+        let _ = writeln!(
+            s,
+            "{path},{:e},{:e},{},{},{},{:e},{:e},{:e},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{}",
+            m.h,
+            m.k,
+            m.nodes,
+            m.unknowns,
+            m.steps,
+            r.errors.at_final.h1_seminorm,
+            r.errors.at_final.l2,
+            r.errors.h1_max_over_time,
+            opt(r.order, 4),
+            m.wall,
+            p.assembly,
+            p.factorisation,
+            p.condensation,
+            m.steps_seconds(),
+            p.output,
+            m.newton_total,
+            opt(mb(m.peak_rss_bytes), 1),
+        );
+    }
+    s
+}
+
+/// The rows as one Markdown table (same columns as the CSV, h and k as fractions).
+pub fn markdown(rows: &[Row]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "| path | h | k | nodes | unknowns | steps | H¹ error at T | order | L² error at T | L² order | max_t H¹ error | order | wall [s] | assembly [s] | factorisation [s] | condensation [s] | steps [s] | output [s] | Newton | peak RSS [MB] |"
+    );
+    let _ = writeln!(s, "|---|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|");
+    for r in rows {
+        let m = &r.summary;
+        let p = &m.phases;
+        let ord = |o: Option<f64>| o.map_or("–".to_string(), |o| format!("{o:.2}"));
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {} | {:.6e} | {} | {:.6e} | {} | {:.6e} | {} | {:.2} | {:.3} | {:.3} | {:.3} | {:.2} | {:.3} | {} | {} |",
+            r.path,
+            fraction(m.h),
+            fraction(m.k),
+            m.nodes,
+            m.unknowns,
+            m.steps,
+            r.errors.at_final.h1_seminorm,
+            ord(r.order),
+            r.errors.at_final.l2,
+            ord(r.l2_order),
+            r.errors.h1_max_over_time,
+            ord(r.max_order),
+            m.wall,
+            p.assembly,
+            p.factorisation,
+            p.condensation,
+            m.steps_seconds(),
+            p.output,
+            m.newton_total,
+            mb(m.peak_rss_bytes).map_or("–".into(), |v| format!("{v:.0}")),
+        );
+    }
+    s
+}
+
+/// A value printed beside ours: the paper's error and order for one run of a path.
+#[derive(Clone, Copy, Debug)]
+pub struct Published {
+    pub error: f64,
+    pub order: Option<f64>,
+}
+
+/// A compact table of one path beside published numbers (matched by position; missing
+/// published entries are left blank).
+pub fn comparison_markdown(rows: &[&Row], published: &[Published]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "| h | k | H¹ error at T | order | paper's error | paper's order | ratio ours/paper | max_t H¹ error | order |");
+    let _ = writeln!(s, "|---|---|--:|--:|--:|--:|--:|--:|--:|");
+    for (i, r) in rows.iter().enumerate() {
+        let ord = |o: Option<f64>| o.map_or("–".to_string(), |o| format!("{o:.2}"));
+        let e = r.errors.at_final.h1_seminorm;
+        let (pe, po, ratio) = match published.get(i) {
+            Some(p) => (format!("{:.6e}", p.error), ord(p.order), format!("{:.2}", e / p.error)),
+            None => (String::new(), String::new(), String::new()),
+        };
+        let _ = writeln!(
+            s,
+            "| {} | {} | {e:.6e} | {} | {pe} | {po} | {ratio} | {:.6e} | {} |",
+            fraction(r.summary.h),
+            fraction(r.summary.k),
+            ord(r.order),
+            r.errors.h1_max_over_time,
+            ord(r.max_order)
+        );
+    }
+    s
+}
+
+/// Plain-text version of [`comparison_markdown`] for a terminal.
+pub fn comparison_text(title: &str, rows: &[&Row], published: &[Published]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "{title}");
+    let _ = writeln!(s, "  {:>7} {:>7}  {:>13} {:>6}  {:>13} {:>6}  {:>6}  {:>13} {:>6}", "h", "k", "H1 error", "order", "paper", "order", "ratio", "max_t H1", "order");
+    for (i, r) in rows.iter().enumerate() {
+        let ord = |o: Option<f64>| o.map_or("-".to_string(), |o| format!("{o:.2}"));
+        let e = r.errors.at_final.h1_seminorm;
+        let (pe, po, ratio) = match published.get(i) {
+            Some(p) => (format!("{:.6e}", p.error), ord(p.order), format!("{:.2}", e / p.error)),
+            None => (String::new(), String::new(), String::new()),
+        };
+        let _ = writeln!(
+            s,
+            "  {:>7} {:>7}  {e:>13.6e} {:>6}  {pe:>13} {po:>6}  {ratio:>6}  {:>13.6e} {:>6}",
+            fraction(r.summary.h),
+            fraction(r.summary.k),
+            ord(r.order),
+            r.errors.h1_max_over_time,
+            ord(r.max_order)
+        );
+    }
+    s
+}
+
+/// The rows of the paths refining `refine`.
+pub fn rows_of(rows: &[Row], refine: Refinement) -> Vec<&Row> {
+    rows.iter().filter(|r| r.refine == refine).collect()
+}

@@ -1,0 +1,432 @@
+//! Runs of a convergence study and their errors against a reference (METHOD.md §6).
+//!
+//! [`run`] solves one scene on one mesh and keeps what a study needs: the nodal displacement
+//! at T and at the chosen output times, the per-phase times, the Newton count and the peak
+//! memory. [`Study`] holds a reference (a finer run, or an exact field) and evaluates each run
+//! against it as it is added: the H¹-seminorm and L² errors at T, the largest H¹ error over the
+//! output times both share, and then the observed orders along each refinement path.
+
+use super::interpolate::Locator;
+use super::seminorm_errors;
+use crate::fem::norms::{errors, FieldErrors};
+use crate::mesh::Mesh;
+use crate::scene::Scene;
+use crate::solver::{timeloop, FrameSink, PhaseTimes, Simulation, SolveError, StepView};
+use std::time::Instant;
+
+/// Which steps' displacements a run keeps (besides the last one, always kept).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Keep {
+    /// The scene's output steps (`output.every`, and the last).
+    Output,
+    /// Every step.
+    All,
+    /// Only the last step.
+    Final,
+    /// The steps at these times (matched to 1e-9 T).
+    Times(Vec<f64>),
+    /// The steps whose time is an integer multiple of this (e.g. 1/16).
+    MultiplesOf(f64),
+}
+
+impl Keep {
+    fn wants(&self, sim: &Simulation, n: usize, t: f64) -> bool {
+        let tol = 1e-9 * sim.time.final_time.abs().max(1.0);
+        match self {
+            Keep::Output => sim.is_output_step(n),
+            Keep::All => true,
+            Keep::Final => n == sim.time.steps,
+            Keep::Times(ts) => ts.iter().any(|s| (s - t).abs() <= tol),
+            Keep::MultiplesOf(dt) => {
+                let q = t / dt;
+                (q - q.round()).abs() * dt.abs() <= tol
+            }
+        }
+    }
+}
+
+/// How to run and label one run of a study.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    pub label: String,
+    /// The mesh size to report (default: the longest cell edge).
+    pub h: Option<f64>,
+    pub keep: Keep,
+}
+
+impl RunOptions {
+    /// Keeps the output steps and measures h from the mesh.
+    pub fn new(label: impl Into<String>) -> Self {
+        RunOptions { label: label.into(), h: None, keep: Keep::Output }
+    }
+}
+
+/// One solved run, with what a study compares and reports.
+pub struct RunRecord {
+    pub label: String,
+    /// Mesh size (the longest cell edge unless set by [`RunOptions::h`]).
+    pub h: f64,
+    /// Time step T / N.
+    pub k: f64,
+    pub steps: usize,
+    pub final_time: f64,
+    pub nodes: usize,
+    pub unknowns: usize,
+    /// Nodal displacement at T (zero on Γ₁).
+    pub final_displacement: Vec<[f64; 2]>,
+    /// Nodal displacements at the kept times (see [`Keep`]), in time order.
+    pub displacement_at: Vec<(f64, Vec<[f64; 2]>)>,
+    pub phases: PhaseTimes,
+    /// Wall time of setup and time loop, seconds.
+    pub wall: f64,
+    /// Newton (active-set) iterations summed over the steps.
+    pub newton_total: usize,
+    /// Peak resident memory of the process during the run (VmHWM, reset before the run where
+    /// the kernel allows; it includes whatever the process already held).
+    pub peak_rss_bytes: Option<u64>,
+    pub mesh: Mesh,
+}
+
+impl RunRecord {
+    /// The run without its fields and mesh (what reports need).
+    pub fn summary(&self) -> RunSummary {
+        RunSummary {
+            label: self.label.clone(),
+            h: self.h,
+            k: self.k,
+            steps: self.steps,
+            nodes: self.nodes,
+            unknowns: self.unknowns,
+            phases: self.phases.clone(),
+            wall: self.wall,
+            newton_total: self.newton_total,
+            peak_rss_bytes: self.peak_rss_bytes,
+        }
+    }
+}
+
+/// A run's sizes, times and counters (no fields).
+#[derive(Clone, Debug)]
+pub struct RunSummary {
+    pub label: String,
+    pub h: f64,
+    pub k: f64,
+    pub steps: usize,
+    pub nodes: usize,
+    pub unknowns: usize,
+    pub phases: PhaseTimes,
+    pub wall: f64,
+    pub newton_total: usize,
+    pub peak_rss_bytes: Option<u64>,
+}
+
+impl RunSummary {
+    /// Seconds of the time steps proper (loads, history, solves, contact, recovery).
+    pub fn steps_seconds(&self) -> f64 {
+        let p = &self.phases;
+        p.loads + p.history + p.free_solve + p.contact + p.recover
+    }
+}
+
+struct KeepSink<'a> {
+    keep: &'a Keep,
+    kept: Vec<(f64, Vec<[f64; 2]>)>,
+    last: Option<Vec<[f64; 2]>>,
+}
+
+impl FrameSink for KeepSink<'_> {
+    fn step_done(&mut self, sim: &Simulation, view: &StepView) {
+        let last = view.step == sim.time.steps;
+        let wanted = self.keep.wants(sim, view.step, view.time);
+        if wanted || last {
+            let nodal = sim.dofs.to_nodal(view.displacement);
+            if last {
+                self.last = Some(nodal.clone());
+            }
+            if wanted {
+                self.kept.push((view.time, nodal));
+            }
+        }
+    }
+
+    fn write_frame(&mut self, _sim: &Simulation, _view: &StepView) -> Result<(), SolveError> {
+        Ok(())
+    }
+}
+
+/// Solves `scene` on `mesh`, keeping the output steps.
+pub fn run(mesh: Mesh, scene: &Scene, label: impl Into<String>) -> Result<RunRecord, SolveError> {
+    run_with(mesh, scene, &RunOptions::new(label))
+}
+
+/// Solves `scene` on `mesh` with the given options.
+pub fn run_with(mesh: Mesh, scene: &Scene, options: &RunOptions) -> Result<RunRecord, SolveError> {
+    reset_peak_rss();
+    let started = Instant::now();
+    let h = options.h.unwrap_or_else(|| longest_edge(&mesh));
+    let sim = Simulation::new(scene, mesh)?;
+    let mut sink = KeepSink { keep: &options.keep, kept: Vec::new(), last: None };
+    let stats = timeloop::run(&sim, &mut sink, None)?;
+    let wall = started.elapsed().as_secs_f64();
+    let final_displacement = sink.last.take().ok_or_else(|| SolveError::Setup("the run produced no step".into()))?;
+    Ok(RunRecord {
+        label: options.label.clone(),
+        h,
+        k: sim.time.step(),
+        steps: sim.time.steps,
+        final_time: sim.time.final_time,
+        nodes: sim.mesh.points.len(),
+        unknowns: sim.dofs.n_free(),
+        final_displacement,
+        displacement_at: sink.kept,
+        phases: stats.phases.clone(),
+        wall,
+        newton_total: stats.newton_iterations.iter().sum(),
+        peak_rss_bytes: peak_rss_bytes(),
+        mesh: sim.mesh,
+    })
+}
+
+/// The longest cell edge of a mesh.
+pub fn longest_edge(mesh: &Mesh) -> f64 {
+    mesh.cells
+        .iter()
+        .flat_map(|c| c.edges().collect::<Vec<_>>())
+        .map(|[a, b]| {
+            let (p, q) = (mesh.points[a], mesh.points[b]);
+            ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt()
+        })
+        .fold(0.0, f64::max)
+}
+
+/// VmHWM of this process from /proc/self/status, in bytes (None where there is no procfs).
+pub fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// Resets VmHWM to the current RSS (Linux ≥ 4.0; silently nothing elsewhere).
+pub fn reset_peak_rss() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+/// An exact displacement field: (t, x) ↦ (u, ∇u), ∇u = [[∂u₁/∂x, ∂u₁/∂y], [∂u₂/∂x, ∂u₂/∂y]].
+pub type ExactField = Box<dyn Fn(f64, [f64; 2]) -> ([f64; 2], [[f64; 2]; 2])>;
+
+/// What the runs of a study are compared with.
+pub enum Reference {
+    /// A (finer) run: coarse fields are carried to its mesh by nodal interpolation.
+    Run(Box<RunRecord>),
+    /// A known solution: errors are integrated on each run's own mesh.
+    Exact(ExactField),
+}
+
+/// Which parameter a refinement path refines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Refinement {
+    /// Mesh size h (time step fixed).
+    H,
+    /// Time step k (mesh fixed).
+    K,
+}
+
+/// Errors of one run against the reference.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RunErrors {
+    /// At T.
+    pub at_final: FieldErrors,
+    /// max over the output times shared with the reference of the H¹-seminorm error.
+    pub h1_max_over_time: f64,
+    /// The time where that maximum is attained.
+    pub h1_max_time: f64,
+    /// How many times were compared for the maximum.
+    pub times_compared: usize,
+}
+
+/// A run once evaluated: its summary and errors.
+#[derive(Clone, Debug)]
+pub struct EvaluatedRun {
+    pub summary: RunSummary,
+    pub errors: RunErrors,
+}
+
+/// An ordered list of runs (coarse to fine) refining one parameter.
+#[derive(Clone, Debug)]
+pub struct RefinementPath {
+    pub name: String,
+    pub refine: Refinement,
+    /// Indices into [`Study::runs`].
+    pub runs: Vec<usize>,
+}
+
+/// One line of a study's tables: a run on a path, with the observed orders from the
+/// previous run of the path.
+#[derive(Clone, Debug)]
+pub struct Row {
+    pub path: String,
+    pub refine: Refinement,
+    /// Index into [`Study::runs`].
+    pub run: usize,
+    pub summary: RunSummary,
+    pub errors: RunErrors,
+    /// log(e_{i−1}/e_i) / log(p_{i−1}/p_i) of the H¹-seminorm error at T (p = h or k).
+    pub order: Option<f64>,
+    /// The same for the L² error at T.
+    pub l2_order: Option<f64>,
+    /// The same for the max-over-time H¹ error.
+    pub max_order: Option<f64>,
+}
+
+/// A convergence study: a reference and the runs evaluated against it.
+///
+/// Runs are evaluated when added and their fields dropped, so a study holds only the
+/// reference's fields.
+pub struct Study {
+    pub reference: Reference,
+    pub runs: Vec<EvaluatedRun>,
+    pub paths: Vec<RefinementPath>,
+}
+
+impl Study {
+    /// A study against a reference run (keep the times to compare: see [`Keep`]).
+    pub fn against_run(reference: RunRecord) -> Self {
+        Study { reference: Reference::Run(Box::new(reference)), runs: Vec::new(), paths: Vec::new() }
+    }
+
+    /// A study against an exact solution.
+    pub fn against_exact(exact: ExactField) -> Self {
+        Study { reference: Reference::Exact(exact), runs: Vec::new(), paths: Vec::new() }
+    }
+
+    /// The reference run, if the reference is a run.
+    pub fn reference_run(&self) -> Option<&RunRecord> {
+        match &self.reference {
+            Reference::Run(r) => Some(r),
+            Reference::Exact(_) => None,
+        }
+    }
+
+    /// Evaluates `run` against the reference and stores its summary and errors; returns its
+    /// index for [`Study::add_path`].
+    pub fn add_run(&mut self, run: &RunRecord) -> Result<usize, String> {
+        let errors = self.evaluate(run)?;
+        self.runs.push(EvaluatedRun { summary: run.summary(), errors });
+        Ok(self.runs.len() - 1)
+    }
+
+    /// Declares a refinement path through runs already added (coarse to fine).
+    pub fn add_path(&mut self, name: impl Into<String>, refine: Refinement, runs: Vec<usize>) -> Result<(), String> {
+        if let Some(&bad) = runs.iter().find(|&&r| r >= self.runs.len()) {
+            return Err(format!("path refers to run {bad}, but the study has {} runs", self.runs.len()));
+        }
+        self.paths.push(RefinementPath { name: name.into(), refine, runs });
+        Ok(())
+    }
+
+    /// The errors of `run` against the reference (nothing stored).
+    pub fn evaluate(&self, run: &RunRecord) -> Result<RunErrors, String> {
+        match &self.reference {
+            Reference::Exact(exact) => {
+                let on_mesh = |t: f64, u: &[[f64; 2]]| errors(&run.mesh.cells, &run.mesh.points, u, |x| exact(t, x));
+                let at_final = on_mesh(run.final_time, &run.final_displacement);
+                let mut max = (at_final.h1_seminorm, run.final_time);
+                let mut count = 1;
+                for (t, u) in &run.displacement_at {
+                    if (t - run.final_time).abs() <= time_tolerance(run.final_time) {
+                        continue;
+                    }
+                    let e = on_mesh(*t, u).h1_seminorm;
+                    count += 1;
+                    if e > max.0 {
+                        max = (e, *t);
+                    }
+                }
+                Ok(RunErrors { at_final, h1_max_over_time: max.0, h1_max_time: max.1, times_compared: count })
+            }
+            Reference::Run(reference) => {
+                let tol = time_tolerance(reference.final_time);
+                if (run.final_time - reference.final_time).abs() > tol {
+                    return Err(format!(
+                        "run {} ends at T = {} but the reference {} at T = {}",
+                        run.label, run.final_time, reference.label, reference.final_time
+                    ));
+                }
+                let transfer = Locator::new(&run.mesh)
+                    .transfer(&reference.mesh.points)
+                    .map_err(|e| format!("carrying run {} to the reference mesh: {e}", run.label))?;
+                let at = |u_ref: &[[f64; 2]], u: &[[f64; 2]]| seminorm_errors(&reference.mesh, u_ref, &transfer.apply(u));
+                let at_final = at(&reference.final_displacement, &run.final_displacement);
+                let mut max = (at_final.h1_seminorm, run.final_time);
+                let mut count = 1;
+                for (t, u) in &run.displacement_at {
+                    if (t - run.final_time).abs() <= tol {
+                        continue;
+                    }
+                    if let Some((_, u_ref)) = reference.displacement_at.iter().find(|(s, _)| (s - t).abs() <= tol) {
+                        let e = at(u_ref, u).h1_seminorm;
+                        count += 1;
+                        if e > max.0 {
+                            max = (e, *t);
+                        }
+                    }
+                }
+                Ok(RunErrors { at_final, h1_max_over_time: max.0, h1_max_time: max.1, times_compared: count })
+            }
+        }
+    }
+
+    /// The rows of every path, with observed orders between neighbours.
+    pub fn rows(&self) -> Vec<Row> {
+        let mut rows = Vec::new();
+        for path in &self.paths {
+            let mut prev: Option<&EvaluatedRun> = None;
+            for &r in &path.runs {
+                let run = &self.runs[r];
+                let param = |e: &EvaluatedRun| match path.refine {
+                    Refinement::H => e.summary.h,
+                    Refinement::K => e.summary.k,
+                };
+                let order = |f: fn(&RunErrors) -> f64| prev.map(|p| observed_order(param(p), f(&p.errors), param(run), f(&run.errors)));
+                rows.push(Row {
+                    path: path.name.clone(),
+                    refine: path.refine,
+                    run: r,
+                    summary: run.summary.clone(),
+                    errors: run.errors,
+                    order: order(|e| e.at_final.h1_seminorm),
+                    l2_order: order(|e| e.at_final.l2),
+                    max_order: order(|e| e.h1_max_over_time),
+                });
+                prev = Some(run);
+            }
+        }
+        rows
+    }
+
+    /// Least-squares order of the H¹ error at T along a path (None for < 2 runs).
+    pub fn fitted_order(&self, path: &RefinementPath) -> Option<f64> {
+        (path.runs.len() >= 2).then(|| {
+            let (p, e): (Vec<f64>, Vec<f64>) = path
+                .runs
+                .iter()
+                .map(|&r| {
+                    let run = &self.runs[r];
+                    let p = if path.refine == Refinement::H { run.summary.h } else { run.summary.k };
+                    (p, run.errors.at_final.h1_seminorm)
+                })
+                .unzip();
+            crate::fem::norms::fitted_order(&p, &e)
+        })
+    }
+}
+
+/// log(e₀/e₁) / log(p₀/p₁).
+pub fn observed_order(p0: f64, e0: f64, p1: f64, e1: f64) -> f64 {
+    (e0 / e1).ln() / (p0 / p1).ln()
+}
+
+fn time_tolerance(final_time: f64) -> f64 {
+    1e-9 * final_time.abs().max(1.0)
+}
