@@ -294,8 +294,11 @@ impl<'s> Stepper<'s> {
         let (Some(history), Some(c)) = (&mut self.history, self.memory_diagonal) else { return };
         let (h, u) = (&self.memory_load, &self.displacement);
         let memory_displacement = &mut self.memory_displacement;
+        let wanted = self.sim.is_output_step(n);
         timed(&mut self.stats.phases.history, || {
-            *memory_displacement = Some(h.iter().zip(u).map(|(hv, uv)| if n == 0 { c * uv } else { hv + c * uv }).collect());
+            // only output steps show the memory stress
+            *memory_displacement =
+                wanted.then(|| h.iter().zip(u).map(|(hv, uv)| if n == 0 { c * uv } else { hv + c * uv }).collect());
             history.push(u);
         });
     }

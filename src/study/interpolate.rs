@@ -210,7 +210,9 @@ pub fn interpolate_nodal(from: &Mesh, u: &[[f64; 2]], to_points: &[[f64; 2]]) ->
 
 /// Reference coordinates of `x` in `cell` and the physical distance from `x` to the cell
 /// (0 inside; for P1 the largest signed distance to an edge line, for Q1 the distance to the
-/// image of the reference coordinates clamped to [−1, 1]²).
+/// quadrilateral, whose edges are straight). Outside the cell the reference coordinates
+/// extrapolate the map (exactly for P1; for Q1 Newton's last iterate, meaningful only close
+/// to the cell).
 pub fn reference_coordinates(cell: &Cell, points: &[[f64; 2]], x: [f64; 2]) -> ([f64; 2], f64) {
     match cell {
         Cell::Tri3(n) => {
@@ -244,6 +246,12 @@ pub fn reference_coordinates(cell: &Cell, points: &[[f64; 2]], x: [f64; 2]) -> (
                 (y, j)
             };
             let size = p.iter().map(|q| (q[0] - p[0][0]).abs() + (q[1] - p[0][1]).abs()).fold(0.0, f64::max);
+            // the edges of a Q1 cell are straight: inside test and distance on the polygon
+            let dist = if polygon_contains(&p, x) { 0.0 } else { polygon_distance(&p, x) };
+            if dist > 0.5 * size {
+                // far outside: no reference coordinates needed
+                return ([f64::NAN; 2], dist);
+            }
             let mut xi = [0.0; 2];
             for _ in 0..50 {
                 let (y, j) = map(xi);
@@ -265,12 +273,44 @@ pub fn reference_coordinates(cell: &Cell, points: &[[f64; 2]], x: [f64; 2]) -> (
                     break;
                 }
             }
-            let clamped = [xi[0].clamp(-1.0, 1.0), xi[1].clamp(-1.0, 1.0)];
-            if clamped == xi {
-                return (xi, 0.0);
+            let (y, _) = map(xi);
+            let residual = ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2)).sqrt();
+            if residual > 1e-10 * size {
+                // Newton failed (a degenerate cell): unusable
+                return (xi, f64::INFINITY);
             }
-            let (y, _) = map(clamped);
-            (xi, ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2)).sqrt())
+            (xi, dist)
         }
     }
+}
+
+/// True if `x` lies in the closed polygon `p` (crossing number; points on an edge count in).
+fn polygon_contains(p: &[[f64; 2]], x: [f64; 2]) -> bool {
+    if polygon_distance(p, x) == 0.0 {
+        return true;
+    }
+    let mut inside = false;
+    for i in 0..p.len() {
+        let (a, b) = (p[i], p[(i + 1) % p.len()]);
+        if (a[1] > x[1]) != (b[1] > x[1]) {
+            let cross = a[0] + (x[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+            if x[0] < cross {
+                inside = !inside;
+            }
+        }
+    }
+    inside
+}
+
+/// Euclidean distance from `x` to the boundary of the polygon `p`.
+fn polygon_distance(p: &[[f64; 2]], x: [f64; 2]) -> f64 {
+    (0..p.len())
+        .map(|i| {
+            let (a, b) = (p[i], p[(i + 1) % p.len()]);
+            let (e, r) = ([b[0] - a[0], b[1] - a[1]], [x[0] - a[0], x[1] - a[1]]);
+            let ee = e[0] * e[0] + e[1] * e[1];
+            let s = if ee > 0.0 { ((r[0] * e[0] + r[1] * e[1]) / ee).clamp(0.0, 1.0) } else { 0.0 };
+            ((r[0] - s * e[0]).powi(2) + (r[1] - s * e[1]).powi(2)).sqrt()
+        })
+        .fold(f64::INFINITY, f64::min)
 }

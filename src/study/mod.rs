@@ -32,8 +32,9 @@ pub mod runner;
 pub use interpolate::{interpolate_nodal, Locator, Transfer};
 pub use runner::{
     observed_order, run, run_with, EvaluatedRun, ExactField, Keep, Reference, Refinement, RefinementPath, Row, RunErrors,
-    RunOptions, RunRecord, RunSummary, Study,
+    RunOptions, RunRecord, RunSummary, Study, StudyPlan,
 };
+pub use runner::run_plan;
 
 use crate::fem::norms::{errors, FieldErrors};
 use crate::mesh::Mesh;

@@ -430,3 +430,60 @@ pub fn observed_order(p0: f64, e0: f64, p1: f64, e1: f64) -> f64 {
 fn time_tolerance(final_time: f64) -> f64 {
     1e-9 * final_time.abs().max(1.0)
 }
+
+/// A study on uniformly refined meshes: a mesh is named by n (h = 1/n), a time grid by its
+/// number of steps N (k = T/N).
+#[derive(Clone, Debug)]
+pub struct StudyPlan {
+    /// (n, N) of the reference run.
+    pub reference: (usize, usize),
+    /// h-refinement paths: (N, [n coarse to fine]).
+    pub h_paths: Vec<(usize, Vec<usize>)>,
+    /// k-refinement paths: (n, [N coarse to fine]).
+    pub k_paths: Vec<(usize, Vec<usize>)>,
+    /// Which steps every run keeps (the reference too): the max over time compares the kept
+    /// times both have.
+    pub keep: Keep,
+}
+
+/// Runs a [`StudyPlan`]: the reference first, then every distinct (n, N) once, in the order the
+/// paths name them, each evaluated and dropped (only the reference's fields are held).
+/// `make_mesh(n)` builds the mesh of h = 1/n, `make_scene(N)` the scene with N steps;
+/// `progress` sees each run (with its errors, None for the reference) as it finishes.
+pub fn run_plan(
+    plan: &StudyPlan,
+    make_mesh: &dyn Fn(usize) -> Mesh,
+    make_scene: &dyn Fn(usize) -> Scene,
+    progress: &mut dyn FnMut(&RunRecord, Option<&RunErrors>),
+) -> Result<Study, String> {
+    let one = |n: usize, steps: usize, label: String| -> Result<RunRecord, String> {
+        let options = RunOptions { label: label.clone(), h: Some(1.0 / n as f64), keep: plan.keep.clone() };
+        run_with(make_mesh(n), &make_scene(steps), &options).map_err(|e| format!("run {label}: {e}"))
+    };
+    let label = |n: usize, steps: usize| format!("h=1/{n} N={steps}");
+    let (rn, rs) = plan.reference;
+    let reference = one(rn, rs, format!("reference {}", label(rn, rs)))?;
+    progress(&reference, None);
+    let mut study = Study::against_run(reference);
+    let mut done: Vec<((usize, usize), usize)> = Vec::new();
+    let mut index = |study: &mut Study, n: usize, steps: usize, progress: &mut dyn FnMut(&RunRecord, Option<&RunErrors>)| -> Result<usize, String> {
+        if let Some(&(_, i)) = done.iter().find(|(key, _)| *key == (n, steps)) {
+            return Ok(i);
+        }
+        let record = one(n, steps, label(n, steps))?;
+        let i = study.add_run(&record)?;
+        progress(&record, Some(&study.runs[i].errors));
+        done.push(((n, steps), i));
+        Ok(i)
+    };
+    for (steps, ns) in plan.h_paths.iter().filter(|(_, ns)| !ns.is_empty()) {
+        let runs = ns.iter().map(|&n| index(&mut study, n, *steps, progress)).collect::<Result<Vec<_>, _>>()?;
+        let k = study.runs[runs[0]].summary.k;
+        study.add_path(format!("h (k={})", super::report::fraction(k)), Refinement::H, runs)?;
+    }
+    for (n, all_steps) in plan.k_paths.iter().filter(|(_, s)| !s.is_empty()) {
+        let runs = all_steps.iter().map(|&s| index(&mut study, *n, s, progress)).collect::<Result<Vec<_>, _>>()?;
+        study.add_path(format!("k (h=1/{n})"), Refinement::K, runs)?;
+    }
+    Ok(study)
+}

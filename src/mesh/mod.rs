@@ -1,0 +1,779 @@
+//! The mesh: gmsh MSH files (4.1 ASCII and binary, 2.2 ASCII) and a built-in rectangle mesher.
+//!
+//! [`read_msh`] reads a file into a [`Mesh`]: dense 0-based points (in ascending order of the
+//! gmsh node tags), every 2D element as a counter-clockwise [`Cell`], and the physical groups
+//! (`Physical Point/Curve/Surface` of the `.geo`) with their `$PhysicalNames`. A scene refers
+//! to a group by name or tag ([`GroupSelector`]); [`Mesh::boundary`] turns a curve group into
+//! an oriented [`BoundaryPart`] with outward normals and nodal quadrature weights.
+//!
+//! Only first-order elements are read: points (gmsh type 15), 2-node lines (1), 3-node
+//! triangles (2) and 4-node quadrilaterals (3); anything else is an error that says how to
+//! re-mesh. Every problem found is reported with the file, the place (line number for ASCII
+//! files, node or element tag) and what to do: hvi never panics on a bad file and never
+//! allocates in proportion to a count in a header that the file is too short to hold.
+//!
+//! Cells are not reordered or repaired, with one exception: if *every* cell of the file is
+//! clockwise (a surface whose normal points to −z, e.g. a curve loop given clockwise in the
+//! `.geo`), all cells are flipped to counter-clockwise. A mesh with only some clockwise cells
+//! is an error naming the first of them.
+
+mod cell;
+mod error;
+mod group;
+mod msh22;
+mod msh41;
+mod physical_names;
+pub mod structured;
+mod topology;
+
+pub use cell::Cell;
+pub use error::MeshError;
+pub use group::GroupSelector;
+pub use topology::BoundaryPart;
+
+use std::collections::{BTreeMap, HashMap};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// A 2D mesh with its physical groups.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mesh {
+    /// The file read (or a label such as `<rectangle 16x8>` for a generated mesh).
+    pub path: PathBuf,
+    /// Node coordinates, dense and 0-based (the file's node tags in ascending order); the
+    /// file's constant z is dropped.
+    pub points: Vec<[f64; 2]>,
+    /// Every 2D element of the file, counter-clockwise, in file order.
+    pub cells: Vec<Cell>,
+    /// The gmsh element tag of each cell, for messages.
+    pub cell_tags: Vec<usize>,
+    /// The physical groups, sorted by (dimension, tag).
+    pub groups: Vec<PhysicalGroup>,
+}
+
+/// A physical group: a `Physical Point` (dim 0), `Physical Curve` (dim 1) or
+/// `Physical Surface` (dim 2) of the `.geo`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PhysicalGroup {
+    pub dim: u8,
+    pub tag: i32,
+    /// The name given in `$PhysicalNames`, if any.
+    pub name: Option<String>,
+    /// Dim 1: the group's 2-node line elements (node indices, as written in the file).
+    pub facets: Vec<[usize; 2]>,
+    /// Dim 2: indices into [`Mesh::cells`].
+    pub cells: Vec<usize>,
+    /// Dim 0: the group's point elements (node indices).
+    pub nodes: Vec<usize>,
+}
+
+impl PhysicalGroup {
+    /// How messages name the group: `Gamma3 (tag 3)`, or `tag 7` for an unnamed group.
+    pub fn label(&self) -> String {
+        match &self.name {
+            Some(n) => format!("{n} (tag {})", self.tag),
+            None => format!("tag {}", self.tag),
+        }
+    }
+
+    fn matches(&self, sel: &GroupSelector) -> bool {
+        match sel {
+            GroupSelector::Tag(t) => self.tag == *t,
+            GroupSelector::Name(n) => self.name.as_deref() == Some(n.as_str()),
+        }
+    }
+}
+
+/// Reads a gmsh MSH file: 4.1 (ASCII or binary) or 2.2 (ASCII), chosen from `$MeshFormat`.
+pub fn read_msh(path: &Path) -> Result<Mesh, MeshError> {
+    let bytes = std::fs::read(path).map_err(|source| MeshError::Io { path: path.to_path_buf(), source })?;
+    parse_msh(path, &bytes)
+}
+
+/// Parses the bytes of an MSH file already in memory; `path` is used in messages only.
+pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<Mesh, MeshError> {
+    let header = Header::parse(path, bytes)?;
+    let raw = match header.version {
+        Version::V2 => msh22::parse(path, bytes, header.body)?,
+        Version::V41 => msh41::parse(path, bytes, &header)?,
+    };
+    build(path, raw)
+}
+
+impl Mesh {
+    /// The physical group of dimension `dim` that `sel` names. A name that is not found but
+    /// reads as an integer is also tried as a tag. If there is none, the error lists every
+    /// group the mesh has.
+    pub fn group(&self, sel: &GroupSelector, dim: u8) -> Result<&PhysicalGroup, MeshError> {
+        if let Some(g) = self.groups.iter().find(|g| g.dim == dim && g.matches(sel)) {
+            return Ok(g);
+        }
+        if let GroupSelector::Name(n) = sel {
+            if let Ok(t) = n.trim().parse::<i32>() {
+                if let Some(g) = self.groups.iter().find(|g| g.dim == dim && g.tag == t) {
+                    return Ok(g);
+                }
+            }
+        }
+        Err(self.group_not_found(sel, dim))
+    }
+
+    fn group_not_found(&self, sel: &GroupSelector, dim: u8) -> MeshError {
+        let available = if self.groups.is_empty() {
+            "no physical groups at all: define them in the .geo (Physical Curve(\"Gamma3\", 3) = {...}; \
+             Physical Surface(\"Omega\", 5) = {...};) and mesh again"
+                .to_string()
+        } else {
+            let mut s = String::from("these groups: ");
+            for (i, g) in self.groups.iter().enumerate() {
+                if i > 0 {
+                    s.push_str(", ");
+                }
+                let _ = write!(s, "dim {} tag {}", g.dim, g.tag);
+                if let Some(n) = &g.name {
+                    let _ = write!(s, " \"{n}\"");
+                }
+            }
+            s
+        };
+        MeshError::GroupNotFound { path: self.path.clone(), wanted: sel.to_string(), dim, available }
+    }
+
+    /// A dimension-1 group as an oriented boundary part (see [`BoundaryPart`]). Every facet of
+    /// the group must be an edge of exactly one cell.
+    pub fn boundary(&self, sel: &GroupSelector) -> Result<BoundaryPart, MeshError> {
+        let group = self.group(sel, 1)?;
+        topology::boundary_part(self, group)
+    }
+
+    /// The sorted, unique node indices of a dimension-1 group (or, if there is none of that
+    /// name or tag, of a dimension-0 group).
+    pub fn group_nodes(&self, sel: &GroupSelector) -> Result<Vec<usize>, MeshError> {
+        let mut nodes: Vec<usize> = match self.group(sel, 1) {
+            Ok(g) => g.facets.iter().flatten().copied().collect(),
+            Err(e) => match self.group(sel, 0) {
+                Ok(g) => g.nodes.clone(),
+                Err(_) => return Err(e),
+            },
+        };
+        nodes.sort_unstable();
+        nodes.dedup();
+        Ok(nodes)
+    }
+
+    /// (min, max) over the cells of the longest cell edge: the mesh size h. (0, 0) if there
+    /// are no cells.
+    pub fn cell_size(&self) -> (f64, f64) {
+        let mut lo = f64::INFINITY;
+        let mut hi = 0.0_f64;
+        for c in &self.cells {
+            let longest = c
+                .edges()
+                .map(|[a, b]| {
+                    let (p, q) = (self.points[a], self.points[b]);
+                    (q[0] - p[0]).hypot(q[1] - p[1])
+                })
+                .fold(0.0_f64, f64::max);
+            lo = lo.min(longest);
+            hi = hi.max(longest);
+        }
+        if self.cells.is_empty() {
+            (0.0, 0.0)
+        } else {
+            (lo, hi)
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Shared by the readers: the $MeshFormat header, line/token scanning, the element type table,
+// and the raw data a reader hands to `build`.
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Version {
+    V2,
+    V41,
+}
+
+/// The `$MeshFormat` section.
+#[derive(Clone, Debug)]
+pub(crate) struct Header {
+    pub version: Version,
+    pub binary: bool,
+    /// sizeof(size_t) in binary files.
+    pub data_size: usize,
+    pub little_endian: bool,
+    /// Byte offset just after `$EndMeshFormat`.
+    pub body: usize,
+}
+
+impl Header {
+    fn parse(path: &Path, bytes: &[u8]) -> Result<Header, MeshError> {
+        let unsupported = |detail: String| MeshError::UnsupportedFormat { path: path.to_path_buf(), detail };
+        let syntax = |line: usize, detail: String| MeshError::Syntax {
+            path: path.to_path_buf(),
+            place: format!("line {line} ($MeshFormat)"),
+            detail,
+        };
+        let mut start = 0;
+        if bytes.starts_with(&[0xEF, 0xBB, 0xBF]) {
+            start = 3;
+        }
+        let mut lines = Lines::new(bytes, start);
+        let first = lines.next_nonblank();
+        match first {
+            Some((_, l)) if trim(l) == b"$MeshFormat" => {}
+            Some((_, l)) if trim(l).starts_with(b"$NOD") => {
+                return Err(unsupported(
+                    "this is an MSH 1 file ($NOD), which hvi does not read; re-export it as MSH 4.1: \
+                     gmsh file.msh -save -format msh41 -o new.msh"
+                        .into(),
+                ))
+            }
+            _ => {
+                return Err(unsupported(
+                    "not a gmsh MSH file: it does not start with $MeshFormat; mesh the geometry with \
+                     gmsh (gmsh -2 body.geo -format msh41) and give the .msh file"
+                        .into(),
+                ))
+            }
+        }
+        let Some((line, l)) = lines.next_line() else {
+            return Err(syntax(2, "the file ends inside $MeshFormat: it is truncated".into()));
+        };
+        let text = String::from_utf8_lossy(l);
+        let tokens: Vec<&str> = text.split_whitespace().collect();
+        if tokens.len() < 3 {
+            return Err(syntax(line, format!("expected \"version file-type data-size\" (e.g. \"4.1 0 8\"), found \"{}\"", text.trim())));
+        }
+        let version = match tokens[0] {
+            "4.1" => Version::V41,
+            "2" | "2.0" | "2.1" | "2.2" => Version::V2,
+            "4" | "4.0" => {
+                return Err(unsupported(
+                    "MSH version 4.0 is not supported (hvi reads 4.1 and 2.2); re-export with gmsh -format msh41 \
+                     (or Mesh.MshFileVersion = 4.1 in the .geo)"
+                        .into(),
+                ))
+            }
+            v => {
+                return Err(unsupported(format!(
+                    "MSH version {v} is not supported (hvi reads 4.1 ASCII/binary and 2.2 ASCII); \
+                     re-export with gmsh -format msh41"
+                )))
+            }
+        };
+        let binary = match tokens[1] {
+            "0" => false,
+            "1" => true,
+            t => return Err(syntax(line, format!("file type must be 0 (ASCII) or 1 (binary), found \"{t}\""))),
+        };
+        let data_size: usize = match tokens[2].parse() {
+            Ok(d) => d,
+            Err(_) => return Err(syntax(line, format!("data size must be an integer, found \"{}\"", tokens[2]))),
+        };
+        if binary && version == Version::V2 {
+            return Err(unsupported(format!(
+                "binary MSH {} is not supported (hvi reads 2.2 only as ASCII); re-export as MSH 4.1: \
+                 gmsh file.msh -save -format msh41 -o new.msh (add -bin for binary 4.1)",
+                tokens[0]
+            )));
+        }
+        let mut little_endian = true;
+        let mut pos = lines.pos;
+        if binary {
+            if data_size != 4 && data_size != 8 {
+                return Err(syntax(line, format!("binary data size {data_size} is not supported (gmsh writes 8)")));
+            }
+            let Some(one) = bytes.get(pos..pos + 4) else {
+                return Err(syntax(line + 1, "the file ends inside $MeshFormat: it is truncated".into()));
+            };
+            let one: [u8; 4] = [one[0], one[1], one[2], one[3]];
+            if i32::from_le_bytes(one) == 1 {
+                little_endian = true;
+            } else if i32::from_be_bytes(one) == 1 {
+                little_endian = false;
+            } else {
+                return Err(syntax(line + 1, "binary endianness marker (the integer 1) not found after the version line".into()));
+            }
+            pos += 4;
+            while pos < bytes.len() && (bytes[pos] == b'\n' || bytes[pos] == b'\r') {
+                pos += 1;
+            }
+        }
+        let mut lines = Lines::new(bytes, pos);
+        match lines.next_nonblank() {
+            Some((_, l)) if trim(l) == b"$EndMeshFormat" => {}
+            Some((n, l)) => {
+                return Err(syntax(n, format!("expected $EndMeshFormat, found \"{}\"", String::from_utf8_lossy(trim(l)))))
+            }
+            None => return Err(syntax(line + 1, "the file ends inside $MeshFormat: it is truncated".into())),
+        }
+        Ok(Header { version, binary, data_size, little_endian, body: lines.pos })
+    }
+}
+
+/// 1-based line number of byte `offset`.
+pub(crate) fn line_of(bytes: &[u8], offset: usize) -> usize {
+    1 + bytes[..offset.min(bytes.len())].iter().filter(|&&b| b == b'\n').count()
+}
+
+pub(crate) fn trim(l: &[u8]) -> &[u8] {
+    let s = l.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(l.len());
+    let e = l.iter().rposition(|b| !b.is_ascii_whitespace()).map_or(s, |e| e + 1);
+    &l[s..e.max(s)]
+}
+
+/// Line-by-line reading with 1-based line numbers.
+pub(crate) struct Lines<'a> {
+    bytes: &'a [u8],
+    /// Offset of the next line.
+    pub pos: usize,
+    /// Number of the next line.
+    pub line: usize,
+}
+
+impl<'a> Lines<'a> {
+    pub fn new(bytes: &'a [u8], pos: usize) -> Self {
+        Lines { bytes, pos, line: line_of(bytes, pos) }
+    }
+
+    /// The next line (without its line break) and its number.
+    pub fn next_line(&mut self) -> Option<(usize, &'a [u8])> {
+        if self.pos >= self.bytes.len() {
+            return None;
+        }
+        let rest = &self.bytes[self.pos..];
+        let len = rest.iter().position(|&b| b == b'\n').unwrap_or(rest.len());
+        let mut l = &rest[..len];
+        if l.last() == Some(&b'\r') {
+            l = &l[..l.len() - 1];
+        }
+        self.pos += (len + 1).min(rest.len());
+        let n = self.line;
+        self.line += 1;
+        Some((n, l))
+    }
+
+    /// The next line that is not blank.
+    pub fn next_nonblank(&mut self) -> Option<(usize, &'a [u8])> {
+        loop {
+            let (n, l) = self.next_line()?;
+            if !trim(l).is_empty() {
+                return Some((n, l));
+            }
+        }
+    }
+
+    /// Bytes left from the next line on.
+    pub fn remaining(&self) -> usize {
+        self.bytes.len().saturating_sub(self.pos)
+    }
+}
+
+/// Name, node count and dimension of a gmsh element type (the common ones; `None` if unknown).
+pub(crate) fn element_type_info(t: i32) -> Option<(&'static str, usize, u8)> {
+    Some(match t {
+        1 => ("2-node line", 2, 1),
+        2 => ("3-node triangle", 3, 2),
+        3 => ("4-node quadrangle", 4, 2),
+        4 => ("4-node tetrahedron", 4, 3),
+        5 => ("8-node hexahedron", 8, 3),
+        6 => ("6-node prism", 6, 3),
+        7 => ("5-node pyramid", 5, 3),
+        8 => ("3-node second-order line", 3, 1),
+        9 => ("6-node second-order triangle", 6, 2),
+        10 => ("9-node second-order quadrangle", 9, 2),
+        11 => ("10-node second-order tetrahedron", 10, 3),
+        12 => ("27-node second-order hexahedron", 27, 3),
+        13 => ("18-node second-order prism", 18, 3),
+        14 => ("14-node second-order pyramid", 14, 3),
+        15 => ("1-node point", 1, 0),
+        16 => ("8-node second-order quadrangle", 8, 2),
+        17 => ("20-node second-order hexahedron", 20, 3),
+        18 => ("15-node second-order prism", 15, 3),
+        19 => ("13-node second-order pyramid", 13, 3),
+        20 => ("9-node third-order incomplete triangle", 9, 2),
+        21 => ("10-node third-order triangle", 10, 2),
+        22 => ("12-node fourth-order incomplete triangle", 12, 2),
+        23 => ("15-node fourth-order triangle", 15, 2),
+        24 => ("15-node fifth-order incomplete triangle", 15, 2),
+        25 => ("21-node fifth-order triangle", 21, 2),
+        26 => ("4-node third-order line", 4, 1),
+        27 => ("5-node fourth-order line", 5, 1),
+        28 => ("6-node fifth-order line", 6, 1),
+        29 => ("20-node third-order tetrahedron", 20, 3),
+        30 => ("35-node fourth-order tetrahedron", 35, 3),
+        31 => ("56-node fifth-order tetrahedron", 56, 3),
+        36 => ("16-node third-order quadrangle", 16, 2),
+        37 => ("25-node fourth-order quadrangle", 25, 2),
+        38 => ("36-node fifth-order quadrangle", 36, 2),
+        92 => ("64-node third-order hexahedron", 64, 3),
+        93 => ("125-node fourth-order hexahedron", 125, 3),
+        _ => return None,
+    })
+}
+
+/// Where the physical tags of a run of elements come from.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Origin {
+    /// Physical tags (the dimension is the element's).
+    pub physical: Vec<i32>,
+    /// The elementary entity (dim, tag), for messages.
+    pub entity: Option<(i32, i32)>,
+}
+
+/// Where things are in the file, for messages.
+pub(crate) struct Places<'a> {
+    /// Per node (file order): line of its tag and line of its coordinates (ASCII only).
+    pub node_lines: Option<Vec<(usize, usize)>>,
+    /// Line of element `index` (file order) with tag `tag`, if it can be found.
+    pub element_line: Box<dyn Fn(usize, u64) -> Option<usize> + 'a>,
+}
+
+/// What a reader hands to [`build`]: everything in file order, tags unresolved.
+pub(crate) struct RawMesh<'a> {
+    pub node_tags: Vec<u64>,
+    pub coords: Vec<[f64; 3]>,
+    pub element_tags: Vec<u64>,
+    pub element_types: Vec<i32>,
+    /// `element_nodes[offsets[e]..offsets[e + 1]]` are the node tags of element `e`.
+    pub offsets: Vec<usize>,
+    pub element_nodes: Vec<u64>,
+    /// Index into `origins` of each element.
+    pub element_origin: Vec<u32>,
+    pub origins: Vec<Origin>,
+    pub names: Vec<physical_names::PhysicalName>,
+    pub places: Places<'a>,
+}
+
+impl RawMesh<'_> {
+    fn node_place(&self, i: usize, coordinates: bool) -> String {
+        match &self.places.node_lines {
+            Some(l) => format!("line {} (node {})", if coordinates { l[i].1 } else { l[i].0 }, self.node_tags[i]),
+            None => format!("$Nodes, node {}", self.node_tags[i]),
+        }
+    }
+
+    fn element_place(&self, e: usize) -> String {
+        let tag = self.element_tags[e];
+        match (self.places.element_line)(e, tag) {
+            Some(l) => format!("line {l} (element {tag})"),
+            None => format!("$Elements, element {tag}"),
+        }
+    }
+}
+
+/// Node tag → dense index, by a table when the tags are dense enough, else a hash map.
+enum TagIndex {
+    Dense { min: u64, index: Vec<usize> },
+    Sparse(HashMap<u64, usize>),
+}
+
+impl TagIndex {
+    fn new(tags: &[u64], rank: &[usize]) -> Self {
+        let min = tags.iter().copied().min().unwrap_or(0);
+        let max = tags.iter().copied().max().unwrap_or(0);
+        let span = max - min;
+        if span < 4 * tags.len() as u64 + 64 {
+            let mut index = vec![usize::MAX; span as usize + 1];
+            for (i, &t) in tags.iter().enumerate() {
+                index[(t - min) as usize] = rank[i];
+            }
+            TagIndex::Dense { min, index }
+        } else {
+            TagIndex::Sparse(tags.iter().zip(rank).map(|(&t, &r)| (t, r)).collect())
+        }
+    }
+
+    fn get(&self, tag: u64) -> Option<usize> {
+        match self {
+            TagIndex::Dense { min, index } => {
+                let i = tag.checked_sub(*min)?;
+                index.get(usize::try_from(i).ok()?).copied().filter(|&r| r != usize::MAX)
+            }
+            TagIndex::Sparse(m) => m.get(&tag).copied(),
+        }
+    }
+}
+
+fn signed_area(points: &[[f64; 2]], nodes: &[usize]) -> f64 {
+    let n = nodes.len();
+    let mut a = 0.0;
+    for i in 0..n {
+        let p = points[nodes[i]];
+        let q = points[nodes[(i + 1) % n]];
+        a += p[0] * q[1] - q[0] * p[1];
+    }
+    0.5 * a
+}
+
+fn fmt_point(p: [f64; 2]) -> String {
+    format!("({:?}, {:?})", p[0], p[1])
+}
+
+/// Turns what a reader found into a [`Mesh`], validating it.
+fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
+    let invalid = |place: String, detail: String| MeshError::Invalid { path: path.to_path_buf(), place, detail };
+    let n = raw.node_tags.len();
+    if n == 0 {
+        return Err(invalid("$Nodes".into(), "the mesh has no nodes; mesh the geometry (gmsh -2) before saving".into()));
+    }
+
+    // Coordinates: finite, planar.
+    for (i, c) in raw.coords.iter().enumerate() {
+        if !c.iter().all(|v| v.is_finite()) {
+            return Err(invalid(
+                raw.node_place(i, true),
+                format!("node {} has a non-finite coordinate ({}, {}, {}); the file is corrupt: re-export it", raw.node_tags[i], c[0], c[1], c[2]),
+            ));
+        }
+    }
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for c in &raw.coords {
+        for k in 0..2 {
+            lo[k] = lo[k].min(c[k]);
+            hi[k] = hi[k].max(c[k]);
+        }
+    }
+    let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(f64::MIN_POSITIVE);
+    let z0 = raw.coords[0][2];
+    if let Some(i) = raw.coords.iter().position(|c| (c[2] - z0).abs() > 1e-9 * extent.max(z0.abs())) {
+        return Err(invalid(
+            raw.node_place(i, true),
+            format!(
+                "node {} has z = {:?} but node {} has z = {:?}: hvi is 2D and needs a mesh in a plane z = const; \
+                 mesh a plane surface (gmsh -2) of a geometry with constant z",
+                raw.node_tags[i], raw.coords[i][2], raw.node_tags[0], z0
+            ),
+        ));
+    }
+
+    // Dense numbering in ascending tag order; duplicate tags are an error.
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by_key(|&i| (raw.node_tags[i], i));
+    for w in order.windows(2) {
+        if raw.node_tags[w[0]] == raw.node_tags[w[1]] {
+            return Err(invalid(
+                raw.node_place(w[1], false),
+                format!(
+                    "node tag {} is defined twice (also at {}); node tags must be unique: re-export the mesh from gmsh \
+                     (or renumber it: gmsh file.msh -renumber -save)",
+                    raw.node_tags[w[1]],
+                    raw.node_place(w[0], false)
+                ),
+            ));
+        }
+    }
+    let mut rank = vec![0usize; n];
+    for (r, &i) in order.iter().enumerate() {
+        rank[i] = r;
+    }
+    let points: Vec<[f64; 2]> = order.iter().map(|&i| [raw.coords[i][0], raw.coords[i][1]]).collect();
+    let index = TagIndex::new(&raw.node_tags, &rank);
+
+    // Elements.
+    let mut groups: BTreeMap<(u8, i32), PhysicalGroup> = BTreeMap::new();
+    fn group(groups: &mut BTreeMap<(u8, i32), PhysicalGroup>, dim: u8, tag: i32) -> &mut PhysicalGroup {
+        groups.entry((dim, tag)).or_insert_with(|| PhysicalGroup {
+            dim,
+            tag,
+            name: None,
+            facets: Vec::new(),
+            cells: Vec::new(),
+            nodes: Vec::new(),
+        })
+    }
+    let name_of = |dim: u8, tag: i32| raw.names.iter().find(|p| p.dim == dim && p.tag == tag).map(|p| p.name.clone());
+    let mut cells = Vec::new();
+    let mut cell_tags = Vec::new();
+    let mut cell_element = Vec::new();
+    let mut nodes = [0usize; 4];
+    for e in 0..raw.element_tags.len() {
+        let ty = raw.element_types[e];
+        let origin = &raw.origins[raw.element_origin[e] as usize];
+        let info = element_type_info(ty);
+        if !matches!(ty, 1 | 2 | 3 | 15) {
+            let dim = info.map_or(2, |i| i.2);
+            let group_text = if origin.physical.is_empty() {
+                match origin.entity {
+                    Some((d, t)) => format!("in no physical group (elementary entity of dim {d}, tag {t})"),
+                    None => "in no physical group".to_string(),
+                }
+            } else {
+                let names: Vec<String> = origin
+                    .physical
+                    .iter()
+                    .map(|&t| match name_of(dim, t) {
+                        Some(n) => format!("\"{n}\" (tag {t})"),
+                        None => format!("tag {t}"),
+                    })
+                    .collect();
+                format!("in physical group {}", names.join(", "))
+            };
+            let (name, fix) = match info {
+                Some((name, _, 3)) => (name, "hvi is 2D: mesh only the surface (gmsh -2) and put the body in a Physical Surface"),
+                Some((name, _, _)) => (
+                    name,
+                    "hvi computes with first-order elements only: mesh with gmsh -order 1 (Mesh.ElementOrder = 1), \
+                     without Mesh.SecondOrderIncomplete",
+                ),
+                None => (
+                    "an element type hvi does not know",
+                    "hvi reads only points (15), 2-node lines (1), 3-node triangles (2) and 4-node quadrangles (3): \
+                     mesh with gmsh -2 -order 1",
+                ),
+            };
+            return Err(MeshError::UnsupportedElement {
+                path: path.to_path_buf(),
+                place: raw.element_place(e),
+                element_type: ty,
+                detail: format!("element {} is of type {ty} ({name}), {group_text}; {fix}", raw.element_tags[e]),
+            });
+        }
+        let tags = &raw.element_nodes[raw.offsets[e]..raw.offsets[e + 1]];
+        let want = info.map_or(0, |i| i.1);
+        if tags.len() != want {
+            return Err(MeshError::Syntax {
+                path: path.to_path_buf(),
+                place: raw.element_place(e),
+                detail: format!("element {} of type {ty} has {} nodes, expected {want}", raw.element_tags[e], tags.len()),
+            });
+        }
+        for (k, &t) in tags.iter().enumerate() {
+            nodes[k] = index.get(t).ok_or_else(|| {
+                invalid(
+                    raw.element_place(e),
+                    format!(
+                        "element {} refers to node {t}, which is not in $Nodes; the file is corrupt or was edited: \
+                         re-export it from gmsh",
+                        raw.element_tags[e]
+                    ),
+                )
+            })?;
+        }
+        let nodes = &nodes[..tags.len()];
+        for i in 0..nodes.len() {
+            if nodes[i + 1..].contains(&nodes[i]) {
+                return Err(invalid(
+                    raw.element_place(e),
+                    format!("element {} uses node {} twice: it is degenerate; re-mesh", raw.element_tags[e], tags[i]),
+                ));
+            }
+        }
+        match ty {
+            15 => {
+                for &p in &origin.physical {
+                    group(&mut groups, 0, p).nodes.push(nodes[0]);
+                }
+            }
+            1 => {
+                for &p in &origin.physical {
+                    group(&mut groups, 1, p).facets.push([nodes[0], nodes[1]]);
+                }
+            }
+            _ => {
+                let c = cells.len();
+                cells.push(if ty == 2 {
+                    Cell::Tri3([nodes[0], nodes[1], nodes[2]])
+                } else {
+                    Cell::Quad4([nodes[0], nodes[1], nodes[2], nodes[3]])
+                });
+                cell_tags.push(raw.element_tags[e] as usize);
+                cell_element.push(e);
+                for &p in &origin.physical {
+                    group(&mut groups, 2, p).cells.push(c);
+                }
+            }
+        }
+    }
+    if cells.is_empty() {
+        return Err(invalid(
+            "$Elements".into(),
+            "the mesh has no 2D elements (triangles or quadrangles). gmsh saves only elements of physical groups: \
+             add Physical Surface(\"Omega\", 5) = {...}; to the .geo (or set Mesh.SaveAll = 1), and mesh in 2D (gmsh -2)"
+                .into(),
+        ));
+    }
+
+    // Orientation: all counter-clockwise, or all clockwise (then flipped), else an error.
+    let areas: Vec<f64> = cells.iter().map(|c| signed_area(&points, c.nodes())).collect();
+    for (c, &a) in areas.iter().enumerate() {
+        let longest = cells[c]
+            .edges()
+            .map(|[p, q]| (points[q][0] - points[p][0]).hypot(points[q][1] - points[p][1]))
+            .fold(0.0_f64, f64::max);
+        if a.abs() <= 1e-14 * longest * longest {
+            return Err(invalid(
+                raw.element_place(cell_element[c]),
+                format!("element {} has zero area (degenerate cell); re-mesh", cell_tags[c]),
+            ));
+        }
+    }
+    let clockwise = areas.iter().filter(|&&a| a < 0.0).count();
+    if clockwise == cells.len() {
+        for c in &mut cells {
+            *c = match *c {
+                Cell::Tri3([a, b, c]) => Cell::Tri3([a, c, b]),
+                Cell::Quad4([a, b, c, d]) => Cell::Quad4([a, d, c, b]),
+            };
+        }
+    } else if clockwise > 0 {
+        let c = areas.iter().position(|&a| a < 0.0).unwrap_or(0);
+        return Err(invalid(
+            raw.element_place(cell_element[c]),
+            format!(
+                "element {} is inverted (clockwise, signed area {:e}) while other cells are counter-clockwise; \
+                 {clockwise} of {} cells are clockwise. Fix the mesh: re-mesh, or make all surfaces in the .geo \
+                 oriented alike (Reverse Surface{{...}};)",
+                cell_tags[c],
+                areas[c],
+                cells.len()
+            ),
+        ));
+    }
+    for (c, cell) in cells.iter().enumerate() {
+        if let Cell::Quad4(q) = cell {
+            for i in 0..4 {
+                let (p0, p1, p2) = (points[q[i]], points[q[(i + 1) % 4]], points[q[(i + 2) % 4]]);
+                let cross = (p1[0] - p0[0]) * (p2[1] - p1[1]) - (p1[1] - p0[1]) * (p2[0] - p1[0]);
+                if cross <= 1e-14 * areas[c].abs() {
+                    return Err(invalid(
+                        raw.element_place(cell_element[c]),
+                        format!(
+                            "quadrangle {} is not convex (or self-intersecting) at its corner {}: the bilinear map is \
+                             not invertible there; re-mesh (e.g. Mesh.RecombinationAlgorithm, or triangles)",
+                            cell_tags[c],
+                            fmt_point(p1)
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+
+    // Every node must be in a cell, or the stiffness matrix is singular.
+    let mut used = vec![false; n];
+    for c in &cells {
+        for &p in c.nodes() {
+            used[p] = true;
+        }
+    }
+    if let Some(r) = used.iter().position(|u| !u) {
+        let i = order[r];
+        return Err(invalid(
+            raw.node_place(i, false),
+            format!(
+                "node {} at {} belongs to no 2D element, so its displacement would be undetermined; remove \
+                 unmeshed points from the geometry, or save without Mesh.SaveAll = 1",
+                raw.node_tags[i],
+                fmt_point(points[r])
+            ),
+        ));
+    }
+
+    for p in &raw.names {
+        group(&mut groups, p.dim, p.tag).name = Some(p.name.clone());
+    }
+    Ok(Mesh { path: path.to_path_buf(), points, cells, cell_tags, groups: groups.into_values().collect() })
+}
