@@ -27,18 +27,42 @@ use std::time::Instant;
 
 /// EXAMPLE.md's corrected Table 1 (k = 1/256; h = 1/8 … 1/64).
 const PAPER_TABLE_1: [Published; 4] = [
-    Published { error: 7.044095264494761e-3, order: None },
-    Published { error: 2.831608699747937e-3, order: Some(1.31) },
-    Published { error: 1.244870264157188e-3, order: Some(1.19) },
-    Published { error: 5.692251463968669e-4, order: Some(1.13) },
+    Published {
+        error: 7.044095264494761e-3,
+        order: None,
+    },
+    Published {
+        error: 2.831608699747937e-3,
+        order: Some(1.31),
+    },
+    Published {
+        error: 1.244870264157188e-3,
+        order: Some(1.19),
+    },
+    Published {
+        error: 5.692251463968669e-4,
+        order: Some(1.13),
+    },
 ];
 
 /// EXAMPLE.md's corrected Table 2 (h = 1/256; k = 1/4, 1/8, 1/12, 1/16).
 const PAPER_TABLE_2: [Published; 4] = [
-    Published { error: 4.049067247799612e-3, order: None },
-    Published { error: 9.899921240195822e-4, order: Some(2.03) },
-    Published { error: 4.290570202713140e-4, order: Some(2.06) },
-    Published { error: 2.416076212233180e-4, order: Some(2.00) },
+    Published {
+        error: 4.049067247799612e-3,
+        order: None,
+    },
+    Published {
+        error: 9.899921240195822e-4,
+        order: Some(2.03),
+    },
+    Published {
+        error: 4.29057020271314e-4,
+        order: Some(2.06),
+    },
+    Published {
+        error: 2.41607621223318e-4,
+        order: Some(2.00),
+    },
 ];
 
 /// The times of the paper's Fig. 2 (the OCR's last panel reads "0.8"; 0.75 continues the
@@ -52,7 +76,11 @@ struct Args {
 }
 
 fn parse_args() -> Result<Args, String> {
-    let mut args = Args { quick: false, wide: false, out: PathBuf::from("paper_study") };
+    let mut args = Args {
+        quick: false,
+        wide: false,
+        out: PathBuf::from("paper_study"),
+    };
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -63,14 +91,19 @@ fn parse_args() -> Result<Args, String> {
                 println!("usage: paper_study [--quick] [--out DIR] [--wide]");
                 std::process::exit(0);
             }
-            other => return Err(format!("unknown argument {other:?} (usage: paper_study [--quick] [--out DIR] [--wide])")),
+            other => {
+                return Err(format!(
+                "unknown argument {other:?} (usage: paper_study [--quick] [--out DIR] [--wide])"
+            ))
+            }
         }
     }
     Ok(args)
 }
 
 fn scene(steps: usize) -> Scene {
-    let mut scene = Scene::load(None, &[format!("time.steps={steps}")]).unwrap_or_else(|e| panic!("embedded scene: {e}"));
+    let mut scene = Scene::load(None, &[format!("time.steps={steps}")])
+        .unwrap_or_else(|e| panic!("embedded scene: {e}"));
     scene.time.steps = steps;
     scene
 }
@@ -85,7 +118,8 @@ fn main() {
 fn real_main() -> Result<(), String> {
     let args = parse_args()?;
     let started = Instant::now();
-    std::fs::create_dir_all(&args.out).map_err(|e| format!("creating {}: {e}", args.out.display()))?;
+    std::fs::create_dir_all(&args.out)
+        .map_err(|e| format!("creating {}: {e}", args.out.display()))?;
     let wide = args.wide;
     let make_mesh = move |n: usize| -> Mesh {
         if wide {
@@ -95,7 +129,12 @@ fn real_main() -> Result<(), String> {
         }
     };
     let plan = if args.quick {
-        StudyPlan { reference: (64, 64), h_paths: vec![(64, vec![8, 16, 32])], k_paths: vec![(64, vec![4, 8, 12, 16])], keep: Keep::MultiplesOf(1.0 / 16.0) }
+        StudyPlan {
+            reference: (64, 64),
+            h_paths: vec![(64, vec![8, 16, 32])],
+            k_paths: vec![(64, vec![4, 8, 12, 16])],
+            keep: Keep::MultiplesOf(1.0 / 16.0),
+        }
     } else {
         StudyPlan {
             reference: (256, 256),
@@ -112,15 +151,15 @@ fn real_main() -> Result<(), String> {
         plan.reference.1
     );
     let mut progress = |r: &RunRecord, e: Option<&RunErrors>| {
-        let errs = e.map_or(String::from("(reference)"), |e| format!("H¹ error {:.4e}, L² {:.4e}, max_t H¹ {:.4e}", e.at_final.h1_seminorm, e.at_final.l2, e.h1_max_over_time));
+        let errs = e.map_or(String::from("(reference)"), |e| {
+            format!(
+                "H¹ error {:.4e}, L² {:.4e}, max_t H¹ {:.4e}",
+                e.at_final.h1_seminorm, e.at_final.l2, e.h1_max_over_time
+            )
+        });
         eprintln!(
             "  {:<28} {:>7} unknowns {:>4} steps  {:>7.2} s  {:>5} Newton  {}",
-            r.label,
-            r.unknowns,
-            r.steps,
-            r.wall,
-            r.newton_total,
-            errs
+            r.label, r.unknowns, r.steps, r.wall, r.newton_total, errs
         );
     };
     let study = study::run_plan(&plan, &make_mesh, &scene, &mut progress)?;
@@ -132,21 +171,42 @@ fn real_main() -> Result<(), String> {
     let title2 = format!("Table 2: h = 1/{h2} fixed, k refined (paper: h = 1/256)");
     println!("{}", report::comparison_text(&title1, &t1, &PAPER_TABLE_1));
     println!("{}", report::comparison_text(&title2, &t2, &PAPER_TABLE_2));
-    let fitted: Vec<String> = study.paths.iter().map(|p| format!("{}: {:.3}", p.name, study.fitted_order(p).unwrap_or(f64::NAN))).collect();
-    println!("least-squares orders of the H¹ error at T: {}", fitted.join(", "));
+    let fitted: Vec<String> = study
+        .paths
+        .iter()
+        .map(|p| {
+            format!(
+                "{}: {:.3}",
+                p.name,
+                study.fitted_order(p).unwrap_or(f64::NAN)
+            )
+        })
+        .collect();
+    println!(
+        "least-squares orders of the H¹ error at T: {}",
+        fitted.join(", ")
+    );
 
     // plots
     let out = &args.out;
     plot::plot_error_vs_h(&out.join("error_vs_h.svg"), &rows)?;
     plot::plot_error_vs_k(&out.join("error_vs_k.svg"), &rows)?;
     plot::plot_work_precision(&out.join("work_precision.svg"), &rows)?;
-    let reference = study.reference_run().ok_or("the study has no reference run")?;
+    let reference = study
+        .reference_run()
+        .ok_or("the study has no reference run")?;
     let contact = scene(1).groups.contact;
-    let gamma3 = reference.mesh.boundary(&contact).map_err(|e| format!("Γ₃ of the reference mesh: {e}"))?;
+    let gamma3 = reference
+        .mesh
+        .boundary(&contact)
+        .map_err(|e| format!("Γ₃ of the reference mesh: {e}"))?;
     let series: Vec<(f64, Vec<(f64, f64)>)> = FIG2_TIMES
         .iter()
         .filter_map(|&t| {
-            let (_, u) = reference.displacement_at.iter().find(|(s, _)| (s - t).abs() < 1e-9)?;
+            let (_, u) = reference
+                .displacement_at
+                .iter()
+                .find(|(s, _)| (s - t).abs() < 1e-9)?;
             let pts = gamma3
                 .nodes
                 .iter()
@@ -160,18 +220,37 @@ fn real_main() -> Result<(), String> {
 
     // the README picture: von Mises on the deformed mesh at T, h = k = 1/32
     let n_pic = 32;
-    let (sim, _, sink) = solve_in_memory(&scene(n_pic), make_mesh(n_pic)).map_err(|e| format!("picture run: {e}"))?;
+    let (sim, _, sink) = solve_in_memory(&scene(n_pic), make_mesh(n_pic))
+        .map_err(|e| format!("picture run: {e}"))?;
     let last = sink.steps.last().ok_or("picture run kept no step")?;
     let u = sim.dofs.to_nodal(&last.displacement);
-    let memory = last.memory_displacement.as_ref().map(|m| sim.dofs.to_nodal(m));
-    let stresses = cell_stresses(&sim.mesh.cells, &sim.mesh.points, &sim.elasticity, &u, memory.as_deref());
-    plot::render_deformed_png(&out.join("deformed.png"), &sim.mesh, &u, &stresses.von_mises, 1.0)?;
+    let memory = last
+        .memory_displacement
+        .as_ref()
+        .map(|m| sim.dofs.to_nodal(m));
+    let stresses = cell_stresses(
+        &sim.mesh.cells,
+        &sim.mesh.points,
+        &sim.elasticity,
+        &u,
+        memory.as_deref(),
+    );
+    plot::render_deformed_png(
+        &out.join("deformed.png"),
+        &sim.mesh,
+        &u,
+        &stresses.von_mises,
+        1.0,
+    )?;
 
     // tables
     let csv = report::csv(&rows);
     std::fs::write(out.join("study.csv"), &csv).map_err(|e| format!("writing study.csv: {e}"))?;
     let mut md = String::new();
-    let _ = writeln!(md, "# The paper's convergence study (Tables 1–2), reproduced by hvi\n");
+    let _ = writeln!(
+        md,
+        "# The paper's convergence study (Tables 1–2), reproduced by hvi\n"
+    );
     let _ = writeln!(
         md,
         "Command: `cargo run --release --example paper_study -- {}`. Scene: the embedded default \
@@ -185,9 +264,21 @@ fn real_main() -> Result<(), String> {
         plan.reference.1,
         started.elapsed().as_secs_f64()
     );
-    let _ = writeln!(md, "## {title1}\n\n{}", report::comparison_markdown(&t1, &PAPER_TABLE_1));
-    let _ = writeln!(md, "## {title2}\n\n{}", report::comparison_markdown(&t2, &PAPER_TABLE_2));
-    let _ = writeln!(md, "Least-squares orders of the H¹ error at T: {}.\n", fitted.join(", "));
+    let _ = writeln!(
+        md,
+        "## {title1}\n\n{}",
+        report::comparison_markdown(&t1, &PAPER_TABLE_1)
+    );
+    let _ = writeln!(
+        md,
+        "## {title2}\n\n{}",
+        report::comparison_markdown(&t2, &PAPER_TABLE_2)
+    );
+    let _ = writeln!(
+        md,
+        "Least-squares orders of the H¹ error at T: {}.\n",
+        fitted.join(", ")
+    );
     let _ = writeln!(
         md,
         "The paper's Table 1 decays faster than O(h) at coarse h (orders 1.31, 1.19, 1.13; EXAMPLE.md: it fits \
@@ -215,6 +306,10 @@ fn real_main() -> Result<(), String> {
     );
     std::fs::write(out.join("study.md"), &md).map_err(|e| format!("writing study.md: {e}"))?;
     println!("wrote study.md, study.csv, error_vs_h.svg, error_vs_k.svg, work_precision.svg, gamma3.svg, deformed.png to {}", out.display());
-    println!("total {:.1} s (reference {})", started.elapsed().as_secs_f64(), fraction(reference.k));
+    println!(
+        "total {:.1} s (reference {})",
+        started.elapsed().as_secs_f64(),
+        fraction(reference.k)
+    );
     Ok(())
 }

@@ -30,3 +30,4 @@ pub mod mesh;
 pub mod output;
 pub mod scene;
 pub mod solver;
+pub mod study;

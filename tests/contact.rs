@@ -4,8 +4,10 @@
 //! The column: Ω = (0,1)², clamped on top, contact on the bottom, plane stress with ν = 0,
 //! body force (0, −ρ). Then u = (0, v(y)) with E v'' = ρ, v(1) = 0, σ₂₂ = E v' exactly (the
 //! sides are traction-free), and the bottom contact pressure p = −σ₂₂(0) with r = u_ν = −v(0):
-//! r = ρ/(2E) − p/E. Linear elements are nodally exact for this 1D problem, and the nodal
+//! r = ρ/(2E) − p/E. Q1 elements are nodally exact for this 1D problem, and the nodal
 //! contact quadrature is exact for a uniform r, so every bottom node must show the exact r.
+//! (Not P1 on the structured triangulation: there the bottom corners carry unequal shares of
+//! the body force, h²/6 and h²/3, so the discrete solution is not a 1D column.)
 
 mod common;
 
@@ -52,7 +54,8 @@ fn column_on_the_compliant_layer() {
         }
     }
     let r = 0.5 * (lo + hi);
-    for shape in [CellShape::Quad, CellShape::Tri] {
+    {
+        let shape = CellShape::Quad;
         for (un, p, _) in run_column(rho, &format!("[contact]\n{LAW}"), shape) {
             assert!((un - r).abs() < 1e-10, "u_ν {un} vs exact {r}");
             assert!((p - paper_force(r)).abs() < 1e-10, "pressure {p} vs {}", paper_force(r));
@@ -76,7 +79,8 @@ fn column_below_the_bound() {
 #[test]
 fn column_reaching_the_bound() {
     let (rho, g) = (0.6, 0.2);
-    for shape in [CellShape::Quad, CellShape::Tri] {
+    {
+        let shape = CellShape::Quad;
         for (un, p, eta_nodal) in run_column(rho, &format!("[contact]\nbound = {g}\n{LAW}"), shape) {
             assert!((un - g).abs() < 1e-12, "u_ν {un}");
             let p_exact = rho / 2.0 - g;

@@ -48,8 +48,9 @@ fn patch_test_constant_strain_on_distorted_meshes() {
 }
 
 /// u = (sin x cos y, x² sin y), plane stress E = 1, ν = 0.3, clamped at x = 0, tractions of
-/// the exact stress on the other sides and the body force −div σ. On meshes h = 1/4 … 1/32
-/// the fitted orders are 1 (H¹ seminorm) and 2 (L²) within ±0.1.
+/// the exact stress on the other sides and the body force −div σ. On meshes h = 1/8 … 1/64
+/// the fitted orders are 1 (H¹ seminorm) and 2 (L²) within ±0.1. (h = 1/4, 8 × 4 cells, is
+/// still pre-asymptotic in L²: its pairwise order to h = 1/8 is 1.76 on Q1.)
 #[test]
 fn manufactured_solution_converges_at_the_theoretical_orders() {
     let nu: f64 = 0.3;
@@ -70,7 +71,7 @@ fn manufactured_solution_converges_at_the_theoretical_orders() {
     };
     for shape in [CellShape::Quad, CellShape::Tri] {
         let (mut hs, mut h1, mut l2) = (vec![], vec![], vec![]);
-        for n in [4, 8, 16, 32] {
+        for n in [8, 16, 32, 64] {
             let mesh = rectangle_with_sides(2.0, 1.0, 2 * n, n, shape);
             let (sim, _, sink) = solve_in_memory(&scene(&toml), mesh).unwrap();
             let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);

@@ -7,12 +7,16 @@ use hvi::fem::norms::errors;
 use hvi::mesh::structured::{rectangle, CellShape};
 use hvi::mesh::{Mesh, PhysicalGroup};
 use hvi::scene::Scene;
-use hvi::study::{self, interpolate_nodal, plot, report, seminorm_errors, Keep, Locator, Refinement, RunOptions, Study, StudyPlan};
+use hvi::study::{
+    self, interpolate_nodal, plot, report, seminorm_errors, Keep, Locator, Refinement, RunOptions,
+    Study, StudyPlan,
+};
 
 // ---- scenes (begin) ----
 /// The embedded default scene (the paper's example) with N steps.
 fn paper_scene(steps: usize) -> Scene {
-    let mut scene = Scene::load(None, &[format!("time.steps={steps}")]).unwrap_or_else(|e| panic!("{e}"));
+    let mut scene =
+        Scene::load(None, &[format!("time.steps={steps}")]).unwrap_or_else(|e| panic!("{e}"));
     scene.time.steps = steps;
     scene
 }
@@ -26,8 +30,12 @@ fn manufactured_scene() -> Scene {
     let s11 = format!("{c:e}*(cos(x)*cos(y) + {nu:e}*x^2*cos(y))");
     let s22 = format!("{c:e}*({nu:e}*cos(x)*cos(y) + x^2*cos(y))");
     let s12 = format!("{g:e}*(-sin(x)*sin(y) + 2*x*sin(y))");
-    let f1 = format!("-({c:e}*(-sin(x)*cos(y) + 2*{nu:e}*x*cos(y)) + {g:e}*(-sin(x)*cos(y) + 2*x*cos(y)))");
-    let f2 = format!("-({g:e}*(-cos(x)*sin(y) + 2*sin(y)) + {c:e}*(-{nu:e}*cos(x)*sin(y) - x^2*sin(y)))");
+    let f1 = format!(
+        "-({c:e}*(-sin(x)*cos(y) + 2*{nu:e}*x*cos(y)) + {g:e}*(-sin(x)*cos(y) + 2*x*cos(y)))"
+    );
+    let f2 = format!(
+        "-({g:e}*(-cos(x)*sin(y) + 2*sin(y)) + {c:e}*(-{nu:e}*cos(x)*sin(y) - x^2*sin(y)))"
+    );
     let toml = format!(
         "[material]\nplane = \"stress\"\nyoungs_modulus = 1.0\npoisson_ratio = {nu}\n[time]\nfinal_time = 1.0\nsteps = 1\n\
          [[traction]]\ngroup = \"Right\"\nvalue = [\"{s11}\", \"{s12}\"]\n[[traction]]\ngroup = \"Gamma2_top\"\nvalue = [\"{s12}\", \"{s22}\"]\n\
@@ -40,7 +48,10 @@ fn manufactured_scene() -> Scene {
 /// u = (sin x cos y, x² sin y) and its gradient.
 fn manufactured_exact(x: [f64; 2]) -> ([f64; 2], [[f64; 2]; 2]) {
     let (sx, cx, sy, cy) = (x[0].sin(), x[0].cos(), x[1].sin(), x[1].cos());
-    ([sx * cy, x[0] * x[0] * sy], [[cx * cy, -sx * sy], [2.0 * x[0] * sy, x[0] * x[0] * cy]])
+    (
+        [sx * cy, x[0] * x[0] * sy],
+        [[cx * cy, -sx * sy], [2.0 * x[0] * sy, x[0] * x[0] * cy]],
+    )
 }
 
 /// The rectangle with its groups plus a "Right" group for the side x = lx.
@@ -56,14 +67,24 @@ fn rectangle_with_sides(lx: f64, ly: f64, nx: usize, ny: usize, shape: CellShape
         .copied()
         .filter(|f| f.iter().all(|&p| (mesh.points[p][0] - lx).abs() < 1e-12))
         .collect();
-    mesh.groups.push(PhysicalGroup { dim: 1, tag: 90, name: Some("Right".into()), facets: right, cells: vec![], nodes: vec![] });
+    mesh.groups.push(PhysicalGroup {
+        dim: 1,
+        tag: 90,
+        name: Some("Right".into()),
+        facets: right,
+        cells: vec![],
+        nodes: vec![],
+    });
     mesh
 }
 
 /// Moves interior nodes by a deterministic perturbation of amplitude `amp`·h.
 fn distort_interior(mesh: &mut Mesh, lx: f64, ly: f64, h: f64, amp: f64) {
     for (k, p) in mesh.points.iter_mut().enumerate() {
-        let on_boundary = p[0].abs() < 1e-12 || p[1].abs() < 1e-12 || (p[0] - lx).abs() < 1e-12 || (p[1] - ly).abs() < 1e-12;
+        let on_boundary = p[0].abs() < 1e-12
+            || p[1].abs() < 1e-12
+            || (p[0] - lx).abs() < 1e-12
+            || (p[1] - ly).abs() < 1e-12;
         if !on_boundary {
             let s = (k as f64 * 12.9898).sin() * 43758.5453;
             let t = (k as f64 * 78.233).sin() * 12345.678;
@@ -74,16 +95,31 @@ fn distort_interior(mesh: &mut Mesh, lx: f64, ly: f64, h: f64, amp: f64) {
 }
 
 fn linear(x: [f64; 2]) -> [f64; 2] {
-    [0.3 + 1.7 * x[0] - 0.4 * x[1], -0.2 + 0.5 * x[0] + 2.1 * x[1]]
+    [
+        0.3 + 1.7 * x[0] - 0.4 * x[1],
+        -0.2 + 0.5 * x[0] + 2.1 * x[1],
+    ]
 }
 
 fn max_diff(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
-    a.iter().zip(b).map(|(u, v)| (u[0] - v[0]).abs().max((u[1] - v[1]).abs())).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .map(|(u, v)| (u[0] - v[0]).abs().max((u[1] - v[1]).abs()))
+        .fold(0.0, f64::max)
 }
 
 /// A deterministic, non-polynomial nodal field.
 fn rough_field(mesh: &Mesh) -> Vec<[f64; 2]> {
-    mesh.points.iter().enumerate().map(|(k, p)| [(3.0 * p[0]).sin() + 0.1 * (k as f64).cos(), p[0] * p[1] - 0.05 * (k as f64 * 0.7).sin()]).collect()
+    mesh.points
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            [
+                (3.0 * p[0]).sin() + 0.1 * (k as f64).cos(),
+                p[0] * p[1] - 0.05 * (k as f64 * 0.7).sin(),
+            ]
+        })
+        .collect()
 }
 
 #[test]
@@ -97,11 +133,22 @@ fn interpolation_is_exact_for_linear_fields_between_non_nested_meshes() {
         let u: Vec<[f64; 2]> = from.points.iter().map(|&x| linear(x)).collect();
         let carried = interpolate_nodal(from, &u, &to.points).unwrap();
         let exact: Vec<[f64; 2]> = to.points.iter().map(|&x| linear(x)).collect();
-        assert!(max_diff(&carried, &exact) < 1e-12, "nodal error {:e}", max_diff(&carried, &exact));
+        assert!(
+            max_diff(&carried, &exact) < 1e-12,
+            "nodal error {:e}",
+            max_diff(&carried, &exact)
+        );
         let e = seminorm_errors(to, &exact, &carried);
         assert!(e.h1_seminorm < 1e-11 && e.l2 < 1e-12, "{e:?}");
         // and at arbitrary interior points
-        let pts: Vec<[f64; 2]> = (0..200).map(|i| [2.0 * ((i as f64 * 0.618_034) % 1.0), (i as f64 * 0.414_214) % 1.0]).collect();
+        let pts: Vec<[f64; 2]> = (0..200)
+            .map(|i| {
+                [
+                    2.0 * ((i as f64 * 0.618_034) % 1.0),
+                    (i as f64 * 0.414_214) % 1.0,
+                ]
+            })
+            .collect();
         let at = interpolate_nodal(from, &u, &pts).unwrap();
         let want: Vec<[f64; 2]> = pts.iter().map(|&x| linear(x)).collect();
         assert!(max_diff(&at, &want) < 1e-12);
@@ -117,8 +164,19 @@ fn points_outside_the_mesh_are_errors_naming_the_point_and_the_boundary_is_insid
     let err = interpolate_nodal(&mesh, &u, &[[1.0, -1e-6]]).unwrap_err();
     assert!(err.contains("outside"), "{err}");
     // corners, edges and points outside by less than 1e-10 × diameter are inside
-    let ok = interpolate_nodal(&mesh, &u, &[[0.0, 0.0], [2.0, 1.0], [1.0, 0.0], [2.0 + 1e-12, 0.5], [0.3, 1.0 + 1e-12]]).unwrap();
-    assert!(max_diff(&ok, &vec![[1.0, 2.0]; 5]) < 1e-14);
+    let ok = interpolate_nodal(
+        &mesh,
+        &u,
+        &[
+            [0.0, 0.0],
+            [2.0, 1.0],
+            [1.0, 0.0],
+            [2.0 + 1e-12, 0.5],
+            [0.3, 1.0 + 1e-12],
+        ],
+    )
+    .unwrap();
+    assert!(max_diff(&ok, &[[1.0, 2.0]; 5]) < 1e-14);
     let locator = Locator::new(&mesh);
     let (cell, xi) = locator.locate([0.3, 0.2]).unwrap();
     let s = shape_at(&mesh.cells[cell], &mesh.points, xi);
@@ -128,13 +186,23 @@ fn points_outside_the_mesh_are_errors_naming_the_point_and_the_boundary_is_insid
 #[test]
 fn nested_meshes_carry_exactly_both_ways() {
     for quad in [true, false] {
-        let shape = || if quad { CellShape::Quad } else { CellShape::Tri };
+        let shape = || {
+            if quad {
+                CellShape::Quad
+            } else {
+                CellShape::Tri
+            }
+        };
         let coarse = rectangle(2.0, 1.0, 8, 4, shape());
         let fine = rectangle(2.0, 1.0, 32, 16, shape());
         let u = rough_field(&coarse);
         let carried = interpolate_nodal(&coarse, &u, &fine.points).unwrap();
         let back = interpolate_nodal(&fine, &carried, &coarse.points).unwrap();
-        assert!(max_diff(&back, &u) < 1e-13, "there and back: {:e}", max_diff(&back, &u));
+        assert!(
+            max_diff(&back, &u) < 1e-13,
+            "there and back: {:e}",
+            max_diff(&back, &u)
+        );
         // the carried field is the coarse function: its H¹ and L² distance to a direct
         // evaluation of the coarse field (value and gradient at each quadrature point) is 0
         let locator = Locator::new(&coarse);
@@ -161,17 +229,41 @@ fn nested_meshes_carry_exactly_both_ways() {
 #[test]
 fn nested_transfer_of_a_solution_is_exact() {
     // a coarse solution of the paper's problem, carried to a nested fine mesh and back
-    let coarse = study::run(rectangle(2.0, 1.0, 8, 4, CellShape::Quad), &paper_scene(4), "coarse").unwrap();
+    let options = RunOptions {
+        label: "coarse".into(),
+        h: None,
+        keep: Keep::All,
+    };
+    let coarse = study::run_with(
+        rectangle(2.0, 1.0, 8, 4, CellShape::Quad),
+        &paper_scene(4),
+        &options,
+    )
+    .unwrap();
     let fine = rectangle(2.0, 1.0, 32, 16, CellShape::Quad);
-    let carried = interpolate_nodal(&coarse.mesh, &coarse.final_displacement, &fine.points).unwrap();
+    let carried =
+        interpolate_nodal(&coarse.mesh, &coarse.final_displacement, &fine.points).unwrap();
     let back = interpolate_nodal(&fine, &carried, &coarse.mesh.points).unwrap();
     assert!(max_diff(&back, &coarse.final_displacement) < 1e-14);
-    assert_eq!(coarse.displacement_at.len(), 5, "Keep::Output keeps every output step");
+    assert_eq!(
+        coarse.displacement_at.len(),
+        5,
+        "Keep::All keeps every step"
+    );
     assert!((coarse.displacement_at.last().unwrap().0 - 1.0).abs() < 1e-12);
     // a study of a run against itself has zero error
-    let mut s = Study::against_run(study::run(rectangle(2.0, 1.0, 8, 4, CellShape::Quad), &paper_scene(4), "again").unwrap());
+    let mut s = Study::against_run(
+        study::run_with(
+            rectangle(2.0, 1.0, 8, 4, CellShape::Quad),
+            &paper_scene(4),
+            &options,
+        )
+        .unwrap(),
+    );
     let i = s.add_run(&coarse).unwrap();
-    assert!(s.runs[i].errors.at_final.h1_seminorm < 1e-14 && s.runs[i].errors.h1_max_over_time < 1e-14);
+    assert!(
+        s.runs[i].errors.at_final.h1_seminorm < 1e-14 && s.runs[i].errors.h1_max_over_time < 1e-14
+    );
     assert_eq!(s.runs[i].errors.times_compared, 5);
 }
 
@@ -184,8 +276,19 @@ fn study_reports_theoretical_orders_for_a_manufactured_solution() {
     let mut exact = Study::against_exact(Box::new(|_t, x| manufactured_exact(x)));
     let mut records = Vec::new();
     for n in [4, 8, 16, 32] {
-        let options = RunOptions { label: format!("h=1/{n}"), h: Some(1.0 / n as f64), keep: Keep::All };
-        records.push(study::run_with(rectangle_with_sides(2.0, 1.0, 2 * n, n, CellShape::Quad), &scene, &options).unwrap());
+        let options = RunOptions {
+            label: format!("h=1/{n}"),
+            h: Some(1.0 / n as f64),
+            keep: Keep::All,
+        };
+        records.push(
+            study::run_with(
+                rectangle_with_sides(2.0, 1.0, 2 * n, n, CellShape::Quad),
+                &scene,
+                &options,
+            )
+            .unwrap(),
+        );
     }
     let idx: Vec<usize> = records.iter().map(|r| exact.add_run(r).unwrap()).collect();
     exact.add_path("h", Refinement::H, idx).unwrap();
@@ -198,23 +301,50 @@ fn study_reports_theoretical_orders_for_a_manufactured_solution() {
     let fitted = exact.fitted_order(&exact.paths[0]).unwrap();
     assert!((fitted - 1.0).abs() <= 0.1, "fitted H¹ order {fitted}");
     // max over the two output times (t = 0, 1: the loads do not depend on t) equals the error at T
-    assert!((last.errors.h1_max_over_time - last.errors.at_final.h1_seminorm).abs() <= 1e-12 * last.errors.h1_max_over_time);
+    assert!(
+        (last.errors.h1_max_over_time - last.errors.at_final.h1_seminorm).abs()
+            <= 1e-12 * last.errors.h1_max_over_time
+    );
 
     // the same runs against a reference run at h = 1/128
-    let options = RunOptions { label: "reference".into(), h: Some(1.0 / 128.0), keep: Keep::All };
-    let reference = study::run_with(rectangle_with_sides(2.0, 1.0, 256, 128, CellShape::Quad), &scene, &options).unwrap();
+    let options = RunOptions {
+        label: "reference".into(),
+        h: Some(1.0 / 128.0),
+        keep: Keep::All,
+    };
+    let reference = study::run_with(
+        rectangle_with_sides(2.0, 1.0, 256, 128, CellShape::Quad),
+        &scene,
+        &options,
+    )
+    .unwrap();
     let mut against_run = Study::against_run(reference);
-    let idx: Vec<usize> = records[..3].iter().map(|r| against_run.add_run(r).unwrap()).collect();
+    let idx: Vec<usize> = records[..3]
+        .iter()
+        .map(|r| against_run.add_run(r).unwrap())
+        .collect();
     against_run.add_path("h", Refinement::H, idx).unwrap();
     let rows = against_run.rows();
-    eprintln!("against a reference run at h = 1/128:\n{}", report::markdown(&rows));
+    eprintln!(
+        "against a reference run at h = 1/128:\n{}",
+        report::markdown(&rows)
+    );
     for r in &rows[1..] {
         let p = r.order.unwrap();
-        assert!((p - 1.0).abs() <= 0.1, "H¹ order against the reference run {p}");
+        assert!(
+            (p - 1.0).abs() <= 0.1,
+            "H¹ order against the reference run {p}"
+        );
     }
     // the reported errors differ from the exact ones by about the reference's own error
-    let (e_ref, e_exact) = (rows[2].errors.at_final.h1_seminorm, exact.runs[2].errors.at_final.h1_seminorm);
-    assert!((e_ref / e_exact - 1.0).abs() < 0.1, "against the reference {e_ref:e}, against the exact solution {e_exact:e}");
+    let (e_ref, e_exact) = (
+        rows[2].errors.at_final.h1_seminorm,
+        exact.runs[2].errors.at_final.h1_seminorm,
+    );
+    assert!(
+        (e_ref / e_exact - 1.0).abs() < 0.1,
+        "against the reference {e_ref:e}, against the exact solution {e_exact:e}"
+    );
 }
 
 /// The paper's study, reduced: h = 1/8, 1/16, 1/32 at k = 1/16; k = 1/4, 1/8, 1/16 at
@@ -225,9 +355,20 @@ fn study_reports_theoretical_orders_for_a_manufactured_solution() {
 /// and the observed order in k collapses (0.75, then 0.08).
 #[test]
 fn reduced_paper_study_shows_first_order_in_h_and_second_order_in_k() {
-    let plan = StudyPlan { reference: (64, 64), h_paths: vec![(16, vec![8, 16, 32])], k_paths: vec![(64, vec![4, 8, 16])], keep: Keep::MultiplesOf(1.0 / 16.0) };
+    let plan = StudyPlan {
+        reference: (64, 64),
+        h_paths: vec![(16, vec![8, 16, 32])],
+        k_paths: vec![(64, vec![4, 8, 16])],
+        keep: Keep::MultiplesOf(1.0 / 16.0),
+    };
     let mut seen = 0;
-    let s = study::run_plan(&plan, &|n| rectangle(2.0, 1.0, 2 * n, n, CellShape::Quad), &paper_scene, &mut |_, _| seen += 1).unwrap();
+    let s = study::run_plan(
+        &plan,
+        &|n| rectangle(2.0, 1.0, 2 * n, n, CellShape::Quad),
+        &paper_scene,
+        &mut |_, _| seen += 1,
+    )
+    .unwrap();
     assert_eq!(seen, 7, "the reference and six runs");
     assert_eq!(s.runs.len(), 6);
     let rows = s.rows();
@@ -236,12 +377,25 @@ fn reduced_paper_study_shows_first_order_in_h_and_second_order_in_k() {
     for r in &rows {
         if let Some(p) = r.order {
             match r.refine {
-                Refinement::H => assert!(p >= 0.8, "order in h {p} at h = {}\n{}", r.summary.h, report::markdown(&rows)),
-                Refinement::K => assert!(p >= 1.7, "order in k {p} at k = {}\n{}", r.summary.k, report::markdown(&rows)),
+                Refinement::H => assert!(
+                    p >= 0.8,
+                    "order in h {p} at h = {}\n{}",
+                    r.summary.h,
+                    report::markdown(&rows)
+                ),
+                Refinement::K => assert!(
+                    p >= 1.7,
+                    "order in k {p} at k = {}\n{}",
+                    r.summary.k,
+                    report::markdown(&rows)
+                ),
             }
         }
         assert!(r.errors.h1_max_over_time >= r.errors.at_final.h1_seminorm);
-        assert!(r.errors.times_compared >= 5, "t = 0, 1/4, 1/2, 3/4, 1 at least");
+        assert!(
+            r.errors.times_compared >= 5,
+            "t = 0, 1/4, 1/2, 3/4, 1 at least"
+        );
     }
     // the reference kept t = j/16
     assert_eq!(s.reference_run().unwrap().displacement_at.len(), 17);
@@ -252,7 +406,10 @@ fn reduced_paper_study_shows_first_order_in_h_and_second_order_in_k() {
     assert_eq!(lines[0], report::CSV_COLUMNS.join(","));
     assert!(lines.iter().all(|l| l.split(',').count() == 18), "{csv}");
     let md = report::markdown(&rows);
-    assert!(md.contains("| h (k=1/16) | 1/8 | 1/16 |") && md.contains("k (h=1/64)"), "{md}");
+    assert!(
+        md.contains("| h (k=1/16) | 1/8 | 1/16 |") && md.contains("k (h=1/64)"),
+        "{md}"
+    );
 
     let dir = tempfile::tempdir().unwrap();
     plot::plot_error_vs_h(&dir.path().join("h.svg"), &rows).unwrap();
@@ -263,14 +420,36 @@ fn reduced_paper_study_shows_first_order_in_h_and_second_order_in_k() {
         .displacement_at
         .iter()
         .step_by(4)
-        .map(|(t, u)| (*t, reference.mesh.points.iter().zip(u).filter(|(p, _)| p[1] == 0.0).map(|(p, u)| (p[0], -u[1])).collect()))
+        .map(|(t, u)| {
+            (
+                *t,
+                reference
+                    .mesh
+                    .points
+                    .iter()
+                    .zip(u)
+                    .filter(|(p, _)| p[1] == 0.0)
+                    .map(|(p, u)| (p[0], -u[1]))
+                    .collect(),
+            )
+        })
         .collect();
     plot::plot_gamma3(&dir.path().join("g.svg"), &series).unwrap();
     let values: Vec<f64> = (0..reference.mesh.cells.len()).map(|c| c as f64).collect();
-    plot::render_deformed_png(&dir.path().join("d.png"), &reference.mesh, &reference.final_displacement, &values, 1.0).unwrap();
+    plot::render_deformed_png(
+        &dir.path().join("d.png"),
+        &reference.mesh,
+        &reference.final_displacement,
+        &values,
+        1.0,
+    )
+    .unwrap();
     for f in ["h.svg", "k.svg", "w.svg", "g.svg"] {
         let text = std::fs::read_to_string(dir.path().join(f)).unwrap();
-        assert!(text.starts_with("<svg") && text.contains("<polyline"), "{f}");
+        assert!(
+            text.starts_with("<svg") && text.contains("<polyline"),
+            "{f}"
+        );
     }
     let png = std::fs::read(dir.path().join("d.png")).unwrap();
     assert_eq!(&png[1..4], b"PNG");

@@ -208,9 +208,9 @@ mod tests {
     fn piecewise_linear_integrates_its_slope() {
         let t = PiecewiseLinear::new(&[(0.0, 1.0), (0.1, 3.0), (0.2, 0.5), (0.3, 2.0)]).unwrap();
         let p = ComplianceProfile::PiecewiseLinear { table: t };
-        // φ(0.3) = ∫ μ = 0.1·2 + 0.1·1.75 + 0.1·1.25
-        assert!((p.value(0.3) - 0.55).abs() < 1e-15);
-        assert!((p.value(0.4) - 0.75).abs() < 1e-15);
+        // φ(0.3) = ∫ μ = 0.1·(1+3)/2 + 0.1·(3+0.5)/2 + 0.1·(0.5+2)/2; beyond the table μ = 2
+        assert!((p.value(0.3) - 0.5).abs() < 1e-15);
+        assert!((p.value(0.4) - 0.7).abs() < 1e-15);
         assert!((p.max_negative_curvature() - 25.0).abs() < 1e-12);
         assert!(PiecewiseLinear::new(&[(0.0, 1.0), (0.0, 2.0)]).is_err());
         assert!(PiecewiseLinear::new(&[(0.1, 1.0)]).is_err());

@@ -22,20 +22,42 @@ pub enum MeshError {
     /// The file is malformed: a token that does not parse, a truncated section, a count in a
     /// header that the file is too short to hold.
     #[error("{}: {place}: {detail}", path.display())]
-    Syntax { path: PathBuf, place: String, detail: String },
+    Syntax {
+        path: PathBuf,
+        place: String,
+        detail: String,
+    },
     /// An element type hvi cannot compute with (higher order, 3D, ...).
     #[error("{}: {place}: {detail}", path.display())]
-    UnsupportedElement { path: PathBuf, place: String, element_type: i32, detail: String },
+    UnsupportedElement {
+        path: PathBuf,
+        place: String,
+        element_type: i32,
+        detail: String,
+    },
     /// The file parses but the mesh is not usable: non-finite or non-planar coordinates,
     /// duplicate node tags, elements referring to missing nodes, inverted or degenerate cells.
     #[error("{}: {place}: {detail}", path.display())]
-    Invalid { path: PathBuf, place: String, detail: String },
+    Invalid {
+        path: PathBuf,
+        place: String,
+        detail: String,
+    },
     /// A physical group asked for by a scene does not exist.
     #[error("{}: there is no physical group {wanted} of dimension {dim}; the mesh has {available}", path.display())]
-    GroupNotFound { path: PathBuf, wanted: String, dim: u8, available: String },
+    GroupNotFound {
+        path: PathBuf,
+        wanted: String,
+        dim: u8,
+        available: String,
+    },
     /// A group used as a boundary part is not on the boundary of the body.
     #[error("{}: {group} is not on the boundary of the body: {detail}", path.display())]
-    NotBoundary { path: PathBuf, group: String, detail: String },
+    NotBoundary {
+        path: PathBuf,
+        group: String,
+        detail: String,
+    },
 }
 
 #[cfg(test)]

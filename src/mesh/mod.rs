@@ -86,7 +86,10 @@ impl PhysicalGroup {
 
 /// Reads a gmsh MSH file: 4.1 (ASCII or binary) or 2.2 (ASCII), chosen from `$MeshFormat`.
 pub fn read_msh(path: &Path) -> Result<Mesh, MeshError> {
-    let bytes = std::fs::read(path).map_err(|source| MeshError::Io { path: path.to_path_buf(), source })?;
+    let bytes = std::fs::read(path).map_err(|source| MeshError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
     parse_msh(path, &bytes)
 }
 
@@ -136,7 +139,12 @@ impl Mesh {
             }
             s
         };
-        MeshError::GroupNotFound { path: self.path.clone(), wanted: sel.to_string(), dim, available }
+        MeshError::GroupNotFound {
+            path: self.path.clone(),
+            wanted: sel.to_string(),
+            dim,
+            available,
+        }
     }
 
     /// A dimension-1 group as an oriented boundary part (see [`BoundaryPart`]). Every facet of
@@ -209,7 +217,10 @@ pub(crate) struct Header {
 
 impl Header {
     fn parse(path: &Path, bytes: &[u8]) -> Result<Header, MeshError> {
-        let unsupported = |detail: String| MeshError::UnsupportedFormat { path: path.to_path_buf(), detail };
+        let unsupported = |detail: String| MeshError::UnsupportedFormat {
+            path: path.to_path_buf(),
+            detail,
+        };
         let syntax = |line: usize, detail: String| MeshError::Syntax {
             path: path.to_path_buf(),
             place: format!("line {line} ($MeshFormat)"),
@@ -223,28 +234,33 @@ impl Header {
         let first = lines.next_nonblank();
         match first {
             Some((_, l)) if trim(l) == b"$MeshFormat" => {}
-            Some((_, l)) if trim(l).starts_with(b"$NOD") => {
-                return Err(unsupported(
-                    "this is an MSH 1 file ($NOD), which hvi does not read; re-export it as MSH 4.1: \
+            Some((_, l)) if trim(l).starts_with(b"$NOD") => return Err(unsupported(
+                "this is an MSH 1 file ($NOD), which hvi does not read; re-export it as MSH 4.1: \
                      gmsh file.msh -save -format msh41 -o new.msh"
-                        .into(),
-                ))
-            }
-            _ => {
-                return Err(unsupported(
-                    "not a gmsh MSH file: it does not start with $MeshFormat; mesh the geometry with \
+                    .into(),
+            )),
+            _ => return Err(unsupported(
+                "not a gmsh MSH file: it does not start with $MeshFormat; mesh the geometry with \
                      gmsh (gmsh -2 body.geo -format msh41) and give the .msh file"
-                        .into(),
-                ))
-            }
+                    .into(),
+            )),
         }
         let Some((line, l)) = lines.next_line() else {
-            return Err(syntax(2, "the file ends inside $MeshFormat: it is truncated".into()));
+            return Err(syntax(
+                2,
+                "the file ends inside $MeshFormat: it is truncated".into(),
+            ));
         };
         let text = String::from_utf8_lossy(l);
         let tokens: Vec<&str> = text.split_whitespace().collect();
         if tokens.len() < 3 {
-            return Err(syntax(line, format!("expected \"version file-type data-size\" (e.g. \"4.1 0 8\"), found \"{}\"", text.trim())));
+            return Err(syntax(
+                line,
+                format!(
+                    "expected \"version file-type data-size\" (e.g. \"4.1 0 8\"), found \"{}\"",
+                    text.trim()
+                ),
+            ));
         }
         let version = match tokens[0] {
             "4.1" => Version::V41,
@@ -266,11 +282,21 @@ impl Header {
         let binary = match tokens[1] {
             "0" => false,
             "1" => true,
-            t => return Err(syntax(line, format!("file type must be 0 (ASCII) or 1 (binary), found \"{t}\""))),
+            t => {
+                return Err(syntax(
+                    line,
+                    format!("file type must be 0 (ASCII) or 1 (binary), found \"{t}\""),
+                ))
+            }
         };
         let data_size: usize = match tokens[2].parse() {
             Ok(d) => d,
-            Err(_) => return Err(syntax(line, format!("data size must be an integer, found \"{}\"", tokens[2]))),
+            Err(_) => {
+                return Err(syntax(
+                    line,
+                    format!("data size must be an integer, found \"{}\"", tokens[2]),
+                ))
+            }
         };
         if binary && version == Version::V2 {
             return Err(unsupported(format!(
@@ -283,10 +309,16 @@ impl Header {
         let mut pos = lines.pos;
         if binary {
             if data_size != 4 && data_size != 8 {
-                return Err(syntax(line, format!("binary data size {data_size} is not supported (gmsh writes 8)")));
+                return Err(syntax(
+                    line,
+                    format!("binary data size {data_size} is not supported (gmsh writes 8)"),
+                ));
             }
             let Some(one) = bytes.get(pos..pos + 4) else {
-                return Err(syntax(line + 1, "the file ends inside $MeshFormat: it is truncated".into()));
+                return Err(syntax(
+                    line + 1,
+                    "the file ends inside $MeshFormat: it is truncated".into(),
+                ));
             };
             let one: [u8; 4] = [one[0], one[1], one[2], one[3]];
             if i32::from_le_bytes(one) == 1 {
@@ -294,7 +326,11 @@ impl Header {
             } else if i32::from_be_bytes(one) == 1 {
                 little_endian = false;
             } else {
-                return Err(syntax(line + 1, "binary endianness marker (the integer 1) not found after the version line".into()));
+                return Err(syntax(
+                    line + 1,
+                    "binary endianness marker (the integer 1) not found after the version line"
+                        .into(),
+                ));
             }
             pos += 4;
             while pos < bytes.len() && (bytes[pos] == b'\n' || bytes[pos] == b'\r') {
@@ -305,22 +341,48 @@ impl Header {
         match lines.next_nonblank() {
             Some((_, l)) if trim(l) == b"$EndMeshFormat" => {}
             Some((n, l)) => {
-                return Err(syntax(n, format!("expected $EndMeshFormat, found \"{}\"", String::from_utf8_lossy(trim(l)))))
+                return Err(syntax(
+                    n,
+                    format!(
+                        "expected $EndMeshFormat, found \"{}\"",
+                        String::from_utf8_lossy(trim(l))
+                    ),
+                ))
             }
-            None => return Err(syntax(line + 1, "the file ends inside $MeshFormat: it is truncated".into())),
+            None => {
+                return Err(syntax(
+                    line + 1,
+                    "the file ends inside $MeshFormat: it is truncated".into(),
+                ))
+            }
         }
-        Ok(Header { version, binary, data_size, little_endian, body: lines.pos })
+        Ok(Header {
+            version,
+            binary,
+            data_size,
+            little_endian,
+            body: lines.pos,
+        })
     }
 }
 
 /// 1-based line number of byte `offset`.
 pub(crate) fn line_of(bytes: &[u8], offset: usize) -> usize {
-    1 + bytes[..offset.min(bytes.len())].iter().filter(|&&b| b == b'\n').count()
+    1 + bytes[..offset.min(bytes.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
 }
 
 pub(crate) fn trim(l: &[u8]) -> &[u8] {
-    let s = l.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(l.len());
-    let e = l.iter().rposition(|b| !b.is_ascii_whitespace()).map_or(s, |e| e + 1);
+    let s = l
+        .iter()
+        .position(|b| !b.is_ascii_whitespace())
+        .unwrap_or(l.len());
+    let e = l
+        .iter()
+        .rposition(|b| !b.is_ascii_whitespace())
+        .map_or(s, |e| e + 1);
     &l[s..e.max(s)]
 }
 
@@ -335,7 +397,11 @@ pub(crate) struct Lines<'a> {
 
 impl<'a> Lines<'a> {
     pub fn new(bytes: &'a [u8], pos: usize) -> Self {
-        Lines { bytes, pos, line: line_of(bytes, pos) }
+        Lines {
+            bytes,
+            pos,
+            line: line_of(bytes, pos),
+        }
     }
 
     /// The next line (without its line break) and its number.
@@ -450,7 +516,11 @@ pub(crate) struct RawMesh<'a> {
 impl RawMesh<'_> {
     fn node_place(&self, i: usize, coordinates: bool) -> String {
         match &self.places.node_lines {
-            Some(l) => format!("line {} (node {})", if coordinates { l[i].1 } else { l[i].0 }, self.node_tags[i]),
+            Some(l) => format!(
+                "line {} (node {})",
+                if coordinates { l[i].1 } else { l[i].0 },
+                self.node_tags[i]
+            ),
             None => format!("$Nodes, node {}", self.node_tags[i]),
         }
     }
@@ -490,7 +560,10 @@ impl TagIndex {
         match self {
             TagIndex::Dense { min, index } => {
                 let i = tag.checked_sub(*min)?;
-                index.get(usize::try_from(i).ok()?).copied().filter(|&r| r != usize::MAX)
+                index
+                    .get(usize::try_from(i).ok()?)
+                    .copied()
+                    .filter(|&r| r != usize::MAX)
             }
             TagIndex::Sparse(m) => m.get(&tag).copied(),
         }
@@ -514,10 +587,17 @@ fn fmt_point(p: [f64; 2]) -> String {
 
 /// Turns what a reader found into a [`Mesh`], validating it.
 fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
-    let invalid = |place: String, detail: String| MeshError::Invalid { path: path.to_path_buf(), place, detail };
+    let invalid = |place: String, detail: String| MeshError::Invalid {
+        path: path.to_path_buf(),
+        place,
+        detail,
+    };
     let n = raw.node_tags.len();
     if n == 0 {
-        return Err(invalid("$Nodes".into(), "the mesh has no nodes; mesh the geometry (gmsh -2) before saving".into()));
+        return Err(invalid(
+            "$Nodes".into(),
+            "the mesh has no nodes; mesh the geometry (gmsh -2) before saving".into(),
+        ));
     }
 
     // Coordinates: finite, planar.
@@ -538,7 +618,11 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
     }
     let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(f64::MIN_POSITIVE);
     let z0 = raw.coords[0][2];
-    if let Some(i) = raw.coords.iter().position(|c| (c[2] - z0).abs() > 1e-9 * extent.max(z0.abs())) {
+    if let Some(i) = raw
+        .coords
+        .iter()
+        .position(|c| (c[2] - z0).abs() > 1e-9 * extent.max(z0.abs()))
+    {
         return Err(invalid(
             raw.node_place(i, true),
             format!(
@@ -569,12 +653,19 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
     for (r, &i) in order.iter().enumerate() {
         rank[i] = r;
     }
-    let points: Vec<[f64; 2]> = order.iter().map(|&i| [raw.coords[i][0], raw.coords[i][1]]).collect();
+    let points: Vec<[f64; 2]> = order
+        .iter()
+        .map(|&i| [raw.coords[i][0], raw.coords[i][1]])
+        .collect();
     let index = TagIndex::new(&raw.node_tags, &rank);
 
     // Elements.
     let mut groups: BTreeMap<(u8, i32), PhysicalGroup> = BTreeMap::new();
-    fn group(groups: &mut BTreeMap<(u8, i32), PhysicalGroup>, dim: u8, tag: i32) -> &mut PhysicalGroup {
+    fn group(
+        groups: &mut BTreeMap<(u8, i32), PhysicalGroup>,
+        dim: u8,
+        tag: i32,
+    ) -> &mut PhysicalGroup {
         groups.entry((dim, tag)).or_insert_with(|| PhysicalGroup {
             dim,
             tag,
@@ -584,7 +675,12 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
             nodes: Vec::new(),
         })
     }
-    let name_of = |dim: u8, tag: i32| raw.names.iter().find(|p| p.dim == dim && p.tag == tag).map(|p| p.name.clone());
+    let name_of = |dim: u8, tag: i32| {
+        raw.names
+            .iter()
+            .find(|p| p.dim == dim && p.tag == tag)
+            .map(|p| p.name.clone())
+    };
     let mut cells = Vec::new();
     let mut cell_tags = Vec::new();
     let mut cell_element = Vec::new();
@@ -597,7 +693,9 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
             let dim = info.map_or(2, |i| i.2);
             let group_text = if origin.physical.is_empty() {
                 match origin.entity {
-                    Some((d, t)) => format!("in no physical group (elementary entity of dim {d}, tag {t})"),
+                    Some((d, t)) => {
+                        format!("in no physical group (elementary entity of dim {d}, tag {t})")
+                    }
                     None => "in no physical group".to_string(),
                 }
             } else {
@@ -628,7 +726,10 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
                 path: path.to_path_buf(),
                 place: raw.element_place(e),
                 element_type: ty,
-                detail: format!("element {} is of type {ty} ({name}), {group_text}; {fix}", raw.element_tags[e]),
+                detail: format!(
+                    "element {} is of type {ty} ({name}), {group_text}; {fix}",
+                    raw.element_tags[e]
+                ),
             });
         }
         let tags = &raw.element_nodes[raw.offsets[e]..raw.offsets[e + 1]];
@@ -637,7 +738,11 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
             return Err(MeshError::Syntax {
                 path: path.to_path_buf(),
                 place: raw.element_place(e),
-                detail: format!("element {} of type {ty} has {} nodes, expected {want}", raw.element_tags[e], tags.len()),
+                detail: format!(
+                    "element {} of type {ty} has {} nodes, expected {want}",
+                    raw.element_tags[e],
+                    tags.len()
+                ),
             });
         }
         for (k, &t) in tags.iter().enumerate() {
@@ -657,7 +762,10 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
             if nodes[i + 1..].contains(&nodes[i]) {
                 return Err(invalid(
                     raw.element_place(e),
-                    format!("element {} uses node {} twice: it is degenerate; re-mesh", raw.element_tags[e], tags[i]),
+                    format!(
+                        "element {} uses node {} twice: it is degenerate; re-mesh",
+                        raw.element_tags[e], tags[i]
+                    ),
                 ));
             }
         }
@@ -697,7 +805,10 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
     }
 
     // Orientation: all counter-clockwise, or all clockwise (then flipped), else an error.
-    let areas: Vec<f64> = cells.iter().map(|c| signed_area(&points, c.nodes())).collect();
+    let areas: Vec<f64> = cells
+        .iter()
+        .map(|c| signed_area(&points, c.nodes()))
+        .collect();
     for (c, &a) in areas.iter().enumerate() {
         let longest = cells[c]
             .edges()
@@ -706,7 +817,10 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
         if a.abs() <= 1e-14 * longest * longest {
             return Err(invalid(
                 raw.element_place(cell_element[c]),
-                format!("element {} has zero area (degenerate cell); re-mesh", cell_tags[c]),
+                format!(
+                    "element {} has zero area (degenerate cell); re-mesh",
+                    cell_tags[c]
+                ),
             ));
         }
     }
@@ -775,5 +889,11 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
     for p in &raw.names {
         group(&mut groups, p.dim, p.tag).name = Some(p.name.clone());
     }
-    Ok(Mesh { path: path.to_path_buf(), points, cells, cell_tags, groups: groups.into_values().collect() })
+    Ok(Mesh {
+        path: path.to_path_buf(),
+        points,
+        cells,
+        cell_tags,
+        groups: groups.into_values().collect(),
+    })
 }

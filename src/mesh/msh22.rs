@@ -20,13 +20,22 @@
 
 use super::physical_names;
 use super::{element_type_info, trim, Lines, MeshError, Origin, Places, RawMesh};
+use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 use std::path::Path;
 
-pub(crate) fn parse<'a>(path: &Path, bytes: &'a [u8], body: usize) -> Result<RawMesh<'a>, MeshError> {
+pub(crate) fn parse<'a>(
+    path: &Path,
+    bytes: &'a [u8],
+    body: usize,
+) -> Result<RawMesh<'a>, MeshError> {
     let syntax = |line: usize, section: &str, detail: String| MeshError::Syntax {
         path: path.to_path_buf(),
-        place: if section.is_empty() { format!("line {line}") } else { format!("line {line} ({section})") },
+        place: if section.is_empty() {
+            format!("line {line}")
+        } else {
+            format!("line {line} ({section})")
+        },
         detail,
     };
     let names = physical_names::parse(path, bytes, body)?;
@@ -38,7 +47,9 @@ pub(crate) fn parse<'a>(path: &Path, bytes: &'a [u8], body: usize) -> Result<Raw
     let mut element_types = Vec::new();
     let mut offsets = vec![0usize];
     let mut element_nodes: Vec<u64> = Vec::new();
-    let mut element_physical: Vec<Vec<i32>> = Vec::new();
+    // First tag of each element (0: none), and the further groups of merged copies.
+    let mut element_physical: Vec<i32> = Vec::new();
+    let mut merged: HashMap<usize, Vec<i32>> = HashMap::new();
     let mut element_entity: Vec<Option<(i32, i32)>> = Vec::new();
     let mut element_lines = Vec::new();
     let (mut seen_nodes, mut seen_elements) = (false, false);
@@ -48,7 +59,11 @@ pub(crate) fn parse<'a>(path: &Path, bytes: &'a [u8], body: usize) -> Result<Raw
         let l = trim(l);
         let text = String::from_utf8_lossy(l);
         let Some(name) = text.strip_prefix('$') else {
-            return Err(syntax(line, "", format!("expected a section such as $Nodes, found \"{text}\"")));
+            return Err(syntax(
+                line,
+                "",
+                format!("expected a section such as $Nodes, found \"{text}\""),
+            ));
         };
         match name {
             "Nodes" => {
@@ -69,11 +84,23 @@ pub(crate) fn parse<'a>(path: &Path, bytes: &'a [u8], body: usize) -> Result<Raw
                         ));
                     };
                     let text = String::from_utf8_lossy(l);
-                    let tokens: Vec<&str> = text.split_whitespace().collect();
+                    let mut tokens = [""; 4];
+                    let mut ntok = 0;
+                    for t in text.split_whitespace() {
+                        if ntok < 4 {
+                            tokens[ntok] = t;
+                        }
+                        ntok += 1;
+                    }
+                    let cut = if lines.remaining() == 0 { "; the file ends here: it is truncated" } else { "" };
                     let bad = || {
-                        syntax(line, "$Nodes", format!("expected `node-tag x y z` (node {} of {count}), found \"{}\"", k + 1, text.trim()))
+                        syntax(
+                            line,
+                            "$Nodes",
+                            format!("expected `node-tag x y z` (node {} of {count}), found \"{}\"{cut}", k + 1, text.trim()),
+                        )
                     };
-                    if tokens.len() != 4 {
+                    if ntok != 4 {
                         return Err(bad());
                     }
                     let tag: u64 = tokens[0].parse().map_err(|_| bad())?;
@@ -96,7 +123,9 @@ pub(crate) fn parse<'a>(path: &Path, bytes: &'a [u8], body: usize) -> Result<Raw
                 }
                 seen_elements = true;
                 let count = read_count(&mut lines, path, "$Elements", 8)?;
-                let mut copies: HashMap<(i32, Vec<u64>), usize> = HashMap::new();
+                // Copies of an element (same type and nodes) for further physical groups.
+                let mut copies: HashMap<(i32, [u64; 4]), usize> = HashMap::new();
+                let mut numbers = Vec::new();
                 for k in 0..count {
                     let Some((line, l)) = lines.next_line() else {
                         return Err(syntax(
@@ -106,18 +135,19 @@ pub(crate) fn parse<'a>(path: &Path, bytes: &'a [u8], body: usize) -> Result<Raw
                         ));
                     };
                     let text = String::from_utf8_lossy(l);
+                    let cut = if lines.remaining() == 0 { "; the file ends here: it is truncated" } else { "" };
                     let bad = |why: &str| {
                         syntax(
                             line,
                             "$Elements",
                             format!(
-                                "{why}: expected `element-tag type number-of-tags tags... nodes...` (element {} of {count}), found \"{}\"",
+                                "{why}: expected `element-tag type number-of-tags tags... nodes...` (element {} of {count}), found \"{}\"{cut}",
                                 k + 1,
                                 text.trim()
                             ),
                         )
                     };
-                    let mut numbers = Vec::new();
+                    numbers.clear();
                     for t in text.split_whitespace() {
                         numbers.push(t.parse::<i64>().map_err(|_| bad(&format!("\"{t}\" is not an integer")))?);
                     }
@@ -145,29 +175,38 @@ pub(crate) fn parse<'a>(path: &Path, bytes: &'a [u8], body: usize) -> Result<Raw
                     }
                     let to_i32 = |v: i64| i32::try_from(v).map_err(|_| bad("tag out of range"));
                     let physical = match tags.first() {
-                        Some(&p) if p != 0 => vec![to_i32(p)?],
-                        _ => Vec::new(),
+                        Some(&p) => to_i32(p)?,
+                        None => 0,
                     };
                     let dim = element_type_info(ty).map_or(2, |i| i.2) as i32;
                     let entity = match tags.get(1) {
                         Some(&t) => Some((dim, to_i32(t)?)),
                         None => None,
                     };
-                    let nodes: Vec<u64> = nodes.iter().map(|&v| v as u64).collect();
-                    let key = (ty, nodes);
-                    if let Some(&e) = copies.get(&key) {
-                        let ph: &mut Vec<i32> = &mut element_physical[e];
-                        for p in physical {
-                            if !ph.contains(&p) {
-                                ph.push(p);
+                    if nodes.len() <= 4 {
+                        let mut key = (ty, [0u64; 4]);
+                        for (k, &v) in key.1.iter_mut().zip(nodes) {
+                            *k = v as u64;
+                        }
+                        match copies.entry(key) {
+                            Entry::Occupied(e) => {
+                                let e = *e.get();
+                                if physical != 0 && element_physical[e] != physical {
+                                    let more = merged.entry(e).or_default();
+                                    if !more.contains(&physical) {
+                                        more.push(physical);
+                                    }
+                                }
+                                continue;
+                            }
+                            Entry::Vacant(v) => {
+                                v.insert(element_tags.len());
                             }
                         }
-                        continue;
                     }
-                    copies.insert(key.clone(), element_tags.len());
                     element_tags.push(tag as u64);
                     element_types.push(ty);
-                    element_nodes.extend_from_slice(&key.1);
+                    element_nodes.extend(nodes.iter().map(|&v| v as u64));
                     offsets.push(element_nodes.len());
                     element_physical.push(physical);
                     element_entity.push(entity);
@@ -213,15 +252,29 @@ pub(crate) fn parse<'a>(path: &Path, bytes: &'a [u8], body: usize) -> Result<Raw
 
     // Intern (physical tags, entity) pairs.
     let mut origins: Vec<Origin> = Vec::new();
-    let mut origin_index: HashMap<(Vec<i32>, Option<(i32, i32)>), u32> = HashMap::new();
+    type Entity = Option<(i32, i32)>;
+    let mut origin_index: HashMap<(Vec<i32>, Entity), u32> = HashMap::new();
+    let mut simple_index: HashMap<(i32, Option<(i32, i32)>), u32> = HashMap::new();
     let mut element_origin = Vec::with_capacity(element_tags.len());
-    for (physical, entity) in element_physical.into_iter().zip(element_entity) {
-        let key = (physical, entity);
-        let next = origins.len() as u32;
-        let o = *origin_index.entry(key.clone()).or_insert_with(|| {
-            origins.push(Origin { physical: key.0, entity: key.1 });
-            next
-        });
+    for (e, (&first, &entity)) in element_physical.iter().zip(&element_entity).enumerate() {
+        let mut intern = |physical: Vec<i32>| {
+            *origin_index
+                .entry((physical.clone(), entity))
+                .or_insert_with(|| {
+                    origins.push(Origin { physical, entity });
+                    origins.len() as u32 - 1
+                })
+        };
+        let o = match merged.get(&e) {
+            Some(more) => {
+                let mut physical: Vec<i32> = if first != 0 { vec![first] } else { Vec::new() };
+                physical.extend(more.iter().copied().filter(|&p| p != first));
+                intern(physical)
+            }
+            None => *simple_index
+                .entry((first, entity))
+                .or_insert_with(|| intern(if first != 0 { vec![first] } else { Vec::new() })),
+        };
         element_origin.push(o);
     }
 
@@ -235,13 +288,21 @@ pub(crate) fn parse<'a>(path: &Path, bytes: &'a [u8], body: usize) -> Result<Raw
         element_origin,
         origins,
         names,
-        places: Places { node_lines: Some(node_lines), element_line: Box::new(move |e, _| element_lines.get(e).copied()) },
+        places: Places {
+            node_lines: Some(node_lines),
+            element_line: Box::new(move |e, _| element_lines.get(e).copied()),
+        },
     })
 }
 
 /// Reads the count line of a section and checks it against the bytes left (each item takes
 /// at least `min_bytes`).
-fn read_count(lines: &mut Lines<'_>, path: &Path, section: &str, min_bytes: usize) -> Result<usize, MeshError> {
+fn read_count(
+    lines: &mut Lines<'_>,
+    path: &Path,
+    section: &str,
+    min_bytes: usize,
+) -> Result<usize, MeshError> {
     let place = |line: usize| format!("line {line} ({section})");
     let Some((line, l)) = lines.next_nonblank() else {
         return Err(MeshError::Syntax {
@@ -270,7 +331,13 @@ fn read_count(lines: &mut Lines<'_>, path: &Path, section: &str, min_bytes: usiz
     Ok(count as usize)
 }
 
-fn expect_end(lines: &mut Lines<'_>, path: &Path, section: &str, count: usize, what: &str) -> Result<(), MeshError> {
+fn expect_end(
+    lines: &mut Lines<'_>,
+    path: &Path,
+    section: &str,
+    count: usize,
+    what: &str,
+) -> Result<(), MeshError> {
     let end = format!("$End{}", &section[1..]);
     let line_no = lines.line;
     match lines.next_nonblank() {

@@ -25,9 +25,17 @@ struct Prescan {
     node_lines: Option<Vec<(usize, usize)>>,
 }
 
-pub(crate) fn parse<'a>(path: &Path, bytes: &'a [u8], header: &Header) -> Result<RawMesh<'a>, MeshError> {
+pub(crate) fn parse<'a>(
+    path: &Path,
+    bytes: &'a [u8],
+    header: &Header,
+) -> Result<RawMesh<'a>, MeshError> {
     let names = physical_names::parse(path, bytes, header.body)?;
-    let pre = if header.binary { prescan_binary(path, bytes, header)? } else { prescan_ascii(path, bytes, header.body)? };
+    let pre = if header.binary {
+        prescan_binary(path, bytes, header)?
+    } else {
+        prescan_ascii(path, bytes, header.body)?
+    };
 
     let msh = match std::panic::catch_unwind(|| mshio::parse_msh_bytes(bytes)) {
         Ok(Ok(m)) => m,
@@ -36,29 +44,48 @@ pub(crate) fn parse<'a>(path: &Path, bytes: &'a [u8], header: &Header) -> Result
             return Err(MeshError::Syntax {
                 path: path.to_path_buf(),
                 place: "MSH 4.1 parser".into(),
-                detail: "the file is malformed (the parser stopped on it); re-export it from gmsh".into(),
+                detail: "the file is malformed (the parser stopped on it); re-export it from gmsh"
+                    .into(),
             })
         }
     };
-    let syntax = |place: &str, detail: String| MeshError::Syntax { path: path.to_path_buf(), place: place.into(), detail };
+    let syntax = |place: &str, detail: String| MeshError::Syntax {
+        path: path.to_path_buf(),
+        place: place.into(),
+        detail,
+    };
     let Some(nodes) = msh.data.nodes else {
         return Err(syntax("$Nodes", "the file has no $Nodes section".into()));
     };
     let Some(elements) = msh.data.elements else {
-        return Err(syntax("$Elements", "the file has no $Elements section".into()));
+        return Err(syntax(
+            "$Elements",
+            "the file has no $Elements section".into(),
+        ));
     };
 
     // Coordinates from mshio, tags from the pre-scan, block by block.
     if nodes.node_blocks.len() != pre.block_sizes.len() {
         return Err(syntax(
             "$Nodes",
-            format!("{} node blocks were parsed but the section lists {}", nodes.node_blocks.len(), pre.block_sizes.len()),
+            format!(
+                "{} node blocks were parsed but the section lists {}",
+                nodes.node_blocks.len(),
+                pre.block_sizes.len()
+            ),
         ));
     }
     let mut coords = Vec::with_capacity(pre.node_tags.len());
     for (b, (block, &size)) in nodes.node_blocks.iter().zip(&pre.block_sizes).enumerate() {
         if block.nodes.len() != size {
-            return Err(syntax("$Nodes", format!("node block {} holds {} nodes, expected {size}", b + 1, block.nodes.len())));
+            return Err(syntax(
+                "$Nodes",
+                format!(
+                    "node block {} holds {} nodes, expected {size}",
+                    b + 1,
+                    block.nodes.len()
+                ),
+            ));
         }
         coords.extend(block.nodes.iter().map(|n| [n.x, n.y, n.z]));
     }
@@ -101,7 +128,10 @@ pub(crate) fn parse<'a>(path: &Path, bytes: &'a [u8], header: &Header) -> Result
         }
         let key = (block.entity_dim, block.entity_tag);
         let o = origins.len() as u32;
-        origins.push(Origin { physical: physical.get(&key).cloned().unwrap_or_default(), entity: Some(key) });
+        origins.push(Origin {
+            physical: physical.get(&key).cloned().unwrap_or_default(),
+            entity: Some(key),
+        });
         for el in &block.elements {
             element_tags.push(el.element_tag);
             element_types.push(ty);
@@ -127,13 +157,21 @@ pub(crate) fn parse<'a>(path: &Path, bytes: &'a [u8], header: &Header) -> Result
         element_origin,
         origins,
         names,
-        places: Places { node_lines: pre.node_lines, element_line },
+        places: Places {
+            node_lines: pre.node_lines,
+            element_line,
+        },
     })
 }
 
 /// Turns an mshio error into a [`MeshError::Syntax`] with a line number (ASCII) or byte offset
 /// (binary) and the chain of what was being parsed (never mshio's hex dump of the file).
-fn mshio_error(path: &Path, bytes: &[u8], binary: bool, e: &mshio::MshParserError<&[u8]>) -> MeshError {
+fn mshio_error(
+    path: &Path,
+    bytes: &[u8],
+    binary: bool,
+    e: &mshio::MshParserError<&[u8]>,
+) -> MeshError {
     let bt = e.filtered_backtrace();
     let Some((input, kind)) = bt.first() else {
         return MeshError::Syntax {
@@ -144,10 +182,21 @@ fn mshio_error(path: &Path, bytes: &[u8], binary: bool, e: &mshio::MshParserErro
     };
     let start = bytes.as_ptr() as usize;
     let at = input.as_ptr() as usize;
-    let offset = if at >= start && at <= start + bytes.len() { at - start } else { bytes.len() };
-    let place = if binary { format!("byte {offset}") } else { format!("line {}", line_of(bytes, offset)) };
-    let chain: Vec<String> =
-        bt[1..].iter().rev().map(|(_, k)| k.context().map_or_else(|| k.to_string(), str::to_string)).collect();
+    let offset = if at >= start && at <= start + bytes.len() {
+        at - start
+    } else {
+        bytes.len()
+    };
+    let place = if binary {
+        format!("byte {offset}")
+    } else {
+        format!("line {}", line_of(bytes, offset))
+    };
+    let chain: Vec<String> = bt[1..]
+        .iter()
+        .rev()
+        .map(|(_, k)| k.context().map_or_else(|| k.to_string(), str::to_string))
+        .collect();
     let mut detail = kind.to_string();
     if !chain.is_empty() {
         detail = format!("{detail} (while reading: {})", chain.join(" > "));
@@ -157,7 +206,11 @@ fn mshio_error(path: &Path, bytes: &[u8], binary: bool, e: &mshio::MshParserErro
     } else {
         detail.push_str("; the file is malformed: re-export it from gmsh (gmsh -format msh41)");
     }
-    MeshError::Syntax { path: path.to_path_buf(), place, detail }
+    MeshError::Syntax {
+        path: path.to_path_buf(),
+        place,
+        detail,
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -215,9 +268,17 @@ fn prescan_ascii(path: &Path, bytes: &[u8], body: usize) -> Result<Prescan, Mesh
         match name {
             "Nodes" => {
                 if found.is_some() {
-                    return Err(syntax(line, &section, "a second $Nodes section; hvi reads files with one".into()));
+                    return Err(syntax(
+                        line,
+                        &section,
+                        "a second $Nodes section; hvi reads files with one".into(),
+                    ));
                 }
-                let mut t = Tokens { bytes, pos: lines.pos, line: lines.line };
+                let mut t = Tokens {
+                    bytes,
+                    pos: lines.pos,
+                    line: lines.line,
+                };
                 found = Some(scan_nodes_ascii(path, &mut t)?);
                 match t.next() {
                     Some((tok, _)) if tok == b"$EndNodes" => {}
@@ -233,7 +294,11 @@ fn prescan_ascii(path: &Path, bytes: &[u8], body: usize) -> Result<Prescan, Mesh
                     }
                     None => return Err(syntax(t.line, &section, "the file ends before $EndNodes: it is truncated".into())),
                 }
-                lines = Lines { bytes, pos: t.pos, line: t.line };
+                lines = Lines {
+                    bytes,
+                    pos: t.pos,
+                    line: t.line,
+                };
                 continue;
             }
             "Elements" => {
@@ -241,31 +306,76 @@ fn prescan_ascii(path: &Path, bytes: &[u8], body: usize) -> Result<Prescan, Mesh
                 let (hline, counts) = header_numbers(&mut lines, path, &section)?;
                 let (blocks, count) = (counts[0], counts[1]);
                 if count == 0 {
-                    return Err(syntax(hline, &section, "the file has no elements; mesh the geometry (gmsh -2) before saving".into()));
+                    return Err(syntax(
+                        hline,
+                        &section,
+                        "the file has no elements; mesh the geometry (gmsh -2) before saving"
+                            .into(),
+                    ));
                 }
-                check_fits(path, hline, &section, "element blocks", blocks, 8, lines.remaining(), true)?;
-                check_fits(path, hline, &section, "elements", count, 4, lines.remaining(), true)?;
+                check_fits(
+                    path,
+                    hline,
+                    &section,
+                    "element blocks",
+                    blocks,
+                    8,
+                    lines.remaining(),
+                    true,
+                )?;
+                check_fits(
+                    path,
+                    hline,
+                    &section,
+                    "elements",
+                    count,
+                    4,
+                    lines.remaining(),
+                    true,
+                )?;
             }
             "Entities" => {
                 let (hline, counts) = header_numbers(&mut lines, path, &section)?;
                 let total = counts.iter().fold(0u64, |a, &c| a.saturating_add(c));
-                check_fits(path, hline, &section, "entities", total, 10, lines.remaining(), true)?;
+                check_fits(
+                    path,
+                    hline,
+                    &section,
+                    "entities",
+                    total,
+                    10,
+                    lines.remaining(),
+                    true,
+                )?;
             }
             _ => {}
         }
         skip_to_end(&mut lines, path, name, line)?;
     }
     let Some(pre) = found else {
-        return Err(syntax(lines.line.saturating_sub(1).max(1), "end of file", "the file has no $Nodes section: it is truncated".into()));
+        return Err(syntax(
+            lines.line.saturating_sub(1).max(1),
+            "end of file",
+            "the file has no $Nodes section: it is truncated".into(),
+        ));
     };
     if !seen_elements {
-        return Err(syntax(lines.line.saturating_sub(1).max(1), "end of file", "the file has no $Elements section: it is truncated".into()));
+        return Err(syntax(
+            lines.line.saturating_sub(1).max(1),
+            "end of file",
+            "the file has no $Elements section: it is truncated".into(),
+        ));
     }
     Ok(pre)
 }
 
 /// Skips lines up to and including `$End<name>`.
-fn skip_to_end(lines: &mut Lines<'_>, path: &Path, name: &str, start_line: usize) -> Result<(), MeshError> {
+fn skip_to_end(
+    lines: &mut Lines<'_>,
+    path: &Path,
+    name: &str,
+    start_line: usize,
+) -> Result<(), MeshError> {
     let end = format!("$End{name}");
     loop {
         match lines.next_line() {
@@ -275,7 +385,9 @@ fn skip_to_end(lines: &mut Lines<'_>, path: &Path, name: &str, start_line: usize
                 return Err(MeshError::Syntax {
                     path: path.to_path_buf(),
                     place: format!("line {start_line} (${name})"),
-                    detail: format!("the section ${name} has no {end}: the file is truncated; re-export it"),
+                    detail: format!(
+                        "the section ${name} has no {end}: the file is truncated; re-export it"
+                    ),
                 })
             }
         }
@@ -283,7 +395,11 @@ fn skip_to_end(lines: &mut Lines<'_>, path: &Path, name: &str, start_line: usize
 }
 
 /// The four numbers of a section header line.
-fn header_numbers(lines: &mut Lines<'_>, path: &Path, section: &str) -> Result<(usize, [u64; 4]), MeshError> {
+fn header_numbers(
+    lines: &mut Lines<'_>,
+    path: &Path,
+    section: &str,
+) -> Result<(usize, [u64; 4]), MeshError> {
     let Some((line, l)) = lines.next_nonblank() else {
         return Err(MeshError::Syntax {
             path: path.to_path_buf(),
@@ -292,12 +408,18 @@ fn header_numbers(lines: &mut Lines<'_>, path: &Path, section: &str) -> Result<(
         });
     };
     let text = String::from_utf8_lossy(l);
-    let numbers: Vec<u64> = text.split_whitespace().filter_map(|t| t.parse().ok()).collect();
+    let numbers: Vec<u64> = text
+        .split_whitespace()
+        .filter_map(|t| t.parse().ok())
+        .collect();
     if numbers.len() != 4 || text.split_whitespace().count() != 4 {
         return Err(MeshError::Syntax {
             path: path.to_path_buf(),
             place: format!("line {line} ({section})"),
-            detail: format!("expected four non-negative integers (the section header), found \"{}\"", text.trim()),
+            detail: format!(
+                "expected four non-negative integers (the section header), found \"{}\"",
+                text.trim()
+            ),
         });
     }
     Ok((line, [numbers[0], numbers[1], numbers[2], numbers[3]]))
@@ -342,9 +464,18 @@ fn scan_nodes_ascii(path: &Path, t: &mut Tokens<'_>) -> Result<Prescan, MeshErro
         match t.next() {
             Some((tok, line)) => match std::str::from_utf8(tok).ok().and_then(|s| s.parse().ok()) {
                 Some(v) => Ok((v, line)),
-                None => Err(syntax(line, format!("expected {what}, found \"{}\"", String::from_utf8_lossy(tok)))),
+                None => Err(syntax(
+                    line,
+                    format!(
+                        "expected {what}, found \"{}\"",
+                        String::from_utf8_lossy(tok)
+                    ),
+                )),
             },
-            None => Err(syntax(t.line, format!("the file ends where {what} was expected: it is truncated; re-export it"))),
+            None => Err(syntax(
+                t.line,
+                format!("the file ends where {what} was expected: it is truncated; re-export it"),
+            )),
         }
     }
     let (blocks, hline) = number::<u64>(t, "the number of node blocks", &syntax)?;
@@ -352,10 +483,31 @@ fn scan_nodes_ascii(path: &Path, t: &mut Tokens<'_>) -> Result<Prescan, MeshErro
     let _ = number::<u64>(t, "the minimum node tag", &syntax)?;
     let _ = number::<u64>(t, "the maximum node tag", &syntax)?;
     if count == 0 {
-        return Err(syntax(hline, "the file has no nodes; mesh the geometry (gmsh -2) before saving".into()));
+        return Err(syntax(
+            hline,
+            "the file has no nodes; mesh the geometry (gmsh -2) before saving".into(),
+        ));
     }
-    check_fits(path, hline, "$Nodes", "node blocks", blocks, 8, t.remaining(), true)?;
-    check_fits(path, hline, "$Nodes", "nodes", count, 8, t.remaining(), true)?;
+    check_fits(
+        path,
+        hline,
+        "$Nodes",
+        "node blocks",
+        blocks,
+        8,
+        t.remaining(),
+        true,
+    )?;
+    check_fits(
+        path,
+        hline,
+        "$Nodes",
+        "nodes",
+        count,
+        8,
+        t.remaining(),
+        true,
+    )?;
     let count = count as usize;
     let mut node_tags = Vec::with_capacity(count);
     let mut node_lines = Vec::with_capacity(count);
@@ -375,31 +527,56 @@ fn scan_nodes_ascii(path: &Path, t: &mut Tokens<'_>) -> Result<Prescan, MeshErro
                 ),
             });
         }
-        check_fits(path, bline, "$Nodes", "nodes in a block", n, 8, t.remaining(), true)?;
+        check_fits(
+            path,
+            bline,
+            "$Nodes",
+            "nodes in a block",
+            n,
+            8,
+            t.remaining(),
+            true,
+        )?;
         if node_tags.len() as u64 + n > count as u64 {
-            return Err(syntax(bline, format!("the node blocks hold more than the {count} nodes the section header says")));
+            return Err(syntax(
+                bline,
+                format!("the node blocks hold more than the {count} nodes the section header says"),
+            ));
         }
         let first = node_tags.len();
         for _ in 0..n {
             let (tag, line) = number::<u64>(t, "a node tag", &syntax)?;
             if tag == 0 {
-                return Err(syntax(line, "node tag 0 is not allowed (tags start at 1)".into()));
+                return Err(syntax(
+                    line,
+                    "node tag 0 is not allowed (tags start at 1)".into(),
+                ));
             }
             node_tags.push(tag);
             node_lines.push((line, 0));
         }
-        for k in first..node_tags.len() {
+        for lines in &mut node_lines[first..] {
             let (_, line) = number::<f64>(t, "an x coordinate", &syntax)?;
             let _ = number::<f64>(t, "a y coordinate", &syntax)?;
             let _ = number::<f64>(t, "a z coordinate", &syntax)?;
-            node_lines[k].1 = line;
+            lines.1 = line;
         }
         block_sizes.push(n as usize);
     }
     if node_tags.len() != count {
-        return Err(syntax(hline, format!("the section header says {count} nodes but its blocks hold {}", node_tags.len())));
+        return Err(syntax(
+            hline,
+            format!(
+                "the section header says {count} nodes but its blocks hold {}",
+                node_tags.len()
+            ),
+        ));
     }
-    Ok(Prescan { node_tags, block_sizes, node_lines: Some(node_lines) })
+    Ok(Prescan {
+        node_tags,
+        block_sizes,
+        node_lines: Some(node_lines),
+    })
 }
 
 /// Line of the element with `tag` in an ASCII MSH 4.1 file (only computed for messages).
@@ -408,11 +585,19 @@ fn element_line_ascii(bytes: &[u8], body: usize, tag: u64) -> Option<usize> {
     let mut lines = Lines::new(bytes, start);
     lines.next_line()?;
     let (_, h) = lines.next_nonblank()?;
-    let blocks: u64 = String::from_utf8_lossy(h).split_whitespace().next()?.parse().ok()?;
+    let blocks: u64 = String::from_utf8_lossy(h)
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()?;
     let want = tag.to_string();
     for _ in 0..blocks {
         let (_, bh) = lines.next_nonblank()?;
-        let count: u64 = String::from_utf8_lossy(bh).split_whitespace().nth(3)?.parse().ok()?;
+        let count: u64 = String::from_utf8_lossy(bh)
+            .split_whitespace()
+            .nth(3)?
+            .parse()
+            .ok()?;
         for _ in 0..count {
             let (n, l) = lines.next_nonblank()?;
             if String::from_utf8_lossy(l).split_whitespace().next() == Some(want.as_str()) {
@@ -445,16 +630,28 @@ impl Binary<'_> {
     fn size_t(&mut self) -> Option<u64> {
         if self.size_t == 4 {
             let a = self.take::<4>()?;
-            Some(u64::from(if self.little { u32::from_le_bytes(a) } else { u32::from_be_bytes(a) }))
+            Some(u64::from(if self.little {
+                u32::from_le_bytes(a)
+            } else {
+                u32::from_be_bytes(a)
+            }))
         } else {
             let a = self.take::<8>()?;
-            Some(if self.little { u64::from_le_bytes(a) } else { u64::from_be_bytes(a) })
+            Some(if self.little {
+                u64::from_le_bytes(a)
+            } else {
+                u64::from_be_bytes(a)
+            })
         }
     }
 
     fn int(&mut self) -> Option<i32> {
         let a = self.take::<4>()?;
-        Some(if self.little { i32::from_le_bytes(a) } else { i32::from_be_bytes(a) })
+        Some(if self.little {
+            i32::from_le_bytes(a)
+        } else {
+            i32::from_be_bytes(a)
+        })
     }
 
     fn remaining(&self) -> usize {
@@ -462,7 +659,9 @@ impl Binary<'_> {
     }
 
     fn skip_whitespace(&mut self) {
-        while self.pos < self.bytes.len() && matches!(self.bytes[self.pos], b'\n' | b'\r' | b' ' | b'\t') {
+        while self.pos < self.bytes.len()
+            && matches!(self.bytes[self.pos], b'\n' | b'\r' | b' ' | b'\t')
+        {
             self.pos += 1;
         }
     }
@@ -482,8 +681,19 @@ fn prescan_binary(path: &Path, bytes: &[u8], header: &Header) -> Result<Prescan,
         place: format!("byte {at} ({section})"),
         detail,
     };
-    let truncated = |at: usize, section: &str| syntax(at, section, "the file ends inside this section: it is truncated; re-export it".into());
-    let mut r = Binary { bytes, pos: header.body, size_t: header.data_size, little: header.little_endian };
+    let truncated = |at: usize, section: &str| {
+        syntax(
+            at,
+            section,
+            "the file ends inside this section: it is truncated; re-export it".into(),
+        )
+    };
+    let mut r = Binary {
+        bytes,
+        pos: header.body,
+        size_t: header.data_size,
+        little: header.little_endian,
+    };
     let st = header.data_size as u64;
     let mut found: Option<Prescan> = None;
     let mut seen_elements = false;
@@ -496,13 +706,21 @@ fn prescan_binary(path: &Path, bytes: &[u8], header: &Header) -> Result<Prescan,
         let tag = String::from_utf8_lossy(r.line()).into_owned();
         let Some(name) = tag.strip_prefix('$').map(str::to_string) else {
             let shown: String = tag.chars().take(40).collect();
-            return Err(syntax(at, "between sections", format!("expected a section such as $Nodes, found \"{shown}\"")));
+            return Err(syntax(
+                at,
+                "between sections",
+                format!("expected a section such as $Nodes, found \"{shown}\""),
+            ));
         };
         let section = format!("${name}");
         match name.as_str() {
             "Nodes" => {
                 if found.is_some() {
-                    return Err(syntax(at, &section, "a second $Nodes section; hvi reads files with one".into()));
+                    return Err(syntax(
+                        at,
+                        &section,
+                        "a second $Nodes section; hvi reads files with one".into(),
+                    ));
                 }
                 let h = r.pos;
                 let blocks = r.size_t().ok_or_else(|| truncated(h, &section))?;
@@ -510,10 +728,32 @@ fn prescan_binary(path: &Path, bytes: &[u8], header: &Header) -> Result<Prescan,
                 let _min = r.size_t().ok_or_else(|| truncated(h, &section))?;
                 let _max = r.size_t().ok_or_else(|| truncated(h, &section))?;
                 if count == 0 {
-                    return Err(syntax(h, &section, "the file has no nodes; mesh the geometry (gmsh -2) before saving".into()));
+                    return Err(syntax(
+                        h,
+                        &section,
+                        "the file has no nodes; mesh the geometry (gmsh -2) before saving".into(),
+                    ));
                 }
-                check_fits(path, h, &section, "node blocks", blocks, 12 + st, r.remaining(), false)?;
-                check_fits(path, h, &section, "nodes", count, st + 24, r.remaining(), false)?;
+                check_fits(
+                    path,
+                    h,
+                    &section,
+                    "node blocks",
+                    blocks,
+                    12 + st,
+                    r.remaining(),
+                    false,
+                )?;
+                check_fits(
+                    path,
+                    h,
+                    &section,
+                    "nodes",
+                    count,
+                    st + 24,
+                    r.remaining(),
+                    false,
+                )?;
                 let mut node_tags = Vec::with_capacity(count as usize);
                 let mut block_sizes = Vec::with_capacity(blocks as usize);
                 for b in 0..blocks {
@@ -532,7 +772,16 @@ fn prescan_binary(path: &Path, bytes: &[u8], header: &Header) -> Result<Prescan,
                             ),
                         });
                     }
-                    check_fits(path, bh, &section, "nodes in a block", n, st + 24, r.remaining(), false)?;
+                    check_fits(
+                        path,
+                        bh,
+                        &section,
+                        "nodes in a block",
+                        n,
+                        st + 24,
+                        r.remaining(),
+                        false,
+                    )?;
                     if node_tags.len() as u64 + n > count {
                         return Err(syntax(bh, &section, format!("the node blocks hold more than the {count} nodes the section header says")));
                     }
@@ -540,7 +789,11 @@ fn prescan_binary(path: &Path, bytes: &[u8], header: &Header) -> Result<Prescan,
                         let tp = r.pos;
                         let t = r.size_t().ok_or_else(|| truncated(tp, &section))?;
                         if t == 0 {
-                            return Err(syntax(tp, &section, "node tag 0 is not allowed (tags start at 1)".into()));
+                            return Err(syntax(
+                                tp,
+                                &section,
+                                "node tag 0 is not allowed (tags start at 1)".into(),
+                            ));
                         }
                         node_tags.push(t);
                     }
@@ -552,14 +805,30 @@ fn prescan_binary(path: &Path, bytes: &[u8], header: &Header) -> Result<Prescan,
                     block_sizes.push(n as usize);
                 }
                 if node_tags.len() as u64 != count {
-                    return Err(syntax(h, &section, format!("the section header says {count} nodes but its blocks hold {}", node_tags.len())));
+                    return Err(syntax(
+                        h,
+                        &section,
+                        format!(
+                            "the section header says {count} nodes but its blocks hold {}",
+                            node_tags.len()
+                        ),
+                    ));
                 }
                 r.skip_whitespace();
                 let e = r.pos;
                 if r.line() != b"$EndNodes" {
-                    return Err(syntax(e, &section, "expected $EndNodes: the counts in the section do not match its content".into()));
+                    return Err(syntax(
+                        e,
+                        &section,
+                        "expected $EndNodes: the counts in the section do not match its content"
+                            .into(),
+                    ));
                 }
-                found = Some(Prescan { node_tags, block_sizes, node_lines: None });
+                found = Some(Prescan {
+                    node_tags,
+                    block_sizes,
+                    node_lines: None,
+                });
                 continue;
             }
             "Elements" => {
@@ -568,10 +837,33 @@ fn prescan_binary(path: &Path, bytes: &[u8], header: &Header) -> Result<Prescan,
                 let blocks = r.size_t().ok_or_else(|| truncated(h, &section))?;
                 let count = r.size_t().ok_or_else(|| truncated(h, &section))?;
                 if count == 0 {
-                    return Err(syntax(h, &section, "the file has no elements; mesh the geometry (gmsh -2) before saving".into()));
+                    return Err(syntax(
+                        h,
+                        &section,
+                        "the file has no elements; mesh the geometry (gmsh -2) before saving"
+                            .into(),
+                    ));
                 }
-                check_fits(path, h, &section, "element blocks", blocks, 12 + st, r.remaining(), false)?;
-                check_fits(path, h, &section, "elements", count, 2 * st, r.remaining(), false)?;
+                check_fits(
+                    path,
+                    h,
+                    &section,
+                    "element blocks",
+                    blocks,
+                    12 + st,
+                    r.remaining(),
+                    false,
+                )?;
+                check_fits(
+                    path,
+                    h,
+                    &section,
+                    "elements",
+                    count,
+                    2 * st,
+                    r.remaining(),
+                    false,
+                )?;
             }
             "Entities" => {
                 let h = r.pos;
@@ -579,7 +871,16 @@ fn prescan_binary(path: &Path, bytes: &[u8], header: &Header) -> Result<Prescan,
                 for _ in 0..4 {
                     total = total.saturating_add(r.size_t().ok_or_else(|| truncated(h, &section))?);
                 }
-                check_fits(path, h, &section, "entities", total, 28 + st, r.remaining(), false)?;
+                check_fits(
+                    path,
+                    h,
+                    &section,
+                    "entities",
+                    total,
+                    28 + st,
+                    r.remaining(),
+                    false,
+                )?;
             }
             _ => {}
         }
@@ -590,15 +891,29 @@ fn prescan_binary(path: &Path, bytes: &[u8], header: &Header) -> Result<Prescan,
                 r.line();
             }
             None => {
-                return Err(syntax(at, &section, format!("the section {section} has no {end}: the file is truncated; re-export it")))
+                return Err(syntax(
+                    at,
+                    &section,
+                    format!(
+                        "the section {section} has no {end}: the file is truncated; re-export it"
+                    ),
+                ))
             }
         }
     }
     let Some(pre) = found else {
-        return Err(syntax(bytes.len(), "end of file", "the file has no $Nodes section: it is truncated".into()));
+        return Err(syntax(
+            bytes.len(),
+            "end of file",
+            "the file has no $Nodes section: it is truncated".into(),
+        ));
     };
     if !seen_elements {
-        return Err(syntax(bytes.len(), "end of file", "the file has no $Elements section: it is truncated".into()));
+        return Err(syntax(
+            bytes.len(),
+            "end of file",
+            "the file has no $Elements section: it is truncated".into(),
+        ));
     }
     Ok(pre)
 }

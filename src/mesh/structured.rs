@@ -13,8 +13,9 @@ use std::path::PathBuf;
 pub enum CellShape {
     /// Bilinear quadrilaterals (Q1), one per grid square.
     Quad,
-    /// Linear triangles (P1): each grid square split along its diagonal from lower left to
-    /// upper right into two counter-clockwise triangles.
+    /// Linear triangles (P1): each grid square split along its diagonal from lower right to
+    /// upper left into two counter-clockwise triangles (as gmsh's transfinite meshes of
+    /// `rectangle.geo` do).
     Tri,
 }
 
@@ -28,8 +29,14 @@ pub enum CellShape {
 /// If `nx` or `ny` is 0, or `lx` or `ly` is not positive and finite (a programming error, not
 /// bad input).
 pub fn rectangle(lx: f64, ly: f64, nx: usize, ny: usize, kind: CellShape) -> Mesh {
-    assert!(nx > 0 && ny > 0, "rectangle: nx and ny must be positive (got {nx} x {ny})");
-    assert!(lx > 0.0 && ly > 0.0 && lx.is_finite() && ly.is_finite(), "rectangle: lx, ly must be positive (got {lx}, {ly})");
+    assert!(
+        nx > 0 && ny > 0,
+        "rectangle: nx and ny must be positive (got {nx} x {ny})"
+    );
+    assert!(
+        lx > 0.0 && ly > 0.0 && lx.is_finite() && ly.is_finite(),
+        "rectangle: lx, ly must be positive (got {lx}, {ly})"
+    );
     let id = |i: usize, j: usize| i + j * (nx + 1);
     let mut points = Vec::with_capacity((nx + 1) * (ny + 1));
     for j in 0..=ny {
@@ -44,8 +51,8 @@ pub fn rectangle(lx: f64, ly: f64, nx: usize, ny: usize, kind: CellShape) -> Mes
             match kind {
                 CellShape::Quad => cells.push(Cell::Quad4([a, b, c, d])),
                 CellShape::Tri => {
-                    cells.push(Cell::Tri3([a, b, c]));
-                    cells.push(Cell::Tri3([a, c, d]));
+                    cells.push(Cell::Tri3([a, b, d]));
+                    cells.push(Cell::Tri3([d, b, c]));
                 }
             }
         }
@@ -78,5 +85,11 @@ pub fn rectangle(lx: f64, ly: f64, nx: usize, ny: usize, kind: CellShape) -> Mes
             nodes: Vec::new(),
         },
     ];
-    Mesh { path: PathBuf::from(format!("<rectangle {nx}x{ny}>")), points, cells, cell_tags, groups }
+    Mesh {
+        path: PathBuf::from(format!("<rectangle {nx}x{ny}>")),
+        points,
+        cells,
+        cell_tags,
+        groups,
+    }
 }

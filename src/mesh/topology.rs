@@ -41,7 +41,11 @@ impl BoundaryPart {
 pub(crate) fn boundary_part(mesh: &Mesh, group: &PhysicalGroup) -> Result<BoundaryPart, MeshError> {
     let label = group.label();
     let pts = &mesh.points;
-    let not_boundary = |detail: String| MeshError::NotBoundary { path: mesh.path.clone(), group: label.clone(), detail };
+    let not_boundary = |detail: String| MeshError::NotBoundary {
+        path: mesh.path.clone(),
+        group: label.clone(),
+        detail,
+    };
     let key = |[a, b]: [usize; 2]| if a < b { (a, b) } else { (b, a) };
 
     // The group's facets, each once, in the group's order.
@@ -49,7 +53,9 @@ pub(crate) fn boundary_part(mesh: &Mesh, group: &PhysicalGroup) -> Result<Bounda
     let mut facets: Vec<[usize; 2]> = Vec::with_capacity(group.facets.len());
     for &f in &group.facets {
         if f[0] == f[1] || f[0] >= pts.len() || f[1] >= pts.len() {
-            return Err(not_boundary(format!("facet {f:?} is degenerate or refers to a node that does not exist")));
+            return Err(not_boundary(format!(
+                "facet {f:?} is degenerate or refers to a node that does not exist"
+            )));
         }
         slot.entry(key(f)).or_insert_with(|| {
             facets.push(f);
@@ -63,6 +69,7 @@ pub(crate) fn boundary_part(mesh: &Mesh, group: &PhysicalGroup) -> Result<Bounda
     }
 
     // Orient each facet like the counter-clockwise edge of its (single) cell.
+    let as_given = facets.clone();
     let mut count = vec![0u32; facets.len()];
     for cell in &mesh.cells {
         for e in cell.edges() {
@@ -79,14 +86,14 @@ pub(crate) fn boundary_part(mesh: &Mesh, group: &PhysicalGroup) -> Result<Bounda
             0 => {
                 return Err(not_boundary(format!(
                     "{} is not an edge of any cell; the group must be made of edges of the mesh on its boundary",
-                    show(facets[k])
+                    show(as_given[k])
                 )))
             }
             _ => {
                 return Err(not_boundary(format!(
                     "{} is shared by {} cells, so it is inside the body; a boundary part must be on the outer boundary \
                      (check the Physical Curve of this group in the .geo)",
-                    show(facets[k]),
+                    show(as_given[k]),
                     if c == 2 { "two".to_string() } else { c.to_string() }
                 )))
             }
@@ -115,7 +122,7 @@ pub(crate) fn boundary_part(mesh: &Mesh, group: &PhysicalGroup) -> Result<Bounda
     let mut normals = Vec::with_capacity(nodes.len());
     for (i, s) in sums.iter().enumerate() {
         let norm = s[0].hypot(s[1]);
-        if !(norm > 1e-12 * weights[i]) {
+        if norm.is_nan() || norm <= 1e-12 * weights[i] {
             return Err(not_boundary(format!(
                 "at node {} the outward normals of its facets cancel: the part folds back on itself",
                 fmt_point(pts[nodes[i]])
@@ -123,5 +130,12 @@ pub(crate) fn boundary_part(mesh: &Mesh, group: &PhysicalGroup) -> Result<Bounda
         }
         normals.push([s[0] / norm, s[1] / norm]);
     }
-    Ok(BoundaryPart { label, facets, facet_lengths, nodes, weights, normals })
+    Ok(BoundaryPart {
+        label,
+        facets,
+        facet_lengths,
+        nodes,
+        weights,
+        normals,
+    })
 }

@@ -2,8 +2,8 @@
 //!
 //! A run writes, into one directory:
 //! - `<basename>_<step:05>.vtu` per output step: a VTK XML UnstructuredGrid (base64 binary,
-//!   uncompressed unless [`SeriesWriter::with_compression`] asks for zlib) with the 2D points as 3D points (z = 0), the cells, and the point and cell
-//!   fields of the [`Frame`];
+//!   uncompressed unless [`SeriesWriter::with_compression`] asks for zlib) with the 2D points
+//!   as 3D points (z = 0), the cells, and the point and cell fields of the [`Frame`];
 //! - `<basename>.pvd` and `<basename>.vtu.series`: the two index files ParaView opens as one
 //!   time series, rewritten atomically after every frame so that they list exactly the frames
 //!   written so far with their real times, even when the run is interrupted;

@@ -2,7 +2,7 @@
 //! no `[memory]` → no kernel, no `[contact]` → no contact nodes, no load → no load terms.
 
 use super::error::SolveError;
-use crate::contact::{ComplianceProfile, ContactLaw, ContactNodes, ContactSettings, Symmetry};
+use crate::contact::{ComplianceProfile, ContactLaw, ContactNodes, ContactSettings, PiecewiseLinear, Symmetry};
 use crate::fem::loads::Loads;
 use crate::fem::DofMap;
 use crate::material::{Elasticity, PlaneModel, RelaxationKernel};
@@ -109,17 +109,31 @@ impl Simulation {
             Some(spec) => {
                 let part = mesh.boundary(&scene.groups.contact)?;
                 let nodes = ContactNodes::new(&part, &dofs);
-                let law = spec.law.as_ref().map(|l| {
-                    let (scale, profile) = match l.kind {
-                        scene::LawKind::Paper { scale, a, b, alpha } => (scale, ComplianceProfile::Paper { a, b, alpha }),
-                    };
-                    ContactLaw {
-                        scale,
-                        profile,
-                        symmetry: if l.one_sided { Symmetry::OneSided } else { Symmetry::Odd },
-                        epsilon: l.regularisation,
+                let law = match &spec.law {
+                    None => None,
+                    Some(l) => {
+                        let (scale, profile) = match &l.kind {
+                            scene::LawKind::Paper { scale, a, b, alpha } => {
+                                (*scale, ComplianceProfile::Paper { a: *a, b: *b, alpha: *alpha })
+                            }
+                            scene::LawKind::Power { scale, exponent } => (*scale, ComplianceProfile::Power { exponent: *exponent }),
+                            scene::LawKind::PiecewiseLinear { scale, table } => {
+                                let points: Vec<(f64, f64)> = table.iter().map(|p| (p[0], p[1])).collect();
+                                let table = PiecewiseLinear::new(&points).map_err(|e| SolveError::Setup(format!("contact.law.table: {e}")))?;
+                                (*scale, ComplianceProfile::PiecewiseLinear { table })
+                            }
+                            scene::LawKind::Tabulated { .. } => {
+                                return Err(SolveError::Setup("a tabulated law must be read by Scene::load".into()))
+                            }
+                        };
+                        Some(ContactLaw {
+                            scale,
+                            profile,
+                            symmetry: if l.one_sided { Symmetry::OneSided } else { Symmetry::Odd },
+                            epsilon: l.regularisation,
+                        })
                     }
-                });
+                };
                 let bound = spec.bound.map(|g| vec![g; nodes.len()]);
                 Some(ContactSetup {
                     nodes,

@@ -53,12 +53,18 @@ impl<'m> Locator<'m> {
         let diam = ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2)).sqrt();
         let tolerance = OUTSIDE_TOLERANCE * diam;
         let pad = 2.0 * tolerance + f64::MIN_POSITIVE;
-        let ext = [(hi[0] - lo[0]).max(diam * 1e-6) + 2.0 * pad, (hi[1] - lo[1]).max(diam * 1e-6) + 2.0 * pad];
+        let ext = [
+            (hi[0] - lo[0]).max(diam * 1e-6) + 2.0 * pad,
+            (hi[1] - lo[1]).max(diam * 1e-6) + 2.0 * pad,
+        ];
         let origin = [lo[0] - pad, lo[1] - pad];
         // about one cell per bucket, buckets as square as the box allows
         let n = cells.len().max(1) as f64;
         let side = (ext[0] * ext[1] / n).sqrt().max(f64::MIN_POSITIVE);
-        let dims = [((ext[0] / side).ceil() as usize).clamp(1, 2048), ((ext[1] / side).ceil() as usize).clamp(1, 2048)];
+        let dims = [
+            ((ext[0] / side).ceil() as usize).clamp(1, 2048),
+            ((ext[1] / side).ceil() as usize).clamp(1, 2048),
+        ];
         let bucket = [ext[0] / dims[0] as f64, ext[1] / dims[1] as f64];
         let range = |c: &Cell| {
             let (mut a, mut b) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
@@ -68,7 +74,9 @@ impl<'m> Locator<'m> {
                     b[d] = b[d].max(points[p][d] + pad);
                 }
             }
-            let i = |v: f64, d: usize| (((v - origin[d]) / bucket[d]).floor().max(0.0) as usize).min(dims[d] - 1);
+            let i = |v: f64, d: usize| {
+                (((v - origin[d]) / bucket[d]).floor().max(0.0) as usize).min(dims[d] - 1)
+            };
             ([i(a[0], 0), i(a[1], 1)], [i(b[0], 0), i(b[1], 1)])
         };
         let mut count = vec![0usize; dims[0] * dims[1] + 1];
@@ -95,7 +103,16 @@ impl<'m> Locator<'m> {
                 }
             }
         }
-        Locator { cells, points, origin, bucket, dims, start, items, tolerance }
+        Locator {
+            cells,
+            points,
+            origin,
+            bucket,
+            dims,
+            start,
+            items,
+            tolerance,
+        }
     }
 
     /// The physical distance tolerated outside the mesh (1e-10 × its diameter).
@@ -107,7 +124,9 @@ impl<'m> Locator<'m> {
     /// barycentrics (1 − ξ − η, ξ, η); Q1: (ξ, η) ∈ [−1, 1]²), or None if `x` is outside
     /// the mesh by more than [`Locator::tolerance`].
     pub fn locate(&self, x: [f64; 2]) -> Option<(usize, [f64; 2])> {
-        self.locate_with_distance(x).filter(|&(_, _, d)| d <= self.tolerance).map(|(c, xi, _)| (c, xi))
+        self.locate_with_distance(x)
+            .filter(|&(_, _, d)| d <= self.tolerance)
+            .map(|(c, xi, _)| (c, xi))
     }
 
     /// Like [`Locator::locate`], but returns the best candidate whatever its distance,
@@ -145,13 +164,14 @@ impl<'m> Locator<'m> {
             let s = shape_at(cell, self.points, xi);
             let mut nodes = [0usize; MAX_NODES];
             let mut w = [0.0; MAX_NODES];
-            for a in 0..s.n {
-                nodes[a] = cell.nodes()[a];
-                w[a] = s.value[a];
-            }
+            nodes[..s.n].copy_from_slice(&cell.nodes()[..s.n]);
+            w[..s.n].copy_from_slice(&s.value[..s.n]);
             weights.push((s.n as u8, nodes, w));
         }
-        Ok(Transfer { n_from: self.points.len(), weights })
+        Ok(Transfer {
+            n_from: self.points.len(),
+            weights,
+        })
     }
 
     fn outside_message(&self, x: [f64; 2]) -> String {
@@ -184,7 +204,13 @@ impl Transfer {
 
     /// Evaluates the nodal field `u` (on the source mesh) at the target points.
     pub fn apply(&self, u: &[[f64; 2]]) -> Vec<[f64; 2]> {
-        assert_eq!(u.len(), self.n_from, "field has {} nodes, the source mesh {}", u.len(), self.n_from);
+        assert_eq!(
+            u.len(),
+            self.n_from,
+            "field has {} nodes, the source mesh {}",
+            u.len(),
+            self.n_from
+        );
         self.weights
             .iter()
             .map(|(n, nodes, w)| {
@@ -201,9 +227,17 @@ impl Transfer {
 
 /// Evaluates the FE field `u` (nodal values on `from`) at each of `to_points`. A point outside
 /// `from` by more than 1e-10 × its diameter is an error naming the point.
-pub fn interpolate_nodal(from: &Mesh, u: &[[f64; 2]], to_points: &[[f64; 2]]) -> Result<Vec<[f64; 2]>, String> {
+pub fn interpolate_nodal(
+    from: &Mesh,
+    u: &[[f64; 2]],
+    to_points: &[[f64; 2]],
+) -> Result<Vec<[f64; 2]>, String> {
     if u.len() != from.points.len() {
-        return Err(format!("field has {} nodal values, the mesh {} nodes", u.len(), from.points.len()));
+        return Err(format!(
+            "field has {} nodal values, the mesh {} nodes",
+            u.len(),
+            from.points.len()
+        ));
     }
     Ok(Locator::new(from).transfer(to_points)?.apply(u))
 }
@@ -220,11 +254,19 @@ pub fn reference_coordinates(cell: &Cell, points: &[[f64; 2]], x: [f64; 2]) -> (
             let (e1, e2) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
             let det = e1[0] * e2[1] - e1[1] * e2[0];
             let r = [x[0] - a[0], x[1] - a[1]];
-            let xi = [(r[0] * e2[1] - r[1] * e2[0]) / det, (e1[0] * r[1] - e1[1] * r[0]) / det];
+            let xi = [
+                (r[0] * e2[1] - r[1] * e2[0]) / det,
+                (e1[0] * r[1] - e1[1] * r[0]) / det,
+            ];
             let lambda = [1.0 - xi[0] - xi[1], xi[0], xi[1]];
             // λ_i × (height over the edge opposite vertex i) is the signed distance to that edge
-            let len = |p: [f64; 2], q: [f64; 2]| ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt();
-            let heights = [det.abs() / len(b, c), det.abs() / len(c, a), det.abs() / len(a, b)];
+            let len =
+                |p: [f64; 2], q: [f64; 2]| ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt();
+            let heights = [
+                det.abs() / len(b, c),
+                det.abs() / len(c, a),
+                det.abs() / len(a, b),
+            ];
             let dist = (0..3).map(|i| -lambda[i] * heights[i]).fold(0.0, f64::max);
             (xi, dist)
         }
@@ -245,9 +287,16 @@ pub fn reference_coordinates(cell: &Cell, points: &[[f64; 2]], x: [f64; 2]) -> (
                 }
                 (y, j)
             };
-            let size = p.iter().map(|q| (q[0] - p[0][0]).abs() + (q[1] - p[0][1]).abs()).fold(0.0, f64::max);
+            let size = p
+                .iter()
+                .map(|q| (q[0] - p[0][0]).abs() + (q[1] - p[0][1]).abs())
+                .fold(0.0, f64::max);
             // the edges of a Q1 cell are straight: inside test and distance on the polygon
-            let dist = if polygon_contains(&p, x) { 0.0 } else { polygon_distance(&p, x) };
+            let dist = if polygon_contains(&p, x) {
+                0.0
+            } else {
+                polygon_distance(&p, x)
+            };
             if dist > 0.5 * size {
                 // far outside: no reference coordinates needed
                 return ([f64::NAN; 2], dist);
@@ -263,12 +312,18 @@ pub fn reference_coordinates(cell: &Cell, points: &[[f64; 2]], x: [f64; 2]) -> (
                 if det.abs() <= f64::MIN_POSITIVE {
                     break;
                 }
-                let d = [(j[1][1] * r[0] - j[0][1] * r[1]) / det, (j[0][0] * r[1] - j[1][0] * r[0]) / det];
+                let d = [
+                    (j[1][1] * r[0] - j[0][1] * r[1]) / det,
+                    (j[0][0] * r[1] - j[1][0] * r[0]) / det,
+                ];
                 if !(d[0].is_finite() && d[1].is_finite()) {
                     return ([0.0; 2], f64::INFINITY);
                 }
                 // keep far-away iterates bounded (the point is outside then anyway)
-                xi = [(xi[0] + d[0]).clamp(-1e3, 1e3), (xi[1] + d[1]).clamp(-1e3, 1e3)];
+                xi = [
+                    (xi[0] + d[0]).clamp(-1e3, 1e3),
+                    (xi[1] + d[1]).clamp(-1e3, 1e3),
+                ];
                 if d[0].abs() + d[1].abs() <= 1e-15 {
                     break;
                 }
@@ -309,7 +364,11 @@ fn polygon_distance(p: &[[f64; 2]], x: [f64; 2]) -> f64 {
             let (a, b) = (p[i], p[(i + 1) % p.len()]);
             let (e, r) = ([b[0] - a[0], b[1] - a[1]], [x[0] - a[0], x[1] - a[1]]);
             let ee = e[0] * e[0] + e[1] * e[1];
-            let s = if ee > 0.0 { ((r[0] * e[0] + r[1] * e[1]) / ee).clamp(0.0, 1.0) } else { 0.0 };
+            let s = if ee > 0.0 {
+                ((r[0] * e[0] + r[1] * e[1]) / ee).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
             ((r[0] - s * e[0]).powi(2) + (r[1] - s * e[1]).powi(2)).sqrt()
         })
         .fold(f64::INFINITY, f64::min)

@@ -30,20 +30,38 @@ pub mod report;
 pub mod runner;
 
 pub use interpolate::{interpolate_nodal, Locator, Transfer};
-pub use runner::{
-    observed_order, run, run_with, EvaluatedRun, ExactField, Keep, Reference, Refinement, RefinementPath, Row, RunErrors,
-    RunOptions, RunRecord, RunSummary, Study, StudyPlan,
-};
 pub use runner::run_plan;
+pub use runner::{
+    observed_order, run, run_with, EvaluatedRun, ExactField, Keep, Reference, Refinement,
+    RefinementPath, Row, RunErrors, RunOptions, RunRecord, RunSummary, Study, StudyPlan,
+};
 
 use crate::fem::norms::{errors, FieldErrors};
 use crate::mesh::Mesh;
 
 /// The H¹ seminorm and L² norm of `u_ref − u_carried`, two nodal fields on the reference
 /// mesh (the carried one typically from [`interpolate_nodal`]).
-pub fn seminorm_errors(reference: &Mesh, u_ref: &[[f64; 2]], u_carried: &[[f64; 2]]) -> FieldErrors {
-    assert_eq!(u_ref.len(), reference.points.len(), "reference field and mesh differ in size");
-    assert_eq!(u_carried.len(), reference.points.len(), "carried field and reference mesh differ in size");
-    let difference: Vec<[f64; 2]> = u_ref.iter().zip(u_carried).map(|(a, b)| [a[0] - b[0], a[1] - b[1]]).collect();
-    errors(&reference.cells, &reference.points, &difference, |_| ([0.0; 2], [[0.0; 2]; 2]))
+pub fn seminorm_errors(
+    reference: &Mesh,
+    u_ref: &[[f64; 2]],
+    u_carried: &[[f64; 2]],
+) -> FieldErrors {
+    assert_eq!(
+        u_ref.len(),
+        reference.points.len(),
+        "reference field and mesh differ in size"
+    );
+    assert_eq!(
+        u_carried.len(),
+        reference.points.len(),
+        "carried field and reference mesh differ in size"
+    );
+    let difference: Vec<[f64; 2]> = u_ref
+        .iter()
+        .zip(u_carried)
+        .map(|(a, b)| [a[0] - b[0], a[1] - b[1]])
+        .collect();
+    errors(&reference.cells, &reference.points, &difference, |_| {
+        ([0.0; 2], [[0.0; 2]; 2])
+    })
 }

@@ -24,11 +24,22 @@ pub fn sci(v: f64) -> String {
     }
     let e = v.abs().log10().floor() as i32;
     let m = v / 10f64.powi(e);
-    let m = if (m - m.round()).abs() < 1e-6 { format!("{}", m.round()) } else { format!("{:.2}", m).trim_end_matches('0').trim_end_matches('.').to_string() };
+    let m = if (m - m.round()).abs() < 1e-6 {
+        format!("{}", m.round())
+    } else {
+        format!("{:.2}", m)
+            .trim_end_matches('0')
+            .trim_end_matches('.')
+            .to_string()
+    };
     if (-2..3).contains(&e) {
         let decimals = (-e).max(0) as usize + 2;
         let s = format!("{v:.decimals$}");
-        let s = if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s };
+        let s = if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        };
         return s;
     }
     format!("{m}e{e}")
@@ -75,16 +86,29 @@ pub fn log_ticks(lo: f64, hi: f64, light: bool) -> Vec<f64> {
 }
 
 fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
-    let (lo, hi) = values.filter(|v| v.is_finite() && *v > 0.0).fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
+    let (lo, hi) = values
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
     (hi > 0.0).then(|| {
-        let (lo, hi) = if hi / lo < 1.5 { (lo / 1.5, hi * 1.5) } else { (lo, hi) };
+        let (lo, hi) = if hi / lo < 1.5 {
+            (lo / 1.5, hi * 1.5)
+        } else {
+            (lo, hi)
+        };
         let pad = (hi / lo).powf(0.06);
         (lo / pad, hi * pad)
     })
 }
 
 /// Draws a log–log plot of the series, with guide lines, to an SVG file.
-pub fn loglog_svg(path: &Path, title: &str, x_desc: &str, y_desc: &str, series: &[Series], guides: &[Guide]) -> Result<(), String> {
+pub fn loglog_svg(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    series: &[Series],
+    guides: &[Guide],
+) -> Result<(), String> {
     let root = SVGBackend::new(path, SIZE).into_drawing_area();
     loglog(&root, title, x_desc, y_desc, series, guides)?;
     root.present().map_err(err)
@@ -100,20 +124,30 @@ fn loglog<DB: DrawingBackend>(
 ) -> Result<(), String> {
     root.fill(&WHITE).map_err(err)?;
     let all = || series.iter().flat_map(|s| s.points.iter().copied());
-    let Some((x0, mut x1)) = log_range(all().map(|p| p.0)) else { return Err(format!("{title}: nothing to plot")) };
+    let Some((x0, mut x1)) = log_range(all().map(|p| p.0)) else {
+        return Err(format!("{title}: nothing to plot"));
+    };
     if series.iter().any(|s| !s.labels.is_empty()) {
         // room for the point labels on the right
         x1 *= (x1 / x0).powf(0.12);
     }
-    let Some((y0, y1)) = log_range(all().map(|p| p.1)) else { return Err(format!("{title}: nothing to plot")) };
+    let Some((y0, y1)) = log_range(all().map(|p| p.1)) else {
+        return Err(format!("{title}: nothing to plot"));
+    };
     let mut chart = ChartBuilder::on(root)
         .caption(title, (FONT, 20))
         .margin(16)
         .x_label_area_size(48)
         .y_label_area_size(72)
         .build_cartesian_2d(
-            (x0..x1).log_scale().with_key_points(log_ticks(x0, x1, false)).with_light_points(log_ticks(x0, x1, true)),
-            (y0..y1).log_scale().with_key_points(log_ticks(y0, y1, false)).with_light_points(log_ticks(y0, y1, true)),
+            (x0..x1)
+                .log_scale()
+                .with_key_points(log_ticks(x0, x1, false))
+                .with_light_points(log_ticks(x0, x1, true)),
+            (y0..y1)
+                .log_scale()
+                .with_key_points(log_ticks(y0, y1, false))
+                .with_light_points(log_ticks(y0, y1, true)),
         )
         .map_err(err)?;
     chart
@@ -128,10 +162,17 @@ fn loglog<DB: DrawingBackend>(
         .map_err(err)?;
     // the legend goes into the empty corner: upper left for rising data, lower left for falling
     let rising = series.iter().map(|s| {
-        let (a, b) = (s.points.first().copied().unwrap_or((1.0, 1.0)), s.points.last().copied().unwrap_or((1.0, 1.0)));
+        let (a, b) = (
+            s.points.first().copied().unwrap_or((1.0, 1.0)),
+            s.points.last().copied().unwrap_or((1.0, 1.0)),
+        );
         (b.0 - a.0) * (b.1 - a.1)
     });
-    let legend_position = if rising.sum::<f64>() >= 0.0 { SeriesLabelPosition::UpperLeft } else { SeriesLabelPosition::LowerLeft };
+    let legend_position = if rising.sum::<f64>() >= 0.0 {
+        SeriesLabelPosition::UpperLeft
+    } else {
+        SeriesLabelPosition::LowerLeft
+    };
     for (i, g) in guides.iter().enumerate() {
         // the guide over the x range, clipped to the y range
         let f = |x: f64| g.anchor.1 * (x / g.anchor.0).powf(g.slope);
@@ -141,12 +182,23 @@ fn loglog<DB: DrawingBackend>(
             .map(|x| (x, f(x)))
             .filter(|&(_, y)| y >= y0 && y <= y1)
             .collect();
-        let color = if i == 0 { RGBColor(120, 120, 120) } else { RGBColor(170, 120, 60) };
+        let color = if i == 0 {
+            RGBColor(120, 120, 120)
+        } else {
+            RGBColor(170, 120, 60)
+        };
         chart
-            .draw_series(std::iter::once(DashedPathElement::new(pts, 6, 4, color.stroke_width(1))))
+            .draw_series(std::iter::once(DashedPathElement::new(
+                pts,
+                6,
+                4,
+                color.stroke_width(1),
+            )))
             .map_err(err)?
             .label(g.name.clone())
-            .legend(move |(x, y)| DashedPathElement::new(vec![(x, y), (x + 20, y)], 4, 3, color.stroke_width(1)));
+            .legend(move |(x, y)| {
+                DashedPathElement::new(vec![(x, y), (x + 20, y)], 4, 3, color.stroke_width(1))
+            });
     }
     for (i, s) in series.iter().enumerate() {
         let color = Palette99::pick(i).to_rgba();
@@ -156,13 +208,18 @@ fn loglog<DB: DrawingBackend>(
             .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
             .map_err(err)?
             .label(s.name.clone())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
-        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled()))).map_err(err)?;
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+            });
+        chart
+            .draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled())))
+            .map_err(err)?;
         if !s.labels.is_empty() {
             chart
-                .draw_series(
-                    s.points.iter().zip(&s.labels).map(|(&p, l)| EmptyElement::at(p) + Text::new(l.clone(), (6, -14), (FONT, 12).into_font().color(&color))),
-                )
+                .draw_series(s.points.iter().zip(&s.labels).map(|(&p, l)| {
+                    EmptyElement::at(p)
+                        + Text::new(l.clone(), (6, -14), (FONT, 12).into_font().color(&color))
+                }))
                 .map_err(err)?;
         }
     }
@@ -190,11 +247,18 @@ fn unique_runs(rows: &[Row]) -> Vec<&Row> {
 }
 
 /// Groups runs by a parameter (to a relative 1e-9), each group sorted by the other.
-fn group_by(rows: &[Row], key: impl Fn(&Row) -> f64, along: impl Fn(&Row) -> f64) -> Vec<(f64, Vec<&Row>)> {
+fn group_by(
+    rows: &[Row],
+    key: impl Fn(&Row) -> f64,
+    along: impl Fn(&Row) -> f64,
+) -> Vec<(f64, Vec<&Row>)> {
     let mut groups: Vec<(f64, Vec<&Row>)> = Vec::new();
     for r in unique_runs(rows) {
         let k = key(r);
-        match groups.iter_mut().find(|(g, _)| (g - k).abs() <= 1e-9 * k.abs()) {
+        match groups
+            .iter_mut()
+            .find(|(g, _)| (g - k).abs() <= 1e-9 * k.abs())
+        {
             Some((_, v)) => v.push(r),
             None => groups.push((k, vec![r])),
         }
@@ -214,12 +278,24 @@ pub fn plot_error_vs_h(path: &Path, rows: &[Row]) -> Result<(), String> {
         .iter()
         .map(|(k, v)| Series {
             name: format!("k = {}", fraction(*k)),
-            points: v.iter().map(|r| (r.summary.h, r.errors.at_final.h1_seminorm)).collect(),
+            points: v
+                .iter()
+                .map(|r| (r.summary.h, r.errors.at_final.h1_seminorm))
+                .collect(),
             labels: vec![],
         })
         .collect();
-    let guides = guide_at_finest(&series, "O(h)", 1.0).into_iter().collect::<Vec<_>>();
-    loglog_svg(path, "H¹-seminorm error at T against the mesh size", "h", "|u_ref − u_hk|₁ at T", &series, &guides)
+    let guides = guide_at_finest(&series, "O(h)", 1.0)
+        .into_iter()
+        .collect::<Vec<_>>();
+    loglog_svg(
+        path,
+        "H¹-seminorm error at T against the mesh size",
+        "h",
+        "|u_ref − u_hk|₁ at T",
+        &series,
+        &guides,
+    )
 }
 
 /// H¹-seminorm error at T against k, one line per h, with an O(k²) guide.
@@ -229,12 +305,24 @@ pub fn plot_error_vs_k(path: &Path, rows: &[Row]) -> Result<(), String> {
         .iter()
         .map(|(h, v)| Series {
             name: format!("h = {}", fraction(*h)),
-            points: v.iter().map(|r| (r.summary.k, r.errors.at_final.h1_seminorm)).collect(),
+            points: v
+                .iter()
+                .map(|r| (r.summary.k, r.errors.at_final.h1_seminorm))
+                .collect(),
             labels: vec![],
         })
         .collect();
-    let guides = guide_at_finest(&series, "O(k²)", 2.0).into_iter().collect::<Vec<_>>();
-    loglog_svg(path, "H¹-seminorm error at T against the time step", "k", "|u_ref − u_hk|₁ at T", &series, &guides)
+    let guides = guide_at_finest(&series, "O(k²)", 2.0)
+        .into_iter()
+        .collect::<Vec<_>>();
+    loglog_svg(
+        path,
+        "H¹-seminorm error at T against the time step",
+        "k",
+        "|u_ref − u_hk|₁ at T",
+        &series,
+        &guides,
+    )
 }
 
 /// Work–precision: H¹ error at T against wall time, one line per refinement path, each point
@@ -252,7 +340,10 @@ pub fn plot_work_precision(path: &Path, rows: &[Row]) -> Result<(), String> {
             let on: Vec<&Row> = rows.iter().filter(|r| r.path == *name).collect();
             Series {
                 name: name.to_string(),
-                points: on.iter().map(|r| (r.summary.wall.max(1e-6), r.errors.at_final.h1_seminorm)).collect(),
+                points: on
+                    .iter()
+                    .map(|r| (r.summary.wall.max(1e-6), r.errors.at_final.h1_seminorm))
+                    .collect(),
                 labels: on
                     .iter()
                     .map(|r| match r.refine {
@@ -264,8 +355,22 @@ pub fn plot_work_precision(path: &Path, rows: &[Row]) -> Result<(), String> {
         })
         .collect();
     let anchor = series.first().and_then(|s| s.points.first().copied());
-    let guides: Vec<Guide> = anchor.map(|a| Guide { name: "slope −1/2".into(), slope: -0.5, anchor: a }).into_iter().collect();
-    loglog_svg(path, "Work–precision: H¹ error at T against wall time", "wall time [s]", "|u_ref − u_hk|₁ at T", &series, &guides)
+    let guides: Vec<Guide> = anchor
+        .map(|a| Guide {
+            name: "slope −1/2".into(),
+            slope: -0.5,
+            anchor: a,
+        })
+        .into_iter()
+        .collect();
+    loglog_svg(
+        path,
+        "Work–precision: H¹ error at T against wall time",
+        "wall time [s]",
+        "|u_ref − u_hk|₁ at T",
+        &series,
+        &guides,
+    )
 }
 
 fn guide_at_finest(series: &[Series], name: &str, slope: f64) -> Option<Guide> {
@@ -275,7 +380,11 @@ fn guide_at_finest(series: &[Series], name: &str, slope: f64) -> Option<Guide> {
         .iter()
         .filter_map(|s| s.points.iter().copied().min_by(|a, b| a.0.total_cmp(&b.0)))
         .min_by(|a, b| a.1.total_cmp(&b.1))?;
-    Some(Guide { name: name.into(), slope, anchor: (finest.0, finest.1 / 2.0) })
+    Some(Guide {
+        name: name.into(),
+        slope,
+        anchor: (finest.0, finest.1 / 2.0),
+    })
 }
 
 /// The normal displacement u_ν along Γ₃ at several times: `series` holds (t, [(x, u_ν)]).
@@ -283,20 +392,31 @@ pub fn plot_gamma3(path: &Path, series: &[(f64, Vec<(f64, f64)>)]) -> Result<(),
     let root = SVGBackend::new(path, SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
     let pts = || series.iter().flat_map(|(_, v)| v.iter().copied());
-    let (x0, x1) = pts().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.0), b.max(p.0)));
+    let (x0, x1) = pts().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+        (a.min(p.0), b.max(p.0))
+    });
     let (y0, y1) = pts().fold((0.0f64, 0.0f64), |(a, b), p| (a.min(p.1), b.max(p.1)));
     if !x0.is_finite() {
         return Err("Γ₃ plot: nothing to plot".into());
     }
     let pad = 0.06 * (y1 - y0).max(1e-12);
     let mut chart = ChartBuilder::on(&root)
-        .caption("Normal displacement u_ν on Γ₃ (the paper's Fig. 2 plots u₂ = −u_ν)", (FONT, 18))
+        .caption(
+            "Normal displacement u_ν on Γ₃ (the paper's Fig. 2 plots u₂ = −u_ν)",
+            (FONT, 18),
+        )
         .margin(16)
         .x_label_area_size(44)
         .y_label_area_size(64)
         .build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))
         .map_err(err)?;
-    chart.configure_mesh().x_desc("x").y_desc("u_ν").light_line_style(RGBColor(235, 235, 235)).draw().map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("x")
+        .y_desc("u_ν")
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(err)?;
     for (i, (t, v)) in series.iter().enumerate() {
         let color = Palette99::pick(i).to_rgba();
         let mut v = v.clone();
@@ -305,7 +425,9 @@ pub fn plot_gamma3(path: &Path, series: &[(f64, Vec<(f64, f64)>)]) -> Result<(),
             .draw_series(LineSeries::new(v, color.stroke_width(2)))
             .map_err(err)?
             .label(format!("t = {t}"))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+            });
     }
     chart
         .configure_series_labels()
@@ -331,7 +453,11 @@ pub fn colour_map(s: f64) -> RGBColor {
         (173, 220, 48),
         (253, 231, 37),
     ];
-    let s = if s.is_finite() { s.clamp(0.0, 1.0) } else { 0.0 };
+    let s = if s.is_finite() {
+        s.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     let f = s * (STOPS.len() - 1) as f64;
     let i = (f.floor() as usize).min(STOPS.len() - 2);
     let w = f - i as f64;
@@ -343,7 +469,13 @@ pub fn colour_map(s: f64) -> RGBColor {
 /// Draws the mesh deformed by `scale × nodal_u`, each cell filled by the colour map of its
 /// value (scaled between the 2 % and 98 % quantiles of the values), the undeformed outline in grey, and
 /// cell edges when cells are large enough to see. PNG, no text.
-pub fn render_deformed_png(path: &Path, mesh: &Mesh, nodal_u: &[[f64; 2]], cell_values: &[f64], scale: f64) -> Result<(), String> {
+pub fn render_deformed_png(
+    path: &Path,
+    mesh: &Mesh,
+    nodal_u: &[[f64; 2]],
+    cell_values: &[f64],
+    scale: f64,
+) -> Result<(), String> {
     if nodal_u.len() != mesh.points.len() || cell_values.len() != mesh.cells.len() {
         return Err(format!(
             "deformed-mesh picture: {} nodal values for {} nodes, {} cell values for {} cells",
@@ -353,7 +485,12 @@ pub fn render_deformed_png(path: &Path, mesh: &Mesh, nodal_u: &[[f64; 2]], cell_
             mesh.cells.len()
         ));
     }
-    let moved: Vec<[f64; 2]> = mesh.points.iter().zip(nodal_u).map(|(p, u)| [p[0] + scale * u[0], p[1] + scale * u[1]]).collect();
+    let moved: Vec<[f64; 2]> = mesh
+        .points
+        .iter()
+        .zip(nodal_u)
+        .map(|(p, u)| [p[0] + scale * u[0], p[1] + scale * u[1]])
+        .collect();
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     for p in mesh.points.iter().chain(&moved) {
         for d in 0..2 {
@@ -365,12 +502,26 @@ pub fn render_deformed_png(path: &Path, mesh: &Mesh, nodal_u: &[[f64; 2]], cell_
     let span = [(hi[0] - lo[0]).max(1e-300), (hi[1] - lo[1]).max(1e-300)];
     let px = (w as f64 - 2.0 * margin) / span[0];
     let h = ((span[1] * px + 2.0 * margin).ceil() as u32).clamp(40, 4000);
-    let to_px = |p: [f64; 2]| ((margin + (p[0] - lo[0]) * px).round() as i32, (h as f64 - margin - (p[1] - lo[1]) * px).round() as i32);
+    let to_px = |p: [f64; 2]| {
+        (
+            (margin + (p[0] - lo[0]) * px).round() as i32,
+            (h as f64 - margin - (p[1] - lo[1]) * px).round() as i32,
+        )
+    };
     // colour range: the 2 % and 98 % quantiles, so that a few singular corner cells do not
     // wash out the rest
-    let mut sorted: Vec<f64> = cell_values.iter().copied().filter(|v| v.is_finite()).collect();
+    let mut sorted: Vec<f64> = cell_values
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .collect();
     sorted.sort_by(f64::total_cmp);
-    let quantile = |q: f64| sorted.get(((sorted.len().max(1) - 1) as f64 * q).round() as usize).copied().unwrap_or(0.0);
+    let quantile = |q: f64| {
+        sorted
+            .get(((sorted.len().max(1) - 1) as f64 * q).round() as usize)
+            .copied()
+            .unwrap_or(0.0)
+    };
     let (vmin, vmax) = (quantile(0.02), quantile(0.98));
     let range = if vmax > vmin { vmax - vmin } else { 1.0 };
     let root = BitMapBackend::new(path, (w, h)).into_drawing_area();
@@ -384,7 +535,11 @@ pub fn render_deformed_png(path: &Path, mesh: &Mesh, nodal_u: &[[f64; 2]], cell_
     }
     let grey = RGBColor(170, 170, 170);
     for (&[a, b], _) in edges.iter().filter(|(_, &n)| n == 1) {
-        root.draw(&PathElement::new(vec![to_px(mesh.points[a]), to_px(mesh.points[b])], grey.stroke_width(2))).map_err(err)?;
+        root.draw(&PathElement::new(
+            vec![to_px(mesh.points[a]), to_px(mesh.points[b])],
+            grey.stroke_width(2),
+        ))
+        .map_err(err)?;
     }
     let cell_px = mesh.cells.first().map_or(0.0, |c| {
         let n = c.nodes();
@@ -395,11 +550,13 @@ pub fn render_deformed_png(path: &Path, mesh: &Mesh, nodal_u: &[[f64; 2]], cell_
     for (c, v) in mesh.cells.iter().zip(cell_values) {
         let poly: Vec<(i32, i32)> = c.nodes().iter().map(|&p| to_px(moved[p])).collect();
         let colour = colour_map((v - vmin) / range);
-        root.draw(&Polygon::new(poly.clone(), colour.filled())).map_err(err)?;
+        root.draw(&Polygon::new(poly.clone(), colour.filled()))
+            .map_err(err)?;
         if cell_px >= 8.0 {
             let mut closed = poly;
             closed.push(closed[0]);
-            root.draw(&PathElement::new(closed, edge_colour.stroke_width(1))).map_err(err)?;
+            root.draw(&PathElement::new(closed, edge_colour.stroke_width(1)))
+                .map_err(err)?;
         }
     }
     root.present().map_err(err)

@@ -47,7 +47,11 @@ pub fn csv(rows: &[Row]) -> String {
         let m = &r.summary;
         let p = &m.phases;
         let opt = |v: Option<f64>, prec: usize| v.map_or(String::new(), |v| format!("{v:.prec$}"));
-        let path = if r.path.contains([',', '"']) { format!("\"{}\"", r.path.replace('"', "\"\"")) } else { r.path.clone() };
+        let path = if r.path.contains([',', '"']) {
+            format!("\"{}\"", r.path.replace('"', "\"\""))
+        } else {
+            r.path.clone()
+        };
         let _ = writeln!(
             s,
             "{path},{:e},{:e},{},{},{},{:e},{:e},{:e},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{}",
@@ -80,7 +84,10 @@ pub fn markdown(rows: &[Row]) -> String {
         s,
         "| path | h | k | nodes | unknowns | steps | H¹ error at T | order | L² error at T | L² order | max_t H¹ error | order | wall [s] | assembly [s] | factorisation [s] | condensation [s] | steps [s] | output [s] | Newton | peak RSS [MB] |"
     );
-    let _ = writeln!(s, "|---|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|");
+    let _ = writeln!(
+        s,
+        "|---|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|"
+    );
     for r in rows {
         let m = &r.summary;
         let p = &m.phases;
@@ -130,7 +137,11 @@ pub fn comparison_markdown(rows: &[&Row], published: &[Published]) -> String {
         let ord = |o: Option<f64>| o.map_or("–".to_string(), |o| format!("{o:.2}"));
         let e = r.errors.at_final.h1_seminorm;
         let (pe, po, ratio) = match published.get(i) {
-            Some(p) => (format!("{:.6e}", p.error), ord(p.order), format!("{:.2}", e / p.error)),
+            Some(p) => (
+                format!("{:.6e}", p.error),
+                ord(p.order),
+                format!("{:.2}", e / p.error),
+            ),
             None => (String::new(), String::new(), String::new()),
         };
         let _ = writeln!(
@@ -150,12 +161,20 @@ pub fn comparison_markdown(rows: &[&Row], published: &[Published]) -> String {
 pub fn comparison_text(title: &str, rows: &[&Row], published: &[Published]) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "{title}");
-    let _ = writeln!(s, "  {:>7} {:>7}  {:>13} {:>6}  {:>13} {:>6}  {:>6}  {:>13} {:>6}", "h", "k", "H1 error", "order", "paper", "order", "ratio", "max_t H1", "order");
+    let _ = writeln!(
+        s,
+        "  {:>7} {:>7}  {:>13} {:>6}  {:>13} {:>6}  {:>6}  {:>13} {:>6}",
+        "h", "k", "H1 error", "order", "paper", "order", "ratio", "max_t H1", "order"
+    );
     for (i, r) in rows.iter().enumerate() {
         let ord = |o: Option<f64>| o.map_or("-".to_string(), |o| format!("{o:.2}"));
         let e = r.errors.at_final.h1_seminorm;
         let (pe, po, ratio) = match published.get(i) {
-            Some(p) => (format!("{:.6e}", p.error), ord(p.order), format!("{:.2}", e / p.error)),
+            Some(p) => (
+                format!("{:.6e}", p.error),
+                ord(p.order),
+                format!("{:.2}", e / p.error),
+            ),
             None => (String::new(), String::new(), String::new()),
         };
         let _ = writeln!(

@@ -57,7 +57,11 @@ pub struct RunOptions {
 impl RunOptions {
     /// Keeps the output steps and measures h from the mesh.
     pub fn new(label: impl Into<String>) -> Self {
-        RunOptions { label: label.into(), h: None, keep: Keep::Output }
+        RunOptions {
+            label: label.into(),
+            h: None,
+            keep: Keep::Output,
+        }
     }
 }
 
@@ -165,10 +169,17 @@ pub fn run_with(mesh: Mesh, scene: &Scene, options: &RunOptions) -> Result<RunRe
     let started = Instant::now();
     let h = options.h.unwrap_or_else(|| longest_edge(&mesh));
     let sim = Simulation::new(scene, mesh)?;
-    let mut sink = KeepSink { keep: &options.keep, kept: Vec::new(), last: None };
+    let mut sink = KeepSink {
+        keep: &options.keep,
+        kept: Vec::new(),
+        last: None,
+    };
     let stats = timeloop::run(&sim, &mut sink, None)?;
     let wall = started.elapsed().as_secs_f64();
-    let final_displacement = sink.last.take().ok_or_else(|| SolveError::Setup("the run produced no step".into()))?;
+    let final_displacement = sink
+        .last
+        .take()
+        .ok_or_else(|| SolveError::Setup("the run produced no step".into()))?;
     Ok(RunRecord {
         label: options.label.clone(),
         h,
@@ -292,12 +303,20 @@ pub struct Study {
 impl Study {
     /// A study against a reference run (keep the times to compare: see [`Keep`]).
     pub fn against_run(reference: RunRecord) -> Self {
-        Study { reference: Reference::Run(Box::new(reference)), runs: Vec::new(), paths: Vec::new() }
+        Study {
+            reference: Reference::Run(Box::new(reference)),
+            runs: Vec::new(),
+            paths: Vec::new(),
+        }
     }
 
     /// A study against an exact solution.
     pub fn against_exact(exact: ExactField) -> Self {
-        Study { reference: Reference::Exact(exact), runs: Vec::new(), paths: Vec::new() }
+        Study {
+            reference: Reference::Exact(exact),
+            runs: Vec::new(),
+            paths: Vec::new(),
+        }
     }
 
     /// The reference run, if the reference is a run.
@@ -312,16 +331,31 @@ impl Study {
     /// index for [`Study::add_path`].
     pub fn add_run(&mut self, run: &RunRecord) -> Result<usize, String> {
         let errors = self.evaluate(run)?;
-        self.runs.push(EvaluatedRun { summary: run.summary(), errors });
+        self.runs.push(EvaluatedRun {
+            summary: run.summary(),
+            errors,
+        });
         Ok(self.runs.len() - 1)
     }
 
     /// Declares a refinement path through runs already added (coarse to fine).
-    pub fn add_path(&mut self, name: impl Into<String>, refine: Refinement, runs: Vec<usize>) -> Result<(), String> {
+    pub fn add_path(
+        &mut self,
+        name: impl Into<String>,
+        refine: Refinement,
+        runs: Vec<usize>,
+    ) -> Result<(), String> {
         if let Some(&bad) = runs.iter().find(|&&r| r >= self.runs.len()) {
-            return Err(format!("path refers to run {bad}, but the study has {} runs", self.runs.len()));
+            return Err(format!(
+                "path refers to run {bad}, but the study has {} runs",
+                self.runs.len()
+            ));
         }
-        self.paths.push(RefinementPath { name: name.into(), refine, runs });
+        self.paths.push(RefinementPath {
+            name: name.into(),
+            refine,
+            runs,
+        });
         Ok(())
     }
 
@@ -329,7 +363,9 @@ impl Study {
     pub fn evaluate(&self, run: &RunRecord) -> Result<RunErrors, String> {
         match &self.reference {
             Reference::Exact(exact) => {
-                let on_mesh = |t: f64, u: &[[f64; 2]]| errors(&run.mesh.cells, &run.mesh.points, u, |x| exact(t, x));
+                let on_mesh = |t: f64, u: &[[f64; 2]]| {
+                    errors(&run.mesh.cells, &run.mesh.points, u, |x| exact(t, x))
+                };
                 let at_final = on_mesh(run.final_time, &run.final_displacement);
                 let mut max = (at_final.h1_seminorm, run.final_time);
                 let mut count = 1;
@@ -343,7 +379,12 @@ impl Study {
                         max = (e, *t);
                     }
                 }
-                Ok(RunErrors { at_final, h1_max_over_time: max.0, h1_max_time: max.1, times_compared: count })
+                Ok(RunErrors {
+                    at_final,
+                    h1_max_over_time: max.0,
+                    h1_max_time: max.1,
+                    times_compared: count,
+                })
             }
             Reference::Run(reference) => {
                 let tol = time_tolerance(reference.final_time);
@@ -355,8 +396,12 @@ impl Study {
                 }
                 let transfer = Locator::new(&run.mesh)
                     .transfer(&reference.mesh.points)
-                    .map_err(|e| format!("carrying run {} to the reference mesh: {e}", run.label))?;
-                let at = |u_ref: &[[f64; 2]], u: &[[f64; 2]]| seminorm_errors(&reference.mesh, u_ref, &transfer.apply(u));
+                    .map_err(|e| {
+                        format!("carrying run {} to the reference mesh: {e}", run.label)
+                    })?;
+                let at = |u_ref: &[[f64; 2]], u: &[[f64; 2]]| {
+                    seminorm_errors(&reference.mesh, u_ref, &transfer.apply(u))
+                };
                 let at_final = at(&reference.final_displacement, &run.final_displacement);
                 let mut max = (at_final.h1_seminorm, run.final_time);
                 let mut count = 1;
@@ -364,7 +409,11 @@ impl Study {
                     if (t - run.final_time).abs() <= tol {
                         continue;
                     }
-                    if let Some((_, u_ref)) = reference.displacement_at.iter().find(|(s, _)| (s - t).abs() <= tol) {
+                    if let Some((_, u_ref)) = reference
+                        .displacement_at
+                        .iter()
+                        .find(|(s, _)| (s - t).abs() <= tol)
+                    {
                         let e = at(u_ref, u).h1_seminorm;
                         count += 1;
                         if e > max.0 {
@@ -372,7 +421,12 @@ impl Study {
                         }
                     }
                 }
-                Ok(RunErrors { at_final, h1_max_over_time: max.0, h1_max_time: max.1, times_compared: count })
+                Ok(RunErrors {
+                    at_final,
+                    h1_max_over_time: max.0,
+                    h1_max_time: max.1,
+                    times_compared: count,
+                })
             }
         }
     }
@@ -388,7 +442,9 @@ impl Study {
                     Refinement::H => e.summary.h,
                     Refinement::K => e.summary.k,
                 };
-                let order = |f: fn(&RunErrors) -> f64| prev.map(|p| observed_order(param(p), f(&p.errors), param(run), f(&run.errors)));
+                let order = |f: fn(&RunErrors) -> f64| {
+                    prev.map(|p| observed_order(param(p), f(&p.errors), param(run), f(&run.errors)))
+                };
                 rows.push(Row {
                     path: path.name.clone(),
                     refine: path.refine,
@@ -413,7 +469,11 @@ impl Study {
                 .iter()
                 .map(|&r| {
                     let run = &self.runs[r];
-                    let p = if path.refine == Refinement::H { run.summary.h } else { run.summary.k };
+                    let p = if path.refine == Refinement::H {
+                        run.summary.h
+                    } else {
+                        run.summary.k
+                    };
                     (p, run.errors.at_final.h1_seminorm)
                 })
                 .unzip();
@@ -457,8 +517,13 @@ pub fn run_plan(
     progress: &mut dyn FnMut(&RunRecord, Option<&RunErrors>),
 ) -> Result<Study, String> {
     let one = |n: usize, steps: usize, label: String| -> Result<RunRecord, String> {
-        let options = RunOptions { label: label.clone(), h: Some(1.0 / n as f64), keep: plan.keep.clone() };
-        run_with(make_mesh(n), &make_scene(steps), &options).map_err(|e| format!("run {label}: {e}"))
+        let options = RunOptions {
+            label: label.clone(),
+            h: Some(1.0 / n as f64),
+            keep: plan.keep.clone(),
+        };
+        run_with(make_mesh(n), &make_scene(steps), &options)
+            .map_err(|e| format!("run {label}: {e}"))
     };
     let label = |n: usize, steps: usize| format!("h=1/{n} N={steps}");
     let (rn, rs) = plan.reference;
@@ -466,7 +531,11 @@ pub fn run_plan(
     progress(&reference, None);
     let mut study = Study::against_run(reference);
     let mut done: Vec<((usize, usize), usize)> = Vec::new();
-    let mut index = |study: &mut Study, n: usize, steps: usize, progress: &mut dyn FnMut(&RunRecord, Option<&RunErrors>)| -> Result<usize, String> {
+    let mut index = |study: &mut Study,
+                     n: usize,
+                     steps: usize,
+                     progress: &mut dyn FnMut(&RunRecord, Option<&RunErrors>)|
+     -> Result<usize, String> {
         if let Some(&(_, i)) = done.iter().find(|(key, _)| *key == (n, steps)) {
             return Ok(i);
         }
@@ -477,12 +546,22 @@ pub fn run_plan(
         Ok(i)
     };
     for (steps, ns) in plan.h_paths.iter().filter(|(_, ns)| !ns.is_empty()) {
-        let runs = ns.iter().map(|&n| index(&mut study, n, *steps, progress)).collect::<Result<Vec<_>, _>>()?;
+        let runs = ns
+            .iter()
+            .map(|&n| index(&mut study, n, *steps, progress))
+            .collect::<Result<Vec<_>, _>>()?;
         let k = study.runs[runs[0]].summary.k;
-        study.add_path(format!("h (k={})", super::report::fraction(k)), Refinement::H, runs)?;
+        study.add_path(
+            format!("h (k={})", super::report::fraction(k)),
+            Refinement::H,
+            runs,
+        )?;
     }
     for (n, all_steps) in plan.k_paths.iter().filter(|(_, s)| !s.is_empty()) {
-        let runs = all_steps.iter().map(|&s| index(&mut study, *n, s, progress)).collect::<Result<Vec<_>, _>>()?;
+        let runs = all_steps
+            .iter()
+            .map(|&s| index(&mut study, *n, s, progress))
+            .collect::<Result<Vec<_>, _>>()?;
         study.add_path(format!("k (h=1/{n})"), Refinement::K, runs)?;
     }
     Ok(study)

@@ -1,0 +1,206 @@
+//! The serde types of a scene file (TOML). Unknown keys are caught before deserialising by
+//! [`super::validate::check_keys`], which also suggests the nearest valid key.
+
+use crate::mesh::GroupSelector;
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+/// A whole scene: the physics to simulate. An absent optional section is an absent effect.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    #[serde(default)]
+    pub groups: Groups,
+    pub material: Material,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub memory: Option<MemoryKernelSpec>,
+    pub time: TimeSpec,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub traction: Vec<TractionSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub body_force: Option<BodyForceSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact: Option<ContactSpec>,
+    #[serde(default)]
+    pub solver: SolverSpec,
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+/// Which physical groups play Γ₁ and Γ₃.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Groups {
+    #[serde(default = "default_clamped")]
+    pub clamped: GroupSelector,
+    #[serde(default = "default_contact")]
+    pub contact: GroupSelector,
+}
+
+fn default_clamped() -> GroupSelector {
+    GroupSelector::Name("Gamma1".into())
+}
+fn default_contact() -> GroupSelector {
+    GroupSelector::Name("Gamma3".into())
+}
+
+impl Default for Groups {
+    fn default() -> Self {
+        Groups { clamped: default_clamped(), contact: default_contact() }
+    }
+}
+
+/// Plane stress or plane strain.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Plane {
+    Stress,
+    Strain,
+}
+
+/// Isotropic linear elasticity A.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    pub plane: Plane,
+    pub youngs_modulus: f64,
+    pub poisson_ratio: f64,
+}
+
+/// The relaxation kernel b(s) of B(s) = b(s)·I.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum MemoryKernelSpec {
+    /// b(s) = Σ c_j s^j.
+    Polynomial { coefficients: Vec<f64> },
+    /// b(s) = Σ c_m e^{−s/τ_m}.
+    Exponential { terms: Vec<PronyTerm> },
+    /// Any b(s).
+    Expression { expression: String },
+}
+
+/// One term c e^{−s/τ} of a Prony series.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PronyTerm {
+    pub coefficient: f64,
+    pub relaxation_time: f64,
+}
+
+/// Uniform time steps on [0, T].
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSpec {
+    pub final_time: f64,
+    pub steps: usize,
+}
+
+/// A traction density on a boundary group.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TractionSpec {
+    pub group: GroupSelector,
+    pub value: [String; 2],
+}
+
+/// A body force density.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodyForceSpec {
+    pub value: [String; 2],
+}
+
+/// Contact on Γ₃: the bound u_ν ≤ g and/or a normal-compliance law.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bound: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub law: Option<ContactLawSpec>,
+}
+
+/// A normal-compliance law j_ν = S ∫ μ and its regularisation.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ContactLawSpec {
+    #[serde(flatten)]
+    pub kind: LawKind,
+    #[serde(default)]
+    pub one_sided: bool,
+    #[serde(default = "default_regularisation")]
+    pub regularisation: f64,
+}
+
+fn default_regularisation() -> f64 {
+    1e-8
+}
+
+/// The menu of laws.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum LawKind {
+    /// μ(s) = (a − b) e^{−αs} + b (EXAMPLE.md (5.3)).
+    Paper { scale: f64, a: f64, b: f64, alpha: f64 },
+    /// μ(s) = s^p: p_ν = S (u_ν)₊^p.
+    Power { scale: f64, exponent: f64 },
+    /// μ piecewise linear through `table = [[s0, μ0], [s1, μ1], …]`, s0 = 0.
+    PiecewiseLinear { scale: f64, table: Vec<[f64; 2]> },
+    /// As piecewise_linear, the table read from a CSV file of `s,mu` rows (relative to the scene).
+    Tabulated { scale: f64, file: PathBuf },
+}
+
+/// Contact solver settings.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSpec {
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: usize,
+}
+
+fn default_tolerance() -> f64 {
+    1e-10
+}
+fn default_max_iterations() -> usize {
+    100
+}
+
+impl Default for SolverSpec {
+    fn default() -> Self {
+        SolverSpec { tolerance: default_tolerance(), max_iterations: default_max_iterations() }
+    }
+}
+
+/// A field that can be written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OutputField {
+    Displacement,
+    Stress,
+    VonMises,
+    Contact,
+}
+
+/// Which steps and fields are written.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    #[serde(default = "default_every")]
+    pub every: usize,
+    #[serde(default = "default_fields")]
+    pub fields: Vec<OutputField>,
+}
+
+fn default_every() -> usize {
+    1
+}
+fn default_fields() -> Vec<OutputField> {
+    vec![OutputField::Displacement, OutputField::Stress, OutputField::VonMises, OutputField::Contact]
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        OutputSpec { every: default_every(), fields: default_fields() }
+    }
+}

@@ -1,0 +1,229 @@
+//! Checks of a scene: every key known (with the nearest valid key suggested), every value in
+//! range, every expression compiling and finite at a probe point.
+
+use super::error::SceneError;
+use super::expr::Expr;
+use super::types::{ContactLawSpec, LawKind, MemoryKernelSpec, Scene};
+use toml::Value;
+
+/// The keys allowed in a table, given its path and contents.
+fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
+    let kind = table.get("kind").and_then(|v| v.as_str());
+    Some(match path {
+        "" => vec!["groups", "material", "memory", "time", "traction", "body_force", "contact", "solver", "output"],
+        "groups" => vec!["clamped", "contact"],
+        "material" => vec!["plane", "youngs_modulus", "poisson_ratio"],
+        "memory" => match kind {
+            Some("polynomial") => vec!["kind", "coefficients"],
+            Some("exponential") => vec!["kind", "terms"],
+            Some("expression") => vec!["kind", "expression"],
+            _ => vec!["kind", "coefficients", "terms", "expression"],
+        },
+        "memory.terms" => vec!["coefficient", "relaxation_time"],
+        "time" => vec!["final_time", "steps"],
+        "traction" => vec!["group", "value"],
+        "body_force" => vec!["value"],
+        "contact" => vec!["bound", "law"],
+        "contact.law" => {
+            let mut keys = vec!["kind", "one_sided", "regularisation", "scale"];
+            keys.extend(match kind {
+                Some("paper") => vec!["a", "b", "alpha"],
+                Some("power") => vec!["exponent"],
+                Some("piecewise_linear") => vec!["table"],
+                Some("tabulated") => vec!["file"],
+                _ => vec!["a", "b", "alpha", "exponent", "table", "file"],
+            });
+            keys
+        }
+        "solver" => vec!["tolerance", "max_iterations"],
+        "output" => vec!["every", "fields"],
+        _ => return None,
+    })
+}
+
+/// Levenshtein distance (for "did you mean").
+fn distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut cur = vec![i + 1];
+        for (j, cb) in b.iter().enumerate() {
+            cur.push((prev[j] + usize::from(ca != *cb)).min(prev[j + 1] + 1).min(cur[j] + 1));
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
+/// Rejects unknown keys anywhere in the tree, naming the nearest valid one.
+pub fn check_keys(value: &Value, origin: &str) -> Result<(), SceneError> {
+    walk(value, "", origin)
+}
+
+fn walk(value: &Value, path: &str, origin: &str) -> Result<(), SceneError> {
+    match value {
+        Value::Table(table) => {
+            if let Some(allowed) = allowed_keys(path, table) {
+                for (key, v) in table {
+                    if !allowed.contains(&key.as_str()) {
+                        let best = allowed.iter().min_by_key(|k| distance(key, k)).copied();
+                        let suggestion = match best {
+                            Some(b) if distance(key, b) <= (key.len() / 3).max(2) => format!(" (did you mean `{b}`?)"),
+                            _ => String::new(),
+                        };
+                        return Err(SceneError::UnknownKey {
+                            origin: origin.into(),
+                            section: if path.is_empty() { "the top level".into() } else { format!("[{path}]") },
+                            key: key.clone(),
+                            suggestion,
+                            allowed: allowed.join(", "),
+                        });
+                    }
+                    let child = if path.is_empty() { key.clone() } else { format!("{path}.{key}") };
+                    walk(v, &child, origin)?;
+                }
+            }
+            Ok(())
+        }
+        Value::Array(items) => items.iter().try_for_each(|v| walk(v, path, origin)),
+        _ => Ok(()),
+    }
+}
+
+fn invalid(origin: &str, key: &str, value: impl std::fmt::Display, fix: &str) -> SceneError {
+    SceneError::Invalid { origin: origin.into(), key: key.into(), value: value.to_string(), fix: fix.into() }
+}
+
+/// Range checks of every value; expressions compile and are finite at a probe point.
+pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
+    let m = &scene.material;
+    if !(m.youngs_modulus.is_finite() && m.youngs_modulus > 0.0) {
+        return Err(invalid(origin, "material.youngs_modulus", m.youngs_modulus, "Young's modulus must be positive and finite"));
+    }
+    if !(m.poisson_ratio > -1.0 && m.poisson_ratio < 0.5) {
+        return Err(invalid(origin, "material.poisson_ratio", m.poisson_ratio, "Poisson's ratio must lie in (−1, 0.5)"));
+    }
+    let t = &scene.time;
+    if !(t.final_time.is_finite() && t.final_time > 0.0) {
+        return Err(invalid(origin, "time.final_time", t.final_time, "the final time must be positive"));
+    }
+    if t.steps == 0 {
+        return Err(invalid(origin, "time.steps", 0, "at least one time step is needed"));
+    }
+    if t.steps > 100_000_000 {
+        return Err(invalid(origin, "time.steps", t.steps, "more than 10⁸ steps is surely a typo"));
+    }
+    match &scene.memory {
+        Some(MemoryKernelSpec::Polynomial { coefficients }) => {
+            if coefficients.is_empty() || coefficients.iter().any(|c| !c.is_finite()) {
+                return Err(invalid(origin, "memory.coefficients", format!("{coefficients:?}"), "give at least one finite coefficient c0, c1, … of b(s) = Σ c_j s^j"));
+            }
+        }
+        Some(MemoryKernelSpec::Exponential { terms }) => {
+            if terms.is_empty() {
+                return Err(invalid(origin, "memory.terms", "[]", "give at least one { coefficient, relaxation_time }"));
+            }
+            for (i, term) in terms.iter().enumerate() {
+                if !(term.relaxation_time.is_finite() && term.relaxation_time > 0.0) {
+                    return Err(invalid(origin, &format!("memory.terms[{i}].relaxation_time"), term.relaxation_time, "relaxation times must be positive"));
+                }
+                if !term.coefficient.is_finite() {
+                    return Err(invalid(origin, &format!("memory.terms[{i}].coefficient"), term.coefficient, "coefficients must be finite"));
+                }
+            }
+        }
+        Some(MemoryKernelSpec::Expression { expression }) => {
+            compile(origin, "memory.expression", expression, &["s"], &[0.0])?;
+        }
+        None => {}
+    }
+    for (i, tr) in scene.traction.iter().enumerate() {
+        for c in 0..2 {
+            compile(origin, &format!("traction[{i}].value[{c}]"), &tr.value[c], &["x", "y", "t"], &[0.0, 0.0, 0.0])?;
+        }
+    }
+    if let Some(f) = &scene.body_force {
+        for c in 0..2 {
+            compile(origin, &format!("body_force.value[{c}]"), &f.value[c], &["x", "y", "t"], &[0.0, 0.0, 0.0])?;
+        }
+    }
+    if let Some(c) = &scene.contact {
+        if let Some(g) = c.bound {
+            if !(g.is_finite() && g >= 0.0) {
+                return Err(invalid(origin, "contact.bound", g, "the bound g must be ≥ 0 (omit it for no bound)"));
+            }
+        }
+        if let Some(law) = &c.law {
+            check_law(law, origin)?;
+        }
+    }
+    if !(scene.solver.tolerance > 0.0 && scene.solver.tolerance < 1.0) {
+        return Err(invalid(origin, "solver.tolerance", scene.solver.tolerance, "the relative tolerance must lie in (0, 1), e.g. 1e-10"));
+    }
+    if scene.solver.max_iterations == 0 {
+        return Err(invalid(origin, "solver.max_iterations", 0, "allow at least one iteration"));
+    }
+    if scene.output.every == 0 {
+        return Err(invalid(origin, "output.every", 0, "write every n-th step with n ≥ 1"));
+    }
+    Ok(())
+}
+
+fn check_law(law: &ContactLawSpec, origin: &str) -> Result<(), SceneError> {
+    if !(law.regularisation.is_finite() && law.regularisation > 0.0) {
+        return Err(invalid(
+            origin,
+            "contact.law.regularisation",
+            law.regularisation,
+            "ε = 0 is not supported: the Clarke subdifferential is set-valued at u_ν = 0; use a small ε such as 1e-8",
+        ));
+    }
+    let scale = match &law.kind {
+        LawKind::Paper { scale, a, b, alpha } => {
+            if !(alpha.is_finite() && *alpha > 0.0) {
+                return Err(invalid(origin, "contact.law.alpha", alpha, "α must be positive"));
+            }
+            for (k, v) in [("a", a), ("b", b)] {
+                if !(v.is_finite() && *v >= 0.0) {
+                    return Err(invalid(origin, &format!("contact.law.{k}"), v, "a and b must be ≥ 0"));
+                }
+            }
+            scale
+        }
+        LawKind::Power { scale, exponent } => {
+            if !(exponent.is_finite() && *exponent >= 1.0) {
+                return Err(invalid(origin, "contact.law.exponent", exponent, "the exponent p of S (u_ν)₊^p must be ≥ 1"));
+            }
+            scale
+        }
+        LawKind::PiecewiseLinear { scale, table } => {
+            let points: Vec<(f64, f64)> = table.iter().map(|p| (p[0], p[1])).collect();
+            crate::contact::PiecewiseLinear::new(&points).map_err(|e| invalid(origin, "contact.law.table", format!("{table:?}"), &e))?;
+            scale
+        }
+        LawKind::Tabulated { scale, .. } => scale,
+    };
+    if !(scale.is_finite() && *scale >= 0.0) {
+        return Err(invalid(origin, "contact.law.scale", scale, "the scale S must be ≥ 0"));
+    }
+    Ok(())
+}
+
+fn compile(origin: &str, key: &str, source: &str, vars: &[&str], probe: &[f64]) -> Result<Expr, SceneError> {
+    let err = |message: String| SceneError::Expression { origin: origin.into(), key: key.into(), expression: source.into(), message };
+    let e = Expr::parse(source, vars).map_err(err)?;
+    let v = e.eval(probe);
+    if !v.is_finite() {
+        return Err(err(format!("evaluates to {v} at {} = {probe:?}; check divisions and logarithms", vars.join(", "))));
+    }
+    Ok(e)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn distance_counts_edits() {
+        assert_eq!(super::distance("youngs_modulos", "youngs_modulus"), 1);
+        assert_eq!(super::distance("", "abc"), 3);
+    }
+}
