@@ -18,7 +18,8 @@ use std::time::Duration;
 
 fn paper(n: usize, steps: usize) -> Simulation {
     // only the last frame is kept (output.every = steps)
-    let scene = Scene::load(None, &[format!("time.steps={steps}"), format!("output.every={steps}")]).expect("embedded scene");
+    let scene =
+        Scene::load(None, &[format!("time.steps={steps}"), format!("output.every={steps}")]).expect("embedded scene");
     Simulation::new(&scene, rectangle(2.0, 1.0, 2 * n, n, CellShape::Quad)).expect("paper example")
 }
 
@@ -35,11 +36,17 @@ fn phases(c: &mut Criterion) {
         let counters = Counters::default();
         g.bench_function("symbolic factorisation", |b| b.iter(|| Factor::analyse(&k).unwrap()));
         let symbolic = Factor::analyse(&k).unwrap();
-        g.bench_function("numeric factorisation", |b| b.iter(|| Factor::new(&symbolic, &k, &counters).unwrap()));
+        g.bench_function("numeric factorisation", |b| {
+            b.iter(|| Factor::new(&symbolic, &k, &counters).unwrap())
+        });
         let factor = Factor::new(&symbolic, &k, &counters).unwrap();
         let rhs: Vec<f64> = (0..k.n()).map(|i| (i as f64).sin()).collect();
         g.bench_function("one solve", |b| {
-            b.iter_batched_ref(|| rhs.clone(), |x| factor.solve_in_place(x, &counters), BatchSize::SmallInput)
+            b.iter_batched_ref(
+                || rhs.clone(),
+                |x| factor.solve_in_place(x, &counters),
+                BatchSize::SmallInput,
+            )
         });
         let nodes = &sim.contact.as_ref().unwrap().nodes;
         g.sample_size(10);

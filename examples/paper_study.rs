@@ -93,8 +93,8 @@ fn parse_args() -> Result<Args, String> {
             }
             other => {
                 return Err(format!(
-                "unknown argument {other:?} (usage: paper_study [--quick] [--out DIR] [--wide])"
-            ))
+                    "unknown argument {other:?} (usage: paper_study [--quick] [--out DIR] [--wide])"
+                ))
             }
         }
     }
@@ -102,8 +102,8 @@ fn parse_args() -> Result<Args, String> {
 }
 
 fn scene(steps: usize) -> Scene {
-    let mut scene = Scene::load(None, &[format!("time.steps={steps}")])
-        .unwrap_or_else(|e| panic!("embedded scene: {e}"));
+    let mut scene =
+        Scene::load(None, &[format!("time.steps={steps}")]).unwrap_or_else(|e| panic!("embedded scene: {e}"));
     scene.time.steps = steps;
     scene
 }
@@ -118,8 +118,7 @@ fn main() {
 fn real_main() -> Result<(), String> {
     let args = parse_args()?;
     let started = Instant::now();
-    std::fs::create_dir_all(&args.out)
-        .map_err(|e| format!("creating {}: {e}", args.out.display()))?;
+    std::fs::create_dir_all(&args.out).map_err(|e| format!("creating {}: {e}", args.out.display()))?;
     let wide = args.wide;
     let make_mesh = move |n: usize| -> Mesh {
         if wide {
@@ -174,27 +173,16 @@ fn real_main() -> Result<(), String> {
     let fitted: Vec<String> = study
         .paths
         .iter()
-        .map(|p| {
-            format!(
-                "{}: {:.3}",
-                p.name,
-                study.fitted_order(p).unwrap_or(f64::NAN)
-            )
-        })
+        .map(|p| format!("{}: {:.3}", p.name, study.fitted_order(p).unwrap_or(f64::NAN)))
         .collect();
-    println!(
-        "least-squares orders of the H¹ error at T: {}",
-        fitted.join(", ")
-    );
+    println!("least-squares orders of the H¹ error at T: {}", fitted.join(", "));
 
     // plots
     let out = &args.out;
     plot::plot_error_vs_h(&out.join("error_vs_h.svg"), &rows)?;
     plot::plot_error_vs_k(&out.join("error_vs_k.svg"), &rows)?;
     plot::plot_work_precision(&out.join("work_precision.svg"), &rows)?;
-    let reference = study
-        .reference_run()
-        .ok_or("the study has no reference run")?;
+    let reference = study.reference_run().ok_or("the study has no reference run")?;
     let contact = scene(1).groups.contact;
     let gamma3 = reference
         .mesh
@@ -203,10 +191,7 @@ fn real_main() -> Result<(), String> {
     let series: Vec<(f64, Vec<(f64, f64)>)> = FIG2_TIMES
         .iter()
         .filter_map(|&t| {
-            let (_, u) = reference
-                .displacement_at
-                .iter()
-                .find(|(s, _)| (s - t).abs() < 1e-9)?;
+            let (_, u) = reference.displacement_at.iter().find(|(s, _)| (s - t).abs() < 1e-9)?;
             let pts = gamma3
                 .nodes
                 .iter()
@@ -220,14 +205,10 @@ fn real_main() -> Result<(), String> {
 
     // the README picture: von Mises on the deformed mesh at T, h = k = 1/32
     let n_pic = 32;
-    let (sim, _, sink) = solve_in_memory(&scene(n_pic), make_mesh(n_pic))
-        .map_err(|e| format!("picture run: {e}"))?;
+    let (sim, _, sink) = solve_in_memory(&scene(n_pic), make_mesh(n_pic)).map_err(|e| format!("picture run: {e}"))?;
     let last = sink.steps.last().ok_or("picture run kept no step")?;
     let u = sim.dofs.to_nodal(&last.displacement);
-    let memory = last
-        .memory_displacement
-        .as_ref()
-        .map(|m| sim.dofs.to_nodal(m));
+    let memory = last.memory_displacement.as_ref().map(|m| sim.dofs.to_nodal(m));
     let stresses = cell_stresses(
         &sim.mesh.cells,
         &sim.mesh.points,
@@ -235,22 +216,13 @@ fn real_main() -> Result<(), String> {
         &u,
         memory.as_deref(),
     );
-    plot::render_deformed_png(
-        &out.join("deformed.png"),
-        &sim.mesh,
-        &u,
-        &stresses.von_mises,
-        1.0,
-    )?;
+    plot::render_deformed_png(&out.join("deformed.png"), &sim.mesh, &u, &stresses.von_mises, 1.0)?;
 
     // tables
     let csv = report::csv(&rows);
     std::fs::write(out.join("study.csv"), &csv).map_err(|e| format!("writing study.csv: {e}"))?;
     let mut md = String::new();
-    let _ = writeln!(
-        md,
-        "# The paper's convergence study (Tables 1–2), reproduced by hvi\n"
-    );
+    let _ = writeln!(md, "# The paper's convergence study (Tables 1–2), reproduced by hvi\n");
     let _ = writeln!(
         md,
         "Command: `cargo run --release --example paper_study -- {}`. Scene: the embedded default \
@@ -305,7 +277,10 @@ fn real_main() -> Result<(), String> {
         series.iter().map(|(t, _)| format!("{t}")).collect::<Vec<_>>().join(", ")
     );
     std::fs::write(out.join("study.md"), &md).map_err(|e| format!("writing study.md: {e}"))?;
-    println!("wrote study.md, study.csv, error_vs_h.svg, error_vs_k.svg, work_precision.svg, gamma3.svg, deformed.png to {}", out.display());
+    println!(
+        "wrote study.md, study.csv, error_vs_h.svg, error_vs_k.svg, work_precision.svg, gamma3.svg, deformed.png to {}",
+        out.display()
+    );
     println!(
         "total {:.1} s (reference {})",
         started.elapsed().as_secs_f64(),

@@ -68,13 +68,21 @@ impl FileSink {
         let progress = progress.then(|| {
             let bar = indicatif::ProgressBar::new(sim.time.steps as u64 + 1);
             bar.set_style(
-                indicatif::ProgressStyle::with_template("{spinner} step {pos}/{len} [{bar:30}] {elapsed_precise} eta {eta} {msg}")
-                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-                    .progress_chars("=> "),
+                indicatif::ProgressStyle::with_template(
+                    "{spinner} step {pos}/{len} [{bar:30}] {elapsed_precise} eta {eta} {msg}",
+                )
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+                .progress_chars("=> "),
             );
             bar
         });
-        Ok(FileSink { series, gamma3, fields: fields.to_vec(), progress, stress_seconds: 0.0 })
+        Ok(FileSink {
+            series,
+            gamma3,
+            fields: fields.to_vec(),
+            progress,
+            stress_seconds: 0.0,
+        })
     }
 
     fn wants(&self, f: OutputField) -> bool {
@@ -106,7 +114,11 @@ impl FrameSink for FileSink {
         let mut point_fields = Vec::new();
         let mut cell_fields = Vec::new();
         if self.wants(OutputField::Displacement) {
-            point_fields.push(Field { name: "displacement", components: 3, values: FieldValues::F64(&displacement) });
+            point_fields.push(Field {
+                name: "displacement",
+                components: 3,
+                values: FieldValues::F64(&displacement),
+            });
         }
         let stresses = (self.wants(OutputField::Stress) || self.wants(OutputField::VonMises)).then(|| {
             timed(&mut self.stress_seconds, || {
@@ -116,15 +128,27 @@ impl FrameSink for FileSink {
         });
         if let Some(s) = &stresses {
             if self.wants(OutputField::Stress) {
-                cell_fields.push(Field { name: "stress", components: 9, values: FieldValues::F64(&s.tensor) });
+                cell_fields.push(Field {
+                    name: "stress",
+                    components: 9,
+                    values: FieldValues::F64(&s.tensor),
+                });
             }
             if self.wants(OutputField::VonMises) {
-                cell_fields.push(Field { name: "von_mises", components: 1, values: FieldValues::F64(&s.von_mises) });
+                cell_fields.push(Field {
+                    name: "von_mises",
+                    components: 1,
+                    values: FieldValues::F64(&s.von_mises),
+                });
             }
         }
         let n_points = mesh.points.len();
-        let (mut u_nu, mut force, mut pressure, mut status) =
-            (vec![0.0; n_points], vec![0.0; n_points], vec![0.0; n_points], vec![-1i32; n_points]);
+        let (mut u_nu, mut force, mut pressure, mut status) = (
+            vec![0.0; n_points],
+            vec![0.0; n_points],
+            vec![0.0; n_points],
+            vec![-1i32; n_points],
+        );
         let mut rows = Vec::new();
         if let (Some(c), Some(state)) = (&sim.contact, view.contact) {
             let mut normal = vec![0.0; c.nodes.len()];
@@ -135,13 +159,37 @@ impl FrameSink for FileSink {
                 pressure[p] = state.force[k] / c.nodes.weights[k];
                 status[p] = state.status[k].code();
                 let x = mesh.points[p];
-                rows.push(vec![view.time, x[0], x[1], normal[k], force[p], pressure[p], status[p] as f64]);
+                rows.push(vec![
+                    view.time,
+                    x[0],
+                    x[1],
+                    normal[k],
+                    force[p],
+                    pressure[p],
+                    status[p] as f64,
+                ]);
             }
             if self.wants(OutputField::Contact) {
-                point_fields.push(Field { name: "u_nu", components: 1, values: FieldValues::F64(&u_nu) });
-                point_fields.push(Field { name: "contact_force", components: 1, values: FieldValues::F64(&force) });
-                point_fields.push(Field { name: "contact_pressure", components: 1, values: FieldValues::F64(&pressure) });
-                point_fields.push(Field { name: "contact_status", components: 1, values: FieldValues::I32(&status) });
+                point_fields.push(Field {
+                    name: "u_nu",
+                    components: 1,
+                    values: FieldValues::F64(&u_nu),
+                });
+                point_fields.push(Field {
+                    name: "contact_force",
+                    components: 1,
+                    values: FieldValues::F64(&force),
+                });
+                point_fields.push(Field {
+                    name: "contact_pressure",
+                    components: 1,
+                    values: FieldValues::F64(&pressure),
+                });
+                point_fields.push(Field {
+                    name: "contact_status",
+                    components: 1,
+                    values: FieldValues::I32(&status),
+                });
             }
         }
         let frame = Frame {
@@ -198,7 +246,12 @@ pub fn solve(opts: &SolveOptions, stop: Option<&AtomicBool>) -> Result<RunStats,
     let summary = Summary {
         hvi_version: env!("CARGO_PKG_VERSION"),
         mesh: opts.mesh.display().to_string(),
-        scene: opts.scene.as_ref().map_or("<embedded default: examples/paper.toml>".into(), |p| p.display().to_string()),
+        scene: opts
+            .scene
+            .as_ref()
+            .map_or("<embedded default: examples/paper.toml>".into(), |p| {
+                p.display().to_string()
+            }),
         output: opts.out.display().to_string(),
         stats: &stats,
     };
@@ -221,8 +274,19 @@ pub fn check(mesh_path: &Path, scene_path: Option<&Path>, overrides: &[String]) 
     let mesh = mesh::read_msh(mesh_path)?;
     let mut out = String::new();
     let _ = writeln!(out, "mesh {}", mesh_path.display());
-    let tris = mesh.cells.iter().filter(|c| matches!(c, crate::mesh::Cell::Tri3(_))).count();
-    let _ = writeln!(out, "  {} nodes, {} cells ({} triangles, {} quadrilaterals)", mesh.points.len(), mesh.cells.len(), tris, mesh.cells.len() - tris);
+    let tris = mesh
+        .cells
+        .iter()
+        .filter(|c| matches!(c, crate::mesh::Cell::Tri3(_)))
+        .count();
+    let _ = writeln!(
+        out,
+        "  {} nodes, {} cells ({} triangles, {} quadrilaterals)",
+        mesh.points.len(),
+        mesh.cells.len(),
+        tris,
+        mesh.cells.len() - tris
+    );
     let (hmin, hmax) = mesh.cell_size();
     let _ = writeln!(out, "  cell size h: {hmin:.4e} … {hmax:.4e}");
     let _ = writeln!(out, "  physical groups:");
@@ -238,9 +302,21 @@ pub fn check(mesh_path: &Path, scene_path: Option<&Path>, overrides: &[String]) 
         );
     }
     let sim = Simulation::new(&scene, mesh)?;
-    let _ = writeln!(out, "scene {}", scene_path.map_or("<embedded default: examples/paper.toml>".to_string(), |p| p.display().to_string()));
+    let _ = writeln!(
+        out,
+        "scene {}",
+        scene_path.map_or("<embedded default: examples/paper.toml>".to_string(), |p| p
+            .display()
+            .to_string())
+    );
     let _ = writeln!(out, "  unknowns: {} (clamped nodes eliminated)", sim.dofs.n_free());
-    let _ = writeln!(out, "  time: T = {}, {} steps of k = {:.4e}", sim.time.final_time, sim.time.steps, sim.time.step());
+    let _ = writeln!(
+        out,
+        "  time: T = {}, {} steps of k = {:.4e}",
+        sim.time.final_time,
+        sim.time.steps,
+        sim.time.step()
+    );
     let _ = writeln!(out, "plan:");
     let _ = write!(out, "{}", Plan::new(&sim));
     if let Some(c) = &sim.contact {
@@ -251,7 +327,11 @@ pub fn check(mesh_path: &Path, scene_path: Option<&Path>, overrides: &[String]) 
                 out,
                 "  smallness condition (discrete, energy norm of A): α_j·c² = {:.3} ({})",
                 ratio,
-                if ratio < 1.0 { "holds: every step's energy is convex" } else { "FAILS: the step energy is non-convex; the globalised solver handles it, but uniqueness is not guaranteed" }
+                if ratio < 1.0 {
+                    "holds: every step's energy is convex"
+                } else {
+                    "FAILS: the step energy is non-convex; the globalised solver handles it, but uniqueness is not guaranteed"
+                }
             );
         }
     }
@@ -260,12 +340,17 @@ pub fn check(mesh_path: &Path, scene_path: Option<&Path>, overrides: &[String]) 
 
 /// α_j λ_max(D^{1/2} C K_A⁻¹ Cᵀ D^{1/2}) (see [`crate::contact::CondensedOperator::trace_constant`]).
 pub fn smallness_ratio(sim: &Simulation, law: &crate::contact::ContactLaw) -> Result<f64, SolveError> {
-    let c = sim.contact.as_ref().ok_or_else(|| SolveError::Setup("no contact".into()))?;
+    let c = sim
+        .contact
+        .as_ref()
+        .ok_or_else(|| SolveError::Setup("no contact".into()))?;
     let [k_a] = crate::fem::assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.voigt()]);
     let counters = crate::linalg::Counters::default();
     let symbolic = crate::linalg::Factor::analyse(&k_a).map_err(|e| SolveError::Setup(e.to_string()))?;
-    let factor = crate::linalg::Factor::new(&symbolic, &k_a, &counters)
-        .map_err(|e| SolveError::Singular { mesh: sim.mesh.path.display().to_string(), detail: e.to_string() })?;
+    let factor = crate::linalg::Factor::new(&symbolic, &k_a, &counters).map_err(|e| SolveError::Singular {
+        mesh: sim.mesh.path.display().to_string(),
+        detail: e.to_string(),
+    })?;
     let op = crate::contact::CondensedOperator::new(&c.nodes, &factor, &counters).map_err(SolveError::Setup)?;
     Ok(law.relaxed_monotonicity() * op.trace_constant(&c.nodes.weights))
 }
@@ -275,7 +360,11 @@ pub fn report(stats: &RunStats, out: &Path) -> String {
     use std::fmt::Write;
     let mut s = String::new();
     let p = &stats.phases;
-    let _ = writeln!(s, "hvi: {} steps of k = {:.4e} to T = {} on {} nodes / {} cells ({} unknowns, {} contact nodes)", stats.steps, stats.time_step, stats.final_time, stats.nodes, stats.cells, stats.unknowns, stats.contact_nodes);
+    let _ = writeln!(
+        s,
+        "hvi: {} steps of k = {:.4e} to T = {} on {} nodes / {} cells ({} unknowns, {} contact nodes)",
+        stats.steps, stats.time_step, stats.final_time, stats.nodes, stats.cells, stats.unknowns, stats.contact_nodes
+    );
     let _ = writeln!(s, "  effects: {}", stats.effects.join(", "));
     if !stats.newton_iterations.is_empty() {
         let total: usize = stats.newton_iterations.iter().sum();
@@ -284,15 +373,28 @@ pub fn report(stats: &RunStats, out: &Path) -> String {
         let _ = writeln!(s, "  contact: {total} Newton iterations in all (max {max} per step), {active} nodes on the bound at T, max residual {:.2e}", stats.max_contact_residual);
     }
     if let Some(h) = &stats.history_algorithm {
-        let _ = writeln!(s, "  memory: {h}, {:.1} MiB held", stats.history_bytes as f64 / 1048576.0);
+        let _ = writeln!(
+            s,
+            "  memory: {h}, {:.1} MiB held",
+            stats.history_bytes as f64 / 1048576.0
+        );
     }
-    let _ = writeln!(s, "  work: {} factorisation(s), {} sparse solves", stats.factorisations, stats.solves);
+    let _ = writeln!(
+        s,
+        "  work: {} factorisation(s), {} sparse solves",
+        stats.factorisations, stats.solves
+    );
     let _ = writeln!(
         s,
         "  time [s]: mesh {:.3}, assembly {:.3}, factorisation {:.3}, condensation {:.3}, steps {:.3} (history {:.3}, solves {:.3}, contact {:.3}), output {:.3}; total {:.3}",
         p.mesh, p.assembly, p.factorisation, p.condensation,
         p.loads + p.history + p.free_solve + p.contact + p.recover, p.history, p.free_solve + p.recover, p.contact, p.output, p.total
     );
-    let _ = write!(s, "  wrote {} frames to {} (solution.pvd, gamma3.csv, summary.json)", stats.frames_written, out.display());
+    let _ = write!(
+        s,
+        "  wrote {} frames to {} (solution.pvd, gamma3.csv, summary.json)",
+        stats.frames_written,
+        out.display()
+    );
     s
 }

@@ -52,7 +52,11 @@ impl Factor {
     }
 
     /// Numeric factorisation of `matrix` with a symbolic analysis of its pattern.
-    pub fn new(symbolic: &SymbolicLlt<usize>, matrix: &SymmetricMatrix, counters: &Counters) -> Result<Self, FactorError> {
+    pub fn new(
+        symbolic: &SymbolicLlt<usize>,
+        matrix: &SymmetricMatrix,
+        counters: &Counters,
+    ) -> Result<Self, FactorError> {
         counters.factorisations.fetch_add(1, Ordering::Relaxed);
         let llt = Llt::try_new_with_symbolic(symbolic.clone(), matrix.as_faer(), Side::Lower).map_err(|e| match e {
             faer::sparse::linalg::LltError::Numeric(_) => FactorError::NotPositiveDefinite,

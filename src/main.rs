@@ -11,7 +11,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 static STOP: AtomicBool = AtomicBool::new(false);
 
 #[derive(Parser)]
-#[command(name = "hvi", version, about = "Quasistatic contact of viscoelastic bodies with long memory (history-dependent hemivariational inequalities)")]
+#[command(
+    name = "hvi",
+    version,
+    about = "Quasistatic contact of viscoelastic bodies with long memory (history-dependent hemivariational inequalities)"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -49,7 +53,13 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Solve { mesh, scene, out, overrides, quiet } => {
+        Command::Solve {
+            mesh,
+            scene,
+            out,
+            overrides,
+            quiet,
+        } => {
             let opts = hvi::app::SolveOptions {
                 mesh,
                 scene,

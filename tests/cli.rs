@@ -17,7 +17,15 @@ fn solve_writes_a_readable_series() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
     let status = hvi()
-        .args(["solve", &mesh("rect_q1_h8.msh"), "--out", out.to_str().unwrap(), "--set", "time.steps=4", "--quiet"])
+        .args([
+            "solve",
+            &mesh("rect_q1_h8.msh"),
+            "--out",
+            out.to_str().unwrap(),
+            "--set",
+            "time.steps=4",
+            "--quiet",
+        ])
         .output()
         .unwrap();
     assert!(status.status.success(), "{}", String::from_utf8_lossy(&status.stderr));
@@ -41,7 +49,7 @@ fn solve_writes_a_readable_series() {
     assert_eq!(vtu.cell_data["von_mises"].1.len(), vtu.connectivity.len());
     // u_ν ≤ g = 0.2 on Γ₃, and some node sits on the bound at T
     let status = &vtu.point_data["contact_status"].1;
-    assert!(status.iter().any(|s| *s == 2.0));
+    assert!(status.contains(&2.0));
     assert!(vtu.point_data["u_nu"].1.iter().all(|u| *u <= 0.2 + 1e-12));
 
     // gamma3.csv: header and one row per Γ₃ node per frame
@@ -52,11 +60,15 @@ fn solve_writes_a_readable_series() {
     assert_eq!(lines.count(), 5 * gamma3_nodes);
 
     // summary.json: sizes, iterations per step, phases
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["steps"], 4);
     assert_eq!(summary["newton_iterations"].as_array().unwrap().len(), 5);
     assert!(summary["phases"]["factorisation"].as_f64().unwrap() >= 0.0);
-    assert_eq!(summary["factorisations"], 1, "the paper's step 0 is unloaded: only K is factorised");
+    assert_eq!(
+        summary["factorisations"], 1,
+        "the paper's step 0 is unloaded: only K is factorised"
+    );
     assert!(Path::new(&out.join("scene.toml")).exists());
 }
 
@@ -73,19 +85,36 @@ fn check_reports_groups_plan_and_smallness() {
 #[test]
 fn bad_input_fails_with_a_message_and_nonzero_exit() {
     let dir = tempfile::tempdir().unwrap();
-    let missing = hvi().args(["solve", "no/such/mesh.msh", "--out", dir.path().to_str().unwrap()]).output().unwrap();
+    let missing = hvi()
+        .args(["solve", "no/such/mesh.msh", "--out", dir.path().to_str().unwrap()])
+        .output()
+        .unwrap();
     assert!(!missing.status.success());
     assert!(String::from_utf8_lossy(&missing.stderr).contains("no/such/mesh.msh"));
 
     let bad_key = hvi()
-        .args(["solve", &mesh("rect_q1_h8.msh"), "--out", dir.path().to_str().unwrap(), "--set", "material.youngs_modulus=-1"])
+        .args([
+            "solve",
+            &mesh("rect_q1_h8.msh"),
+            "--out",
+            dir.path().to_str().unwrap(),
+            "--set",
+            "material.youngs_modulus=-1",
+        ])
         .output()
         .unwrap();
     assert!(!bad_key.status.success());
     assert!(String::from_utf8_lossy(&bad_key.stderr).contains("youngs_modulus"));
 
     let bad_group = hvi()
-        .args(["solve", &mesh("rect_q1_h8.msh"), "--out", dir.path().to_str().unwrap(), "--set", "groups.contact=Bottom"])
+        .args([
+            "solve",
+            &mesh("rect_q1_h8.msh"),
+            "--out",
+            dir.path().to_str().unwrap(),
+            "--set",
+            "groups.contact=Bottom",
+        ])
         .output()
         .unwrap();
     assert!(!bad_group.status.success());

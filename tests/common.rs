@@ -24,14 +24,22 @@ pub fn rectangle_with_sides(lx: f64, ly: f64, nx: usize, ny: usize, shape: CellS
         .copied()
         .filter(|f| f.iter().all(|&p| (mesh.points[p][0] - lx).abs() < 1e-12))
         .collect();
-    mesh.groups.push(PhysicalGroup { dim: 1, tag: 90, name: Some("Right".into()), facets: right, cells: vec![], nodes: vec![] });
+    mesh.groups.push(PhysicalGroup {
+        dim: 1,
+        tag: 90,
+        name: Some("Right".into()),
+        facets: right,
+        cells: vec![],
+        nodes: vec![],
+    });
     mesh
 }
 
 /// Moves interior nodes by a smooth, deterministic perturbation of amplitude `amp`·h.
 pub fn distort_interior(mesh: &mut Mesh, lx: f64, ly: f64, h: f64, amp: f64) {
     for (k, p) in mesh.points.iter_mut().enumerate() {
-        let on_boundary = p[0].abs() < 1e-12 || p[1].abs() < 1e-12 || (p[0] - lx).abs() < 1e-12 || (p[1] - ly).abs() < 1e-12;
+        let on_boundary =
+            p[0].abs() < 1e-12 || p[1].abs() < 1e-12 || (p[0] - lx).abs() < 1e-12 || (p[1] - ly).abs() < 1e-12;
         if !on_boundary {
             let s = (k as f64 * 12.9898).sin() * 43758.5453;
             let t = (k as f64 * 78.233).sin() * 12345.678;

@@ -15,7 +15,8 @@ use common::scene;
 use hvi::app::solve_in_memory;
 use hvi::mesh::structured::{rectangle, CellShape};
 
-const LAW: &str = "[contact.law]\nkind = \"paper\"\nscale = 0.1\na = 0.04\nb = 0.02\nalpha = 100.0\nregularisation = 1e-12\n";
+const LAW: &str =
+    "[contact.law]\nkind = \"paper\"\nscale = 0.1\na = 0.04\nb = 0.02\nalpha = 100.0\nregularisation = 1e-12\n";
 
 fn column_scene(rho: f64, contact: &str) -> String {
     format!(
@@ -37,7 +38,9 @@ fn run_column(rho: f64, contact: &str, shape: CellShape) -> Vec<(f64, f64, f64)>
     let state = last.contact.as_ref().unwrap();
     let mut normal = vec![0.0; c.nodes.len()];
     c.nodes.normal_displacements(&last.displacement, &mut normal);
-    (0..c.nodes.len()).map(|k| (normal[k], state.force[k] / c.nodes.weights[k], state.bound_force[k])).collect()
+    (0..c.nodes.len())
+        .map(|k| (normal[k], state.force[k] / c.nodes.weights[k], state.bound_force[k]))
+        .collect()
 }
 
 /// Compliance only (no bound): r = ρ/2 − S μ(r), solved by bisection.
@@ -105,7 +108,11 @@ fn column_on_a_rigid_bound() {
 /// right part of Γ₃ at T.
 #[test]
 fn paper_example_satisfies_the_contact_law_at_every_node_and_step() {
-    let mesh = hvi::mesh::read_msh(std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/meshes/rect_q1_h16.msh"))).unwrap();
+    let mesh = hvi::mesh::read_msh(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/meshes/rect_q1_h16.msh"
+    )))
+    .unwrap();
     let sc = hvi::scene::Scene::load(None, &["time.steps=16".to_string()]).unwrap();
     let (sim, stats, sink) = solve_in_memory(&sc, mesh).unwrap();
     assert_eq!(sink.steps.len(), 17);
@@ -120,11 +127,23 @@ fn paper_example_satisfies_the_contact_law_at_every_node_and_step() {
         for k in 0..c.nodes.len() {
             let xi = c.nodes.weights[k] * law.derivative(un[k]);
             assert!(un[k] <= g[k] + 1e-12, "step {} node {k}: u_ν {} > g", s.step, un[k]);
-            assert!(((un[k] - g[k]) * st.bound_force[k]).abs() <= 1e-10, "complementarity at step {} node {k}", s.step);
+            assert!(
+                ((un[k] - g[k]) * st.bound_force[k]).abs() <= 1e-10,
+                "complementarity at step {} node {k}",
+                s.step
+            );
             assert!(st.bound_force[k] >= -1e-9 * scale, "η < 0 at step {} node {k}", s.step);
-            assert!(st.force[k] - xi >= -1e-8 * scale, "force below the law at step {} node {k}", s.step);
+            assert!(
+                st.force[k] - xi >= -1e-8 * scale,
+                "force below the law at step {} node {k}",
+                s.step
+            );
             if st.bound_force[k] == 0.0 {
-                assert!((st.force[k] - xi).abs() <= 1e-8 * scale, "law violated off the bound at step {} node {k}", s.step);
+                assert!(
+                    (st.force[k] - xi).abs() <= 1e-8 * scale,
+                    "law violated off the bound at step {} node {k}",
+                    s.step
+                );
             }
         }
     }
@@ -140,5 +159,9 @@ fn paper_example_satisfies_the_contact_law_at_every_node_and_step() {
             assert!(!on, "node at x = {x} should be off the bound");
         }
     }
-    assert!(stats.newton_iterations.iter().all(|&i| i <= 30), "{:?}", stats.newton_iterations);
+    assert!(
+        stats.newton_iterations.iter().all(|&i| i <= 30),
+        "{:?}",
+        stats.newton_iterations
+    );
 }

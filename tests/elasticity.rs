@@ -15,7 +15,16 @@ fn material(plane: &str, nu: f64) -> String {
 /// Voigt D of the scene's material (to write tractions of a known stress).
 fn voigt(plane: &str, nu: f64) -> [[f64; 3]; 3] {
     use hvi::material::{Elasticity, PlaneModel};
-    Elasticity { youngs_modulus: 1.0, poisson_ratio: nu, plane: if plane == "stress" { PlaneModel::Stress } else { PlaneModel::Strain } }.voigt()
+    Elasticity {
+        youngs_modulus: 1.0,
+        poisson_ratio: nu,
+        plane: if plane == "stress" {
+            PlaneModel::Stress
+        } else {
+            PlaneModel::Strain
+        },
+    }
+    .voigt()
 }
 
 /// A constant strain field u = (a x, b x) (zero on the clamped side x = 0) is reproduced to
@@ -27,7 +36,9 @@ fn patch_test_constant_strain_on_distorted_meshes() {
         let nu = 0.3;
         let d = voigt(plane, nu);
         let eps = [a, 0.0, b];
-        let s: Vec<f64> = (0..3).map(|r| d[r][0] * eps[0] + d[r][1] * eps[1] + d[r][2] * eps[2]).collect();
+        let s: Vec<f64> = (0..3)
+            .map(|r| d[r][0] * eps[0] + d[r][1] * eps[1] + d[r][2] * eps[2])
+            .collect();
         let (s11, s22, s12) = (s[0], s[1], s[2]);
         let toml = format!(
             "{}[[traction]]\ngroup = \"Right\"\nvalue = [\"{s11:e}\", \"{s12:e}\"]\n[[traction]]\ngroup = \"Gamma2_top\"\nvalue = [\"{s12:e}\", \"{s22:e}\"]\n[[traction]]\ngroup = \"Gamma3\"\nvalue = [\"{:e}\", \"{:e}\"]\n",
@@ -41,7 +52,11 @@ fn patch_test_constant_strain_on_distorted_meshes() {
             let points = mesh.points.clone();
             let (sim, _, sink) = solve_in_memory(&scene(&toml), mesh).unwrap();
             let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
-            let err = points.iter().zip(&u).map(|(x, u)| (u[0] - a * x[0]).abs().max((u[1] - b * x[0]).abs())).fold(0.0, f64::max);
+            let err = points
+                .iter()
+                .zip(&u)
+                .map(|(x, u)| (u[0] - a * x[0]).abs().max((u[1] - b * x[0]).abs()))
+                .fold(0.0, f64::max);
             assert!(err < 1e-12, "{plane}: patch test error {err:e}");
         }
     }
@@ -67,7 +82,10 @@ fn manufactured_solution_converges_at_the_theoretical_orders() {
     );
     let exact = |x: [f64; 2]| {
         let (sx, cx, sy, cy) = (x[0].sin(), x[0].cos(), x[1].sin(), x[1].cos());
-        ([sx * cy, x[0] * x[0] * sy], [[cx * cy, -sx * sy], [2.0 * x[0] * sy, x[0] * x[0] * cy]])
+        (
+            [sx * cy, x[0] * x[0] * sy],
+            [[cx * cy, -sx * sy], [2.0 * x[0] * sy, x[0] * x[0] * cy]],
+        )
     };
     for shape in [CellShape::Quad, CellShape::Tri] {
         let (mut hs, mut h1, mut l2) = (vec![], vec![], vec![]);

@@ -21,14 +21,24 @@ fn amplitude_ratios(kernel: &str, steps: usize) -> Vec<f64> {
     let (_, stats, sink) = solve_in_memory(&scene(&memory_scene(kernel, steps)), mesh).unwrap();
     assert_eq!(stats.factorisations, 2, "K and, for the loaded step 0, K_A");
     let u0 = &sink.steps[0].displacement;
-    let i = (0..u0.len()).max_by(|a, b| u0[*a].abs().total_cmp(&u0[*b].abs())).unwrap();
+    let i = (0..u0.len())
+        .max_by(|a, b| u0[*a].abs().total_cmp(&u0[*b].abs()))
+        .unwrap();
     sink.steps
         .iter()
         .map(|s| {
             // every dof carries the same ratio: u_n = φ_n û
             let r = s.displacement[i] / u0[i];
-            let spread = s.displacement.iter().zip(u0).map(|(a, b)| (a - r * b).abs()).fold(0.0, f64::max);
-            assert!(spread <= 1e-12 * u0[i].abs(), "u_n is not a multiple of u_0 (spread {spread:e})");
+            let spread = s
+                .displacement
+                .iter()
+                .zip(u0)
+                .map(|(a, b)| (a - r * b).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                spread <= 1e-12 * u0[i].abs(),
+                "u_n is not a multiple of u_0 (spread {spread:e})"
+            );
             r
         })
         .collect()
@@ -47,7 +57,11 @@ fn constant_kernel_matches_discrete_and_continuous_solutions() {
         let k = 1.0 / steps as f64;
         let rho = (e - k * b0 / 2.0) / (e + k * b0 / 2.0);
         for (n, r) in ratios.iter().enumerate() {
-            assert!((r - rho.powi(n as i32)).abs() < 1e-12, "step {n}: {r} vs {}", rho.powi(n as i32));
+            assert!(
+                (r - rho.powi(n as i32)).abs() < 1e-12,
+                "step {n}: {r} vs {}",
+                rho.powi(n as i32)
+            );
         }
         ks.push(k);
         errs.push((ratios[steps] - (-b0 / e).exp()).abs());
@@ -66,7 +80,10 @@ fn exponential_kernel_converges_at_order_two() {
     let exact = (phi_inf + (1.0 / e - phi_inf) * (-beta).exp()) * e; // relative to φ_0 = 1/E
     let (mut ks, mut errs) = (vec![], vec![]);
     for steps in [8, 16, 32, 64] {
-        let ratios = amplitude_ratios("kind = \"exponential\"\nterms = [ { coefficient = 1.5, relaxation_time = 0.4 } ]", steps);
+        let ratios = amplitude_ratios(
+            "kind = \"exponential\"\nterms = [ { coefficient = 1.5, relaxation_time = 0.4 } ]",
+            steps,
+        );
         ks.push(1.0 / steps as f64);
         errs.push((ratios[steps] - exact).abs());
     }

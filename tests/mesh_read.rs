@@ -67,11 +67,7 @@ fn close(a: f64, b: f64, tol: f64) -> bool {
 fn check_rectangle(m: &Mesh, nx: usize, ny: usize, kind: Kind) {
     let what = m.path.display().to_string();
     assert_eq!(m.points.len(), (nx + 1) * (ny + 1), "{what}: nodes");
-    let tris = m
-        .cells
-        .iter()
-        .filter(|c| matches!(c, Cell::Tri3(_)))
-        .count();
+    let tris = m.cells.iter().filter(|c| matches!(c, Cell::Tri3(_))).count();
     let quads = m.cells.len() - tris;
     let (want_tris, want_quads) = match kind {
         Kind::Quad => (0, nx * ny),
@@ -115,30 +111,15 @@ fn check_rectangle(m: &Mesh, nx: usize, ny: usize, kind: Kind) {
         m.cells.len(),
         "{what}"
     );
-    assert_eq!(
-        m.group_nodes(&sel("Gamma1")).unwrap().len(),
-        ny + 1,
-        "{what}"
-    );
-    assert_eq!(
-        m.group_nodes(&sel("Gamma2")).unwrap().len(),
-        nx + ny + 1,
-        "{what}"
-    );
-    assert_eq!(
-        m.group_nodes(&GroupSelector::Tag(3)).unwrap().len(),
-        nx + 1,
-        "{what}"
-    );
+    assert_eq!(m.group_nodes(&sel("Gamma1")).unwrap().len(), ny + 1, "{what}");
+    assert_eq!(m.group_nodes(&sel("Gamma2")).unwrap().len(), nx + ny + 1, "{what}");
+    assert_eq!(m.group_nodes(&GroupSelector::Tag(3)).unwrap().len(), nx + 1, "{what}");
 
     // Γ₃: total weight 2, normals (0, −1), facets oriented with the body on the left.
     let g3 = m.boundary(&sel("Gamma3")).unwrap();
     assert_eq!(g3.label, "Gamma3 (tag 3)");
     assert_eq!(g3.nodes.len(), nx + 1);
-    assert!(
-        close(g3.weights.iter().sum::<f64>(), 2.0, 1e-12),
-        "{what}: Γ₃ weight"
-    );
+    assert!(close(g3.weights.iter().sum::<f64>(), 2.0, 1e-12), "{what}: Γ₃ weight");
     assert!(close(g3.facet_lengths.iter().sum::<f64>(), 2.0, 1e-12));
     for (&p, n) in g3.nodes.iter().zip(&g3.normals) {
         assert!(close(m.points[p][1], 0.0, 1e-12));
@@ -174,11 +155,7 @@ fn check_rectangle(m: &Mesh, nx: usize, ny: usize, kind: Kind) {
         }
     }
     assert!(close(
-        m.boundary(&sel("Gamma2_top"))
-            .unwrap()
-            .weights
-            .iter()
-            .sum::<f64>(),
+        m.boundary(&sel("Gamma2_top")).unwrap().weights.iter().sum::<f64>(),
         2.0,
         1e-12
     ));
@@ -243,11 +220,7 @@ fn sparse_node_tags_read_like_the_original() {
     assert_eq!(a.points, b.points);
     assert_eq!(a.cells, b.cells);
     assert_eq!(a.groups, b.groups);
-    assert!(a
-        .cell_tags
-        .iter()
-        .zip(&b.cell_tags)
-        .all(|(x, y)| x + 1000 == *y));
+    assert!(a.cell_tags.iter().zip(&b.cell_tags).all(|(x, y)| x + 1000 == *y));
 }
 
 #[test]
@@ -286,11 +259,7 @@ fn contiguous_permuted_node_tags_not_starting_at_1() {
             _ => out.push(l.to_string()),
         }
     }
-    let m = parse_msh(
-        Path::new("contiguous.msh"),
-        (out.join("\n") + "\n").as_bytes(),
-    )
-    .unwrap();
+    let m = parse_msh(Path::new("contiguous.msh"), (out.join("\n") + "\n").as_bytes()).unwrap();
     let a = read("rect_q1_h8.msh");
     assert_eq!(m.points, a.points);
     assert_eq!(m.cells, a.cells);
@@ -337,10 +306,7 @@ fn structured_rectangle_equals_the_gmsh_mesh() {
         assert_eq!(r.path, PathBuf::from(format!("<rectangle {nx}x{ny}>")));
         check_rectangle(&r, nx, ny, kind);
         let g = read(file);
-        let (pr, pg) = (
-            sorted(r.points.iter().copied()),
-            sorted(g.points.iter().copied()),
-        );
+        let (pr, pg) = (sorted(r.points.iter().copied()), sorted(g.points.iter().copied()));
         assert_eq!(pr.len(), pg.len());
         for (p, q) in pr.iter().zip(&pg) {
             assert!(
@@ -399,11 +365,7 @@ fn nodal_normals_on_an_arc_are_radial_to_second_order() {
         assert_eq!(arc.nodes.len(), n + 1);
         let perimeter: f64 = arc.facet_lengths.iter().sum();
         assert!(close(arc.weights.iter().sum::<f64>(), perimeter, 1e-12));
-        assert!(close(
-            perimeter,
-            std::f64::consts::FRAC_PI_2,
-            2.0 / (n * n) as f64
-        ));
+        assert!(close(perimeter, std::f64::consts::FRAC_PI_2, 2.0 / (n * n) as f64));
         let mut worst = 0.0_f64;
         for (&p, nu) in arc.nodes.iter().zip(&arc.normals) {
             let x = m.points[p];
@@ -483,10 +445,7 @@ fn missing_group_lists_the_existing_ones() {
     // Omega is a surface: not a boundary part.
     assert!(m.boundary(&sel("Omega")).is_err());
     // A name that is a number is tried as a tag.
-    assert_eq!(
-        m.group(&sel("3"), 1).unwrap().name.as_deref(),
-        Some("Gamma3")
-    );
+    assert_eq!(m.group(&sel("3"), 1).unwrap().name.as_deref(), Some("Gamma3"));
 }
 
 #[test]
@@ -524,11 +483,7 @@ fn truncated_files_are_errors_never_panics() {
 
 #[test]
 fn corrupted_bytes_never_panic() {
-    for file in [
-        "rect_q1_h8.msh",
-        "rect_q1_h16_bin.msh",
-        "rect_q1_h16_v22.msh",
-    ] {
+    for file in ["rect_q1_h8.msh", "rect_q1_h16_bin.msh", "rect_q1_h16_v22.msh"] {
         let orig = bytes(file);
         let mut state = 0x2545_f491_4f6c_dd1du64;
         for _ in 0..300 {
@@ -618,14 +573,10 @@ fn absurd_counts_in_headers_are_errors_not_aborts() {
         t.replacen("\n9 153 1 153\n", &format!("\n9 {huge} 1 {huge}\n"), 1)
             .as_bytes(),
     );
-    assert_contains(
-        &s,
-        &[huge, "nodes", "truncated or its header is corrupt", "line"],
-    );
+    assert_contains(&s, &[huge, "nodes", "truncated or its header is corrupt", "line"]);
     let s = parse_err(
         "huge_block.msh",
-        t.replacen("\n0 1 0 1\n", &format!("\n0 1 0 {huge}\n"), 1)
-            .as_bytes(),
+        t.replacen("\n0 1 0 1\n", &format!("\n0 1 0 {huge}\n"), 1).as_bytes(),
     );
     assert_contains(&s, &[huge, "corrupt"]);
     let s = parse_err(
@@ -642,14 +593,10 @@ fn absurd_counts_in_headers_are_errors_not_aborts() {
     assert_contains(&s, &[huge, "elements"]);
     let s = parse_err(
         "huge_entities.msh",
-        t.replacen("\n4 4 1 0\n", &format!("\n4 {huge} 1 0\n"), 1)
-            .as_bytes(),
+        t.replacen("\n4 4 1 0\n", &format!("\n4 {huge} 1 0\n"), 1).as_bytes(),
     );
     assert_contains(&s, &["entities"]);
-    let s = parse_err(
-        "zero.msh",
-        t.replacen("\n9 153 1 153\n", "\n9 0 1 153\n", 1).as_bytes(),
-    );
+    let s = parse_err("zero.msh", t.replacen("\n9 153 1 153\n", "\n9 0 1 153\n", 1).as_bytes());
     assert_contains(&s, &["no nodes"]);
 
     let t22 = text("rect_q1_h16_v22.msh");
@@ -684,10 +631,7 @@ fn two_squares_v22(extra_nodes: &str, extra: &[&str]) -> String {
     s += "$PhysicalNames\n3\n1 3 \"Gamma3\"\n0 7 \"Corner\"\n2 5 \"Omega\"\n$EndPhysicalNames\n";
     let nodes = "1 0 0 0\n2 1 0 0\n3 2 0 0\n4 0 1 0\n5 1 1 0\n6 2 1 0\n".to_string() + extra_nodes;
     s += &format!("$Nodes\n{}\n{nodes}$EndNodes\n", nodes.lines().count());
-    s += &format!(
-        "$Elements\n{}\n1 3 2 5 1 1 2 5 4\n2 3 2 5 1 2 3 6 5\n",
-        2 + extra.len()
-    );
+    s += &format!("$Elements\n{}\n1 3 2 5 1 1 2 5 4\n2 3 2 5 1 2 3 6 5\n", 2 + extra.len());
     for (i, e) in extra.iter().enumerate() {
         s += &format!("{} {e}\n", i + 3);
     }
@@ -698,10 +642,7 @@ fn two_squares_v22(extra_nodes: &str, extra: &[&str]) -> String {
 fn small_v22_file_groups_and_points() {
     let t = two_squares_v22("", &["1 2 3 1 1 2", "1 2 3 1 2 3", "15 2 7 1 6"]);
     let m = parse_msh(Path::new("small.msh"), t.as_bytes()).unwrap();
-    assert_eq!(
-        m.cells,
-        vec![Cell::Quad4([0, 1, 4, 3]), Cell::Quad4([1, 2, 5, 4])]
-    );
+    assert_eq!(m.cells, vec![Cell::Quad4([0, 1, 4, 3]), Cell::Quad4([1, 2, 5, 4])]);
     assert_eq!(m.cell_tags, vec![1, 2]);
     assert_eq!(m.group_nodes(&sel("Gamma3")).unwrap(), vec![0, 1, 2]);
     assert_eq!(m.group_nodes(&sel("Corner")).unwrap(), vec![5]);
@@ -756,12 +697,7 @@ fn unsupported_element_types_name_type_group_and_fix() {
     let s = parse_err("line3.msh", t.as_bytes());
     assert_contains(
         &s,
-        &[
-            "type 8",
-            "3-node second-order line",
-            "\"Gamma3\" (tag 3)",
-            "-order 1",
-        ],
+        &["type 8", "3-node second-order line", "\"Gamma3\" (tag 3)", "-order 1"],
     );
     // A tetrahedron (type 4).
     let t = two_squares_v22("7 0.5 0.5 0\n", &["4 2 9 1 1 2 4 7"]);
@@ -812,19 +748,13 @@ fn bad_nodes_and_versions() {
         &["non-finite", "line 14", "node 3"],
     );
     let t = text("rect_q1_h8.msh").replacen("\n2 0 0\n", "\n2 1e999 0\n", 1);
-    assert_contains(
-        &parse_err("inf.msh", t.as_bytes()),
-        &["non-finite", "node 2"],
-    );
+    assert_contains(&parse_err("inf.msh", t.as_bytes()), &["non-finite", "node 2"]);
     // z not constant.
     let t = two_squares_v22("", &[]).replace("\n6 2 1 0\n", "\n6 2 1 0.5\n");
     assert_contains(&parse_err("z.msh", t.as_bytes()), &["z = 0.5", "plane"]);
     // A node in no cell.
     let t = two_squares_v22("7 5 5 0\n", &[]);
-    assert_contains(
-        &parse_err("orphan.msh", t.as_bytes()),
-        &["node 7", "no 2D element"],
-    );
+    assert_contains(&parse_err("orphan.msh", t.as_bytes()), &["node 7", "no 2D element"]);
     // No cells at all.
     let t = two_squares_v22("", &[])
         .replace("1 3 2 5 1 1 2 5 4", "1 1 2 3 1 1 2")
@@ -839,31 +769,19 @@ fn bad_nodes_and_versions() {
         &parse_err("v3.msh", header("3.0 0 8").as_bytes()),
         &["version 3.0", "msh41"],
     );
-    assert_contains(
-        &parse_err("v40.msh", header("4 0 8").as_bytes()),
-        &["4.0", "msh41"],
-    );
+    assert_contains(&parse_err("v40.msh", header("4 0 8").as_bytes()), &["4.0", "msh41"]);
     assert_contains(
         &parse_err("v22b.msh", header("2.2 1 8").as_bytes()),
         &["binary", "-format msh41"],
     );
-    assert_contains(
-        &parse_err("garbage.msh", b"hello\n"),
-        &["not a gmsh MSH file"],
-    );
+    assert_contains(&parse_err("garbage.msh", b"hello\n"), &["not a gmsh MSH file"]);
     assert_contains(&parse_err("empty.msh", b""), &["not a gmsh MSH file"]);
     assert_contains(
-        &parse_err(
-            "size.msh",
-            header("4.1 1 99999999999999999999999").as_bytes(),
-        ),
+        &parse_err("size.msh", header("4.1 1 99999999999999999999999").as_bytes()),
         &["data size"],
     );
     assert_contains(
-        &parse_err(
-            "size3.msh",
-            b"$MeshFormat\n4.1 1 3\n\x01\0\0\0\n$EndMeshFormat\n",
-        ),
+        &parse_err("size3.msh", b"$MeshFormat\n4.1 1 3\n\x01\0\0\0\n$EndMeshFormat\n"),
         &["data size 3"],
     );
     // A file that does not exist: the path is in the message.

@@ -3,8 +3,8 @@
 
 use hvi::mesh::Cell;
 use hvi::output::{
-    is_temporary_name, read_vtu_arrays, write_atomic, write_json_atomic, CsvTable, Field,
-    FieldValues, Frame, OutputError, SeriesWriter,
+    is_temporary_name, read_vtu_arrays, write_atomic, write_json_atomic, CsvTable, Field, FieldValues, Frame,
+    OutputError, SeriesWriter,
 };
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -119,17 +119,12 @@ fn pvd_entries(path: &Path) -> Vec<(String, String)> {
     assert!(text.trim_start().starts_with("<?xml"), "{text}");
     assert!(text.contains("<VTKFile type=\"Collection\""), "{text}");
     assert!(
-        text.contains("<Collection>")
-            && text.contains("</Collection>")
-            && text.contains("</VTKFile>"),
+        text.contains("<Collection>") && text.contains("</Collection>") && text.contains("</VTKFile>"),
         "{text}"
     );
     let attr = |element: &str, name: &str| -> String {
         let key = format!(" {name}=\"");
-        let start = element
-            .find(&key)
-            .unwrap_or_else(|| panic!("no {name} in {element}"))
-            + key.len();
+        let start = element.find(&key).unwrap_or_else(|| panic!("no {name} in {element}")) + key.len();
         let len = element[start..].find('"').unwrap();
         element[start..start + len].to_string()
     };
@@ -144,19 +139,13 @@ fn pvd_entries(path: &Path) -> Vec<(String, String)> {
 
 /// The (name, time) entries of a `.vtu.series`.
 fn series_entries(path: &Path) -> Vec<(String, f64)> {
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
     assert_eq!(json["file-series-version"], "1.0");
     json["files"]
         .as_array()
         .unwrap()
         .iter()
-        .map(|f| {
-            (
-                f["name"].as_str().unwrap().to_string(),
-                f["time"].as_f64().unwrap(),
-            )
-        })
+        .map(|f| (f["name"].as_str().unwrap().to_string(), f["time"].as_f64().unwrap()))
         .collect()
 }
 
@@ -180,9 +169,7 @@ fn two_frame_series_reads_back_exactly() {
     for level in [0, 1, 9] {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path().join("nested/run");
-        let mut writer = SeriesWriter::create(&dir, "sol")
-            .unwrap()
-            .with_compression(level);
+        let mut writer = SeriesWriter::create(&dir, "sol").unwrap().with_compression(level);
         assert!(dir.is_dir());
         assert_eq!(writer.dir(), dir);
         assert!(dir_names(&dir).is_empty(), "create leaves nothing behind");
@@ -209,21 +196,13 @@ fn two_frame_series_reads_back_exactly() {
         let series = series_entries(&dir.join("sol.vtu.series"));
         assert_eq!(
             series,
-            vec![
-                ("sol_00000.vtu".to_string(), 0.0),
-                ("sol_00003.vtu".to_string(), t1)
-            ]
+            vec![("sol_00000.vtu".to_string(), 0.0), ("sol_00003.vtu".to_string(), t1)]
         );
 
-        let expected: BTreeSet<String> = [
-            "sol.pvd",
-            "sol.vtu.series",
-            "sol_00000.vtu",
-            "sol_00003.vtu",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
+        let expected: BTreeSet<String> = ["sol.pvd", "sol.vtu.series", "sol_00000.vtu", "sol_00003.vtu"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
         assert_eq!(dir_names(&dir), expected, "level {level}");
     }
 }
@@ -269,9 +248,7 @@ fn csv_has_header_and_full_precision_rows() {
     csv.append(&[]).unwrap();
 
     // a row of the wrong length is an error and writes nothing of its block
-    let err = csv
-        .append(&[vec![1.0, 2.0, 3.0], vec![1.0, 2.0]])
-        .unwrap_err();
+    let err = csv.append(&[vec![1.0, 2.0, 3.0], vec![1.0, 2.0]]).unwrap_err();
     assert!(
         matches!(
             err,
@@ -310,14 +287,8 @@ fn unwritable_directory_is_reported_by_create() {
         let err = SeriesWriter::create(&dir, "sol").unwrap_err();
         let msg = err.to_string();
         assert!(matches!(err, OutputError::Directory { .. }), "{msg}");
-        assert!(
-            msg.contains(&dir.display().to_string()),
-            "names the directory: {msg}"
-        );
-        assert!(
-            msg.contains("choose another --out directory"),
-            "names the fix: {msg}"
-        );
+        assert!(msg.contains(&dir.display().to_string()), "names the directory: {msg}");
+        assert!(msg.contains("choose another --out directory"), "names the fix: {msg}");
     }
     assert_eq!(std::fs::read_to_string(&file).unwrap(), "not a directory");
 
@@ -330,10 +301,7 @@ fn unwritable_directory_is_reported_by_create() {
         std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o555)).unwrap();
         if std::fs::write(ro.join("x"), "").is_err() {
             let msg = SeriesWriter::create(&ro, "sol").unwrap_err().to_string();
-            assert!(
-                msg.contains("permission denied") && msg.contains("ro"),
-                "{msg}"
-            );
+            assert!(msg.contains("permission denied") && msg.contains("ro"), "{msg}");
         }
         std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o755)).unwrap();
     }
@@ -392,11 +360,7 @@ fn bad_frames_are_errors_and_write_nothing() {
     ));
 
     assert!(writer.frames().is_empty());
-    assert!(
-        dir_names(tmp.path()).is_empty(),
-        "{:?}",
-        dir_names(tmp.path())
-    );
+    assert!(dir_names(tmp.path()).is_empty(), "{:?}", dir_names(tmp.path()));
 }
 
 #[test]
@@ -467,14 +431,11 @@ fn atomic_writes_replace_whole_files() {
         },
     )
     .unwrap();
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(v["steps"], 4);
     assert_eq!(v["residual"].as_f64().unwrap(), 0.1 + 0.2);
     assert!(
-        std::fs::read_to_string(&json)
-            .unwrap()
-            .contains("\n  \"steps\""),
+        std::fs::read_to_string(&json).unwrap().contains("\n  \"steps\""),
         "pretty-printed"
     );
 

@@ -8,15 +8,13 @@ use hvi::mesh::structured::{rectangle, CellShape};
 use hvi::mesh::{Mesh, PhysicalGroup};
 use hvi::scene::Scene;
 use hvi::study::{
-    self, interpolate_nodal, plot, report, seminorm_errors, Keep, Locator, Refinement, RunOptions,
-    Study, StudyPlan,
+    self, interpolate_nodal, plot, report, seminorm_errors, Keep, Locator, Refinement, RunOptions, Study, StudyPlan,
 };
 
 // ---- scenes (begin) ----
 /// The embedded default scene (the paper's example) with N steps.
 fn paper_scene(steps: usize) -> Scene {
-    let mut scene =
-        Scene::load(None, &[format!("time.steps={steps}")]).unwrap_or_else(|e| panic!("{e}"));
+    let mut scene = Scene::load(None, &[format!("time.steps={steps}")]).unwrap_or_else(|e| panic!("{e}"));
     scene.time.steps = steps;
     scene
 }
@@ -30,12 +28,8 @@ fn manufactured_scene() -> Scene {
     let s11 = format!("{c:e}*(cos(x)*cos(y) + {nu:e}*x^2*cos(y))");
     let s22 = format!("{c:e}*({nu:e}*cos(x)*cos(y) + x^2*cos(y))");
     let s12 = format!("{g:e}*(-sin(x)*sin(y) + 2*x*sin(y))");
-    let f1 = format!(
-        "-({c:e}*(-sin(x)*cos(y) + 2*{nu:e}*x*cos(y)) + {g:e}*(-sin(x)*cos(y) + 2*x*cos(y)))"
-    );
-    let f2 = format!(
-        "-({g:e}*(-cos(x)*sin(y) + 2*sin(y)) + {c:e}*(-{nu:e}*cos(x)*sin(y) - x^2*sin(y)))"
-    );
+    let f1 = format!("-({c:e}*(-sin(x)*cos(y) + 2*{nu:e}*x*cos(y)) + {g:e}*(-sin(x)*cos(y) + 2*x*cos(y)))");
+    let f2 = format!("-({g:e}*(-cos(x)*sin(y) + 2*sin(y)) + {c:e}*(-{nu:e}*cos(x)*sin(y) - x^2*sin(y)))");
     let toml = format!(
         "[material]\nplane = \"stress\"\nyoungs_modulus = 1.0\npoisson_ratio = {nu}\n[time]\nfinal_time = 1.0\nsteps = 1\n\
          [[traction]]\ngroup = \"Right\"\nvalue = [\"{s11}\", \"{s12}\"]\n[[traction]]\ngroup = \"Gamma2_top\"\nvalue = [\"{s12}\", \"{s22}\"]\n\
@@ -81,10 +75,8 @@ fn rectangle_with_sides(lx: f64, ly: f64, nx: usize, ny: usize, shape: CellShape
 /// Moves interior nodes by a deterministic perturbation of amplitude `amp`·h.
 fn distort_interior(mesh: &mut Mesh, lx: f64, ly: f64, h: f64, amp: f64) {
     for (k, p) in mesh.points.iter_mut().enumerate() {
-        let on_boundary = p[0].abs() < 1e-12
-            || p[1].abs() < 1e-12
-            || (p[0] - lx).abs() < 1e-12
-            || (p[1] - ly).abs() < 1e-12;
+        let on_boundary =
+            p[0].abs() < 1e-12 || p[1].abs() < 1e-12 || (p[0] - lx).abs() < 1e-12 || (p[1] - ly).abs() < 1e-12;
         if !on_boundary {
             let s = (k as f64 * 12.9898).sin() * 43758.5453;
             let t = (k as f64 * 78.233).sin() * 12345.678;
@@ -95,10 +87,7 @@ fn distort_interior(mesh: &mut Mesh, lx: f64, ly: f64, h: f64, amp: f64) {
 }
 
 fn linear(x: [f64; 2]) -> [f64; 2] {
-    [
-        0.3 + 1.7 * x[0] - 0.4 * x[1],
-        -0.2 + 0.5 * x[0] + 2.1 * x[1],
-    ]
+    [0.3 + 1.7 * x[0] - 0.4 * x[1], -0.2 + 0.5 * x[0] + 2.1 * x[1]]
 }
 
 fn max_diff(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
@@ -142,12 +131,7 @@ fn interpolation_is_exact_for_linear_fields_between_non_nested_meshes() {
         assert!(e.h1_seminorm < 1e-11 && e.l2 < 1e-12, "{e:?}");
         // and at arbitrary interior points
         let pts: Vec<[f64; 2]> = (0..200)
-            .map(|i| {
-                [
-                    2.0 * ((i as f64 * 0.618_034) % 1.0),
-                    (i as f64 * 0.414_214) % 1.0,
-                ]
-            })
+            .map(|i| [2.0 * ((i as f64 * 0.618_034) % 1.0), (i as f64 * 0.414_214) % 1.0])
             .collect();
         let at = interpolate_nodal(from, &u, &pts).unwrap();
         let want: Vec<[f64; 2]> = pts.iter().map(|&x| linear(x)).collect();
@@ -198,11 +182,7 @@ fn nested_meshes_carry_exactly_both_ways() {
         let u = rough_field(&coarse);
         let carried = interpolate_nodal(&coarse, &u, &fine.points).unwrap();
         let back = interpolate_nodal(&fine, &carried, &coarse.points).unwrap();
-        assert!(
-            max_diff(&back, &u) < 1e-13,
-            "there and back: {:e}",
-            max_diff(&back, &u)
-        );
+        assert!(max_diff(&back, &u) < 1e-13, "there and back: {:e}", max_diff(&back, &u));
         // the carried field is the coarse function: its H¹ and L² distance to a direct
         // evaluation of the coarse field (value and gradient at each quadrature point) is 0
         let locator = Locator::new(&coarse);
@@ -234,36 +214,19 @@ fn nested_transfer_of_a_solution_is_exact() {
         h: None,
         keep: Keep::All,
     };
-    let coarse = study::run_with(
-        rectangle(2.0, 1.0, 8, 4, CellShape::Quad),
-        &paper_scene(4),
-        &options,
-    )
-    .unwrap();
+    let coarse = study::run_with(rectangle(2.0, 1.0, 8, 4, CellShape::Quad), &paper_scene(4), &options).unwrap();
     let fine = rectangle(2.0, 1.0, 32, 16, CellShape::Quad);
-    let carried =
-        interpolate_nodal(&coarse.mesh, &coarse.final_displacement, &fine.points).unwrap();
+    let carried = interpolate_nodal(&coarse.mesh, &coarse.final_displacement, &fine.points).unwrap();
     let back = interpolate_nodal(&fine, &carried, &coarse.mesh.points).unwrap();
     assert!(max_diff(&back, &coarse.final_displacement) < 1e-14);
-    assert_eq!(
-        coarse.displacement_at.len(),
-        5,
-        "Keep::All keeps every step"
-    );
+    assert_eq!(coarse.displacement_at.len(), 5, "Keep::All keeps every step");
     assert!((coarse.displacement_at.last().unwrap().0 - 1.0).abs() < 1e-12);
     // a study of a run against itself has zero error
     let mut s = Study::against_run(
-        study::run_with(
-            rectangle(2.0, 1.0, 8, 4, CellShape::Quad),
-            &paper_scene(4),
-            &options,
-        )
-        .unwrap(),
+        study::run_with(rectangle(2.0, 1.0, 8, 4, CellShape::Quad), &paper_scene(4), &options).unwrap(),
     );
     let i = s.add_run(&coarse).unwrap();
-    assert!(
-        s.runs[i].errors.at_final.h1_seminorm < 1e-14 && s.runs[i].errors.h1_max_over_time < 1e-14
-    );
+    assert!(s.runs[i].errors.at_final.h1_seminorm < 1e-14 && s.runs[i].errors.h1_max_over_time < 1e-14);
     assert_eq!(s.runs[i].errors.times_compared, 5);
 }
 
@@ -302,8 +265,7 @@ fn study_reports_theoretical_orders_for_a_manufactured_solution() {
     assert!((fitted - 1.0).abs() <= 0.1, "fitted H¹ order {fitted}");
     // max over the two output times (t = 0, 1: the loads do not depend on t) equals the error at T
     assert!(
-        (last.errors.h1_max_over_time - last.errors.at_final.h1_seminorm).abs()
-            <= 1e-12 * last.errors.h1_max_over_time
+        (last.errors.h1_max_over_time - last.errors.at_final.h1_seminorm).abs() <= 1e-12 * last.errors.h1_max_over_time
     );
 
     // the same runs against a reference run at h = 1/128
@@ -319,22 +281,13 @@ fn study_reports_theoretical_orders_for_a_manufactured_solution() {
     )
     .unwrap();
     let mut against_run = Study::against_run(reference);
-    let idx: Vec<usize> = records[..3]
-        .iter()
-        .map(|r| against_run.add_run(r).unwrap())
-        .collect();
+    let idx: Vec<usize> = records[..3].iter().map(|r| against_run.add_run(r).unwrap()).collect();
     against_run.add_path("h", Refinement::H, idx).unwrap();
     let rows = against_run.rows();
-    eprintln!(
-        "against a reference run at h = 1/128:\n{}",
-        report::markdown(&rows)
-    );
+    eprintln!("against a reference run at h = 1/128:\n{}", report::markdown(&rows));
     for r in &rows[1..] {
         let p = r.order.unwrap();
-        assert!(
-            (p - 1.0).abs() <= 0.1,
-            "H¹ order against the reference run {p}"
-        );
+        assert!((p - 1.0).abs() <= 0.1, "H¹ order against the reference run {p}");
     }
     // the reported errors differ from the exact ones by about the reference's own error
     let (e_ref, e_exact) = (
@@ -392,10 +345,7 @@ fn reduced_paper_study_shows_first_order_in_h_and_second_order_in_k() {
             }
         }
         assert!(r.errors.h1_max_over_time >= r.errors.at_final.h1_seminorm);
-        assert!(
-            r.errors.times_compared >= 5,
-            "t = 0, 1/4, 1/2, 3/4, 1 at least"
-        );
+        assert!(r.errors.times_compared >= 5, "t = 0, 1/4, 1/2, 3/4, 1 at least");
     }
     // the reference kept t = j/16
     assert_eq!(s.reference_run().unwrap().displacement_at.len(), 17);
@@ -446,10 +396,7 @@ fn reduced_paper_study_shows_first_order_in_h_and_second_order_in_k() {
     .unwrap();
     for f in ["h.svg", "k.svg", "w.svg", "g.svg"] {
         let text = std::fs::read_to_string(dir.path().join(f)).unwrap();
-        assert!(
-            text.starts_with("<svg") && text.contains("<polyline"),
-            "{f}"
-        );
+        assert!(text.starts_with("<svg") && text.contains("<polyline"), "{f}");
     }
     let png = std::fs::read(dir.path().join("d.png")).unwrap();
     assert_eq!(&png[1..4], b"PNG");

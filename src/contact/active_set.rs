@@ -207,8 +207,8 @@ impl ActiveSetSolver<'_> {
     pub fn solve(&self, d: &[f64], state: &mut ContactState) -> Result<ContactOutcome, ContactFailure> {
         let m = self.m();
         let r = &mut state.normal_displacement;
-        for p in 0..m {
-            r[p] = r[p].min(self.g(p));
+        for (p, rp) in r.iter_mut().enumerate() {
+            *rp = rp.min(self.g(p));
         }
         let scale = self.force_scale(d);
         let tol = self.settings.tolerance * scale;
@@ -222,12 +222,28 @@ impl ActiveSetSolver<'_> {
             let residual = self.complementarity_residual(r, &grad);
             outcome.residual = residual / scale;
             if std::env::var_os("HVI_TRACE_CONTACT").is_some() {
-                eprintln!("  contact it {} residual {:.3e} cuts {}", outcome.iterations, residual / scale, outcome.line_search_cuts);
+                eprintln!(
+                    "  contact it {} residual {:.3e} cuts {}",
+                    outcome.iterations,
+                    residual / scale,
+                    outcome.line_search_cuts
+                );
                 for p in 0..m {
                     let g = self.g(p);
-                    let phi = if g.is_finite() { (self.c(p) * (g - r[p])).min(-grad[p]).abs() } else { grad[p].abs() };
+                    let phi = if g.is_finite() {
+                        (self.c(p) * (g - r[p])).min(-grad[p]).abs()
+                    } else {
+                        grad[p].abs()
+                    };
                     if phi > 0.5 * residual && residual > tol {
-                        eprintln!("    node {p}: r {:.6e} g-r {:.3e} G {:.3e} j'' {:.3e} c {:.3e}", r[p], g - r[p], grad[p], self.law.map_or(0.0, |l| l.second_derivative(r[p])), self.c(p));
+                        eprintln!(
+                            "    node {p}: r {:.6e} g-r {:.3e} G {:.3e} j'' {:.3e} c {:.3e}",
+                            r[p],
+                            g - r[p],
+                            grad[p],
+                            self.law.map_or(0.0, |l| l.second_derivative(r[p])),
+                            self.c(p)
+                        );
                     }
                 }
             }
@@ -246,7 +262,11 @@ impl ActiveSetSolver<'_> {
             let projected_step = (0..m)
                 .map(|p| (r[p] - (r[p] - grad[p] / self.c(p)).min(self.g(p))).abs())
                 .fold(0.0, f64::max);
-            let delta = projected_step.min(1e-3 * self.bound.map_or(1.0, |g| g.iter().fold(0.0f64, |a, b| a.max(*b)).max(1e-3)));
+            let delta = projected_step.min(
+                1e-3 * self
+                    .bound
+                    .map_or(1.0, |g| g.iter().fold(0.0f64, |a, b| a.max(*b)).max(1e-3)),
+            );
             let active: Vec<bool> = (0..m)
                 .map(|p| {
                     let g = self.g(p);
@@ -256,7 +276,10 @@ impl ActiveSetSolver<'_> {
             let free: Vec<usize> = (0..m).filter(|&p| !active[p]).collect();
 
             // 3. Newton direction on the inactive set, diagonal scaling on the active set
-            let curvature: Vec<f64> = free.iter().map(|&p| self.weights[p] * self.law.map_or(0.0, |l| l.second_derivative(r[p]))).collect();
+            let curvature: Vec<f64> = free
+                .iter()
+                .map(|&p| self.weights[p] * self.law.map_or(0.0, |l| l.second_derivative(r[p])))
+                .collect();
             let free_dir = self.newton_direction(&free, &curvature, &grad, &mut outcome);
             let mut predicted_slope = 0.0;
             for (k, &p) in free.iter().enumerate() {
@@ -293,7 +316,7 @@ impl ActiveSetSolver<'_> {
                     // At the round-off floor the energy cannot decrease measurably: accept a
                     // residual within 100× the tolerance, otherwise report the stall.
                     if residual <= 100.0 * tol {
-                        self.finish(d, state, &qrd, &mut outcome);
+                        self.finish(d, state, &mut outcome);
                         return Ok(outcome);
                     }
                     return Err(ContactFailure {
@@ -309,19 +332,29 @@ impl ActiveSetSolver<'_> {
                 }
             }
         }
-        self.finish(d, state, &qrd, &mut outcome);
+        self.finish(d, state, &mut outcome);
         Ok(outcome)
     }
 
     /// Solves (Q_ℐℐ + diag(curvature)) x = G_ℐ, convexifying when indefinite.
-    fn newton_direction(&self, free: &[usize], curvature: &[f64], grad: &[f64], outcome: &mut ContactOutcome) -> Vec<f64> {
+    fn newton_direction(
+        &self,
+        free: &[usize],
+        curvature: &[f64],
+        grad: &[f64],
+        outcome: &mut ContactOutcome,
+    ) -> Vec<f64> {
         let nf = free.len();
         if nf == 0 {
             return Vec::new();
         }
         let m = self.m();
         let rhs = Mat::<f64>::from_fn(nf, 1, |i, _| grad[free[i]]);
-        let build = |diag: &dyn Fn(usize) -> f64| Mat::<f64>::from_fn(nf, nf, |i, j| self.operator.q[free[i] * m + free[j]] + if i == j { diag(i) } else { 0.0 });
+        let build = |diag: &dyn Fn(usize) -> f64| {
+            Mat::<f64>::from_fn(nf, nf, |i, j| {
+                self.operator.q[free[i] * m + free[j]] + if i == j { diag(i) } else { 0.0 }
+            })
+        };
         if let Ok(llt) = build(&|i| curvature[i]).llt(faer::Side::Lower) {
             let x = llt.solve(&rhs);
             return (0..nf).map(|i| x[(i, 0)]).collect();
@@ -334,18 +367,22 @@ impl ActiveSetSolver<'_> {
                 let x = llt.solve(&rhs);
                 return (0..nf).map(|i| x[(i, 0)]).collect();
             }
-            shift = if shift == 0.0 { 1e-12 * self.c(free[0]) } else { shift * 10.0 };
+            shift = if shift == 0.0 {
+                1e-12 * self.c(free[0])
+            } else {
+                shift * 10.0
+            };
         }
     }
 
     /// Forces and statuses at the converged r: λ = Q(d − r), ξ = w j_ε'(r), η = λ − ξ on the
     /// bound and 0 elsewhere.
-    fn finish(&self, _d: &[f64], state: &mut ContactState, qrd: &[f64], outcome: &mut ContactOutcome) {
+    #[allow(clippy::needless_range_loop)] // p indexes five per-node arrays at once
+    fn finish(&self, d: &[f64], state: &mut ContactState, outcome: &mut ContactOutcome) {
         let m = self.m();
         let mut qrd_final = vec![0.0; m];
-        let diff: Vec<f64> = state.normal_displacement.iter().zip(_d).map(|(a, b)| a - b).collect();
+        let diff: Vec<f64> = state.normal_displacement.iter().zip(d).map(|(a, b)| a - b).collect();
         self.operator.apply_q(&diff, &mut qrd_final);
-        let _ = qrd;
         outcome.active = 0;
         for p in 0..m {
             let r = state.normal_displacement[p];

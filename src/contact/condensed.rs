@@ -6,8 +6,8 @@ use crate::fem::DofMap;
 use crate::linalg::{Counters, Factor};
 use crate::mesh::BoundaryPart;
 use faer::linalg::solvers::Solve;
-use faer::Mat;
 use faer::reborrow::{Reborrow, ReborrowMut};
+use faer::Mat;
 
 /// The contact nodes with their nodal quadrature weights w_p, normals ν_p and bounds g_p,
 /// and the rows of C (u ↦ u_ν at the nodes).

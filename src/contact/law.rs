@@ -65,7 +65,11 @@ impl PiecewiseLinear {
         let i = self.s.partition_point(|v| *v <= s) - 1;
         let slope = (self.mu[i + 1] - self.mu[i]) / (self.s[i + 1] - self.s[i]);
         let ds = s - self.s[i];
-        (self.phi[i] + self.mu[i] * ds + 0.5 * slope * ds * ds, self.mu[i] + slope * ds, slope)
+        (
+            self.phi[i] + self.mu[i] * ds + 0.5 * slope * ds * ds,
+            self.mu[i] + slope * ds,
+            slope,
+        )
     }
 }
 
@@ -201,7 +205,16 @@ mod tests {
     use proptest::prelude::*;
 
     fn paper(symmetry: Symmetry, epsilon: f64) -> ContactLaw {
-        ContactLaw { scale: 0.1, profile: ComplianceProfile::Paper { a: 0.04, b: 0.02, alpha: 100.0 }, symmetry, epsilon }
+        ContactLaw {
+            scale: 0.1,
+            profile: ComplianceProfile::Paper {
+                a: 0.04,
+                b: 0.02,
+                alpha: 100.0,
+            },
+            symmetry,
+            epsilon,
+        }
     }
 
     #[test]

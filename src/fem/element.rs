@@ -70,7 +70,13 @@ pub fn shape_at(cell: &Cell, points: &[[f64; 2]], xi: [f64; 2]) -> ShapeAt {
             inv[0][1] * gref[a][0] + inv[1][1] * gref[a][1],
         ];
     }
-    ShapeAt { n, value, grad, det_j, x }
+    ShapeAt {
+        n,
+        value,
+        grad,
+        det_j,
+        x,
+    }
 }
 
 /// The quadrature rule for the stiffness of a cell (exact for P1; 2×2 Gauss for Q1).
@@ -100,11 +106,10 @@ pub fn reference_centroid(cell: &Cell) -> [f64; 2] {
 /// Small-strain tensor in Voigt form [ε₁₁, ε₂₂, γ₁₂ = 2ε₁₂] from nodal displacements.
 pub fn strain(shape: &ShapeAt, u: &[[f64; 2]]) -> [f64; 3] {
     let mut e = [0.0; 3];
-    for a in 0..shape.n {
-        let g = shape.grad[a];
-        e[0] += g[0] * u[a][0];
-        e[1] += g[1] * u[a][1];
-        e[2] += g[1] * u[a][0] + g[0] * u[a][1];
+    for (g, ua) in shape.grad.iter().zip(u).take(shape.n) {
+        e[0] += g[0] * ua[0];
+        e[1] += g[1] * ua[1];
+        e[2] += g[1] * ua[0] + g[0] * ua[1];
     }
     e
 }

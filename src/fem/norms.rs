@@ -4,7 +4,11 @@
 use super::element::shape_at;
 use crate::mesh::Cell;
 
-const G3: [(f64, f64); 3] = [(-0.774_596_669_241_483_4, 5.0 / 9.0), (0.0, 8.0 / 9.0), (0.774_596_669_241_483_4, 5.0 / 9.0)];
+const G3: [(f64, f64); 3] = [
+    (-0.774_596_669_241_483_4, 5.0 / 9.0),
+    (0.0, 8.0 / 9.0),
+    (0.774_596_669_241_483_4, 5.0 / 9.0),
+];
 
 /// A 6-point rule on the reference triangle, exact for quartics.
 const TRI6: [([f64; 2], f64); 6] = [
@@ -19,7 +23,10 @@ const TRI6: [([f64; 2], f64); 6] = [
 fn error_rule(cell: &Cell) -> Vec<([f64; 2], f64)> {
     match cell {
         Cell::Tri3(_) => TRI6.to_vec(),
-        Cell::Quad4(_) => G3.iter().flat_map(|&(a, wa)| G3.iter().map(move |&(b, wb)| ([a, b], wa * wb))).collect(),
+        Cell::Quad4(_) => G3
+            .iter()
+            .flat_map(|&(a, wa)| G3.iter().map(move |&(b, wb)| ([a, b], wa * wb)))
+            .collect(),
     }
 }
 
@@ -57,10 +64,17 @@ pub fn errors(
             }
             let dw = w * s.det_j;
             l2 += dw * ((u[0] - uh[0]).powi(2) + (u[1] - uh[1]).powi(2));
-            h1 += dw * (0..2).flat_map(|c| (0..2).map(move |d| (c, d))).map(|(c, d)| (g[c][d] - gh[c][d]).powi(2)).sum::<f64>();
+            h1 += dw
+                * (0..2)
+                    .flat_map(|c| (0..2).map(move |d| (c, d)))
+                    .map(|(c, d)| (g[c][d] - gh[c][d]).powi(2))
+                    .sum::<f64>();
         }
     }
-    FieldErrors { l2: l2.sqrt(), h1_seminorm: h1.sqrt() }
+    FieldErrors {
+        l2: l2.sqrt(),
+        h1_seminorm: h1.sqrt(),
+    }
 }
 
 /// Least-squares slope of log(error) against log(h): the observed convergence order.

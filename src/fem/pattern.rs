@@ -61,7 +61,12 @@ impl Pattern {
             scatter_offset.push(scatter.len());
         }
         let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-        Pattern { n, symbolic, scatter, scatter_offset }
+        Pattern {
+            n,
+            symbolic,
+            scatter,
+            scatter_offset,
+        }
     }
 
     /// Number of stored entries.
@@ -101,7 +106,10 @@ impl SymmetricMatrix {
     /// The zero matrix on `pattern`.
     pub fn zeros(pattern: Arc<Pattern>) -> Self {
         let nnz = pattern.nnz();
-        SymmetricMatrix { pattern, values: vec![0.0; nnz] }
+        SymmetricMatrix {
+            pattern,
+            values: vec![0.0; nnz],
+        }
     }
 
     /// Order of the matrix.
@@ -111,9 +119,15 @@ impl SymmetricMatrix {
 
     /// `self + c·other` on the same pattern.
     pub fn plus_scaled(&self, c: f64, other: &SymmetricMatrix) -> SymmetricMatrix {
-        assert!(Arc::ptr_eq(&self.pattern, &other.pattern), "matrices must share a pattern");
+        assert!(
+            Arc::ptr_eq(&self.pattern, &other.pattern),
+            "matrices must share a pattern"
+        );
         let values = self.values.iter().zip(&other.values).map(|(a, b)| a + c * b).collect();
-        SymmetricMatrix { pattern: self.pattern.clone(), values }
+        SymmetricMatrix {
+            pattern: self.pattern.clone(),
+            values,
+        }
     }
 
     /// y = A x (full symmetric storage, so column j is row j).
@@ -144,7 +158,8 @@ impl SymmetricMatrix {
         (0..self.n())
             .map(|j| {
                 let rows = &sym.row_idx()[sym.col_ptr()[j]..sym.col_ptr()[j + 1]];
-                rows.binary_search(&j).map_or(0.0, |k| self.values[sym.col_ptr()[j] + k])
+                rows.binary_search(&j)
+                    .map_or(0.0, |k| self.values[sym.col_ptr()[j] + k])
             })
             .collect()
     }

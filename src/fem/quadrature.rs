@@ -11,21 +11,45 @@ const G: f64 = 0.577_350_269_189_625_8; // 1/√3
 
 /// 2×2 Gauss rule on [−1, 1]²: exact for bicubic integrands (Q1 stiffness on parallelograms).
 pub const QUAD_GAUSS_2X2: [QuadPoint; 4] = [
-    QuadPoint { xi: [-G, -G], weight: 1.0 },
-    QuadPoint { xi: [G, -G], weight: 1.0 },
-    QuadPoint { xi: [G, G], weight: 1.0 },
-    QuadPoint { xi: [-G, G], weight: 1.0 },
+    QuadPoint {
+        xi: [-G, -G],
+        weight: 1.0,
+    },
+    QuadPoint {
+        xi: [G, -G],
+        weight: 1.0,
+    },
+    QuadPoint {
+        xi: [G, G],
+        weight: 1.0,
+    },
+    QuadPoint {
+        xi: [-G, G],
+        weight: 1.0,
+    },
 ];
 
 /// 3-point rule on the reference triangle {ξ, η ≥ 0, ξ + η ≤ 1}: exact for quadratics.
 pub const TRI_3POINT: [QuadPoint; 3] = [
-    QuadPoint { xi: [1.0 / 6.0, 1.0 / 6.0], weight: 1.0 / 6.0 },
-    QuadPoint { xi: [2.0 / 3.0, 1.0 / 6.0], weight: 1.0 / 6.0 },
-    QuadPoint { xi: [1.0 / 6.0, 2.0 / 3.0], weight: 1.0 / 6.0 },
+    QuadPoint {
+        xi: [1.0 / 6.0, 1.0 / 6.0],
+        weight: 1.0 / 6.0,
+    },
+    QuadPoint {
+        xi: [2.0 / 3.0, 1.0 / 6.0],
+        weight: 1.0 / 6.0,
+    },
+    QuadPoint {
+        xi: [1.0 / 6.0, 2.0 / 3.0],
+        weight: 1.0 / 6.0,
+    },
 ];
 
 /// 1-point (centroid) rule on the reference triangle: exact for P1 stiffness (constant strain).
-pub const TRI_CENTROID: [QuadPoint; 1] = [QuadPoint { xi: [1.0 / 3.0, 1.0 / 3.0], weight: 0.5 }];
+pub const TRI_CENTROID: [QuadPoint; 1] = [QuadPoint {
+    xi: [1.0 / 3.0, 1.0 / 3.0],
+    weight: 0.5,
+}];
 
 /// 2-point Gauss rule on [0, 1] (parameter s along an edge), weights summing to 1: exact for cubics.
 pub const EDGE_GAUSS_2: [(f64, f64); 2] = [(0.5 - 0.5 * G, 0.5), (0.5 + 0.5 * G, 0.5)];
@@ -44,7 +68,10 @@ mod tests {
     #[test]
     fn rules_integrate_monomials_exactly() {
         // ∫_{[-1,1]^2} ξ² η² = 4/9
-        let q: f64 = QUAD_GAUSS_2X2.iter().map(|p| p.weight * p.xi[0].powi(2) * p.xi[1].powi(2)).sum();
+        let q: f64 = QUAD_GAUSS_2X2
+            .iter()
+            .map(|p| p.weight * p.xi[0].powi(2) * p.xi[1].powi(2))
+            .sum();
         assert!((q - 4.0 / 9.0).abs() < 1e-14);
         // ∫_T ξ η = 1/24
         let t: f64 = TRI_3POINT.iter().map(|p| p.weight * p.xi[0] * p.xi[1]).sum();

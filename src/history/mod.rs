@@ -19,9 +19,18 @@ use crate::material::RelaxationKernel;
 /// How the history is accumulated.
 #[derive(Clone, Debug)]
 enum Accumulator {
-    Exponentials { terms: Vec<(f64, f64)>, sums: Vec<Vec<f64>> },
-    Polynomial { coefficients: Vec<f64>, moments: Vec<Vec<f64>> },
-    Direct { kernel: RelaxationKernel, past: Vec<Vec<f64>> },
+    Exponentials {
+        terms: Vec<(f64, f64)>,
+        sums: Vec<Vec<f64>>,
+    },
+    Polynomial {
+        coefficients: Vec<f64>,
+        moments: Vec<Vec<f64>>,
+    },
+    Direct {
+        kernel: RelaxationKernel,
+        past: Vec<Vec<f64>>,
+    },
 }
 
 /// The history term of a run with a fixed time step k.
@@ -46,9 +55,17 @@ impl History {
                 coefficients: coefficients.clone(),
                 moments: vec![vec![0.0; n_dof]; coefficients.len()],
             },
-            RelaxationKernel::General { .. } => Accumulator::Direct { kernel: kernel.clone(), past: Vec::new() },
+            RelaxationKernel::General { .. } => Accumulator::Direct {
+                kernel: kernel.clone(),
+                past: Vec::new(),
+            },
         };
-        History { step: k, next: 0, acc, n_dof }
+        History {
+            step: k,
+            next: 0,
+            acc,
+            n_dof,
+        }
     }
 
     /// "recursive (exponentials)", "recursive (polynomial moments)" or "direct sum".
@@ -139,7 +156,9 @@ mod tests {
 
     /// The reference: h_n by its definition, for scalar "displacements".
     fn direct(kernel: &RelaxationKernel, us: &[f64], n: usize, k: f64) -> f64 {
-        (0..n).map(|i| k * if i == 0 { 0.5 } else { 1.0 } * kernel.value((n - i) as f64 * k) * us[i]).sum()
+        (0..n)
+            .map(|i| k * if i == 0 { 0.5 } else { 1.0 } * kernel.value((n - i) as f64 * k) * us[i])
+            .sum()
     }
 
     fn check(kernel: RelaxationKernel) {
@@ -150,15 +169,26 @@ mod tests {
         for (n, u) in us.iter().enumerate() {
             h.memory_load(&mut out);
             let want = direct(&kernel, &us, n, k);
-            assert!((out[0] - want).abs() <= 1e-12 * (1.0 + want.abs()), "{} n={n}: {} vs {want}", h.algorithm(), out[0]);
+            assert!(
+                (out[0] - want).abs() <= 1e-12 * (1.0 + want.abs()),
+                "{} n={n}: {} vs {want}",
+                h.algorithm(),
+                out[0]
+            );
             h.push(&[*u]);
         }
     }
 
     #[test]
     fn recursions_equal_direct_sum() {
-        check(RelaxationKernel::Polynomial { coefficients: vec![0.25, 1.0, 1.0] });
-        check(RelaxationKernel::Polynomial { coefficients: vec![1.0, -2.0, 0.5, 0.3] });
-        check(RelaxationKernel::Exponentials { terms: vec![(1.0, 0.5), (0.3, 0.01), (2.0, 10.0)] });
+        check(RelaxationKernel::Polynomial {
+            coefficients: vec![0.25, 1.0, 1.0],
+        });
+        check(RelaxationKernel::Polynomial {
+            coefficients: vec![1.0, -2.0, 0.5, 0.3],
+        });
+        check(RelaxationKernel::Exponentials {
+            terms: vec![(1.0, 0.5), (0.3, 0.01), (2.0, 10.0)],
+        });
     }
 }

@@ -39,7 +39,11 @@ impl Elasticity {
             }
             PlaneModel::Strain => {
                 let (lambda, mu) = self.lame();
-                [[lambda + 2.0 * mu, lambda, 0.0], [lambda, lambda + 2.0 * mu, 0.0], [0.0, 0.0, mu]]
+                [
+                    [lambda + 2.0 * mu, lambda, 0.0],
+                    [lambda, lambda + 2.0 * mu, 0.0],
+                    [0.0, 0.0, mu],
+                ]
             }
         }
     }
@@ -82,7 +86,11 @@ mod tests {
 
     #[test]
     fn plane_stress_matches_paper_formula() {
-        let a = Elasticity { youngs_modulus: 1.0, poisson_ratio: 0.3, plane: PlaneModel::Stress };
+        let a = Elasticity {
+            youngs_modulus: 1.0,
+            poisson_ratio: 0.3,
+            plane: PlaneModel::Stress,
+        };
         let eps = [0.1, -0.2, 0.06]; // γ = 0.06 → ε₁₂ = 0.03
         let s = apply(&a.voigt(), &eps);
         let (e, k) = (1.0, 0.3);

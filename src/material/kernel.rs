@@ -14,19 +14,15 @@ pub enum RelaxationKernel {
     /// Prony series b(s) = Σ_m c_m e^{−s/τ_m}.
     Exponentials { terms: Vec<(f64, f64)> },
     /// Any expression of s (direct sum).
-    General { expression: Expr },
+    General { expression: Box<Expr> },
 }
 
 impl RelaxationKernel {
     /// b(s).
     pub fn value(&self, s: f64) -> f64 {
         match self {
-            RelaxationKernel::Polynomial { coefficients } => {
-                coefficients.iter().rev().fold(0.0, |acc, c| acc * s + c)
-            }
-            RelaxationKernel::Exponentials { terms } => {
-                terms.iter().map(|(c, tau)| c * (-s / tau).exp()).sum()
-            }
+            RelaxationKernel::Polynomial { coefficients } => coefficients.iter().rev().fold(0.0, |acc, c| acc * s + c),
+            RelaxationKernel::Exponentials { terms } => terms.iter().map(|(c, tau)| c * (-s / tau).exp()).sum(),
             RelaxationKernel::General { expression } => expression.eval(&[s]),
         }
     }

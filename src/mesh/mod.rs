@@ -234,22 +234,23 @@ impl Header {
         let first = lines.next_nonblank();
         match first {
             Some((_, l)) if trim(l) == b"$MeshFormat" => {}
-            Some((_, l)) if trim(l).starts_with(b"$NOD") => return Err(unsupported(
-                "this is an MSH 1 file ($NOD), which hvi does not read; re-export it as MSH 4.1: \
+            Some((_, l)) if trim(l).starts_with(b"$NOD") => {
+                return Err(unsupported(
+                    "this is an MSH 1 file ($NOD), which hvi does not read; re-export it as MSH 4.1: \
                      gmsh file.msh -save -format msh41 -o new.msh"
-                    .into(),
-            )),
-            _ => return Err(unsupported(
-                "not a gmsh MSH file: it does not start with $MeshFormat; mesh the geometry with \
+                        .into(),
+                ))
+            }
+            _ => {
+                return Err(unsupported(
+                    "not a gmsh MSH file: it does not start with $MeshFormat; mesh the geometry with \
                      gmsh (gmsh -2 body.geo -format msh41) and give the .msh file"
-                    .into(),
-            )),
+                        .into(),
+                ))
+            }
         }
         let Some((line, l)) = lines.next_line() else {
-            return Err(syntax(
-                2,
-                "the file ends inside $MeshFormat: it is truncated".into(),
-            ));
+            return Err(syntax(2, "the file ends inside $MeshFormat: it is truncated".into()));
         };
         let text = String::from_utf8_lossy(l);
         let tokens: Vec<&str> = text.split_whitespace().collect();
@@ -328,8 +329,7 @@ impl Header {
             } else {
                 return Err(syntax(
                     line + 1,
-                    "binary endianness marker (the integer 1) not found after the version line"
-                        .into(),
+                    "binary endianness marker (the integer 1) not found after the version line".into(),
                 ));
             }
             pos += 4;
@@ -368,21 +368,12 @@ impl Header {
 
 /// 1-based line number of byte `offset`.
 pub(crate) fn line_of(bytes: &[u8], offset: usize) -> usize {
-    1 + bytes[..offset.min(bytes.len())]
-        .iter()
-        .filter(|&&b| b == b'\n')
-        .count()
+    1 + bytes[..offset.min(bytes.len())].iter().filter(|&&b| b == b'\n').count()
 }
 
 pub(crate) fn trim(l: &[u8]) -> &[u8] {
-    let s = l
-        .iter()
-        .position(|b| !b.is_ascii_whitespace())
-        .unwrap_or(l.len());
-    let e = l
-        .iter()
-        .rposition(|b| !b.is_ascii_whitespace())
-        .map_or(s, |e| e + 1);
+    let s = l.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(l.len());
+    let e = l.iter().rposition(|b| !b.is_ascii_whitespace()).map_or(s, |e| e + 1);
     &l[s..e.max(s)]
 }
 
@@ -605,7 +596,10 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
         if !c.iter().all(|v| v.is_finite()) {
             return Err(invalid(
                 raw.node_place(i, true),
-                format!("node {} has a non-finite coordinate ({}, {}, {}); the file is corrupt: re-export it", raw.node_tags[i], c[0], c[1], c[2]),
+                format!(
+                    "node {} has a non-finite coordinate ({}, {}, {}); the file is corrupt: re-export it",
+                    raw.node_tags[i], c[0], c[1], c[2]
+                ),
             ));
         }
     }
@@ -653,19 +647,12 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
     for (r, &i) in order.iter().enumerate() {
         rank[i] = r;
     }
-    let points: Vec<[f64; 2]> = order
-        .iter()
-        .map(|&i| [raw.coords[i][0], raw.coords[i][1]])
-        .collect();
+    let points: Vec<[f64; 2]> = order.iter().map(|&i| [raw.coords[i][0], raw.coords[i][1]]).collect();
     let index = TagIndex::new(&raw.node_tags, &rank);
 
     // Elements.
     let mut groups: BTreeMap<(u8, i32), PhysicalGroup> = BTreeMap::new();
-    fn group(
-        groups: &mut BTreeMap<(u8, i32), PhysicalGroup>,
-        dim: u8,
-        tag: i32,
-    ) -> &mut PhysicalGroup {
+    fn group(groups: &mut BTreeMap<(u8, i32), PhysicalGroup>, dim: u8, tag: i32) -> &mut PhysicalGroup {
         groups.entry((dim, tag)).or_insert_with(|| PhysicalGroup {
             dim,
             tag,
@@ -710,7 +697,10 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
                 format!("in physical group {}", names.join(", "))
             };
             let (name, fix) = match info {
-                Some((name, _, 3)) => (name, "hvi is 2D: mesh only the surface (gmsh -2) and put the body in a Physical Surface"),
+                Some((name, _, 3)) => (
+                    name,
+                    "hvi is 2D: mesh only the surface (gmsh -2) and put the body in a Physical Surface",
+                ),
                 Some((name, _, _)) => (
                     name,
                     "hvi computes with first-order elements only: mesh with gmsh -order 1 (Mesh.ElementOrder = 1), \
@@ -805,10 +795,7 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
     }
 
     // Orientation: all counter-clockwise, or all clockwise (then flipped), else an error.
-    let areas: Vec<f64> = cells
-        .iter()
-        .map(|c| signed_area(&points, c.nodes()))
-        .collect();
+    let areas: Vec<f64> = cells.iter().map(|c| signed_area(&points, c.nodes())).collect();
     for (c, &a) in areas.iter().enumerate() {
         let longest = cells[c]
             .edges()
@@ -817,10 +804,7 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
         if a.abs() <= 1e-14 * longest * longest {
             return Err(invalid(
                 raw.element_place(cell_element[c]),
-                format!(
-                    "element {} has zero area (degenerate cell); re-mesh",
-                    cell_tags[c]
-                ),
+                format!("element {} has zero area (degenerate cell); re-mesh", cell_tags[c]),
             ));
         }
     }

@@ -24,11 +24,7 @@ use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 use std::path::Path;
 
-pub(crate) fn parse<'a>(
-    path: &Path,
-    bytes: &'a [u8],
-    body: usize,
-) -> Result<RawMesh<'a>, MeshError> {
+pub(crate) fn parse<'a>(path: &Path, bytes: &'a [u8], body: usize) -> Result<RawMesh<'a>, MeshError> {
     let syntax = |line: usize, section: &str, detail: String| MeshError::Syntax {
         path: path.to_path_buf(),
         place: if section.is_empty() {
@@ -68,7 +64,11 @@ pub(crate) fn parse<'a>(
         match name {
             "Nodes" => {
                 if seen_nodes {
-                    return Err(syntax(line, "$Nodes", "a second $Nodes section; hvi reads files with one".into()));
+                    return Err(syntax(
+                        line,
+                        "$Nodes",
+                        "a second $Nodes section; hvi reads files with one".into(),
+                    ));
                 }
                 seen_nodes = true;
                 let count = read_count(&mut lines, path, "$Nodes", 8)?;
@@ -92,12 +92,20 @@ pub(crate) fn parse<'a>(
                         }
                         ntok += 1;
                     }
-                    let cut = if lines.remaining() == 0 { "; the file ends here: it is truncated" } else { "" };
+                    let cut = if lines.remaining() == 0 {
+                        "; the file ends here: it is truncated"
+                    } else {
+                        ""
+                    };
                     let bad = || {
                         syntax(
                             line,
                             "$Nodes",
-                            format!("expected `node-tag x y z` (node {} of {count}), found \"{}\"{cut}", k + 1, text.trim()),
+                            format!(
+                                "expected `node-tag x y z` (node {} of {count}), found \"{}\"{cut}",
+                                k + 1,
+                                text.trim()
+                            ),
                         )
                     };
                     if ntok != 4 {
@@ -105,7 +113,11 @@ pub(crate) fn parse<'a>(
                     }
                     let tag: u64 = tokens[0].parse().map_err(|_| bad())?;
                     if tag == 0 {
-                        return Err(syntax(line, "$Nodes", "node tag 0 is not allowed (tags start at 1)".into()));
+                        return Err(syntax(
+                            line,
+                            "$Nodes",
+                            "node tag 0 is not allowed (tags start at 1)".into(),
+                        ));
                     }
                     let mut c = [0.0; 3];
                     for (d, t) in c.iter_mut().zip(&tokens[1..]) {
@@ -119,7 +131,11 @@ pub(crate) fn parse<'a>(
             }
             "Elements" => {
                 if seen_elements {
-                    return Err(syntax(line, "$Elements", "a second $Elements section; hvi reads files with one".into()));
+                    return Err(syntax(
+                        line,
+                        "$Elements",
+                        "a second $Elements section; hvi reads files with one".into(),
+                    ));
                 }
                 seen_elements = true;
                 let count = read_count(&mut lines, path, "$Elements", 8)?;
@@ -135,7 +151,11 @@ pub(crate) fn parse<'a>(
                         ));
                     };
                     let text = String::from_utf8_lossy(l);
-                    let cut = if lines.remaining() == 0 { "; the file ends here: it is truncated" } else { "" };
+                    let cut = if lines.remaining() == 0 {
+                        "; the file ends here: it is truncated"
+                    } else {
+                        ""
+                    };
                     let bad = |why: &str| {
                         syntax(
                             line,
@@ -149,7 +169,10 @@ pub(crate) fn parse<'a>(
                     };
                     numbers.clear();
                     for t in text.split_whitespace() {
-                        numbers.push(t.parse::<i64>().map_err(|_| bad(&format!("\"{t}\" is not an integer")))?);
+                        numbers.push(
+                            t.parse::<i64>()
+                                .map_err(|_| bad(&format!("\"{t}\" is not an integer")))?,
+                        );
                     }
                     if numbers.len() < 3 {
                         return Err(bad("too few numbers"));
@@ -167,7 +190,10 @@ pub(crate) fn parse<'a>(
                     let nodes = &numbers[3 + ntags..];
                     if let Some((name, want, _)) = element_type_info(ty) {
                         if nodes.len() != want {
-                            return Err(bad(&format!("a {name} (type {ty}) has {want} nodes, found {}", nodes.len())));
+                            return Err(bad(&format!(
+                                "a {name} (type {ty}) has {want} nodes, found {}",
+                                nodes.len()
+                            )));
                         }
                     }
                     if nodes.iter().any(|&v| v <= 0) {
@@ -217,7 +243,9 @@ pub(crate) fn parse<'a>(
             "ParametricNodes" => {
                 return Err(MeshError::UnsupportedFormat {
                     path: path.to_path_buf(),
-                    detail: format!("line {line}: $ParametricNodes is not supported; re-export the mesh with gmsh -format msh41"),
+                    detail: format!(
+                        "line {line}: $ParametricNodes is not supported; re-export the mesh with gmsh -format msh41"
+                    ),
                 })
             }
             _ => {
@@ -258,12 +286,10 @@ pub(crate) fn parse<'a>(
     let mut element_origin = Vec::with_capacity(element_tags.len());
     for (e, (&first, &entity)) in element_physical.iter().zip(&element_entity).enumerate() {
         let mut intern = |physical: Vec<i32>| {
-            *origin_index
-                .entry((physical.clone(), entity))
-                .or_insert_with(|| {
-                    origins.push(Origin { physical, entity });
-                    origins.len() as u32 - 1
-                })
+            *origin_index.entry((physical.clone(), entity)).or_insert_with(|| {
+                origins.push(Origin { physical, entity });
+                origins.len() as u32 - 1
+            })
         };
         let o = match merged.get(&e) {
             Some(more) => {
@@ -297,12 +323,7 @@ pub(crate) fn parse<'a>(
 
 /// Reads the count line of a section and checks it against the bytes left (each item takes
 /// at least `min_bytes`).
-fn read_count(
-    lines: &mut Lines<'_>,
-    path: &Path,
-    section: &str,
-    min_bytes: usize,
-) -> Result<usize, MeshError> {
+fn read_count(lines: &mut Lines<'_>, path: &Path, section: &str, min_bytes: usize) -> Result<usize, MeshError> {
     let place = |line: usize| format!("line {line} ({section})");
     let Some((line, l)) = lines.next_nonblank() else {
         return Err(MeshError::Syntax {
@@ -331,13 +352,7 @@ fn read_count(
     Ok(count as usize)
 }
 
-fn expect_end(
-    lines: &mut Lines<'_>,
-    path: &Path,
-    section: &str,
-    count: usize,
-    what: &str,
-) -> Result<(), MeshError> {
+fn expect_end(lines: &mut Lines<'_>, path: &Path, section: &str, count: usize, what: &str) -> Result<(), MeshError> {
     let end = format!("$End{}", &section[1..]);
     let line_no = lines.line;
     match lines.next_nonblank() {

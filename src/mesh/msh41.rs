@@ -25,11 +25,7 @@ struct Prescan {
     node_lines: Option<Vec<(usize, usize)>>,
 }
 
-pub(crate) fn parse<'a>(
-    path: &Path,
-    bytes: &'a [u8],
-    header: &Header,
-) -> Result<RawMesh<'a>, MeshError> {
+pub(crate) fn parse<'a>(path: &Path, bytes: &'a [u8], header: &Header) -> Result<RawMesh<'a>, MeshError> {
     let names = physical_names::parse(path, bytes, header.body)?;
     let pre = if header.binary {
         prescan_binary(path, bytes, header)?
@@ -44,8 +40,7 @@ pub(crate) fn parse<'a>(
             return Err(MeshError::Syntax {
                 path: path.to_path_buf(),
                 place: "MSH 4.1 parser".into(),
-                detail: "the file is malformed (the parser stopped on it); re-export it from gmsh"
-                    .into(),
+                detail: "the file is malformed (the parser stopped on it); re-export it from gmsh".into(),
             })
         }
     };
@@ -58,10 +53,7 @@ pub(crate) fn parse<'a>(
         return Err(syntax("$Nodes", "the file has no $Nodes section".into()));
     };
     let Some(elements) = msh.data.elements else {
-        return Err(syntax(
-            "$Elements",
-            "the file has no $Elements section".into(),
-        ));
+        return Err(syntax("$Elements", "the file has no $Elements section".into()));
     };
 
     // Coordinates from mshio, tags from the pre-scan, block by block.
@@ -166,12 +158,7 @@ pub(crate) fn parse<'a>(
 
 /// Turns an mshio error into a [`MeshError::Syntax`] with a line number (ASCII) or byte offset
 /// (binary) and the chain of what was being parsed (never mshio's hex dump of the file).
-fn mshio_error(
-    path: &Path,
-    bytes: &[u8],
-    binary: bool,
-    e: &mshio::MshParserError<&[u8]>,
-) -> MeshError {
+fn mshio_error(path: &Path, bytes: &[u8], binary: bool, e: &mshio::MshParserError<&[u8]>) -> MeshError {
     let bt = e.filtered_backtrace();
     let Some((input, kind)) = bt.first() else {
         return MeshError::Syntax {
@@ -292,7 +279,13 @@ fn prescan_ascii(path: &Path, bytes: &[u8], body: usize) -> Result<Prescan, Mesh
                             ),
                         ))
                     }
-                    None => return Err(syntax(t.line, &section, "the file ends before $EndNodes: it is truncated".into())),
+                    None => {
+                        return Err(syntax(
+                            t.line,
+                            &section,
+                            "the file ends before $EndNodes: it is truncated".into(),
+                        ))
+                    }
                 }
                 lines = Lines {
                     bytes,
@@ -309,8 +302,7 @@ fn prescan_ascii(path: &Path, bytes: &[u8], body: usize) -> Result<Prescan, Mesh
                     return Err(syntax(
                         hline,
                         &section,
-                        "the file has no elements; mesh the geometry (gmsh -2) before saving"
-                            .into(),
+                        "the file has no elements; mesh the geometry (gmsh -2) before saving".into(),
                     ));
                 }
                 check_fits(
@@ -323,30 +315,12 @@ fn prescan_ascii(path: &Path, bytes: &[u8], body: usize) -> Result<Prescan, Mesh
                     lines.remaining(),
                     true,
                 )?;
-                check_fits(
-                    path,
-                    hline,
-                    &section,
-                    "elements",
-                    count,
-                    4,
-                    lines.remaining(),
-                    true,
-                )?;
+                check_fits(path, hline, &section, "elements", count, 4, lines.remaining(), true)?;
             }
             "Entities" => {
                 let (hline, counts) = header_numbers(&mut lines, path, &section)?;
                 let total = counts.iter().fold(0u64, |a, &c| a.saturating_add(c));
-                check_fits(
-                    path,
-                    hline,
-                    &section,
-                    "entities",
-                    total,
-                    10,
-                    lines.remaining(),
-                    true,
-                )?;
+                check_fits(path, hline, &section, "entities", total, 10, lines.remaining(), true)?;
             }
             _ => {}
         }
@@ -370,12 +344,7 @@ fn prescan_ascii(path: &Path, bytes: &[u8], body: usize) -> Result<Prescan, Mesh
 }
 
 /// Skips lines up to and including `$End<name>`.
-fn skip_to_end(
-    lines: &mut Lines<'_>,
-    path: &Path,
-    name: &str,
-    start_line: usize,
-) -> Result<(), MeshError> {
+fn skip_to_end(lines: &mut Lines<'_>, path: &Path, name: &str, start_line: usize) -> Result<(), MeshError> {
     let end = format!("$End{name}");
     loop {
         match lines.next_line() {
@@ -385,9 +354,7 @@ fn skip_to_end(
                 return Err(MeshError::Syntax {
                     path: path.to_path_buf(),
                     place: format!("line {start_line} (${name})"),
-                    detail: format!(
-                        "the section ${name} has no {end}: the file is truncated; re-export it"
-                    ),
+                    detail: format!("the section ${name} has no {end}: the file is truncated; re-export it"),
                 })
             }
         }
@@ -395,11 +362,7 @@ fn skip_to_end(
 }
 
 /// The four numbers of a section header line.
-fn header_numbers(
-    lines: &mut Lines<'_>,
-    path: &Path,
-    section: &str,
-) -> Result<(usize, [u64; 4]), MeshError> {
+fn header_numbers(lines: &mut Lines<'_>, path: &Path, section: &str) -> Result<(usize, [u64; 4]), MeshError> {
     let Some((line, l)) = lines.next_nonblank() else {
         return Err(MeshError::Syntax {
             path: path.to_path_buf(),
@@ -408,10 +371,7 @@ fn header_numbers(
         });
     };
     let text = String::from_utf8_lossy(l);
-    let numbers: Vec<u64> = text
-        .split_whitespace()
-        .filter_map(|t| t.parse().ok())
-        .collect();
+    let numbers: Vec<u64> = text.split_whitespace().filter_map(|t| t.parse().ok()).collect();
     if numbers.len() != 4 || text.split_whitespace().count() != 4 {
         return Err(MeshError::Syntax {
             path: path.to_path_buf(),
@@ -440,7 +400,11 @@ fn check_fits(
     if count.saturating_mul(min_bytes) > remaining as u64 {
         return Err(MeshError::Syntax {
             path: path.to_path_buf(),
-            place: if ascii { format!("line {where_} ({section})") } else { format!("byte {where_} ({section})") },
+            place: if ascii {
+                format!("line {where_} ({section})")
+            } else {
+                format!("byte {where_} ({section})")
+            },
             detail: format!(
                 "the header says {count} {what}, but only {remaining} bytes follow (at least {min_bytes} per item): \
                  the file is truncated or its header is corrupt; re-export it"
@@ -466,10 +430,7 @@ fn scan_nodes_ascii(path: &Path, t: &mut Tokens<'_>) -> Result<Prescan, MeshErro
                 Some(v) => Ok((v, line)),
                 None => Err(syntax(
                     line,
-                    format!(
-                        "expected {what}, found \"{}\"",
-                        String::from_utf8_lossy(tok)
-                    ),
+                    format!("expected {what}, found \"{}\"", String::from_utf8_lossy(tok)),
                 )),
             },
             None => Err(syntax(
@@ -488,26 +449,8 @@ fn scan_nodes_ascii(path: &Path, t: &mut Tokens<'_>) -> Result<Prescan, MeshErro
             "the file has no nodes; mesh the geometry (gmsh -2) before saving".into(),
         ));
     }
-    check_fits(
-        path,
-        hline,
-        "$Nodes",
-        "node blocks",
-        blocks,
-        8,
-        t.remaining(),
-        true,
-    )?;
-    check_fits(
-        path,
-        hline,
-        "$Nodes",
-        "nodes",
-        count,
-        8,
-        t.remaining(),
-        true,
-    )?;
+    check_fits(path, hline, "$Nodes", "node blocks", blocks, 8, t.remaining(), true)?;
+    check_fits(path, hline, "$Nodes", "nodes", count, 8, t.remaining(), true)?;
     let count = count as usize;
     let mut node_tags = Vec::with_capacity(count);
     let mut node_lines = Vec::with_capacity(count);
@@ -527,16 +470,7 @@ fn scan_nodes_ascii(path: &Path, t: &mut Tokens<'_>) -> Result<Prescan, MeshErro
                 ),
             });
         }
-        check_fits(
-            path,
-            bline,
-            "$Nodes",
-            "nodes in a block",
-            n,
-            8,
-            t.remaining(),
-            true,
-        )?;
+        check_fits(path, bline, "$Nodes", "nodes in a block", n, 8, t.remaining(), true)?;
         if node_tags.len() as u64 + n > count as u64 {
             return Err(syntax(
                 bline,
@@ -547,10 +481,7 @@ fn scan_nodes_ascii(path: &Path, t: &mut Tokens<'_>) -> Result<Prescan, MeshErro
         for _ in 0..n {
             let (tag, line) = number::<u64>(t, "a node tag", &syntax)?;
             if tag == 0 {
-                return Err(syntax(
-                    line,
-                    "node tag 0 is not allowed (tags start at 1)".into(),
-                ));
+                return Err(syntax(line, "node tag 0 is not allowed (tags start at 1)".into()));
             }
             node_tags.push(tag);
             node_lines.push((line, 0));
@@ -585,19 +516,11 @@ fn element_line_ascii(bytes: &[u8], body: usize, tag: u64) -> Option<usize> {
     let mut lines = Lines::new(bytes, start);
     lines.next_line()?;
     let (_, h) = lines.next_nonblank()?;
-    let blocks: u64 = String::from_utf8_lossy(h)
-        .split_whitespace()
-        .next()?
-        .parse()
-        .ok()?;
+    let blocks: u64 = String::from_utf8_lossy(h).split_whitespace().next()?.parse().ok()?;
     let want = tag.to_string();
     for _ in 0..blocks {
         let (_, bh) = lines.next_nonblank()?;
-        let count: u64 = String::from_utf8_lossy(bh)
-            .split_whitespace()
-            .nth(3)?
-            .parse()
-            .ok()?;
+        let count: u64 = String::from_utf8_lossy(bh).split_whitespace().nth(3)?.parse().ok()?;
         for _ in 0..count {
             let (n, l) = lines.next_nonblank()?;
             if String::from_utf8_lossy(l).split_whitespace().next() == Some(want.as_str()) {
@@ -659,9 +582,7 @@ impl Binary<'_> {
     }
 
     fn skip_whitespace(&mut self) {
-        while self.pos < self.bytes.len()
-            && matches!(self.bytes[self.pos], b'\n' | b'\r' | b' ' | b'\t')
-        {
+        while self.pos < self.bytes.len() && matches!(self.bytes[self.pos], b'\n' | b'\r' | b' ' | b'\t') {
             self.pos += 1;
         }
     }
@@ -734,26 +655,8 @@ fn prescan_binary(path: &Path, bytes: &[u8], header: &Header) -> Result<Prescan,
                         "the file has no nodes; mesh the geometry (gmsh -2) before saving".into(),
                     ));
                 }
-                check_fits(
-                    path,
-                    h,
-                    &section,
-                    "node blocks",
-                    blocks,
-                    12 + st,
-                    r.remaining(),
-                    false,
-                )?;
-                check_fits(
-                    path,
-                    h,
-                    &section,
-                    "nodes",
-                    count,
-                    st + 24,
-                    r.remaining(),
-                    false,
-                )?;
+                check_fits(path, h, &section, "node blocks", blocks, 12 + st, r.remaining(), false)?;
+                check_fits(path, h, &section, "nodes", count, st + 24, r.remaining(), false)?;
                 let mut node_tags = Vec::with_capacity(count as usize);
                 let mut block_sizes = Vec::with_capacity(blocks as usize);
                 for b in 0..blocks {
@@ -772,18 +675,13 @@ fn prescan_binary(path: &Path, bytes: &[u8], header: &Header) -> Result<Prescan,
                             ),
                         });
                     }
-                    check_fits(
-                        path,
-                        bh,
-                        &section,
-                        "nodes in a block",
-                        n,
-                        st + 24,
-                        r.remaining(),
-                        false,
-                    )?;
+                    check_fits(path, bh, &section, "nodes in a block", n, st + 24, r.remaining(), false)?;
                     if node_tags.len() as u64 + n > count {
-                        return Err(syntax(bh, &section, format!("the node blocks hold more than the {count} nodes the section header says")));
+                        return Err(syntax(
+                            bh,
+                            &section,
+                            format!("the node blocks hold more than the {count} nodes the section header says"),
+                        ));
                     }
                     for _ in 0..n {
                         let tp = r.pos;
@@ -820,8 +718,7 @@ fn prescan_binary(path: &Path, bytes: &[u8], header: &Header) -> Result<Prescan,
                     return Err(syntax(
                         e,
                         &section,
-                        "expected $EndNodes: the counts in the section do not match its content"
-                            .into(),
+                        "expected $EndNodes: the counts in the section do not match its content".into(),
                     ));
                 }
                 found = Some(Prescan {
@@ -840,8 +737,7 @@ fn prescan_binary(path: &Path, bytes: &[u8], header: &Header) -> Result<Prescan,
                     return Err(syntax(
                         h,
                         &section,
-                        "the file has no elements; mesh the geometry (gmsh -2) before saving"
-                            .into(),
+                        "the file has no elements; mesh the geometry (gmsh -2) before saving".into(),
                     ));
                 }
                 check_fits(
@@ -854,16 +750,7 @@ fn prescan_binary(path: &Path, bytes: &[u8], header: &Header) -> Result<Prescan,
                     r.remaining(),
                     false,
                 )?;
-                check_fits(
-                    path,
-                    h,
-                    &section,
-                    "elements",
-                    count,
-                    2 * st,
-                    r.remaining(),
-                    false,
-                )?;
+                check_fits(path, h, &section, "elements", count, 2 * st, r.remaining(), false)?;
             }
             "Entities" => {
                 let h = r.pos;
@@ -871,16 +758,7 @@ fn prescan_binary(path: &Path, bytes: &[u8], header: &Header) -> Result<Prescan,
                 for _ in 0..4 {
                     total = total.saturating_add(r.size_t().ok_or_else(|| truncated(h, &section))?);
                 }
-                check_fits(
-                    path,
-                    h,
-                    &section,
-                    "entities",
-                    total,
-                    28 + st,
-                    r.remaining(),
-                    false,
-                )?;
+                check_fits(path, h, &section, "entities", total, 28 + st, r.remaining(), false)?;
             }
             _ => {}
         }
@@ -894,9 +772,7 @@ fn prescan_binary(path: &Path, bytes: &[u8], header: &Header) -> Result<Prescan,
                 return Err(syntax(
                     at,
                     &section,
-                    format!(
-                        "the section {section} has no {end}: the file is truncated; re-export it"
-                    ),
+                    format!("the section {section} has no {end}: the file is truncated; re-export it"),
                 ))
             }
         }

@@ -23,11 +23,7 @@ pub(crate) struct PhysicalName {
 
 /// Finds the first line `$PhysicalNames` at or after `body` and parses the section. No such
 /// section: no names.
-pub(crate) fn parse(
-    path: &Path,
-    bytes: &[u8],
-    body: usize,
-) -> Result<Vec<PhysicalName>, MeshError> {
+pub(crate) fn parse(path: &Path, bytes: &[u8], body: usize) -> Result<Vec<PhysicalName>, MeshError> {
     let Some(start) = find_section(bytes, body, b"$PhysicalNames") else {
         return Ok(Vec::new());
     };
@@ -60,7 +56,9 @@ pub(crate) fn parse(
     if count.saturating_mul(6) > lines.remaining() {
         return Err(syntax(
             n_line,
-            format!("the section says {count} names, more than the rest of the file can hold: it is truncated or corrupt"),
+            format!(
+                "the section says {count} names, more than the rest of the file can hold: it is truncated or corrupt"
+            ),
         ));
     }
     let mut names: Vec<PhysicalName> = Vec::with_capacity(count);
@@ -79,17 +77,9 @@ pub(crate) fn parse(
                 format!("found {text} after {k} names, but the section says {count}"),
             ));
         }
-        let bad = || {
-            syntax(
-                line,
-                format!("expected `dim tag \"name\"`, found \"{text}\""),
-            )
-        };
+        let bad = || syntax(line, format!("expected `dim tag \"name\"`, found \"{text}\""));
         let (first, rest) = text.split_once(char::is_whitespace).ok_or_else(bad)?;
-        let (second, rest) = rest
-            .trim_start()
-            .split_once(char::is_whitespace)
-            .ok_or_else(bad)?;
+        let (second, rest) = rest.trim_start().split_once(char::is_whitespace).ok_or_else(bad)?;
         let dim: u8 = first.parse().ok().filter(|&d| d <= 3).ok_or_else(bad)?;
         let tag: i32 = second.parse().ok().ok_or_else(bad)?;
         let rest = rest.trim();
@@ -155,12 +145,11 @@ mod tests {
 
     #[test]
     fn quoted_unquoted_spaces_and_crlf() {
-        let n = names("$PhysicalNames\r\n3\r\n1  3   \"Gamma 3\"\r\n2\t5 Omega\r\n0 -2 \"p\"\r\n$EndPhysicalNames\r\n").unwrap();
+        let n = names("$PhysicalNames\r\n3\r\n1  3   \"Gamma 3\"\r\n2\t5 Omega\r\n0 -2 \"p\"\r\n$EndPhysicalNames\r\n")
+            .unwrap();
         let got: Vec<(u8, i32, &str)> = n.iter().map(|p| (p.dim, p.tag, p.name.as_str())).collect();
         assert_eq!(got, vec![(1, 3, "Gamma 3"), (2, 5, "Omega"), (0, -2, "p")]);
-        assert!(names("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n")
-            .unwrap()
-            .is_empty());
+        assert!(names("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n").unwrap().is_empty());
     }
 
     #[test]
@@ -172,10 +161,7 @@ mod tests {
         let e = names("$PhysicalNames\n1000000000000\n1 3 \"a\"\n$EndPhysicalNames\n")
             .unwrap_err()
             .to_string();
-        assert!(
-            e.contains("1000000000000") && e.contains("truncated"),
-            "{e}"
-        );
+        assert!(e.contains("1000000000000") && e.contains("truncated"), "{e}");
         let e = names("$PhysicalNames\n2\n1 3 \"a\"\n$EndPhysicalNames\n")
             .unwrap_err()
             .to_string();

@@ -64,7 +64,8 @@ pub(crate) fn boundary_part(mesh: &Mesh, group: &PhysicalGroup) -> Result<Bounda
     }
     if facets.is_empty() {
         return Err(not_boundary(
-            "the group has no line elements; give it the boundary curves in the .geo (Physical Curve) and mesh again".into(),
+            "the group has no line elements; give it the boundary curves in the .geo (Physical Curve) and mesh again"
+                .into(),
         ));
     }
 

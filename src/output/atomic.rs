@@ -46,12 +46,10 @@ impl Drop for TempGuard {
 
 /// Creates a fresh temporary sibling of `path` (never an existing file).
 pub(crate) fn create_temp_sibling(path: &Path) -> Result<(File, PathBuf), OutputError> {
-    let name = path
-        .file_name()
-        .ok_or_else(|| OutputError::InvalidArgument {
-            path: path.to_path_buf(),
-            detail: "the path has no file name; give a file path, not a directory".into(),
-        })?;
+    let name = path.file_name().ok_or_else(|| OutputError::InvalidArgument {
+        path: path.to_path_buf(),
+        detail: "the path has no file name; give a file path, not a directory".into(),
+    })?;
     let dir = parent_dir(path);
     let pid = std::process::id();
     let mut last_err = None;
@@ -83,9 +81,7 @@ where
     };
     let mut w = BufWriter::new(file);
     fill(&mut w)?;
-    let file = w
-        .into_inner()
-        .map_err(|e| OutputError::write(path, e.into_error()))?;
+    let file = w.into_inner().map_err(|e| OutputError::write(path, e.into_error()))?;
     drop(file);
     fs::rename(&tmp, path).map_err(|e| OutputError::write(path, e))?;
     guard.path = None;
@@ -95,9 +91,7 @@ where
 /// Replaces `path` with `bytes`: a temporary file in the same directory, then a rename (no
 /// fsync). On failure the temporary file is removed and `path` is left as it was.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    write_atomic_with(path, |w| {
-        w.write_all(bytes).map_err(|e| OutputError::write(path, e))
-    })
+    write_atomic_with(path, |w| w.write_all(bytes).map_err(|e| OutputError::write(path, e)))
 }
 
 /// Replaces `path` with `value` as pretty-printed JSON (and a final newline), atomically as
@@ -141,9 +135,6 @@ mod tests {
         let (_f2, b) = create_temp_sibling(&p).unwrap();
         assert_ne!(a, b);
         let an = a.file_name().unwrap().to_str().unwrap();
-        assert!(
-            is_temporary_name(an) && an.starts_with(".solution.pvd.tmp."),
-            "{an}"
-        );
+        assert!(is_temporary_name(an) && an.starts_with(".solution.pvd.tmp."), "{an}");
     }
 }

@@ -39,11 +39,7 @@ impl CsvTable {
             });
         }
         let mut file = File::create(path).map_err(|e| OutputError::write(path, e))?;
-        let mut line = header
-            .iter()
-            .map(|h| quote(h))
-            .collect::<Vec<_>>()
-            .join(",");
+        let mut line = header.iter().map(|h| quote(h)).collect::<Vec<_>>().join(",");
         line.push('\n');
         file.write_all(line.as_bytes())
             .map_err(|e| OutputError::write(path, e))?;
@@ -58,11 +54,7 @@ impl CsvTable {
     /// Appends `rows` as one block; an error if any row's length differs from the header's
     /// (then nothing is written).
     pub fn append(&mut self, rows: &[Vec<f64>]) -> Result<(), OutputError> {
-        if let Some((row, r)) = rows
-            .iter()
-            .enumerate()
-            .find(|(_, r)| r.len() != self.columns)
-        {
+        if let Some((row, r)) = rows.iter().enumerate().find(|(_, r)| r.len() != self.columns) {
             return Err(OutputError::CsvRow {
                 path: self.path.clone(),
                 row,

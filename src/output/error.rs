@@ -138,9 +138,7 @@ fn directory_fix(e: &io::Error) -> &'static str {
     use io::ErrorKind::*;
     match e.kind() {
         StorageFull => "free some disk space or choose another --out directory",
-        PermissionDenied | ReadOnlyFilesystem => {
-            "fix its permissions or choose another --out directory"
-        }
+        PermissionDenied | ReadOnlyFilesystem => "fix its permissions or choose another --out directory",
         _ => "choose another --out directory",
     }
 }
@@ -149,9 +147,7 @@ fn file_fix(e: &io::Error) -> &'static str {
     use io::ErrorKind::*;
     match e.kind() {
         StorageFull => "free some disk space or choose another --out directory",
-        NotFound => {
-            "the directory may have been removed during the run; choose another --out directory"
-        }
+        NotFound => "the directory may have been removed during the run; choose another --out directory",
         _ => "check the directory's permissions or choose another --out directory",
     }
 }
@@ -162,10 +158,7 @@ mod tests {
 
     #[test]
     fn messages_name_path_reason_and_fix() {
-        let e = OutputError::directory(
-            Path::new("runs/a"),
-            io::Error::from(io::ErrorKind::PermissionDenied),
-        );
+        let e = OutputError::directory(Path::new("runs/a"), io::Error::from(io::ErrorKind::PermissionDenied));
         assert_eq!(
             e.to_string(),
             "cannot write to runs/a: permission denied; fix its permissions or choose another --out directory"

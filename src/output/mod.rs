@@ -184,9 +184,7 @@ impl SeriesWriter {
     /// `<basename>.vtu.series` atomically, listing every frame written so far with its time.
     /// Writing a step again replaces its file and its entry. Returns the `.vtu` path.
     pub fn write_frame(&mut self, frame: &Frame) -> Result<PathBuf, OutputError> {
-        let path = self
-            .dir
-            .join(format!("{}_{:05}.vtu", self.basename, frame.step));
+        let path = self.dir.join(format!("{}_{:05}.vtu", self.basename, frame.step));
         vtu::write_vtu(&path, frame, self.compression_level)?;
         let mut frames = self.frames.clone();
         match frames.iter_mut().find(|(_, p)| *p == path) {
@@ -229,9 +227,7 @@ fn probe_writable(dir: &Path) -> Result<(), OutputError> {
         .open(&probe)
         .and_then(|mut f| f.write_all(b"hvi"));
     let removed = fs::remove_file(&probe);
-    result
-        .and(removed)
-        .map_err(|e| OutputError::directory(dir, e))
+    result.and(removed).map_err(|e| OutputError::directory(dir, e))
 }
 
 #[cfg(test)]

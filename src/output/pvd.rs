@@ -61,11 +61,7 @@ struct Series {
 }
 
 /// Rewrites `pvd` and `series` (atomically, each) to list `frames`.
-pub(crate) fn write_index(
-    pvd: &Path,
-    series: &Path,
-    frames: &[(f64, PathBuf)],
-) -> Result<(), OutputError> {
+pub(crate) fn write_index(pvd: &Path, series: &Path, frames: &[(f64, PathBuf)]) -> Result<(), OutputError> {
     write_atomic(pvd, pvd_text(frames).as_bytes())?;
     let value = Series {
         version: "1.0",
@@ -86,13 +82,8 @@ mod tests {
 
     #[test]
     fn pvd_lists_frames_with_escaped_names() {
-        let text = pvd_text(&[
-            (0.0, "d/a_00000.vtu".into()),
-            (0.25, "d/a&b_00001.vtu".into()),
-        ]);
-        assert!(
-            text.contains("<DataSet timestep=\"0\" group=\"\" part=\"0\" file=\"a_00000.vtu\"/>")
-        );
+        let text = pvd_text(&[(0.0, "d/a_00000.vtu".into()), (0.25, "d/a&b_00001.vtu".into())]);
+        assert!(text.contains("<DataSet timestep=\"0\" group=\"\" part=\"0\" file=\"a_00000.vtu\"/>"));
         assert!(text.contains("timestep=\"0.25\" group=\"\" part=\"0\" file=\"a&amp;b_00001.vtu\""));
     }
 }

@@ -74,10 +74,7 @@ pub(crate) fn validate_frame(path: &Path, frame: &Frame) -> Result<(), OutputErr
     {
         return Err(OutputError::invalid_frame(
             path,
-            format!(
-                "point {p} has a non-finite coordinate {:?}",
-                frame.points[p]
-            ),
+            format!("point {p} has a non-finite coordinate {:?}", frame.points[p]),
         ));
     }
     for (c, cell) in frame.cells.iter().enumerate() {
@@ -92,21 +89,13 @@ pub(crate) fn validate_frame(path: &Path, frame: &Frame) -> Result<(), OutputErr
     check_fields(path, "cell", &frame.cell_fields, frame.cells.len())
 }
 
-fn check_fields(
-    path: &Path,
-    location: &'static str,
-    fields: &[Field],
-    count: usize,
-) -> Result<(), OutputError> {
+fn check_fields(path: &Path, location: &'static str, fields: &[Field], count: usize) -> Result<(), OutputError> {
     let mut seen = BTreeSet::new();
     for f in fields {
         if f.name.is_empty() || f.name.chars().any(char::is_control) {
             return Err(OutputError::invalid_frame(
                 path,
-                format!(
-                    "{location} field name {:?} is empty or has control characters",
-                    f.name
-                ),
+                format!("{location} field name {:?} is empty or has control characters", f.name),
             ));
         }
         if !seen.insert(f.name) {
@@ -159,16 +148,8 @@ fn attribute(f: &Field) -> Attribute {
 }
 
 /// Encodes a (validated) frame as the bytes of a `.vtu` file.
-pub(crate) fn encode_vtu(
-    path: &Path,
-    frame: &Frame,
-    compression_level: u32,
-) -> Result<Vec<u8>, OutputError> {
-    let points: Vec<f64> = frame
-        .points
-        .iter()
-        .flat_map(|p| [p[0], p[1], 0.0])
-        .collect();
+pub(crate) fn encode_vtu(path: &Path, frame: &Frame, compression_level: u32) -> Result<Vec<u8>, OutputError> {
+    let points: Vec<f64> = frame.points.iter().flat_map(|p| [p[0], p[1], 0.0]).collect();
     let n_conn = frame.cells.iter().map(|c| c.nodes().len()).sum();
     let mut connectivity = Vec::with_capacity(n_conn);
     let mut offsets = Vec::with_capacity(frame.cells.len());
@@ -185,10 +166,7 @@ pub(crate) fn encode_vtu(
     let piece = UnstructuredGridPiece {
         points: IOBuffer::F64(points),
         cells: Cells {
-            cell_verts: VertexNumbers::XML {
-                connectivity,
-                offsets,
-            },
+            cell_verts: VertexNumbers::XML { connectivity, offsets },
             types,
         },
         data: Attributes {
@@ -223,11 +201,7 @@ pub(crate) fn encode_vtu(
 }
 
 /// Validates `frame` and writes it to `path` atomically.
-pub(crate) fn write_vtu(
-    path: &Path,
-    frame: &Frame,
-    compression_level: u32,
-) -> Result<(), OutputError> {
+pub(crate) fn write_vtu(path: &Path, frame: &Frame, compression_level: u32) -> Result<(), OutputError> {
     validate_frame(path, frame)?;
     let bytes = encode_vtu(path, frame, compression_level)?;
     write_atomic(path, &bytes)
@@ -282,10 +256,7 @@ pub fn read_vtu_arrays(path: &Path) -> Result<VtuContents, OutputError> {
         .cast_into::<f64>()
         .ok_or_else(|| OutputError::format(path, "points are not numeric"))?;
     if coords.len() % 3 != 0 {
-        return Err(OutputError::format(
-            path,
-            "point coordinates are not triples",
-        ));
+        return Err(OutputError::format(path, "point coordinates are not triples"));
     }
     let points: Vec<[f64; 3]> = coords.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
 
@@ -341,12 +312,10 @@ fn collect_arrays(
     for a in attributes {
         let Attribute::DataArray(a) = a else { continue };
         let components = a.elem.num_comp() as usize;
-        let values = a.data.cast_into::<f64>().ok_or_else(|| {
-            OutputError::format(
-                path,
-                format!("{location} array \"{}\" is not numeric", a.name),
-            )
-        })?;
+        let values = a
+            .data
+            .cast_into::<f64>()
+            .ok_or_else(|| OutputError::format(path, format!("{location} array \"{}\" is not numeric", a.name)))?;
         if values.len() != components * count {
             return Err(OutputError::format(
                 path,

@@ -8,13 +8,33 @@ pub enum SceneError {
     #[error("{origin}: TOML syntax error: {message}")]
     Syntax { origin: String, message: String },
     #[error("{origin}: unknown key `{key}` in {section}{suggestion}; valid keys there: {allowed}")]
-    UnknownKey { origin: String, section: String, key: String, suggestion: String, allowed: String },
+    UnknownKey {
+        origin: String,
+        section: String,
+        key: String,
+        suggestion: String,
+        allowed: String,
+    },
     #[error("{origin}: `{key}`: {message}")]
-    Type { origin: String, key: String, message: String },
+    Type {
+        origin: String,
+        key: String,
+        message: String,
+    },
     #[error("{origin}: `{key}` = {value}: {fix}")]
-    Invalid { origin: String, key: String, value: String, fix: String },
+    Invalid {
+        origin: String,
+        key: String,
+        value: String,
+        fix: String,
+    },
     #[error("{origin}: `{key}` = \"{expression}\": {message}")]
-    Expression { origin: String, key: String, expression: String, message: String },
+    Expression {
+        origin: String,
+        key: String,
+        expression: String,
+        message: String,
+    },
     #[error("--set {text}: {reason} (expected KEY=VALUE, e.g. --set time.steps=64)")]
     Override { text: String, reason: String },
 }

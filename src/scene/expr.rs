@@ -40,7 +40,12 @@ fn check_unary_minus_power(source: &str) -> Result<(), String> {
             }
             while j < chars.len() && (chars[j].is_alphanumeric() || chars[j] == '_' || chars[j] == '.') {
                 // a literal like 1e-3 carries its own sign
-                if (chars[j] == 'e' || chars[j] == 'E') && j + 1 < chars.len() && (chars[j + 1] == '-' || chars[j + 1] == '+') && j > 0 && chars[j - 1].is_ascii_digit() {
+                if (chars[j] == 'e' || chars[j] == 'E')
+                    && j + 1 < chars.len()
+                    && (chars[j + 1] == '-' || chars[j + 1] == '+')
+                    && j > 0
+                    && chars[j - 1].is_ascii_digit()
+                {
                     j += 1;
                 }
                 j += 1;
@@ -105,13 +110,22 @@ impl Expr {
                 None => {
                     return Err(format!(
                         "unknown variable `{name}`; the variables here are {}",
-                        allowed_vars.iter().map(|v| format!("`{v}`")).collect::<Vec<_>>().join(", ")
+                        allowed_vars
+                            .iter()
+                            .map(|v| format!("`{v}`"))
+                            .collect::<Vec<_>>()
+                            .join(", ")
                     ))
                 }
             }
             used.push(name.clone());
         }
-        Ok(Expr { source: source.to_string(), flat, order, used })
+        Ok(Expr {
+            source: source.to_string(),
+            flat,
+            order,
+            used,
+        })
     }
 
     /// The value at `values` (in the order of the declared variables). NaN if evaluation fails.
@@ -148,8 +162,14 @@ mod tests {
         assert!(Expr::parse("sin(", &["x"]).is_err());
         assert_eq!(Expr::parse("2", &["x", "y", "t"]).unwrap().eval(&[0.0, 0.0, 0.0]), 2.0);
         // scientific literals
-        assert_eq!(Expr::parse("1.5e-3*x + 2E2", &["x"]).unwrap().eval(&[2.0]), 3e-3 + 200.0);
-        assert_eq!(Expr::parse("-1.0989010989010988e-2", &["x"]).unwrap().eval(&[0.0]), -1.0989010989010988e-2);
+        assert_eq!(
+            Expr::parse("1.5e-3*x + 2E2", &["x"]).unwrap().eval(&[2.0]),
+            3e-3 + 200.0
+        );
+        assert_eq!(
+            Expr::parse("-1.0989010989010988e-2", &["x"]).unwrap().eval(&[0.0]),
+            -1.0989010989010988e-2
+        );
         // a minus before a power is rejected, not silently read as (−x)²
         for bad in ["-x^2", "2*-x^2", "-(x+1)^2", "exp(-x^2)", "- 2 ^ 2"] {
             assert!(Expr::parse(bad, &["x"]).unwrap_err().contains("minus"), "{bad}");

@@ -27,18 +27,29 @@ impl Scene {
         match path {
             Some(p) => {
                 let origin = p.display().to_string();
-                let text = std::fs::read_to_string(p).map_err(|e| SceneError::Io { origin: origin.clone(), message: e.to_string() })?;
+                let text = std::fs::read_to_string(p).map_err(|e| SceneError::Io {
+                    origin: origin.clone(),
+                    message: e.to_string(),
+                })?;
                 Self::from_text(&text, &origin, overrides, p.parent())
             }
-            None => Self::from_text(DEFAULT_SCENE_TOML, "<embedded default scene (examples/paper.toml)>", overrides, None),
+            None => Self::from_text(
+                DEFAULT_SCENE_TOML,
+                "<embedded default scene (examples/paper.toml)>",
+                overrides,
+                None,
+            ),
         }
     }
 
     fn from_text(text: &str, origin: &str, overrides: &[String], dir: Option<&Path>) -> Result<Scene, SceneError> {
-        let mut tree: toml::Value = text
-            .parse::<toml::Table>()
-            .map(toml::Value::Table)
-            .map_err(|e| SceneError::Syntax { origin: origin.into(), message: e.to_string() })?;
+        let mut tree: toml::Value =
+            text.parse::<toml::Table>()
+                .map(toml::Value::Table)
+                .map_err(|e| SceneError::Syntax {
+                    origin: origin.into(),
+                    message: e.to_string(),
+                })?;
         for o in overrides {
             overrides::apply(&mut tree, o)?;
         }
@@ -56,10 +67,19 @@ impl Scene {
     /// Reads a tabulated law's CSV (`s,mu` rows, `#` comments, an optional header) into a
     /// piecewise-linear table, relative to the scene's directory.
     fn read_tables(&mut self, origin: &str, dir: Option<&Path>) -> Result<(), SceneError> {
-        let Some(law) = self.contact.as_mut().and_then(|c| c.law.as_mut()) else { return Ok(()) };
-        let LawKind::Tabulated { scale, file } = &law.kind else { return Ok(()) };
+        let Some(law) = self.contact.as_mut().and_then(|c| c.law.as_mut()) else {
+            return Ok(());
+        };
+        let LawKind::Tabulated { scale, file } = &law.kind else {
+            return Ok(());
+        };
         let path = dir.map_or(file.clone(), |d| d.join(file));
-        let bad = |message: String| SceneError::Invalid { origin: origin.into(), key: "contact.law.file".into(), value: path.display().to_string(), fix: message };
+        let bad = |message: String| SceneError::Invalid {
+            origin: origin.into(),
+            key: "contact.law.file".into(),
+            value: path.display().to_string(),
+            fix: message,
+        };
         let text = std::fs::read_to_string(&path).map_err(|e| bad(format!("cannot read the table: {e}")))?;
         let mut table = Vec::new();
         for (i, line) in text.lines().enumerate() {
@@ -67,7 +87,12 @@ impl Scene {
             if line.is_empty() || line.starts_with('#') || line.chars().next().is_some_and(|c| c.is_alphabetic()) {
                 continue;
             }
-            let cols: Vec<f64> = line.split([',', ' ', '\t']).filter(|s| !s.is_empty()).map(|s| s.parse::<f64>()).collect::<Result<_, _>>().map_err(|e| bad(format!("line {}: {e}", i + 1)))?;
+            let cols: Vec<f64> = line
+                .split([',', ' ', '\t'])
+                .filter(|s| !s.is_empty())
+                .map(|s| s.parse::<f64>())
+                .collect::<Result<_, _>>()
+                .map_err(|e| bad(format!("line {}: {e}", i + 1)))?;
             if cols.len() != 2 {
                 return Err(bad(format!("line {}: expected two columns s, mu", i + 1)));
             }

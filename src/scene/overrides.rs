@@ -7,7 +7,10 @@ use toml::Value;
 /// (`64`, `1e-6`, `true`, `[1, 0]`, `"text"`) and otherwise taken as a string; missing tables
 /// are created; a numeric segment indexes an array (`traction.0.group=Gamma2`).
 pub fn apply(root: &mut Value, text: &str) -> Result<(), SceneError> {
-    let fail = |reason: &str| SceneError::Override { text: text.into(), reason: reason.into() };
+    let fail = |reason: &str| SceneError::Override {
+        text: text.into(),
+        reason: reason.into(),
+    };
     let (key, raw) = text.split_once('=').ok_or_else(|| fail("no `=`"))?;
     let key = key.trim();
     if key.is_empty() || key.split('.').any(|s| s.trim().is_empty()) {
@@ -28,12 +31,17 @@ pub fn apply(root: &mut Value, text: &str) -> Result<(), SceneError> {
                     t.insert(seg.to_string(), value);
                     return Ok(());
                 }
-                t.entry(seg.to_string()).or_insert_with(|| Value::Table(toml::Table::new()))
+                t.entry(seg.to_string())
+                    .or_insert_with(|| Value::Table(toml::Table::new()))
             }
             Value::Array(a) => {
-                let idx: usize = seg.parse().map_err(|_| fail(&format!("`{seg}` is not an index into an array")))?;
+                let idx: usize = seg
+                    .parse()
+                    .map_err(|_| fail(&format!("`{seg}` is not an index into an array")))?;
                 let len = a.len();
-                let slot = a.get_mut(idx).ok_or_else(|| fail(&format!("index {idx} is out of range (the array has {len} entries)")))?;
+                let slot = a
+                    .get_mut(idx)
+                    .ok_or_else(|| fail(&format!("index {idx} is out of range (the array has {len} entries)")))?;
                 if last {
                     *slot = value;
                     return Ok(());

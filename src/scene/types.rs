@@ -46,7 +46,10 @@ fn default_contact() -> GroupSelector {
 
 impl Default for Groups {
     fn default() -> Self {
-        Groups { clamped: default_clamped(), contact: default_contact() }
+        Groups {
+            clamped: default_clamped(),
+            contact: default_contact(),
+        }
     }
 }
 
@@ -168,7 +171,10 @@ fn default_max_iterations() -> usize {
 
 impl Default for SolverSpec {
     fn default() -> Self {
-        SolverSpec { tolerance: default_tolerance(), max_iterations: default_max_iterations() }
+        SolverSpec {
+            tolerance: default_tolerance(),
+            max_iterations: default_max_iterations(),
+        }
     }
 }
 
@@ -196,11 +202,19 @@ fn default_every() -> usize {
     1
 }
 fn default_fields() -> Vec<OutputField> {
-    vec![OutputField::Displacement, OutputField::Stress, OutputField::VonMises, OutputField::Contact]
+    vec![
+        OutputField::Displacement,
+        OutputField::Stress,
+        OutputField::VonMises,
+        OutputField::Contact,
+    ]
 }
 
 impl Default for OutputSpec {
     fn default() -> Self {
-        OutputSpec { every: default_every(), fields: default_fields() }
+        OutputSpec {
+            every: default_every(),
+            fields: default_fields(),
+        }
     }
 }

@@ -10,7 +10,17 @@ use toml::Value;
 fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
     let kind = table.get("kind").and_then(|v| v.as_str());
     Some(match path {
-        "" => vec!["groups", "material", "memory", "time", "traction", "body_force", "contact", "solver", "output"],
+        "" => vec![
+            "groups",
+            "material",
+            "memory",
+            "time",
+            "traction",
+            "body_force",
+            "contact",
+            "solver",
+            "output",
+        ],
         "groups" => vec!["clamped", "contact"],
         "material" => vec!["plane", "youngs_modulus", "poisson_ratio"],
         "memory" => match kind {
@@ -73,13 +83,21 @@ fn walk(value: &Value, path: &str, origin: &str) -> Result<(), SceneError> {
                         };
                         return Err(SceneError::UnknownKey {
                             origin: origin.into(),
-                            section: if path.is_empty() { "the top level".into() } else { format!("[{path}]") },
+                            section: if path.is_empty() {
+                                "the top level".into()
+                            } else {
+                                format!("[{path}]")
+                            },
                             key: key.clone(),
                             suggestion,
                             allowed: allowed.join(", "),
                         });
                     }
-                    let child = if path.is_empty() { key.clone() } else { format!("{path}.{key}") };
+                    let child = if path.is_empty() {
+                        key.clone()
+                    } else {
+                        format!("{path}.{key}")
+                    };
                     walk(v, &child, origin)?;
                 }
             }
@@ -91,66 +109,128 @@ fn walk(value: &Value, path: &str, origin: &str) -> Result<(), SceneError> {
 }
 
 fn invalid(origin: &str, key: &str, value: impl std::fmt::Display, fix: &str) -> SceneError {
-    SceneError::Invalid { origin: origin.into(), key: key.into(), value: value.to_string(), fix: fix.into() }
+    SceneError::Invalid {
+        origin: origin.into(),
+        key: key.into(),
+        value: value.to_string(),
+        fix: fix.into(),
+    }
 }
 
 /// Range checks of every value; expressions compile and are finite at a probe point.
 pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
     let m = &scene.material;
     if !(m.youngs_modulus.is_finite() && m.youngs_modulus > 0.0) {
-        return Err(invalid(origin, "material.youngs_modulus", m.youngs_modulus, "Young's modulus must be positive and finite"));
+        return Err(invalid(
+            origin,
+            "material.youngs_modulus",
+            m.youngs_modulus,
+            "Young's modulus must be positive and finite",
+        ));
     }
     if !(m.poisson_ratio > -1.0 && m.poisson_ratio < 0.5) {
-        return Err(invalid(origin, "material.poisson_ratio", m.poisson_ratio, "Poisson's ratio must lie in (−1, 0.5)"));
+        return Err(invalid(
+            origin,
+            "material.poisson_ratio",
+            m.poisson_ratio,
+            "Poisson's ratio must lie in (−1, 0.5)",
+        ));
     }
     let t = &scene.time;
     if !(t.final_time.is_finite() && t.final_time > 0.0) {
-        return Err(invalid(origin, "time.final_time", t.final_time, "the final time must be positive"));
+        return Err(invalid(
+            origin,
+            "time.final_time",
+            t.final_time,
+            "the final time must be positive",
+        ));
     }
     if t.steps == 0 {
         return Err(invalid(origin, "time.steps", 0, "at least one time step is needed"));
     }
     if t.steps > 100_000_000 {
-        return Err(invalid(origin, "time.steps", t.steps, "more than 10⁸ steps is surely a typo"));
+        return Err(invalid(
+            origin,
+            "time.steps",
+            t.steps,
+            "more than 10⁸ steps is surely a typo",
+        ));
     }
     match &scene.memory {
-        Some(MemoryKernelSpec::Polynomial { coefficients }) => {
-            if coefficients.is_empty() || coefficients.iter().any(|c| !c.is_finite()) {
-                return Err(invalid(origin, "memory.coefficients", format!("{coefficients:?}"), "give at least one finite coefficient c0, c1, … of b(s) = Σ c_j s^j"));
-            }
+        Some(MemoryKernelSpec::Polynomial { coefficients })
+            if coefficients.is_empty() || coefficients.iter().any(|c| !c.is_finite()) =>
+        {
+            return Err(invalid(
+                origin,
+                "memory.coefficients",
+                format!("{coefficients:?}"),
+                "give at least one finite coefficient c0, c1, … of b(s) = Σ c_j s^j",
+            ));
         }
         Some(MemoryKernelSpec::Exponential { terms }) => {
             if terms.is_empty() {
-                return Err(invalid(origin, "memory.terms", "[]", "give at least one { coefficient, relaxation_time }"));
+                return Err(invalid(
+                    origin,
+                    "memory.terms",
+                    "[]",
+                    "give at least one { coefficient, relaxation_time }",
+                ));
             }
             for (i, term) in terms.iter().enumerate() {
                 if !(term.relaxation_time.is_finite() && term.relaxation_time > 0.0) {
-                    return Err(invalid(origin, &format!("memory.terms[{i}].relaxation_time"), term.relaxation_time, "relaxation times must be positive"));
+                    return Err(invalid(
+                        origin,
+                        &format!("memory.terms[{i}].relaxation_time"),
+                        term.relaxation_time,
+                        "relaxation times must be positive",
+                    ));
                 }
                 if !term.coefficient.is_finite() {
-                    return Err(invalid(origin, &format!("memory.terms[{i}].coefficient"), term.coefficient, "coefficients must be finite"));
+                    return Err(invalid(
+                        origin,
+                        &format!("memory.terms[{i}].coefficient"),
+                        term.coefficient,
+                        "coefficients must be finite",
+                    ));
                 }
             }
         }
         Some(MemoryKernelSpec::Expression { expression }) => {
             compile(origin, "memory.expression", expression, &["s"], &[0.0])?;
         }
-        None => {}
+        Some(MemoryKernelSpec::Polynomial { .. }) | None => {}
     }
     for (i, tr) in scene.traction.iter().enumerate() {
         for c in 0..2 {
-            compile(origin, &format!("traction[{i}].value[{c}]"), &tr.value[c], &["x", "y", "t"], &[0.0, 0.0, 0.0])?;
+            compile(
+                origin,
+                &format!("traction[{i}].value[{c}]"),
+                &tr.value[c],
+                &["x", "y", "t"],
+                &[0.0, 0.0, 0.0],
+            )?;
         }
     }
     if let Some(f) = &scene.body_force {
         for c in 0..2 {
-            compile(origin, &format!("body_force.value[{c}]"), &f.value[c], &["x", "y", "t"], &[0.0, 0.0, 0.0])?;
+            compile(
+                origin,
+                &format!("body_force.value[{c}]"),
+                &f.value[c],
+                &["x", "y", "t"],
+                &[0.0, 0.0, 0.0],
+            )?;
         }
     }
     if let Some(c) = &scene.contact {
         if let Some(g) = c.bound {
             if !(g.is_finite() && g >= 0.0) {
-                return Err(invalid(origin, "contact.bound", g, "the bound g must be ≥ 0 (omit it for no bound)"));
+                return Err(invalid(
+                    origin,
+                    "contact.bound",
+                    g,
+                    "the bound g must be ≥ 0 (omit it for no bound)",
+                ));
             }
         }
         if let Some(law) = &c.law {
@@ -158,10 +238,20 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
         }
     }
     if !(scene.solver.tolerance > 0.0 && scene.solver.tolerance < 1.0) {
-        return Err(invalid(origin, "solver.tolerance", scene.solver.tolerance, "the relative tolerance must lie in (0, 1), e.g. 1e-10"));
+        return Err(invalid(
+            origin,
+            "solver.tolerance",
+            scene.solver.tolerance,
+            "the relative tolerance must lie in (0, 1), e.g. 1e-10",
+        ));
     }
     if scene.solver.max_iterations == 0 {
-        return Err(invalid(origin, "solver.max_iterations", 0, "allow at least one iteration"));
+        return Err(invalid(
+            origin,
+            "solver.max_iterations",
+            0,
+            "allow at least one iteration",
+        ));
     }
     if scene.output.every == 0 {
         return Err(invalid(origin, "output.every", 0, "write every n-th step with n ≥ 1"));
@@ -192,13 +282,19 @@ fn check_law(law: &ContactLawSpec, origin: &str) -> Result<(), SceneError> {
         }
         LawKind::Power { scale, exponent } => {
             if !(exponent.is_finite() && *exponent >= 1.0) {
-                return Err(invalid(origin, "contact.law.exponent", exponent, "the exponent p of S (u_ν)₊^p must be ≥ 1"));
+                return Err(invalid(
+                    origin,
+                    "contact.law.exponent",
+                    exponent,
+                    "the exponent p of S (u_ν)₊^p must be ≥ 1",
+                ));
             }
             scale
         }
         LawKind::PiecewiseLinear { scale, table } => {
             let points: Vec<(f64, f64)> = table.iter().map(|p| (p[0], p[1])).collect();
-            crate::contact::PiecewiseLinear::new(&points).map_err(|e| invalid(origin, "contact.law.table", format!("{table:?}"), &e))?;
+            crate::contact::PiecewiseLinear::new(&points)
+                .map_err(|e| invalid(origin, "contact.law.table", format!("{table:?}"), &e))?;
             scale
         }
         LawKind::Tabulated { scale, .. } => scale,
@@ -210,11 +306,19 @@ fn check_law(law: &ContactLawSpec, origin: &str) -> Result<(), SceneError> {
 }
 
 fn compile(origin: &str, key: &str, source: &str, vars: &[&str], probe: &[f64]) -> Result<Expr, SceneError> {
-    let err = |message: String| SceneError::Expression { origin: origin.into(), key: key.into(), expression: source.into(), message };
+    let err = |message: String| SceneError::Expression {
+        origin: origin.into(),
+        key: key.into(),
+        expression: source.into(),
+        message,
+    };
     let e = Expr::parse(source, vars).map_err(err)?;
     let v = e.eval(probe);
     if !v.is_finite() {
-        return Err(err(format!("evaluates to {v} at {} = {probe:?}; check divisions and logarithms", vars.join(", "))));
+        return Err(err(format!(
+            "evaluates to {v} at {} = {probe:?}; check divisions and logarithms",
+            vars.join(", ")
+        )));
     }
     Ok(e)
 }

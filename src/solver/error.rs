@@ -18,7 +18,14 @@ pub enum SolveError {
     #[error("{mesh}: {detail}")]
     Singular { mesh: String, detail: String },
     #[error("contact solve failed at step {step} (t = {time}): {reason}; residual {residual:.3e} after {iterations} iterations (tolerance {tolerance:.1e}). Try: a smaller time step (`--set time.steps=...`), a larger `contact.law.regularisation`, or more `solver.max_iterations`")]
-    ContactFailed { step: usize, time: f64, iterations: usize, residual: f64, tolerance: f64, reason: String },
+    ContactFailed {
+        step: usize,
+        time: f64,
+        iterations: usize,
+        residual: f64,
+        tolerance: f64,
+        reason: String,
+    },
     #[error("step {step} (t = {time}) produced a non-finite displacement; check the load expressions and material data of the scene")]
     NonFinite { step: usize, time: f64 },
     #[error("run interrupted; {}", match last_written { Some(n) => format!("the frames up to step {n} and the .pvd listing them are valid"), None => "no frame was written".to_string() })]

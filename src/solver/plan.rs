@@ -39,7 +39,9 @@ impl Plan {
                 crate::material::RelaxationKernel::Polynomial { coefficients } => {
                     ("recursive polynomial moments", coefficients.len())
                 }
-                crate::material::RelaxationKernel::Exponentials { terms } => ("recursive exponential sums", terms.len()),
+                crate::material::RelaxationKernel::Exponentials { terms } => {
+                    ("recursive exponential sums", terms.len())
+                }
                 crate::material::RelaxationKernel::General { .. } => ("direct sum", sim.time.steps + 1),
             };
             effects.push(Effect {
@@ -54,7 +56,11 @@ impl Plan {
         if !sim.loads.is_empty() {
             effects.push(Effect {
                 name: "loads",
-                detail: if sim.loads.is_time_dependent() { "time-dependent".into() } else { "constant in time".into() },
+                detail: if sim.loads.is_time_dependent() {
+                    "time-dependent".into()
+                } else {
+                    "constant in time".into()
+                },
                 cost: if sim.loads.is_time_dependent() {
                     "load vector re-evaluated every step".into()
                 } else {
@@ -90,7 +96,11 @@ impl Plan {
         if sim.kernel.is_none() && !sim.loads.is_time_dependent() {
             solves_per_step = 0;
         }
-        Plan { effects, factorisations, solves_per_step }
+        Plan {
+            effects,
+            factorisations,
+            solves_per_step,
+        }
     }
 
     /// The names of the effects in force.
@@ -106,9 +116,16 @@ impl fmt::Display for Plan {
             writeln!(f, "  {:<11} cost: {}", "", e.cost)?;
         }
         if self.solves_per_step == 0 {
-            writeln!(f, "  no memory and constant loads: one solve at t = 0, the same state written for every output step")?;
+            writeln!(
+                f,
+                "  no memory and constant loads: one solve at t = 0, the same state written for every output step"
+            )?;
         } else {
-            writeln!(f, "  per step: {} sparse solve(s) with the cached factor", self.solves_per_step)?;
+            writeln!(
+                f,
+                "  per step: {} sparse solve(s) with the cached factor",
+                self.solves_per_step
+            )?;
         }
         writeln!(f, "  factorisations: at most {}", self.factorisations)
     }

@@ -83,22 +83,28 @@ impl Simulation {
         };
         let kernel = match &scene.memory {
             None => None,
-            Some(scene::MemoryKernelSpec::Polynomial { coefficients }) => {
-                Some(RelaxationKernel::Polynomial { coefficients: coefficients.clone() })
-            }
+            Some(scene::MemoryKernelSpec::Polynomial { coefficients }) => Some(RelaxationKernel::Polynomial {
+                coefficients: coefficients.clone(),
+            }),
             Some(scene::MemoryKernelSpec::Exponential { terms }) => Some(RelaxationKernel::Exponentials {
                 terms: terms.iter().map(|t| (t.coefficient, t.relaxation_time)).collect(),
             }),
             Some(scene::MemoryKernelSpec::Expression { expression }) => Some(RelaxationKernel::General {
-                expression: Expr::parse(expression, &["s"])
-                    .map_err(|e| SolveError::Setup(format!("memory.expression = \"{expression}\": {e}")))?,
+                expression: Box::new(
+                    Expr::parse(expression, &["s"])
+                        .map_err(|e| SolveError::Setup(format!("memory.expression = \"{expression}\": {e}")))?,
+                ),
             }),
         };
         let origin = mesh.path.display().to_string();
         let mut loads = Loads::new();
         for (i, t) in scene.traction.iter().enumerate() {
             let part = mesh.boundary(&t.group)?;
-            loads.add_traction(&part, &mesh.points, exprs(&t.value, &origin, &format!("traction[{i}].value"))?);
+            loads.add_traction(
+                &part,
+                &mesh.points,
+                exprs(&t.value, &origin, &format!("traction[{i}].value"))?,
+            );
         }
         if let Some(f) = &scene.body_force {
             loads.add_body_force(&mesh.cells, &mesh.points, exprs(&f.value, &origin, "body_force.value")?);
@@ -113,13 +119,21 @@ impl Simulation {
                     None => None,
                     Some(l) => {
                         let (scale, profile) = match &l.kind {
-                            scene::LawKind::Paper { scale, a, b, alpha } => {
-                                (*scale, ComplianceProfile::Paper { a: *a, b: *b, alpha: *alpha })
+                            scene::LawKind::Paper { scale, a, b, alpha } => (
+                                *scale,
+                                ComplianceProfile::Paper {
+                                    a: *a,
+                                    b: *b,
+                                    alpha: *alpha,
+                                },
+                            ),
+                            scene::LawKind::Power { scale, exponent } => {
+                                (*scale, ComplianceProfile::Power { exponent: *exponent })
                             }
-                            scene::LawKind::Power { scale, exponent } => (*scale, ComplianceProfile::Power { exponent: *exponent }),
                             scene::LawKind::PiecewiseLinear { scale, table } => {
                                 let points: Vec<(f64, f64)> = table.iter().map(|p| (p[0], p[1])).collect();
-                                let table = PiecewiseLinear::new(&points).map_err(|e| SolveError::Setup(format!("contact.law.table: {e}")))?;
+                                let table = PiecewiseLinear::new(&points)
+                                    .map_err(|e| SolveError::Setup(format!("contact.law.table: {e}")))?;
                                 (*scale, ComplianceProfile::PiecewiseLinear { table })
                             }
                             scene::LawKind::Tabulated { .. } => {
@@ -153,7 +167,10 @@ impl Simulation {
             kernel,
             loads,
             contact,
-            time: TimeGrid { final_time: scene.time.final_time, steps: scene.time.steps },
+            time: TimeGrid {
+                final_time: scene.time.final_time,
+                steps: scene.time.steps,
+            },
             output_every: scene.output.every,
             threads: 1,
         })

@@ -60,13 +60,19 @@ impl StepOperator {
         counters: &Counters,
         stats: &mut RunStats,
     ) -> Result<Self, SolveError> {
-        let factor = timed(&mut stats.phases.factorisation, || Factor::new(symbolic, matrix, counters)).map_err(|e| {
-            SolveError::Singular { mesh: sim.mesh.path.display().to_string(), detail: e.to_string() }
+        let factor = timed(&mut stats.phases.factorisation, || {
+            Factor::new(symbolic, matrix, counters)
+        })
+        .map_err(|e| SolveError::Singular {
+            mesh: sim.mesh.path.display().to_string(),
+            detail: e.to_string(),
         })?;
         let condensed = match &sim.contact {
             Some(c) if !c.nodes.is_empty() => Some(
-                timed(&mut stats.phases.condensation, || CondensedOperator::new(&c.nodes, &factor, counters))
-                    .map_err(SolveError::Setup)?,
+                timed(&mut stats.phases.condensation, || {
+                    CondensedOperator::new(&c.nodes, &factor, counters)
+                })
+                .map_err(SolveError::Setup)?,
             ),
             _ => None,
         };
@@ -84,11 +90,15 @@ impl StepOperator {
         stats: &mut RunStats,
     ) -> Result<(Vec<f64>, Option<ContactOutcome>), SolveError> {
         let mut u = rhs.clone();
-        timed(&mut stats.phases.free_solve, || self.factor.solve_in_place(&mut u, counters));
+        timed(&mut stats.phases.free_solve, || {
+            self.factor.solve_in_place(&mut u, counters)
+        });
         let (Some(setup), Some(op), Some(state)) = (&sim.contact, &self.condensed, state) else {
             return Ok((u, None));
         };
-        let outcome = timed(&mut stats.phases.contact, || contact_solve(sim, setup, op, step, &u, state))?;
+        let outcome = timed(&mut stats.phases.contact, || {
+            contact_solve(sim, setup, op, step, &u, state)
+        })?;
         stats.contact_solves += 1;
         timed(&mut stats.phases.recover, || {
             setup.nodes.subtract_transpose(&state.force, rhs);
@@ -249,9 +259,18 @@ impl<'s> Stepper<'s> {
             let mut rhs = self.load.clone();
             self.subtract_memory_load(n, &mut rhs);
             let (u, outcome) = if n == 0 && self.history.is_some() {
-                step_zero(sim, &self.symbolic, &self.k_a, &mut rhs, self.contact.as_mut(), &self.counters, &mut self.stats)?
+                step_zero(
+                    sim,
+                    &self.symbolic,
+                    &self.k_a,
+                    &mut rhs,
+                    self.contact.as_mut(),
+                    &self.counters,
+                    &mut self.stats,
+                )?
             } else {
-                self.main.solve(sim, n, &mut rhs, self.contact.as_mut(), &self.counters, &mut self.stats)?
+                self.main
+                    .solve(sim, n, &mut rhs, self.contact.as_mut(), &self.counters, &mut self.stats)?
             };
             if u.iter().any(|v| !v.is_finite()) {
                 return Err(SolveError::NonFinite { step: n, time: t });
@@ -278,7 +297,9 @@ impl<'s> Stepper<'s> {
 
     /// rhs ← rhs − K_B h_n (METHOD.md §3); h_0 = 0.
     fn subtract_memory_load(&mut self, n: usize, rhs: &mut [f64]) {
-        let (Some(history), Some(k_b)) = (&self.history, &self.k_b) else { return };
+        let (Some(history), Some(k_b)) = (&self.history, &self.k_b) else {
+            return;
+        };
         let (h, kb_h) = (&mut self.memory_load, &mut self.memory_rhs);
         timed(&mut self.stats.phases.history, || {
             history.memory_load(h);
@@ -291,14 +312,20 @@ impl<'s> Stepper<'s> {
 
     /// Records u_n in the history and keeps m_n = h_n + (k/2) b(0) u_n for the stresses.
     fn update_history(&mut self, n: usize) {
-        let (Some(history), Some(c)) = (&mut self.history, self.memory_diagonal) else { return };
+        let (Some(history), Some(c)) = (&mut self.history, self.memory_diagonal) else {
+            return;
+        };
         let (h, u) = (&self.memory_load, &self.displacement);
         let memory_displacement = &mut self.memory_displacement;
         let wanted = self.sim.is_output_step(n);
         timed(&mut self.stats.phases.history, || {
             // only output steps show the memory stress
-            *memory_displacement =
-                wanted.then(|| h.iter().zip(u).map(|(hv, uv)| if n == 0 { c * uv } else { hv + c * uv }).collect());
+            *memory_displacement = wanted.then(|| {
+                h.iter()
+                    .zip(u)
+                    .map(|(hv, uv)| if n == 0 { c * uv } else { hv + c * uv })
+                    .collect()
+            });
             history.push(u);
         });
     }
@@ -350,8 +377,16 @@ fn step_zero(
     counters: &Counters,
     stats: &mut RunStats,
 ) -> Result<(Vec<f64>, Option<ContactOutcome>), SolveError> {
-    let law_at_zero = sim.contact.as_ref().and_then(|c| c.law.as_ref()).map_or(0.0, |l| l.derivative(0.0));
-    let bound_ok = sim.contact.as_ref().and_then(|c| c.bound.as_ref()).is_none_or(|g| g.iter().all(|v| *v >= 0.0));
+    let law_at_zero = sim
+        .contact
+        .as_ref()
+        .and_then(|c| c.law.as_ref())
+        .map_or(0.0, |l| l.derivative(0.0));
+    let bound_ok = sim
+        .contact
+        .as_ref()
+        .and_then(|c| c.bound.as_ref())
+        .is_none_or(|g| g.iter().all(|v| *v >= 0.0));
     if rhs.iter().all(|v| *v == 0.0) && law_at_zero == 0.0 && bound_ok {
         let outcome = state.map(|s| {
             let m = s.force.len();

@@ -74,9 +74,7 @@ impl<'m> Locator<'m> {
                     b[d] = b[d].max(points[p][d] + pad);
                 }
             }
-            let i = |v: f64, d: usize| {
-                (((v - origin[d]) / bucket[d]).floor().max(0.0) as usize).min(dims[d] - 1)
-            };
+            let i = |v: f64, d: usize| (((v - origin[d]) / bucket[d]).floor().max(0.0) as usize).min(dims[d] - 1);
             ([i(a[0], 0), i(a[1], 1)], [i(b[0], 0), i(b[1], 1)])
         };
         let mut count = vec![0usize; dims[0] * dims[1] + 1];
@@ -180,7 +178,10 @@ impl<'m> Locator<'m> {
                 "point ({:.17e}, {:.17e}) lies outside the mesh: {:.3e} from the nearest cell (tolerance {:.3e})",
                 x[0], x[1], d, self.tolerance
             ),
-            None => format!("point ({:.17e}, {:.17e}) lies outside the bounding box of the mesh", x[0], x[1]),
+            None => format!(
+                "point ({:.17e}, {:.17e}) lies outside the bounding box of the mesh",
+                x[0], x[1]
+            ),
         }
     }
 }
@@ -227,11 +228,7 @@ impl Transfer {
 
 /// Evaluates the FE field `u` (nodal values on `from`) at each of `to_points`. A point outside
 /// `from` by more than 1e-10 × its diameter is an error naming the point.
-pub fn interpolate_nodal(
-    from: &Mesh,
-    u: &[[f64; 2]],
-    to_points: &[[f64; 2]],
-) -> Result<Vec<[f64; 2]>, String> {
+pub fn interpolate_nodal(from: &Mesh, u: &[[f64; 2]], to_points: &[[f64; 2]]) -> Result<Vec<[f64; 2]>, String> {
     if u.len() != from.points.len() {
         return Err(format!(
             "field has {} nodal values, the mesh {} nodes",
@@ -254,19 +251,11 @@ pub fn reference_coordinates(cell: &Cell, points: &[[f64; 2]], x: [f64; 2]) -> (
             let (e1, e2) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
             let det = e1[0] * e2[1] - e1[1] * e2[0];
             let r = [x[0] - a[0], x[1] - a[1]];
-            let xi = [
-                (r[0] * e2[1] - r[1] * e2[0]) / det,
-                (e1[0] * r[1] - e1[1] * r[0]) / det,
-            ];
+            let xi = [(r[0] * e2[1] - r[1] * e2[0]) / det, (e1[0] * r[1] - e1[1] * r[0]) / det];
             let lambda = [1.0 - xi[0] - xi[1], xi[0], xi[1]];
             // λ_i × (height over the edge opposite vertex i) is the signed distance to that edge
-            let len =
-                |p: [f64; 2], q: [f64; 2]| ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt();
-            let heights = [
-                det.abs() / len(b, c),
-                det.abs() / len(c, a),
-                det.abs() / len(a, b),
-            ];
+            let len = |p: [f64; 2], q: [f64; 2]| ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt();
+            let heights = [det.abs() / len(b, c), det.abs() / len(c, a), det.abs() / len(a, b)];
             let dist = (0..3).map(|i| -lambda[i] * heights[i]).fold(0.0, f64::max);
             (xi, dist)
         }
@@ -320,10 +309,7 @@ pub fn reference_coordinates(cell: &Cell, points: &[[f64; 2]], x: [f64; 2]) -> (
                     return ([0.0; 2], f64::INFINITY);
                 }
                 // keep far-away iterates bounded (the point is outside then anyway)
-                xi = [
-                    (xi[0] + d[0]).clamp(-1e3, 1e3),
-                    (xi[1] + d[1]).clamp(-1e3, 1e3),
-                ];
+                xi = [(xi[0] + d[0]).clamp(-1e3, 1e3), (xi[1] + d[1]).clamp(-1e3, 1e3)];
                 if d[0].abs() + d[1].abs() <= 1e-15 {
                     break;
                 }

@@ -32,8 +32,8 @@ pub mod runner;
 pub use interpolate::{interpolate_nodal, Locator, Transfer};
 pub use runner::run_plan;
 pub use runner::{
-    observed_order, run, run_with, EvaluatedRun, ExactField, Keep, Reference, Refinement,
-    RefinementPath, Row, RunErrors, RunOptions, RunRecord, RunSummary, Study, StudyPlan,
+    observed_order, run, run_with, EvaluatedRun, ExactField, Keep, Reference, Refinement, RefinementPath, Row,
+    RunErrors, RunOptions, RunRecord, RunSummary, Study, StudyPlan,
 };
 
 use crate::fem::norms::{errors, FieldErrors};
@@ -41,11 +41,7 @@ use crate::mesh::Mesh;
 
 /// The H¹ seminorm and L² norm of `u_ref − u_carried`, two nodal fields on the reference
 /// mesh (the carried one typically from [`interpolate_nodal`]).
-pub fn seminorm_errors(
-    reference: &Mesh,
-    u_ref: &[[f64; 2]],
-    u_carried: &[[f64; 2]],
-) -> FieldErrors {
+pub fn seminorm_errors(reference: &Mesh, u_ref: &[[f64; 2]], u_carried: &[[f64; 2]]) -> FieldErrors {
     assert_eq!(
         u_ref.len(),
         reference.points.len(),

@@ -90,11 +90,7 @@ fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
         .filter(|v| v.is_finite() && *v > 0.0)
         .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
     (hi > 0.0).then(|| {
-        let (lo, hi) = if hi / lo < 1.5 {
-            (lo / 1.5, hi * 1.5)
-        } else {
-            (lo, hi)
-        };
+        let (lo, hi) = if hi / lo < 1.5 { (lo / 1.5, hi * 1.5) } else { (lo, hi) };
         let pad = (hi / lo).powf(0.06);
         (lo / pad, hi * pad)
     })
@@ -196,9 +192,7 @@ fn loglog<DB: DrawingBackend>(
             )))
             .map_err(err)?
             .label(g.name.clone())
-            .legend(move |(x, y)| {
-                DashedPathElement::new(vec![(x, y), (x + 20, y)], 4, 3, color.stroke_width(1))
-            });
+            .legend(move |(x, y)| DashedPathElement::new(vec![(x, y), (x + 20, y)], 4, 3, color.stroke_width(1)));
     }
     for (i, s) in series.iter().enumerate() {
         let color = Palette99::pick(i).to_rgba();
@@ -208,17 +202,14 @@ fn loglog<DB: DrawingBackend>(
             .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
             .map_err(err)?
             .label(s.name.clone())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-            });
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
         chart
             .draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled())))
             .map_err(err)?;
         if !s.labels.is_empty() {
             chart
                 .draw_series(s.points.iter().zip(&s.labels).map(|(&p, l)| {
-                    EmptyElement::at(p)
-                        + Text::new(l.clone(), (6, -14), (FONT, 12).into_font().color(&color))
+                    EmptyElement::at(p) + Text::new(l.clone(), (6, -14), (FONT, 12).into_font().color(&color))
                 }))
                 .map_err(err)?;
         }
@@ -247,18 +238,11 @@ fn unique_runs(rows: &[Row]) -> Vec<&Row> {
 }
 
 /// Groups runs by a parameter (to a relative 1e-9), each group sorted by the other.
-fn group_by(
-    rows: &[Row],
-    key: impl Fn(&Row) -> f64,
-    along: impl Fn(&Row) -> f64,
-) -> Vec<(f64, Vec<&Row>)> {
+fn group_by(rows: &[Row], key: impl Fn(&Row) -> f64, along: impl Fn(&Row) -> f64) -> Vec<(f64, Vec<&Row>)> {
     let mut groups: Vec<(f64, Vec<&Row>)> = Vec::new();
     for r in unique_runs(rows) {
         let k = key(r);
-        match groups
-            .iter_mut()
-            .find(|(g, _)| (g - k).abs() <= 1e-9 * k.abs())
-        {
+        match groups.iter_mut().find(|(g, _)| (g - k).abs() <= 1e-9 * k.abs()) {
             Some((_, v)) => v.push(r),
             None => groups.push((k, vec![r])),
         }
@@ -278,16 +262,11 @@ pub fn plot_error_vs_h(path: &Path, rows: &[Row]) -> Result<(), String> {
         .iter()
         .map(|(k, v)| Series {
             name: format!("k = {}", fraction(*k)),
-            points: v
-                .iter()
-                .map(|r| (r.summary.h, r.errors.at_final.h1_seminorm))
-                .collect(),
+            points: v.iter().map(|r| (r.summary.h, r.errors.at_final.h1_seminorm)).collect(),
             labels: vec![],
         })
         .collect();
-    let guides = guide_at_finest(&series, "O(h)", 1.0)
-        .into_iter()
-        .collect::<Vec<_>>();
+    let guides = guide_at_finest(&series, "O(h)", 1.0).into_iter().collect::<Vec<_>>();
     loglog_svg(
         path,
         "H¹-seminorm error at T against the mesh size",
@@ -305,16 +284,11 @@ pub fn plot_error_vs_k(path: &Path, rows: &[Row]) -> Result<(), String> {
         .iter()
         .map(|(h, v)| Series {
             name: format!("h = {}", fraction(*h)),
-            points: v
-                .iter()
-                .map(|r| (r.summary.k, r.errors.at_final.h1_seminorm))
-                .collect(),
+            points: v.iter().map(|r| (r.summary.k, r.errors.at_final.h1_seminorm)).collect(),
             labels: vec![],
         })
         .collect();
-    let guides = guide_at_finest(&series, "O(k²)", 2.0)
-        .into_iter()
-        .collect::<Vec<_>>();
+    let guides = guide_at_finest(&series, "O(k²)", 2.0).into_iter().collect::<Vec<_>>();
     loglog_svg(
         path,
         "H¹-seminorm error at T against the time step",
@@ -392,9 +366,7 @@ pub fn plot_gamma3(path: &Path, series: &[(f64, Vec<(f64, f64)>)]) -> Result<(),
     let root = SVGBackend::new(path, SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
     let pts = || series.iter().flat_map(|(_, v)| v.iter().copied());
-    let (x0, x1) = pts().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-        (a.min(p.0), b.max(p.0))
-    });
+    let (x0, x1) = pts().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.0), b.max(p.0)));
     let (y0, y1) = pts().fold((0.0f64, 0.0f64), |(a, b), p| (a.min(p.1), b.max(p.1)));
     if !x0.is_finite() {
         return Err("Γ₃ plot: nothing to plot".into());
@@ -425,9 +397,7 @@ pub fn plot_gamma3(path: &Path, series: &[(f64, Vec<(f64, f64)>)]) -> Result<(),
             .draw_series(LineSeries::new(v, color.stroke_width(2)))
             .map_err(err)?
             .label(format!("t = {t}"))
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-            });
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
     }
     chart
         .configure_series_labels()
@@ -453,11 +423,7 @@ pub fn colour_map(s: f64) -> RGBColor {
         (173, 220, 48),
         (253, 231, 37),
     ];
-    let s = if s.is_finite() {
-        s.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
+    let s = if s.is_finite() { s.clamp(0.0, 1.0) } else { 0.0 };
     let f = s * (STOPS.len() - 1) as f64;
     let i = (f.floor() as usize).min(STOPS.len() - 2);
     let w = f - i as f64;
@@ -510,11 +476,7 @@ pub fn render_deformed_png(
     };
     // colour range: the 2 % and 98 % quantiles, so that a few singular corner cells do not
     // wash out the rest
-    let mut sorted: Vec<f64> = cell_values
-        .iter()
-        .copied()
-        .filter(|v| v.is_finite())
-        .collect();
+    let mut sorted: Vec<f64> = cell_values.iter().copied().filter(|v| v.is_finite()).collect();
     sorted.sort_by(f64::total_cmp);
     let quantile = |q: f64| {
         sorted
@@ -550,8 +512,7 @@ pub fn render_deformed_png(
     for (c, v) in mesh.cells.iter().zip(cell_values) {
         let poly: Vec<(i32, i32)> = c.nodes().iter().map(|&p| to_px(moved[p])).collect();
         let colour = colour_map((v - vmin) / range);
-        root.draw(&Polygon::new(poly.clone(), colour.filled()))
-            .map_err(err)?;
+        root.draw(&Polygon::new(poly.clone(), colour.filled())).map_err(err)?;
         if cell_px >= 8.0 {
             let mut closed = poly;
             closed.push(closed[0]);

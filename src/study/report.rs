@@ -131,17 +131,16 @@ pub struct Published {
 /// published entries are left blank).
 pub fn comparison_markdown(rows: &[&Row], published: &[Published]) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "| h | k | H¹ error at T | order | paper's error | paper's order | ratio ours/paper | max_t H¹ error | order |");
+    let _ = writeln!(
+        s,
+        "| h | k | H¹ error at T | order | paper's error | paper's order | ratio ours/paper | max_t H¹ error | order |"
+    );
     let _ = writeln!(s, "|---|---|--:|--:|--:|--:|--:|--:|--:|");
     for (i, r) in rows.iter().enumerate() {
         let ord = |o: Option<f64>| o.map_or("–".to_string(), |o| format!("{o:.2}"));
         let e = r.errors.at_final.h1_seminorm;
         let (pe, po, ratio) = match published.get(i) {
-            Some(p) => (
-                format!("{:.6e}", p.error),
-                ord(p.order),
-                format!("{:.2}", e / p.error),
-            ),
+            Some(p) => (format!("{:.6e}", p.error), ord(p.order), format!("{:.2}", e / p.error)),
             None => (String::new(), String::new(), String::new()),
         };
         let _ = writeln!(
@@ -170,11 +169,7 @@ pub fn comparison_text(title: &str, rows: &[&Row], published: &[Published]) -> S
         let ord = |o: Option<f64>| o.map_or("-".to_string(), |o| format!("{o:.2}"));
         let e = r.errors.at_final.h1_seminorm;
         let (pe, po, ratio) = match published.get(i) {
-            Some(p) => (
-                format!("{:.6e}", p.error),
-                ord(p.order),
-                format!("{:.2}", e / p.error),
-            ),
+            Some(p) => (format!("{:.6e}", p.error), ord(p.order), format!("{:.2}", e / p.error)),
             None => (String::new(), String::new(), String::new()),
         };
         let _ = writeln!(

@@ -339,12 +339,7 @@ impl Study {
     }
 
     /// Declares a refinement path through runs already added (coarse to fine).
-    pub fn add_path(
-        &mut self,
-        name: impl Into<String>,
-        refine: Refinement,
-        runs: Vec<usize>,
-    ) -> Result<(), String> {
+    pub fn add_path(&mut self, name: impl Into<String>, refine: Refinement, runs: Vec<usize>) -> Result<(), String> {
         if let Some(&bad) = runs.iter().find(|&&r| r >= self.runs.len()) {
             return Err(format!(
                 "path refers to run {bad}, but the study has {} runs",
@@ -363,9 +358,7 @@ impl Study {
     pub fn evaluate(&self, run: &RunRecord) -> Result<RunErrors, String> {
         match &self.reference {
             Reference::Exact(exact) => {
-                let on_mesh = |t: f64, u: &[[f64; 2]]| {
-                    errors(&run.mesh.cells, &run.mesh.points, u, |x| exact(t, x))
-                };
+                let on_mesh = |t: f64, u: &[[f64; 2]]| errors(&run.mesh.cells, &run.mesh.points, u, |x| exact(t, x));
                 let at_final = on_mesh(run.final_time, &run.final_displacement);
                 let mut max = (at_final.h1_seminorm, run.final_time);
                 let mut count = 1;
@@ -396,12 +389,9 @@ impl Study {
                 }
                 let transfer = Locator::new(&run.mesh)
                     .transfer(&reference.mesh.points)
-                    .map_err(|e| {
-                        format!("carrying run {} to the reference mesh: {e}", run.label)
-                    })?;
-                let at = |u_ref: &[[f64; 2]], u: &[[f64; 2]]| {
-                    seminorm_errors(&reference.mesh, u_ref, &transfer.apply(u))
-                };
+                    .map_err(|e| format!("carrying run {} to the reference mesh: {e}", run.label))?;
+                let at =
+                    |u_ref: &[[f64; 2]], u: &[[f64; 2]]| seminorm_errors(&reference.mesh, u_ref, &transfer.apply(u));
                 let at_final = at(&reference.final_displacement, &run.final_displacement);
                 let mut max = (at_final.h1_seminorm, run.final_time);
                 let mut count = 1;
@@ -409,11 +399,7 @@ impl Study {
                     if (t - run.final_time).abs() <= tol {
                         continue;
                     }
-                    if let Some((_, u_ref)) = reference
-                        .displacement_at
-                        .iter()
-                        .find(|(s, _)| (s - t).abs() <= tol)
-                    {
+                    if let Some((_, u_ref)) = reference.displacement_at.iter().find(|(s, _)| (s - t).abs() <= tol) {
                         let e = at(u_ref, u).h1_seminorm;
                         count += 1;
                         if e > max.0 {
@@ -522,8 +508,7 @@ pub fn run_plan(
             h: Some(1.0 / n as f64),
             keep: plan.keep.clone(),
         };
-        run_with(make_mesh(n), &make_scene(steps), &options)
-            .map_err(|e| format!("run {label}: {e}"))
+        run_with(make_mesh(n), &make_scene(steps), &options).map_err(|e| format!("run {label}: {e}"))
     };
     let label = |n: usize, steps: usize| format!("h=1/{n} N={steps}");
     let (rn, rs) = plan.reference;
@@ -551,11 +536,7 @@ pub fn run_plan(
             .map(|&n| index(&mut study, n, *steps, progress))
             .collect::<Result<Vec<_>, _>>()?;
         let k = study.runs[runs[0]].summary.k;
-        study.add_path(
-            format!("h (k={})", super::report::fraction(k)),
-            Refinement::H,
-            runs,
-        )?;
+        study.add_path(format!("h (k={})", super::report::fraction(k)), Refinement::H, runs)?;
     }
     for (n, all_steps) in plan.k_paths.iter().filter(|(_, s)| !s.is_empty()) {
         let runs = all_steps
