@@ -219,6 +219,30 @@ pub struct Summary<'a> {
     pub stats: &'a RunStats,
 }
 
+/// Reads a mesh file, or builds the paper's rectangle (0,2)×(0,1) for a spec `rect:NXxNY`
+/// (quadrilaterals) or `rect:NXxNY:tri` (triangles) when no such file exists.
+pub fn read_mesh(path: &Path) -> Result<Mesh, SolveError> {
+    let text = path.to_string_lossy();
+    if let (Some(spec), false) = (text.strip_prefix("rect:"), path.exists()) {
+        let (dims, shape) = match spec.split_once(':') {
+            Some((d, "tri")) => (d, mesh::structured::CellShape::Tri),
+            Some((d, "quad")) | Some((d, "")) => (d, mesh::structured::CellShape::Quad),
+            None => (spec, mesh::structured::CellShape::Quad),
+            Some((_, other)) => return Err(SolveError::Setup(format!("mesh spec {text}: unknown cell shape `{other}` (use quad or tri)"))),
+        };
+        let parsed = dims.split_once('x').and_then(|(a, b)| Some((a.parse::<usize>().ok()?, b.parse::<usize>().ok()?)));
+        return match parsed {
+            Some((nx, ny)) if nx > 0 && ny > 0 && nx.saturating_mul(ny) <= 50_000_000 => {
+                Ok(mesh::structured::rectangle(2.0, 1.0, nx, ny, shape))
+            }
+            _ => Err(SolveError::Setup(format!(
+                "mesh spec {text}: expected rect:NXxNY[:tri] with NX, NY ≥ 1, e.g. rect:256x128 (the paper's domain (0,2)×(0,1), cells 2/NX × 1/NY)"
+            ))),
+        };
+    }
+    Ok(mesh::read_msh(path)?)
+}
+
 /// Options of `hvi solve`.
 pub struct SolveOptions {
     pub mesh: PathBuf,
@@ -232,7 +256,7 @@ pub struct SolveOptions {
 pub fn solve(opts: &SolveOptions, stop: Option<&AtomicBool>) -> Result<RunStats, SolveError> {
     let scene = Scene::load(opts.scene.as_deref(), &opts.overrides)?;
     let t0 = Instant::now();
-    let mesh = mesh::read_msh(&opts.mesh)?;
+    let mesh = read_mesh(&opts.mesh)?;
     let mesh_seconds = t0.elapsed().as_secs_f64();
     let sim = Simulation::new(&scene, mesh)?;
     let mut sink = FileSink::create(&opts.out, &sim, &scene.output.fields, opts.progress)?;
@@ -271,7 +295,7 @@ pub fn solve_in_memory(scene: &Scene, mesh: Mesh) -> Result<(Simulation, RunStat
 pub fn check(mesh_path: &Path, scene_path: Option<&Path>, overrides: &[String]) -> Result<String, SolveError> {
     use std::fmt::Write;
     let scene = Scene::load(scene_path, overrides)?;
-    let mesh = mesh::read_msh(mesh_path)?;
+    let mesh = read_mesh(mesh_path)?;
     let mut out = String::new();
     let _ = writeln!(out, "mesh {}", mesh_path.display());
     let tris = mesh
@@ -397,4 +421,67 @@ pub fn report(stats: &RunStats, out: &Path) -> String {
         out.display()
     );
     s
+}
+
+/// `hvi plot RUN_DIR`: a picture of the last frame (deformed mesh coloured by von Mises,
+/// `deformed.png`) and the normal displacement along Γ₃ at up to eight output times
+/// (`gamma3.svg`, from `gamma3.csv`). Returns the files written.
+pub fn plot(run_dir: &Path, scale: f64) -> Result<Vec<PathBuf>, SolveError> {
+    let fail = |what: String| SolveError::Setup(format!("{}: {what}", run_dir.display()));
+    let pvd = std::fs::read_to_string(run_dir.join("solution.pvd"))
+        .map_err(|e| fail(format!("cannot read solution.pvd ({e}); is this an hvi output directory?")))?;
+    let last = pvd
+        .split("file=\"")
+        .skip(1)
+        .filter_map(|s| s.split('"').next())
+        .last()
+        .ok_or_else(|| fail("solution.pvd lists no frame".into()))?;
+    let vtu = output::read_vtu_arrays(&run_dir.join(last))?;
+    let points: Vec<[f64; 2]> = vtu.points.iter().map(|p| [p[0], p[1]]).collect();
+    let cells: Vec<crate::mesh::Cell> = vtu
+        .connectivity
+        .iter()
+        .map(|c| match c.len() {
+            3 => Ok(crate::mesh::Cell::Tri3([c[0], c[1], c[2]])),
+            4 => Ok(crate::mesh::Cell::Quad4([c[0], c[1], c[2], c[3]])),
+            n => Err(fail(format!("{last}: a cell with {n} nodes"))),
+        })
+        .collect::<Result<_, _>>()?;
+    let u: Vec<[f64; 2]> = match vtu.point_data.get("displacement") {
+        Some((3, v)) => v.chunks(3).map(|c| [c[0], c[1]]).collect(),
+        _ => return Err(fail(format!("{last} has no displacement field"))),
+    };
+    let values = vtu.cell_data.get("von_mises").map_or(vec![0.0; cells.len()], |(_, v)| v.clone());
+    let n_cells = cells.len();
+    let mesh = Mesh { path: run_dir.join(last), points, cells, cell_tags: (0..n_cells).collect(), groups: vec![] };
+    let png = run_dir.join("deformed.png");
+    crate::study::plot::render_deformed_png(&png, &mesh, &u, &values, scale).map_err(fail)?;
+    let mut written = vec![png];
+    if let Ok(csv) = std::fs::read_to_string(run_dir.join("gamma3.csv")) {
+        let mut series: Vec<(f64, Vec<(f64, f64)>)> = Vec::new();
+        for line in csv.lines().skip(1) {
+            let v: Vec<f64> = line.split(',').filter_map(|s| s.parse().ok()).collect();
+            if v.len() < 4 {
+                continue;
+            }
+            match series.last_mut() {
+                Some((t, pts)) if *t == v[0] => pts.push((v[1], v[3])),
+                _ => series.push((v[0], vec![(v[1], v[3])])),
+            }
+        }
+        for (_, pts) in series.iter_mut() {
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        }
+        if !series.is_empty() {
+            let stride = series.len().div_ceil(8).max(1);
+            let mut chosen: Vec<_> = series.iter().skip(stride).step_by(stride).cloned().collect();
+            if chosen.last().map(|c| c.0) != series.last().map(|c| c.0) {
+                chosen.push(series.last().cloned().unwrap_or_default());
+            }
+            let svg = run_dir.join("gamma3.svg");
+            crate::study::plot::plot_gamma3(&svg, &chosen).map_err(fail)?;
+            written.push(svg);
+        }
+    }
+    Ok(written)
 }

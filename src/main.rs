@@ -25,7 +25,8 @@ struct Cli {
 enum Command {
     /// Solve a scene on a gmsh mesh and write a ParaView time series.
     Solve {
-        /// The mesh (.msh, MSH 4.1 ASCII/binary or 2.2 ASCII) with physical groups.
+        /// The mesh (.msh, MSH 4.1 ASCII/binary or 2.2 ASCII) with physical groups, or
+        /// `rect:NXxNY[:tri]` for the paper's rectangle built in (e.g. rect:256x128).
         mesh: PathBuf,
         /// Scene file (TOML); default: the paper's example (examples/paper.toml, embedded).
         #[arg(long)]
@@ -39,6 +40,14 @@ enum Command {
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
+    },
+    /// Draw the last frame of a run (deformed.png) and u_ν along Γ₃ over time (gamma3.svg).
+    Plot {
+        /// An output directory of `hvi solve`.
+        run: PathBuf,
+        /// Displacement magnification of the picture.
+        #[arg(long, default_value_t = 1.0)]
+        scale: f64,
     },
     /// Validate a mesh and a scene and print what would be computed.
     Check {
@@ -83,6 +92,18 @@ fn main() -> ExitCode {
                 }
             }
         }
+        Command::Plot { run, scale } => match hvi::app::plot(&run, scale) {
+            Ok(files) => {
+                for f in files {
+                    println!("wrote {}", f.display());
+                }
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        },
         Command::Check { mesh, scene, overrides } => match hvi::app::check(&mesh, scene.as_deref(), &overrides) {
             Ok(report) => {
                 print!("{report}");

@@ -70,6 +70,13 @@ fn solve_writes_a_readable_series() {
         "the paper's step 0 is unloaded: only K is factorised"
     );
     assert!(Path::new(&out.join("scene.toml")).exists());
+
+    // hvi plot draws the last frame and Γ₃ over time
+    let plot = hvi().args(["plot", out.to_str().unwrap()]).output().unwrap();
+    assert!(plot.status.success(), "{}", String::from_utf8_lossy(&plot.stderr));
+    let png = std::fs::read(out.join("deformed.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    assert!(std::fs::read_to_string(out.join("gamma3.svg")).unwrap().contains("<svg"));
 }
 
 #[test]
