@@ -41,6 +41,17 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
+    /// Run a convergence study described by a study file (see examples/paper_study.toml).
+    Study {
+        /// The study file (TOML).
+        study: PathBuf,
+        /// Output directory for study.md, study.csv and the plots.
+        #[arg(long, default_value = "hvi-study")]
+        out: PathBuf,
+        /// Override a scene key for every run (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        overrides: Vec<String>,
+    },
     /// Draw the last frame of a run (deformed.png) and u_ν along Γ₃ over time (gamma3.svg).
     Plot {
         /// An output directory of `hvi solve`.
@@ -92,6 +103,17 @@ fn main() -> ExitCode {
                 }
             }
         }
+        Command::Study { study, out, overrides } => match hvi::study::spec::run_file(&study, &out, &overrides) {
+            Ok(report) => {
+                println!("{report}");
+                println!("wrote study.md, study.csv, error_vs_h.svg, error_vs_k.svg, work_precision.svg, gamma3.svg to {}", out.display());
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        },
         Command::Plot { run, scale } => match hvi::app::plot(&run, scale) {
             Ok(files) => {
                 for f in files {

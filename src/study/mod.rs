@@ -28,6 +28,7 @@ pub mod interpolate;
 pub mod plot;
 pub mod report;
 pub mod runner;
+pub mod spec;
 
 pub use interpolate::{interpolate_nodal, Locator, Transfer};
 pub use runner::run_plan;
