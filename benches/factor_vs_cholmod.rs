@@ -25,7 +25,12 @@ fn main() {
     for n in [128usize, 256] {
         let scene = Scene::load(None, &[format!("time.steps={n}")]).expect("embedded scene");
         let sim = Simulation::new(&scene, rectangle(2.0, 1.0, 2 * n, n, CellShape::Quad)).expect("paper example");
-        let [k_a, k_b] = assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.voigt(), IDENTITY_TENSOR]);
+        let [k_a, k_b] = assemble_stiffness(
+            &sim.mesh.cells,
+            &sim.mesh.points,
+            &sim.dofs,
+            &[sim.elasticity.voigt(), IDENTITY_TENSOR],
+        );
         let k = 1.0 / n as f64;
         let matrix = k_a.plus_scaled(0.5 * k * 0.25, &k_b); // b(0) = 0.25 for (0.5 + s)²
         let counters = Counters::default();
@@ -51,7 +56,11 @@ fn main() {
             err = x.iter().fold(0.0, |a, v| a.max((v - 1.0).abs()));
         }
         let (fs, fnum, fsol) = (median(sym), median(num), median(sol));
-        println!("h = 1/{n}: {} unknowns, {} stored entries", matrix.n(), matrix.values.len());
+        println!(
+            "h = 1/{n}: {} unknowns, {} stored entries",
+            matrix.n(),
+            matrix.values.len()
+        );
         println!("  faer    symbolic {fs:.4} s  numeric {fnum:.4} s  solve {fsol:.5} s  (max error {err:.1e})");
 
         // the same matrix, lower triangle, in MatrixMarket for CHOLMOD
@@ -61,24 +70,42 @@ fn main() {
         let mut text = String::new();
         let mut entries = 0;
         for j in 0..matrix.n() {
-            for q in cp[j]..cp[j + 1] {
-                if ri[q] >= j {
+            for (&i, v) in ri[cp[j]..cp[j + 1]].iter().zip(&matrix.values[cp[j]..cp[j + 1]]) {
+                if i >= j {
                     entries += 1;
-                    text.push_str(&format!("{} {} {:e}\n", ri[q] + 1, j + 1, matrix.values[q]));
+                    text.push_str(&format!("{} {} {v:e}\n", i + 1, j + 1));
                 }
             }
         }
         let mut file = std::fs::File::create(&path).unwrap();
-        writeln!(file, "%%MatrixMarket matrix coordinate real symmetric\n{} {} {entries}", matrix.n(), matrix.n()).unwrap();
+        writeln!(
+            file,
+            "%%MatrixMarket matrix coordinate real symmetric\n{} {} {entries}",
+            matrix.n(),
+            matrix.n()
+        )
+        .unwrap();
         file.write_all(text.as_bytes()).unwrap();
         drop(file);
         let script = concat!(env!("CARGO_MANIFEST_DIR"), "/benches/cholmod_time.py");
-        match std::process::Command::new("python3").arg(script).arg(&path).arg(repeats.to_string()).output() {
+        match std::process::Command::new("python3")
+            .arg(script)
+            .arg(&path)
+            .arg(repeats.to_string())
+            .output()
+        {
             Ok(out) if out.status.success() => {
                 let line = String::from_utf8_lossy(&out.stdout);
                 let v: serde_json::Value = serde_json::from_str(line.trim()).unwrap();
-                let (cs, cn, csol) = (v["symbolic"].as_f64().unwrap(), v["numeric"].as_f64().unwrap(), v["solve"].as_f64().unwrap());
-                println!("  CHOLMOD symbolic {cs:.4} s  numeric {cn:.4} s  solve {csol:.5} s  (nnz(L) {})", v["nnz_factor"]);
+                let (cs, cn, csol) = (
+                    v["symbolic"].as_f64().unwrap(),
+                    v["numeric"].as_f64().unwrap(),
+                    v["solve"].as_f64().unwrap(),
+                );
+                println!(
+                    "  CHOLMOD symbolic {cs:.4} s  numeric {cn:.4} s  solve {csol:.5} s  (nnz(L) {})",
+                    v["nnz_factor"]
+                );
                 println!(
                     "  ratio faer / CHOLMOD: numeric {:.2}, symbolic + numeric {:.2}, solve {:.2}",
                     fnum / cn,
@@ -86,7 +113,10 @@ fn main() {
                     fsol / csol
                 );
             }
-            Ok(out) => println!("  CHOLMOD not measured: {}", String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or("")),
+            Ok(out) => println!(
+                "  CHOLMOD not measured: {}",
+                String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or("")
+            ),
             Err(e) => println!("  CHOLMOD not measured: python3 not runnable ({e})"),
         }
         let _ = std::fs::remove_file(&path);

@@ -228,9 +228,15 @@ pub fn read_mesh(path: &Path) -> Result<Mesh, SolveError> {
             Some((d, "tri")) => (d, mesh::structured::CellShape::Tri),
             Some((d, "quad")) | Some((d, "")) => (d, mesh::structured::CellShape::Quad),
             None => (spec, mesh::structured::CellShape::Quad),
-            Some((_, other)) => return Err(SolveError::Setup(format!("mesh spec {text}: unknown cell shape `{other}` (use quad or tri)"))),
+            Some((_, other)) => {
+                return Err(SolveError::Setup(format!(
+                    "mesh spec {text}: unknown cell shape `{other}` (use quad or tri)"
+                )))
+            }
         };
-        let parsed = dims.split_once('x').and_then(|(a, b)| Some((a.parse::<usize>().ok()?, b.parse::<usize>().ok()?)));
+        let parsed = dims
+            .split_once('x')
+            .and_then(|(a, b)| Some((a.parse::<usize>().ok()?, b.parse::<usize>().ok()?)));
         return match parsed {
             Some((nx, ny)) if nx > 0 && ny > 0 && nx.saturating_mul(ny) <= 50_000_000 => {
                 Ok(mesh::structured::rectangle(2.0, 1.0, nx, ny, shape))
@@ -428,8 +434,11 @@ pub fn report(stats: &RunStats, out: &Path) -> String {
 /// (`gamma3.svg`, from `gamma3.csv`). Returns the files written.
 pub fn plot(run_dir: &Path, scale: f64) -> Result<Vec<PathBuf>, SolveError> {
     let fail = |what: String| SolveError::Setup(format!("{}: {what}", run_dir.display()));
-    let pvd = std::fs::read_to_string(run_dir.join("solution.pvd"))
-        .map_err(|e| fail(format!("cannot read solution.pvd ({e}); is this an hvi output directory?")))?;
+    let pvd = std::fs::read_to_string(run_dir.join("solution.pvd")).map_err(|e| {
+        fail(format!(
+            "cannot read solution.pvd ({e}); is this an hvi output directory?"
+        ))
+    })?;
     let last = pvd
         .split("file=\"")
         .skip(1)
@@ -451,9 +460,18 @@ pub fn plot(run_dir: &Path, scale: f64) -> Result<Vec<PathBuf>, SolveError> {
         Some((3, v)) => v.chunks(3).map(|c| [c[0], c[1]]).collect(),
         _ => return Err(fail(format!("{last} has no displacement field"))),
     };
-    let values = vtu.cell_data.get("von_mises").map_or(vec![0.0; cells.len()], |(_, v)| v.clone());
+    let values = vtu
+        .cell_data
+        .get("von_mises")
+        .map_or(vec![0.0; cells.len()], |(_, v)| v.clone());
     let n_cells = cells.len();
-    let mesh = Mesh { path: run_dir.join(last), points, cells, cell_tags: (0..n_cells).collect(), groups: vec![] };
+    let mesh = Mesh {
+        path: run_dir.join(last),
+        points,
+        cells,
+        cell_tags: (0..n_cells).collect(),
+        groups: vec![],
+    };
     let png = run_dir.join("deformed.png");
     crate::study::plot::render_deformed_png(&png, &mesh, &u, &values, scale).map_err(fail)?;
     let mut written = vec![png];

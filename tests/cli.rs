@@ -76,7 +76,9 @@ fn solve_writes_a_readable_series() {
     assert!(plot.status.success(), "{}", String::from_utf8_lossy(&plot.stderr));
     let png = std::fs::read(out.join("deformed.png")).unwrap();
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
-    assert!(std::fs::read_to_string(out.join("gamma3.svg")).unwrap().contains("<svg"));
+    assert!(std::fs::read_to_string(out.join("gamma3.svg"))
+        .unwrap()
+        .contains("<svg"));
 }
 
 #[test]

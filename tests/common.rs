@@ -48,3 +48,31 @@ pub fn distort_interior(mesh: &mut Mesh, lx: f64, ly: f64, h: f64, amp: f64) {
         }
     }
 }
+
+/// The manufactured problem u = (sin x cos y, x² sin y): plane stress E = 1, ν = 0.3, clamped
+/// at x = 0, the tractions of its stress on the other sides ("Right", "Gamma2_top", "Gamma3")
+/// and the body force −div σ, one step.
+pub fn manufactured_scene() -> Scene {
+    let nu: f64 = 0.3;
+    let c = 1.0 / (1.0 - nu * nu);
+    let g = c * (1.0 - nu) / 2.0;
+    let s11 = format!("{c:e}*(cos(x)*cos(y) + {nu:e}*x^2*cos(y))");
+    let s22 = format!("{c:e}*({nu:e}*cos(x)*cos(y) + x^2*cos(y))");
+    let s12 = format!("{g:e}*(-sin(x)*sin(y) + 2*x*sin(y))");
+    let f1 = format!("-({c:e}*(-sin(x)*cos(y) + 2*{nu:e}*x*cos(y)) + {g:e}*(-sin(x)*cos(y) + 2*x*cos(y)))");
+    let f2 = format!("-({g:e}*(-cos(x)*sin(y) + 2*sin(y)) + {c:e}*(-{nu:e}*cos(x)*sin(y) - x^2*sin(y)))");
+    scene(&format!(
+        "[material]\nplane = \"stress\"\nyoungs_modulus = 1.0\npoisson_ratio = {nu}\n[time]\nfinal_time = 1.0\nsteps = 1\n\
+         [[traction]]\ngroup = \"Right\"\nvalue = [\"{s11}\", \"{s12}\"]\n[[traction]]\ngroup = \"Gamma2_top\"\nvalue = [\"{s12}\", \"{s22}\"]\n\
+         [[traction]]\ngroup = \"Gamma3\"\nvalue = [\"-({s12})\", \"-({s22})\"]\n[body_force]\nvalue = [\"{f1}\", \"{f2}\"]\n"
+    ))
+}
+
+/// u = (sin x cos y, x² sin y) and its gradient [[∂u₁/∂x, ∂u₁/∂y], [∂u₂/∂x, ∂u₂/∂y]].
+pub fn manufactured_exact(x: [f64; 2]) -> ([f64; 2], [[f64; 2]; 2]) {
+    let (sx, cx, sy, cy) = (x[0].sin(), x[0].cos(), x[1].sin(), x[1].cos());
+    (
+        [sx * cy, x[0] * x[0] * sy],
+        [[cx * cy, -sx * sy], [2.0 * x[0] * sy, x[0] * x[0] * cy]],
+    )
+}

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{distort_interior, rectangle_with_sides, scene};
+use common::{distort_interior, manufactured_exact, manufactured_scene, rectangle_with_sides, scene};
 use hvi::app::solve_in_memory;
 use hvi::fem::norms::{errors, fitted_order};
 use hvi::mesh::structured::CellShape;
@@ -68,32 +68,14 @@ fn patch_test_constant_strain_on_distorted_meshes() {
 /// still pre-asymptotic in L²: its pairwise order to h = 1/8 is 1.76 on Q1.)
 #[test]
 fn manufactured_solution_converges_at_the_theoretical_orders() {
-    let nu: f64 = 0.3;
-    let c = 1.0 / (1.0 - nu * nu);
-    let g = c * (1.0 - nu) / 2.0;
-    let s11 = format!("{c:e}*(cos(x)*cos(y) + {nu:e}*x^2*cos(y))");
-    let s22 = format!("{c:e}*({nu:e}*cos(x)*cos(y) + x^2*cos(y))");
-    let s12 = format!("{g:e}*(-sin(x)*sin(y) + 2*x*sin(y))");
-    let f1 = format!("-({c:e}*(-sin(x)*cos(y) + 2*{nu:e}*x*cos(y)) + {g:e}*(-sin(x)*cos(y) + 2*x*cos(y)))");
-    let f2 = format!("-({g:e}*(-cos(x)*sin(y) + 2*sin(y)) + {c:e}*(-{nu:e}*cos(x)*sin(y) - x^2*sin(y)))");
-    let toml = format!(
-        "{}[[traction]]\ngroup = \"Right\"\nvalue = [\"{s11}\", \"{s12}\"]\n[[traction]]\ngroup = \"Gamma2_top\"\nvalue = [\"{s12}\", \"{s22}\"]\n[[traction]]\ngroup = \"Gamma3\"\nvalue = [\"-({s12})\", \"-({s22})\"]\n[body_force]\nvalue = [\"{f1}\", \"{f2}\"]\n",
-        material("stress", nu)
-    );
-    let exact = |x: [f64; 2]| {
-        let (sx, cx, sy, cy) = (x[0].sin(), x[0].cos(), x[1].sin(), x[1].cos());
-        (
-            [sx * cy, x[0] * x[0] * sy],
-            [[cx * cy, -sx * sy], [2.0 * x[0] * sy, x[0] * x[0] * cy]],
-        )
-    };
+    let scene = manufactured_scene();
     for shape in [CellShape::Quad, CellShape::Tri] {
         let (mut hs, mut h1, mut l2) = (vec![], vec![], vec![]);
         for n in [8, 16, 32, 64] {
             let mesh = rectangle_with_sides(2.0, 1.0, 2 * n, n, shape);
-            let (sim, _, sink) = solve_in_memory(&scene(&toml), mesh).unwrap();
+            let (sim, _, sink) = solve_in_memory(&scene, mesh).unwrap();
             let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
-            let e = errors(&sim.mesh.cells, &sim.mesh.points, &u, exact);
+            let e = errors(&sim.mesh.cells, &sim.mesh.points, &u, manufactured_exact);
             hs.push(1.0 / n as f64);
             h1.push(e.h1_seminorm);
             l2.push(e.l2);

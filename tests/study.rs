@@ -2,10 +2,14 @@
 //! linear fields on any meshes, exact for nested meshes), observed orders against an exact
 //! solution and against a fine reference run, and a reduced version of the paper's study.
 
+mod common;
+
+use common::{distort_interior, manufactured_exact, manufactured_scene, rectangle_with_sides};
+
 use hvi::fem::element::shape_at;
 use hvi::fem::norms::errors;
 use hvi::mesh::structured::{rectangle, CellShape};
-use hvi::mesh::{Mesh, PhysicalGroup};
+use hvi::mesh::Mesh;
 use hvi::scene::Scene;
 use hvi::study::{
     self, interpolate_nodal, plot, report, seminorm_errors, Keep, Locator, Refinement, RunOptions, Study, StudyPlan,
@@ -19,72 +23,7 @@ fn paper_scene(steps: usize) -> Scene {
     scene
 }
 
-/// Plane stress E = 1, ν = 0.3, clamped at x = 0, the tractions and body force of
-/// u = (sin x cos y, x² sin y) (as in tests/elasticity.rs), one step.
-fn manufactured_scene() -> Scene {
-    let nu: f64 = 0.3;
-    let c = 1.0 / (1.0 - nu * nu);
-    let g = c * (1.0 - nu) / 2.0;
-    let s11 = format!("{c:e}*(cos(x)*cos(y) + {nu:e}*x^2*cos(y))");
-    let s22 = format!("{c:e}*({nu:e}*cos(x)*cos(y) + x^2*cos(y))");
-    let s12 = format!("{g:e}*(-sin(x)*sin(y) + 2*x*sin(y))");
-    let f1 = format!("-({c:e}*(-sin(x)*cos(y) + 2*{nu:e}*x*cos(y)) + {g:e}*(-sin(x)*cos(y) + 2*x*cos(y)))");
-    let f2 = format!("-({g:e}*(-cos(x)*sin(y) + 2*sin(y)) + {c:e}*(-{nu:e}*cos(x)*sin(y) - x^2*sin(y)))");
-    let toml = format!(
-        "[material]\nplane = \"stress\"\nyoungs_modulus = 1.0\npoisson_ratio = {nu}\n[time]\nfinal_time = 1.0\nsteps = 1\n\
-         [[traction]]\ngroup = \"Right\"\nvalue = [\"{s11}\", \"{s12}\"]\n[[traction]]\ngroup = \"Gamma2_top\"\nvalue = [\"{s12}\", \"{s22}\"]\n\
-         [[traction]]\ngroup = \"Gamma3\"\nvalue = [\"-({s12})\", \"-({s22})\"]\n[body_force]\nvalue = [\"{f1}\", \"{f2}\"]\n"
-    );
-    Scene::from_toml_str(&toml, "<manufactured scene>").unwrap_or_else(|e| panic!("{e}"))
-}
 // ---- scenes (end) ----
-
-/// u = (sin x cos y, x² sin y) and its gradient.
-fn manufactured_exact(x: [f64; 2]) -> ([f64; 2], [[f64; 2]; 2]) {
-    let (sx, cx, sy, cy) = (x[0].sin(), x[0].cos(), x[1].sin(), x[1].cos());
-    (
-        [sx * cy, x[0] * x[0] * sy],
-        [[cx * cy, -sx * sy], [2.0 * x[0] * sy, x[0] * x[0] * cy]],
-    )
-}
-
-/// The rectangle with its groups plus a "Right" group for the side x = lx.
-fn rectangle_with_sides(lx: f64, ly: f64, nx: usize, ny: usize, shape: CellShape) -> Mesh {
-    let mut mesh = rectangle(lx, ly, nx, ny, shape);
-    let right: Vec<[usize; 2]> = mesh
-        .groups
-        .iter()
-        .find(|g| g.name.as_deref() == Some("Gamma2"))
-        .expect("Gamma2")
-        .facets
-        .iter()
-        .copied()
-        .filter(|f| f.iter().all(|&p| (mesh.points[p][0] - lx).abs() < 1e-12))
-        .collect();
-    mesh.groups.push(PhysicalGroup {
-        dim: 1,
-        tag: 90,
-        name: Some("Right".into()),
-        facets: right,
-        cells: vec![],
-        nodes: vec![],
-    });
-    mesh
-}
-
-/// Moves interior nodes by a deterministic perturbation of amplitude `amp`·h.
-fn distort_interior(mesh: &mut Mesh, lx: f64, ly: f64, h: f64, amp: f64) {
-    for (k, p) in mesh.points.iter_mut().enumerate() {
-        let on_boundary =
-            p[0].abs() < 1e-12 || p[1].abs() < 1e-12 || (p[0] - lx).abs() < 1e-12 || (p[1] - ly).abs() < 1e-12;
-        if !on_boundary {
-            let s = (k as f64 * 12.9898).sin() * 43758.5453;
-            let t = (k as f64 * 78.233).sin() * 12345.678;
-            p[0] += amp * h * (s - s.floor() - 0.5);
-            p[1] += amp * h * (t - t.floor() - 0.5);
-        }
-    }
-}
 
 fn linear(x: [f64; 2]) -> [f64; 2] {
     [0.3 + 1.7 * x[0] - 0.4 * x[1], -0.2 + 0.5 * x[0] + 2.1 * x[1]]

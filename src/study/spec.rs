@@ -127,11 +127,17 @@ pub fn run_spec(spec: &StudySpec, dir: &Path, out: &Path, extra: &[String], name
     let wide = match spec.cells.as_str() {
         "square" => false,
         "wide" => true,
-        other => return Err(format!("{name}: cells = \"{other}\": use \"square\" (h × h) or \"wide\" (2h × h)")),
+        other => {
+            return Err(format!(
+                "{name}: cells = \"{other}\": use \"square\" (h × h) or \"wide\" (2h × h)"
+            ))
+        }
     };
     let mut files = BTreeMap::new();
     for (n, file) in &spec.mesh_files {
-        let n: usize = n.parse().map_err(|_| format!("{name}: mesh_files key `{n}` is not an integer n = 1/h"))?;
+        let n: usize = n
+            .parse()
+            .map_err(|_| format!("{name}: mesh_files key `{n}` is not an integer n = 1/h"))?;
         files.insert(n, crate::mesh::read_msh(&dir.join(file)).map_err(|e| e.to_string())?);
     }
     let make_mesh = |n: usize| -> Mesh {
@@ -150,7 +156,10 @@ pub fn run_spec(spec: &StudySpec, dir: &Path, out: &Path, extra: &[String], name
     };
     let mut progress = |r: &RunRecord, e: Option<&RunErrors>| {
         let errs = e.map_or(String::from("(reference)"), |e| {
-            format!("H¹ error {:.4e}, L² {:.4e}, max_t H¹ {:.4e}", e.at_final.h1_seminorm, e.at_final.l2, e.h1_max_over_time)
+            format!(
+                "H¹ error {:.4e}, L² {:.4e}, max_t H¹ {:.4e}",
+                e.at_final.h1_seminorm, e.at_final.l2, e.h1_max_over_time
+            )
         });
         eprintln!(
             "  {:<28} {:>8} unknowns {:>5} steps {:>8.2} s {:>6} Newton  {errs}",
@@ -169,30 +178,49 @@ pub fn run_spec(spec: &StudySpec, dir: &Path, out: &Path, extra: &[String], name
          the study {:.1} s.\n",
         plan.reference.0,
         plan.reference.1,
-        if files.is_empty() { format!("the paper's rectangle, {} {} cells", spec.cells, spec.shape) } else { "mesh files".into() },
+        if files.is_empty() {
+            format!("the paper's rectangle, {} {} cells", spec.cells, spec.shape)
+        } else {
+            "mesh files".into()
+        },
         started.elapsed().as_secs_f64()
     );
     let h_rows = report::rows_of(&rows, Refinement::H);
     let k_rows = report::rows_of(&rows, Refinement::K);
     for (i, p) in spec.h_paths.iter().enumerate() {
-        let these: Vec<_> = h_rows.iter().filter(|r| r.path == study.paths[i].name).copied().collect();
+        let these: Vec<_> = h_rows
+            .iter()
+            .filter(|r| r.path == study.paths[i].name)
+            .copied()
+            .collect();
         let title = format!("h refined at k = T/{}", p.steps);
         if p.published.is_empty() {
             let _ = writeln!(md, "## {title}\n");
         } else {
             let hs: Vec<f64> = p.n.iter().map(|n| 1.0 / *n as f64).collect();
-            let _ = writeln!(md, "## {title}\n\n{}", report::comparison_markdown(&these, &published(&p.published, &hs)));
+            let _ = writeln!(
+                md,
+                "## {title}\n\n{}",
+                report::comparison_markdown(&these, &published(&p.published, &hs))
+            );
         }
     }
     for (j, p) in spec.k_paths.iter().enumerate() {
-        let these: Vec<_> =
-            k_rows.iter().filter(|r| r.path == study.paths[spec.h_paths.len() + j].name).copied().collect();
+        let these: Vec<_> = k_rows
+            .iter()
+            .filter(|r| r.path == study.paths[spec.h_paths.len() + j].name)
+            .copied()
+            .collect();
         let title = format!("k refined at h = 1/{}", p.n);
         if p.published.is_empty() {
             let _ = writeln!(md, "## {title}\n");
         } else {
             let ks: Vec<f64> = p.steps.iter().map(|s| t / *s as f64).collect();
-            let _ = writeln!(md, "## {title}\n\n{}", report::comparison_markdown(&these, &published(&p.published, &ks)));
+            let _ = writeln!(
+                md,
+                "## {title}\n\n{}",
+                report::comparison_markdown(&these, &published(&p.published, &ks))
+            );
         }
     }
     let fitted: Vec<String> = study
@@ -200,8 +228,16 @@ pub fn run_spec(spec: &StudySpec, dir: &Path, out: &Path, extra: &[String], name
         .iter()
         .map(|p| format!("{}: {:.3}", p.name, study.fitted_order(p).unwrap_or(f64::NAN)))
         .collect();
-    let _ = writeln!(md, "Least-squares orders of the H¹ error at T: {}.\n", fitted.join(", "));
-    let _ = writeln!(md, "## All runs (wall time per phase in seconds)\n\n{}", report::markdown(&rows));
+    let _ = writeln!(
+        md,
+        "Least-squares orders of the H¹ error at T: {}.\n",
+        fitted.join(", ")
+    );
+    let _ = writeln!(
+        md,
+        "## All runs (wall time per phase in seconds)\n\n{}",
+        report::markdown(&rows)
+    );
     if let Some(reference) = study.reference_run() {
         let _ = writeln!(
             md,
@@ -209,7 +245,9 @@ pub fn run_spec(spec: &StudySpec, dir: &Path, out: &Path, extra: &[String], name
             reference.unknowns,
             reference.wall,
             reference.newton_total,
-            reference.peak_rss_bytes.map_or("unknown".into(), |b| format!("{:.0} MB", b as f64 / 1048576.0))
+            reference
+                .peak_rss_bytes
+                .map_or("unknown".into(), |b| format!("{:.0} MB", b as f64 / 1048576.0))
         );
         // u_ν on Γ₃ of the reference at the compared times
         if let Ok(gamma3) = reference.mesh.boundary(&base.groups.contact) {
