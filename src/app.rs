@@ -272,6 +272,7 @@ pub fn solve(opts: &SolveOptions, stop: Option<&AtomicBool>) -> Result<RunStats,
     let mut stats = result?;
     stats.phases.mesh = mesh_seconds;
     stats.phases.stress = sink.stress_seconds;
+    stats.peak_memory_bytes = crate::solver::stats::peak_memory_bytes();
     stats.phases.total += mesh_seconds;
     let summary = Summary {
         hvi_version: env!("CARGO_PKG_VERSION"),
@@ -411,8 +412,12 @@ pub fn report(stats: &RunStats, out: &Path) -> String {
     }
     let _ = writeln!(
         s,
-        "  work: {} factorisation(s), {} sparse solves",
-        stats.factorisations, stats.solves
+        "  work: {} factorisation(s), {} sparse solves; peak memory {}",
+        stats.factorisations,
+        stats.solves,
+        stats
+            .peak_memory_bytes
+            .map_or("unknown".into(), |b| format!("{:.0} MiB", b as f64 / 1048576.0))
     );
     let _ = writeln!(
         s,

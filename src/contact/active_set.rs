@@ -216,10 +216,22 @@ impl ActiveSetSolver<'_> {
         let mut outcome = ContactOutcome::default();
         let mut direction = vec![0.0; m];
         let mut trial = vec![0.0; m];
+        // A kink of j at r = 0 (∂j(0) an interval, e.g. [−Sa, Sa]): the smoothed j_ε bends
+        // within ~ε of 0, which a Newton model taken farther out cannot see. The path stops
+        // a node at 0 instead of carrying it across (it may cross at the next iteration, from
+        // inside the smoothing zone); otherwise it zig-zags across the kink without converging.
+        let kink = match self.law {
+            Some(l) if l.clarke_interval(0.0).1 > l.clarke_interval(0.0).0 => l.epsilon,
+            _ => f64::INFINITY,
+        };
+        // The smallest residual so far: a full step that raises the energy is accepted only if
+        // it halves this (a watchdog: such steps cannot cycle).
+        let mut best_residual = f64::INFINITY;
         loop {
             // 1. gradient and residual
             self.gradient(r, d, &mut qrd, &mut grad);
             let residual = self.complementarity_residual(r, &grad);
+            best_residual = best_residual.min(residual);
             outcome.residual = residual / scale;
             if std::env::var_os("HVI_TRACE_CONTACT").is_some() {
                 eprintln!(
@@ -295,7 +307,12 @@ impl ActiveSetSolver<'_> {
             loop {
                 let mut decrease_bound = alpha * predicted_slope;
                 for p in 0..m {
-                    let moved = (r[p] - alpha * direction[p]).min(self.g(p));
+                    let mut moved = (r[p] - alpha * direction[p]).min(self.g(p));
+                    if !active[p] && r[p].abs() > kink && moved * r[p] < 0.0 {
+                        // stop at the kink: the first-order decrease is that of the shorter move
+                        decrease_bound += grad[p] * (r[p] - alpha * direction[p]);
+                        moved = 0.0;
+                    }
                     trial[p] = moved - r[p];
                     if active[p] {
                         decrease_bound -= grad[p] * trial[p];
@@ -307,7 +324,7 @@ impl ActiveSetSolver<'_> {
                 }
                 // Local phase: a full step that halves the complementarity residual is kept
                 // even where the energy change is below its rounding.
-                if alpha == 1.0 && self.trial_residual(r, &trial, d) <= 0.5 * residual {
+                if alpha == 1.0 && self.trial_residual(r, &trial, d) <= 0.5 * best_residual {
                     break;
                 }
                 alpha *= 0.5;

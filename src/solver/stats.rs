@@ -57,5 +57,15 @@ pub struct RunStats {
     pub contact: Vec<ContactOutcome>,
     pub max_contact_residual: f64,
     pub smallness: Option<f64>,
+    /// Peak resident memory of the process (VmHWM, Linux), in bytes.
+    pub peak_memory_bytes: Option<u64>,
     pub phases: PhaseTimes,
+}
+
+/// The process's peak resident set size (VmHWM from /proc/self/status), if available.
+pub fn peak_memory_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
 }

@@ -212,10 +212,7 @@ pub fn longest_edge(mesh: &Mesh) -> f64 {
 
 /// VmHWM of this process from /proc/self/status, in bytes (None where there is no procfs).
 pub fn peak_rss_bytes() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
+    crate::solver::stats::peak_memory_bytes()
 }
 
 /// Resets VmHWM to the current RSS (Linux ≥ 4.0; silently nothing elsewhere).
