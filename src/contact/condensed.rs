@@ -88,7 +88,7 @@ pub struct CondensedOperator {
 }
 
 /// Right-hand sides per block when forming K⁻¹ Cᵀ (bounds the n × block work array).
-const BLOCK: usize = 32;
+const BLOCK: usize = 128;
 
 impl CondensedOperator {
     /// Forms W with m solves against the cached factor, in blocks of right-hand sides.

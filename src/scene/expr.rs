@@ -5,7 +5,9 @@
 //! Two exmex conventions would surprise a user, so they are handled here:
 //! * its default literals have no exponent: `1e-3` is accepted through [`SciNumber`];
 //! * its unary minus binds tighter than `^` (`-x^2` would be (−x)²): such an expression is
-//!   rejected with a message asking for `-(x^2)` or `(-x)^2` ([`check_unary_minus_power`]).
+//!   rejected with a message asking for `-(x^2)` or `(-x)^2` ([`check_unary_minus_power`]);
+//! * its `^` associates to the left (`2^3^2` would be 64): chained powers must be bracketed
+//!   ([`check_chained_powers`]).
 
 use exmex::prelude::*;
 use exmex::{literal_matcher_from_pattern, FlatEx, FloatOpsFactory, MatchLiteral};
@@ -84,6 +86,40 @@ fn check_unary_minus_power(source: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// Rejects chained powers `a^b^c` without parentheses, which exmex evaluates left to right
+/// ((a^b)^c) unlike the usual right-to-left convention.
+fn check_chained_powers(source: &str) -> Result<(), String> {
+    // per parenthesis depth: was the last binary operator at this depth a power?
+    let mut last_was_power = vec![false];
+    for (i, c) in source.chars().enumerate() {
+        match c {
+            '(' => last_was_power.push(false),
+            ')' => {
+                if last_was_power.len() > 1 {
+                    last_was_power.pop();
+                }
+            }
+            '+' | '-' | '*' | '/' | ',' => {
+                if let Some(top) = last_was_power.last_mut() {
+                    *top = false;
+                }
+            }
+            '^' => {
+                let top = last_was_power.last_mut().expect("depth 0 is never popped");
+                if *top {
+                    return Err(format!(
+                        "column {}: chained powers a^b^c are ambiguous here (they would be read as (a^b)^c); write (a^b)^c or a^(b^c)",
+                        i + 1
+                    ));
+                }
+                *top = true;
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
 /// A compiled scalar expression over a declared list of variables.
 #[derive(Clone, Debug)]
 pub struct Expr {
@@ -101,6 +137,7 @@ impl Expr {
             return Err("the expression is empty".into());
         }
         check_unary_minus_power(source)?;
+        check_chained_powers(source)?;
         let flat = Flat::parse(source).map_err(|e| format!("cannot parse: {}", e.msg()))?;
         let mut order = Vec::new();
         let mut used = Vec::new();
@@ -175,6 +212,13 @@ mod tests {
             assert!(Expr::parse(bad, &["x"]).unwrap_err().contains("minus"), "{bad}");
         }
         assert_eq!(Expr::parse("-(x^2)", &["x"]).unwrap().eval(&[3.0]), -9.0);
+        assert!(Expr::parse("2^3^2", &["x"]).unwrap_err().contains("chained"));
+        assert_eq!(Expr::parse("2^(3^2)", &["x"]).unwrap().eval(&[0.0]), 512.0);
+        assert_eq!(Expr::parse("(2^3)^2 + x^2*x^2", &["x"]).unwrap().eval(&[1.0]), 65.0);
+        assert_eq!(
+            Expr::parse("exp(x^2) + y^2", &["x", "y"]).unwrap().eval(&[0.0, 2.0]),
+            5.0
+        );
         assert_eq!(Expr::parse("x-2^2", &["x"]).unwrap().eval(&[3.0]), -1.0);
         assert_eq!(Expr::parse("x^-2", &["x"]).unwrap().eval(&[2.0]), 0.25);
         assert_eq!(Expr::parse("exp(-2*x)", &["x"]).unwrap().eval(&[0.0]), 1.0);

@@ -54,10 +54,24 @@ impl Scene {
             overrides::apply(&mut tree, o)?;
         }
         validate::check_keys(&tree, origin)?;
-        let mut scene: Scene = tree.try_into().map_err(|e: toml::de::Error| SceneError::Type {
-            origin: origin.into(),
+        // Deserialise from text, so that a type error shows the offending line with its key
+        // (the original text when there are no overrides, keeping the file's line numbers).
+        let effective = if overrides.is_empty() {
+            text.to_string()
+        } else {
+            toml::to_string(&tree).map_err(|e| SceneError::Syntax {
+                origin: origin.into(),
+                message: e.to_string(),
+            })?
+        };
+        let mut scene: Scene = toml::from_str(&effective).map_err(|e: toml::de::Error| SceneError::Type {
+            origin: if overrides.is_empty() {
+                origin.into()
+            } else {
+                format!("{origin} (after --set {})", overrides.join(" --set "))
+            },
             key: "scene".into(),
-            message: e.message().to_string(),
+            message: e.to_string(),
         })?;
         scene.read_tables(origin, dir)?;
         validate::check_values(&scene, origin)?;
