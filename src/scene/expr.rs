@@ -94,10 +94,8 @@ fn check_chained_powers(source: &str) -> Result<(), String> {
     for (i, c) in source.chars().enumerate() {
         match c {
             '(' => last_was_power.push(false),
-            ')' => {
-                if last_was_power.len() > 1 {
-                    last_was_power.pop();
-                }
+            ')' if last_was_power.len() > 1 => {
+                last_was_power.pop();
             }
             '+' | '-' | '*' | '/' | ',' => {
                 if let Some(top) = last_was_power.last_mut() {
