@@ -893,21 +893,28 @@ fn bad_expressions_name_the_key() {
 }
 
 /// An expression that is finite at the probe point (0, 0, 0) but not on the body: the load is
-/// NaN, and the run stops at step 0 with a clear error (no panic, no hang, no frame).
+/// NaN, and the run stops at step 0 with an error naming the key, the point and the time (no
+/// panic, no hang, no frame).
 #[test]
 fn expression_that_is_nan_on_the_body_stops_the_run() {
     let case = Case::new("rect.msh", mesh_text("rect_q1_h8.msh").as_bytes());
-    for set in [
-        "traction.0.value=[\"0\", \"log(1-x)\"]",
-        "body_force.value=[\"0\", \"sqrt(0.5-y)\"]",
+    for (set, key) in [
+        (
+            "traction.0.value=[\"0\", \"log(1-x)\"]",
+            "traction[0].value[1] = \"log(1-x)\"",
+        ),
+        (
+            "body_force.value=[\"0\", \"sqrt(0.5-y)\"]",
+            "body_force.value[1] = \"sqrt(0.5-y)\"",
+        ),
     ] {
         let t0 = Instant::now();
         let (e, _) = case.error(&[set, "time.steps=4"]);
         assert!(t0.elapsed() < Duration::from_secs(5));
-        assert!(matches!(e, SolveError::NonFinite { step: 0, .. }), "{e:?}");
+        assert!(matches!(e, SolveError::NonFiniteLoad { step: 0, .. }), "{e:?}");
         assert_contains(
             &e.to_string(),
-            &["step 0", "non-finite displacement", "check the load expressions"],
+            &["step 0", key, "is NaN at (x, y) = (", "make the expression finite"],
         );
         let files: Vec<String> = std::fs::read_dir(case.out())
             .unwrap()

@@ -145,7 +145,7 @@ fn contact_force_difference(sim: &Simulation, a: &MemorySink, b: &MemorySink) ->
     let mut scale = 0.0f64;
     let mut diff = 0.0f64;
     for (fa, fb) in a.steps.iter().zip(&b.steps) {
-        sim.loads.assemble(fa.time, &sim.dofs, &mut load);
+        sim.loads.assemble(fa.time, &sim.dofs, &mut load).unwrap();
         scale = scale.max(load.iter().fold(0.0f64, |m, v| m.max(v.abs())));
         let force = |f: &hvi::app::StoredStep| f.contact.as_ref().map(|c| c.force.clone());
         match (force(fa), force(fb)) {

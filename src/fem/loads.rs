@@ -21,6 +21,8 @@ struct LoadPoint {
 /// A vector-valued load density f = (f_x, f_y) integrated over a set of points.
 #[derive(Clone, Debug)]
 struct LoadTerm {
+    /// Where the load comes from, for messages (e.g. the scene key).
+    label: String,
     value: [Expr; 2],
     points: Vec<LoadPoint>,
 }
@@ -38,7 +40,7 @@ impl Loads {
     }
 
     /// Adds a traction density on a boundary part (2-node facets, 3-point Gauss per facet).
-    pub fn add_traction(&mut self, part: &BoundaryPart, points: &[[f64; 2]], value: [Expr; 2]) {
+    pub fn add_traction(&mut self, part: &BoundaryPart, points: &[[f64; 2]], value: [Expr; 2], label: &str) {
         let mut qp = Vec::with_capacity(part.facets.len() * EDGE_GAUSS_3.len());
         for (f, len) in part.facets.iter().zip(&part.facet_lengths) {
             let (a, b) = (points[f[0]], points[f[1]]);
@@ -50,11 +52,15 @@ impl Loads {
                 });
             }
         }
-        self.terms.push(LoadTerm { value, points: qp });
+        self.terms.push(LoadTerm {
+            label: label.to_string(),
+            value,
+            points: qp,
+        });
     }
 
     /// Adds a body force density on every cell.
-    pub fn add_body_force(&mut self, cells: &[Cell], points: &[[f64; 2]], value: [Expr; 2]) {
+    pub fn add_body_force(&mut self, cells: &[Cell], points: &[[f64; 2]], value: [Expr; 2], label: &str) {
         let mut qp = Vec::new();
         for cell in cells {
             for q in load_rule(cell) {
@@ -66,7 +72,11 @@ impl Loads {
                 });
             }
         }
-        self.terms.push(LoadTerm { value, points: qp });
+        self.terms.push(LoadTerm {
+            label: label.to_string(),
+            value,
+            points: qp,
+        });
     }
 
     /// True if any load density depends on t.
@@ -79,13 +89,24 @@ impl Loads {
         self.terms.is_empty()
     }
 
-    /// F(t) restricted to the free unknowns, written into `out` (overwritten).
-    pub fn assemble(&self, t: f64, dofs: &DofMap, out: &mut [f64]) {
+    /// F(t) restricted to the free unknowns, written into `out` (overwritten). A load density
+    /// that is not finite at some quadrature point is an error naming the load, the point and t.
+    pub fn assemble(&self, t: f64, dofs: &DofMap, out: &mut [f64]) -> Result<(), String> {
         out.iter_mut().for_each(|v| *v = 0.0);
         for term in &self.terms {
             for p in &term.points {
                 let vars = [p.x[0], p.x[1], t];
                 let f = [term.value[0].eval(&vars), term.value[1].eval(&vars)];
+                if let Some(c) = f.iter().position(|v| !v.is_finite()) {
+                    return Err(format!(
+                        "{}[{c}] = \"{}\" is {} at (x, y) = ({}, {}), t = {t}; make the expression finite on the whole group",
+                        term.label,
+                        term.value[c].source(),
+                        f[c],
+                        p.x[0],
+                        p.x[1]
+                    ));
+                }
                 for &(node, n) in &p.shape {
                     for (c, fc) in f.iter().enumerate() {
                         if let Some(d) = dofs.get(node, c) {
@@ -95,5 +116,6 @@ impl Loads {
                 }
             }
         }
+        Ok(())
     }
 }

@@ -26,6 +26,8 @@ pub enum SolveError {
         tolerance: f64,
         reason: String,
     },
+    #[error("step {step} (t = {time}): the load {detail}")]
+    NonFiniteLoad { step: usize, time: f64, detail: String },
     #[error("step {step} (t = {time}) produced a non-finite displacement; check the load expressions and material data of the scene")]
     NonFinite { step: usize, time: f64 },
     #[error("run interrupted; {}", match last_written { Some(n) => format!("the frames up to step {n} and the .pvd listing them are valid"), None => "no frame was written".to_string() })]

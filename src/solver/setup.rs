@@ -100,14 +100,16 @@ impl Simulation {
         let mut loads = Loads::new();
         for (i, t) in scene.traction.iter().enumerate() {
             let part = mesh.boundary(&t.group)?;
-            loads.add_traction(
-                &part,
-                &mesh.points,
-                exprs(&t.value, &origin, &format!("traction[{i}].value"))?,
-            );
+            let key = format!("traction[{i}].value");
+            loads.add_traction(&part, &mesh.points, exprs(&t.value, &origin, &key)?, &key);
         }
         if let Some(f) = &scene.body_force {
-            loads.add_body_force(&mesh.cells, &mesh.points, exprs(&f.value, &origin, "body_force.value")?);
+            loads.add_body_force(
+                &mesh.cells,
+                &mesh.points,
+                exprs(&f.value, &origin, "body_force.value")?,
+                "body_force.value",
+            );
         }
         let contact = match &scene.contact {
             None => None,

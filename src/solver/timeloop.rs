@@ -247,7 +247,13 @@ impl<'s> Stepper<'s> {
         let t = sim.time.time(n);
         if n == 0 || self.time_dependent_loads {
             let load = &mut self.load;
-            timed(&mut self.stats.phases.loads, || sim.loads.assemble(t, &sim.dofs, load));
+            timed(&mut self.stats.phases.loads, || sim.loads.assemble(t, &sim.dofs, load)).map_err(|detail| {
+                SolveError::NonFiniteLoad {
+                    step: n,
+                    time: t,
+                    detail,
+                }
+            })?;
         }
         if self.single_solve && n > 0 {
             // Nothing changes: the state of step 0 stands for every step.
