@@ -67,6 +67,12 @@ impl StepOperator {
             mesh: sim.mesh.path.display().to_string(),
             detail: e.to_string(),
         })?;
+        timed(&mut stats.phases.factorisation, || probe_singularity(&factor, matrix)).map_err(|detail| {
+            SolveError::Singular {
+                mesh: sim.mesh.path.display().to_string(),
+                detail,
+            }
+        })?;
         let condensed = match &sim.contact {
             Some(c) if !c.nodes.is_empty() => Some(
                 timed(&mut stats.phases.condensation, || {
@@ -105,6 +111,29 @@ impl StepOperator {
             self.factor.solve_in_place(rhs, counters);
         });
         Ok((std::mem::take(rhs), Some(outcome)))
+    }
+}
+
+/// A Cholesky factorisation of a singular matrix can succeed on round-off pivots (a body held
+/// at a single point can still rotate about it). One probe solve, K⁻¹(K v) against v for a fixed
+/// pseudo-random v, tells: an error far above round-off means the matrix is (nearly) singular.
+/// The probe is not counted among the run's solves.
+fn probe_singularity(factor: &Factor, matrix: &SymmetricMatrix) -> Result<(), String> {
+    let n = matrix.n();
+    let v: Vec<f64> = (0..n)
+        .map(|i| ((i as f64 + 1.0) * 0.618_033_988_749_895).fract() - 0.5)
+        .collect();
+    let mut x = vec![0.0; n];
+    matrix.matvec(&v, &mut x);
+    factor.solve_in_place(&mut x, &Counters::default());
+    let scale = v.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    let error = x.iter().zip(&v).fold(0.0f64, |a, (p, q)| a.max((p - q).abs())) / scale;
+    if error.is_finite() && error <= 1e-6 {
+        Ok(())
+    } else {
+        Err(format!(
+            "the stiffness matrix is singular or nearly so (a probe solve is off by {error:.1e} relative): the body is not held against rigid motions; clamp a part of the boundary (groups.clamped) that stops translations and rotations"
+        ))
     }
 }
 
