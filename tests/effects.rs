@@ -3,18 +3,14 @@
 //! equals the direct sum; an effect that is not in the scene costs nothing (asserted through the
 //! counters of `RunStats`, not by timing); and the plan lists exactly the effects in force.
 //!
-//! The performance floors of the issue are measured by the `#[ignore]`d test
-//! `history_scaling_and_per_step_cost` (`cargo test --release --test effects -- --ignored
-//! --nocapture`), the same measurement as `benches/history_scaling.rs`.
+//! The performance floors of the issue are measured by `cargo bench --bench history_scaling`.
 
 use hvi::app::{solve_in_memory, MemorySink};
 use hvi::mesh::structured::{rectangle, CellShape};
 use hvi::mesh::{read_msh, Mesh};
 use hvi::scene::{ContactLawSpec, ContactSpec, LawKind, MemoryKernelSpec, Scene};
-use hvi::solver::timeloop::Stepper;
 use hvi::solver::{Plan, RunStats, Simulation};
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 /// Relative tolerance of the equivalence tests: max over all frames and unknowns of
 /// |u − u_twin| divided by max |u| (round-off: the two runs do the same arithmetic up to adding
@@ -655,179 +651,4 @@ fn the_plan_lists_exactly_the_effects_in_force() {
             assert_eq!(stats.contact_solves, 0, "{name}");
         }
     }
-}
-
-// ---------------------------------------------------------------------------------------------
-// Performance floors (ratios), the measurement of benches/history_scaling.rs. Ignored by default:
-// cargo test --release --test effects -- --ignored --nocapture
-
-const CHILD_ENV: &str = "HVI_EFFECTS_BENCH_CHILD";
-
-fn vm_hwm_kib() -> u64 {
-    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
-    status
-        .lines()
-        .find_map(|l| l.strip_prefix("VmHWM:"))
-        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok())
-        .unwrap_or(0)
-}
-
-/// One whole run in a fresh process (so its peak memory is its own): `scene:steps` in CHILD_ENV.
-/// Prints `HVI_BENCH seconds=… vmhwm_kib=… history_bytes=…`.
-#[test]
-#[ignore]
-fn bench_child() {
-    let Ok(spec) = std::env::var(CHILD_ENV) else {
-        return; // only meaningful when spawned by history_scaling_and_per_step_cost
-    };
-    let (name, n) = spec.split_once(':').expect("scene:steps");
-    let n: usize = n.parse().expect("steps");
-    let scene = load(name, &[format!("time.steps={n}"), format!("output.every={n}")]);
-    let sim = Simulation::new(&scene, mesh("rect_q1_h16.msh")).unwrap();
-    let before = vm_hwm_kib();
-    let start = Instant::now();
-    let mut sink = MemorySink::default();
-    let stats = hvi::solver::timeloop::run(&sim, &mut sink, None).unwrap();
-    let seconds = start.elapsed().as_secs_f64();
-    assert_eq!(sink.steps.len(), 2, "only the frames at t = 0 and T");
-    println!(
-        "HVI_BENCH seconds={seconds} vmhwm_kib={} vmhwm_before_kib={before} history_bytes={}",
-        vm_hwm_kib(),
-        stats.history_bytes
-    );
-}
-
-/// (seconds, peak KiB, history bytes) of a whole run of `name` at N steps, in a child process.
-fn child_run(name: &str, n: usize) -> (f64, u64, usize) {
-    let out = std::process::Command::new(std::env::current_exe().unwrap())
-        .args(["bench_child", "--exact", "--ignored", "--nocapture", "--test-threads=1"])
-        .env(CHILD_ENV, format!("{name}:{n}"))
-        .output()
-        .expect("spawn the bench child");
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "child {name}:{n} failed:\n{text}\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let line = text
-        .lines()
-        .find(|l| l.contains("HVI_BENCH "))
-        .unwrap_or_else(|| panic!("no result from child {name}:{n}:\n{text}"));
-    let field = |key: &str| -> f64 {
-        line.split_whitespace()
-            .find_map(|w| w.strip_prefix(&format!("{key}=")))
-            .and_then(|v| v.parse().ok())
-            .unwrap_or_else(|| panic!("{key} in {line}"))
-    };
-    (
-        field("seconds"),
-        field("vmhwm_kib") as u64,
-        field("history_bytes") as usize,
-    )
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
-/// Seconds per step of the time loop alone (Stepper::advance, after the one-off setup).
-fn seconds_per_step(name: &str, n: usize) -> f64 {
-    let scene = load(name, &[format!("time.steps={n}"), format!("output.every={n}")]);
-    let sim = Simulation::new(&scene, mesh("rect_q1_h16.msh")).unwrap();
-    let mut stepper = Stepper::prepare(&sim).unwrap();
-    let start = Instant::now();
-    for _ in 0..=n {
-        stepper.advance().unwrap();
-    }
-    start.elapsed().as_secs_f64() / (n + 1) as f64
-}
-
-/// The floors of issue 5 as ratios, medians of `HVI_BENCH_REPS` (default 5) repetitions:
-/// * paper scene (polynomial kernel), h = 1/16, only the frames at 0 and T written: a whole run
-///   at N = 4096 takes ≤ 2.2× the time at N = 2048 (each run in a fresh process), the history
-///   held is the same, and the peak memory (VmHWM) grows by less than a tenth of what a direct
-///   sum would add over the extra 2048 steps (it does grow a little: `RunStats` keeps 48 bytes of
-///   per-step contact statistics, see the report printed);
-/// * per step (the time loop after the one-off setup), `elastic_only.toml` (no memory, no
-///   contact, constant load: one solve in all) is ≥ 5× cheaper than `full.toml`. The elastic
-///   scene with a time-dependent load (one solve per step, against two solves, the history and
-///   the contact of the full scene) is printed for information, without a floor.
-#[test]
-#[ignore]
-fn history_scaling_and_per_step_cost() {
-    let reps = std::env::var("HVI_BENCH_REPS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(5);
-    // 1. whole runs of the paper scene (polynomial kernel), h = 1/16
-    let mut t = [vec![], vec![]];
-    let mut hwm = [vec![], vec![]];
-    let mut bytes = [0, 0];
-    for _ in 0..reps {
-        for (i, n) in [2048, 4096].into_iter().enumerate() {
-            let (s, k, b) = child_run("full.toml", n);
-            t[i].push(s);
-            hwm[i].push(k as f64);
-            bytes[i] = b;
-        }
-    }
-    let (t0, t1) = (median(t[0].clone()), median(t[1].clone()));
-    let (m0, m1) = (median(hwm[0].clone()), median(hwm[1].clone()));
-    let ratio = t1 / t0;
-    println!("paper scene h = 1/16: whole run N = 2048: {:?} s", t[0]);
-    println!("paper scene h = 1/16: whole run N = 4096: {:?} s", t[1]);
-    println!("  medians {t0:.4} s, {t1:.4} s: ratio T(4096)/T(2048) = {ratio:.3} (floor ≤ 2.2)");
-    let fastest = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
-    println!("  (fastest of each: ratio {:.3})", fastest(&t[1]) / fastest(&t[0]));
-    println!(
-        "  peak memory (VmHWM) {m0:.0} KiB vs {m1:.0} KiB (ratio {:.3}, +{:.0} KiB); history held {} vs {} bytes",
-        m1 / m0,
-        m1 - m0,
-        bytes[0],
-        bytes[1]
-    );
-    // the same measurement is sensitive: the direct sum's memory grows with N
-    let (_, d1, db1) = child_run("memory_expression.toml", 1024);
-    let (_, d2, db2) = child_run("memory_expression.toml", 2048);
-    println!(
-        "  contrast, direct sum (expression kernel): VmHWM {d1} KiB at N = 1024, {d2} KiB at N = 2048; history {db1} vs {db2} bytes"
-    );
-    // what the direct sum would hold in addition over the extra 2048 steps (n_dof from the
-    // polynomial history: 3 vectors)
-    let direct_growth_kib = 2048.0 * (bytes[0] / 3) as f64 / 1024.0;
-
-    // 2. per step: elastic only vs the full paper scene, same mesh and N
-    let n = 2048;
-    let mut per = std::collections::BTreeMap::<&str, Vec<f64>>::new();
-    for _ in 0..reps {
-        for name in ["elastic_only.toml", "elastic_time_dependent.toml", "full.toml"] {
-            per.entry(name).or_default().push(seconds_per_step(name, n));
-        }
-    }
-    let full = median(per["full.toml"].clone());
-    for name in ["elastic_only.toml", "elastic_time_dependent.toml"] {
-        let e = median(per[name].clone());
-        println!(
-            "per step, h = 1/16, N = {n}: {name} {:.3} µs vs full.toml {:.3} µs: full/elastic = {:.1}×{}",
-            e * 1e6,
-            full * 1e6,
-            full / e,
-            if name == "elastic_only.toml" {
-                " (floor ≥ 5)"
-            } else {
-                " (no floor)"
-            }
-        );
-    }
-    assert!(ratio <= 2.2, "T(4096)/T(2048) = {ratio}");
-    assert_eq!(bytes[0], bytes[1], "history memory must not depend on N");
-    assert!(
-        m1 - m0 <= 0.1 * direct_growth_kib,
-        "peak memory grew by {} KiB from N = 2048 to 4096 (a direct sum would add {direct_growth_kib:.0} KiB)",
-        m1 - m0
-    );
-    let elastic = full / median(per["elastic_only.toml"].clone());
-    assert!(elastic >= 5.0, "elastic only is only {elastic:.2}× cheaper per step");
 }

@@ -156,35 +156,6 @@ pub fn comparison_markdown(rows: &[&Row], published: &[Published]) -> String {
     s
 }
 
-/// Plain-text version of [`comparison_markdown`] for a terminal.
-pub fn comparison_text(title: &str, rows: &[&Row], published: &[Published]) -> String {
-    let mut s = String::new();
-    let _ = writeln!(s, "{title}");
-    let _ = writeln!(
-        s,
-        "  {:>7} {:>7}  {:>13} {:>6}  {:>13} {:>6}  {:>6}  {:>13} {:>6}",
-        "h", "k", "H1 error", "order", "paper", "order", "ratio", "max_t H1", "order"
-    );
-    for (i, r) in rows.iter().enumerate() {
-        let ord = |o: Option<f64>| o.map_or("-".to_string(), |o| format!("{o:.2}"));
-        let e = r.errors.at_final.h1_seminorm;
-        let (pe, po, ratio) = match published.get(i) {
-            Some(p) => (format!("{:.6e}", p.error), ord(p.order), format!("{:.2}", e / p.error)),
-            None => (String::new(), String::new(), String::new()),
-        };
-        let _ = writeln!(
-            s,
-            "  {:>7} {:>7}  {e:>13.6e} {:>6}  {pe:>13} {po:>6}  {ratio:>6}  {:>13.6e} {:>6}",
-            fraction(r.summary.h),
-            fraction(r.summary.k),
-            ord(r.order),
-            r.errors.h1_max_over_time,
-            ord(r.max_order)
-        );
-    }
-    s
-}
-
 /// The rows of the paths refining `refine`.
 pub fn rows_of(rows: &[Row], refine: Refinement) -> Vec<&Row> {
     rows.iter().filter(|r| r.refine == refine).collect()
