@@ -316,6 +316,40 @@ fn prescan_ascii(path: &Path, bytes: &[u8], body: usize) -> Result<Prescan, Mesh
                     true,
                 )?;
                 check_fits(path, hline, &section, "elements", count, 4, lines.remaining(), true)?;
+                // The header's total must equal what the blocks hold (mshio does not check it).
+                let mut walk = Lines {
+                    bytes,
+                    pos: lines.pos,
+                    line: lines.line,
+                };
+                let mut held: u64 = 0;
+                let mut complete = true;
+                for _ in 0..blocks {
+                    let in_block = walk.next_nonblank().and_then(|(_, bh)| {
+                        String::from_utf8_lossy(bh)
+                            .split_whitespace()
+                            .nth(3)
+                            .and_then(|v| v.parse::<u64>().ok())
+                    });
+                    let Some(n) = in_block else {
+                        complete = false;
+                        break;
+                    };
+                    held = held.saturating_add(n);
+                    for _ in 0..n {
+                        if walk.next_nonblank().is_none() {
+                            complete = false;
+                            break;
+                        }
+                    }
+                }
+                if complete && held != count {
+                    return Err(syntax(
+                        hline,
+                        &section,
+                        format!("the section header says {count} elements but its blocks hold {held}; re-export the mesh from gmsh"),
+                    ));
+                }
             }
             "Entities" => {
                 let (hline, counts) = header_numbers(&mut lines, path, &section)?;
