@@ -4,6 +4,7 @@
 //! `cargo bench --bench factor_vs_cholmod` — needs python3 with scikit-sparse
 //! (`pip install "scikit-sparse<0.5"`, Debian's libsuitesparse-dev); without it, prints faer's
 //! times and says what is missing. Sizes: h = 1/128 and 1/256 (Q1, square cells).
+//! `HVI_KEEP_MTX=1` keeps the MatrixMarket files (in the temp directory) for other tools.
 
 use hvi::fem::assembly::assemble_stiffness;
 use hvi::linalg::{Counters, Factor};
@@ -119,6 +120,8 @@ fn main() {
             ),
             Err(e) => println!("  CHOLMOD not measured: python3 not runnable ({e})"),
         }
-        let _ = std::fs::remove_file(&path);
+        if std::env::var_os("HVI_KEEP_MTX").is_none() {
+            let _ = std::fs::remove_file(&path);
+        }
     }
 }
