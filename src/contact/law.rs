@@ -99,6 +99,15 @@ impl ComplianceProfile {
             ComplianceProfile::PiecewiseLinear { table } => table.eval(s).2,
         }
     }
+    /// A short human-readable description.
+    pub fn describe(&self) -> String {
+        match self {
+            ComplianceProfile::Paper { a, b, alpha } => format!("paper μ-law (a = {a}, b = {b}, α = {alpha})"),
+            ComplianceProfile::Power { exponent } => format!("power law μ(s) = s^{exponent}"),
+            ComplianceProfile::PiecewiseLinear { table } => format!("piecewise-linear μ ({} points)", table.s.len()),
+        }
+    }
+
     /// sup_s max(0, −φ''(s)): how non-convex the profile is (relaxed monotonicity, per unit S).
     pub fn max_negative_curvature(&self) -> f64 {
         match self {

@@ -76,13 +76,23 @@ impl Plan {
             }
             if let Some(l) = &c.law {
                 parts.push(format!(
-                    "compliance law S = {}, {:?}, {:?}, ε = {:e}",
-                    l.scale, l.profile, l.symmetry, l.epsilon
+                    "{} compliance law, S = {}, {}, ε = {:e}",
+                    match l.symmetry {
+                        crate::contact::Symmetry::Odd => "odd",
+                        crate::contact::Symmetry::OneSided => "one-sided",
+                    },
+                    l.scale,
+                    l.profile.describe(),
+                    l.epsilon
                 ));
             }
             effects.push(Effect {
                 name: "contact",
-                detail: format!("{} on {m} nodes ({} clamped nodes set aside)", parts.join(" + "), c.nodes.clamped_nodes.len()),
+                detail: format!(
+                    "{} on {m} nodes ({} Γ₃ node(s) also clamped, set aside)",
+                    parts.join(" + "),
+                    c.nodes.clamped_nodes.len()
+                ),
                 cost: format!(
                     "condensation W = C K⁻¹ Cᵀ: {m} solves once, {:.1} MiB dense; per step one dense active-set solve of size {m} and one extra sparse solve",
                     (2 * m * m * 8) as f64 / 1048576.0
