@@ -130,3 +130,56 @@ fn bad_input_fails_with_a_message_and_nonzero_exit() {
     let err = String::from_utf8_lossy(&bad_group.stderr);
     assert!(err.contains("Bottom") && err.contains("Gamma3"), "{err}");
 }
+
+/// `hvi study` on a small study file: tables, CSV and plots are written, the published column
+/// appears when given, and the observed orders are finite.
+#[test]
+fn study_writes_tables_and_plots() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("small.toml");
+    std::fs::write(
+        &study,
+        format!(
+            "scene = \"{}\"\nreference = {{ n = 16, steps = 16 }}\n[[h_paths]]\nsteps = 16\nn = [4, 8]\npublished = [1e-2, 5e-3]\n[[k_paths]]\nn = 16\nsteps = [2, 4]\n",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper.toml")
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let run = hvi()
+        .args(["study", study.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    for f in [
+        "study.md",
+        "study.csv",
+        "error_vs_h.svg",
+        "error_vs_k.svg",
+        "work_precision.svg",
+        "gamma3.svg",
+    ] {
+        assert!(
+            out.join(f).metadata().map(|m| m.len() > 0).unwrap_or(false),
+            "{f} missing"
+        );
+    }
+    let md = std::fs::read_to_string(out.join("study.md")).unwrap();
+    assert!(
+        md.contains("paper's error") && md.contains("Least-squares orders"),
+        "{md}"
+    );
+    // 4 runs, one CSV row each after the header
+    assert_eq!(
+        std::fs::read_to_string(out.join("study.csv")).unwrap().lines().count(),
+        5
+    );
+    // a study file with a typo is an error naming the key
+    std::fs::write(&study, "reference = { n = 4, steps = 2 }\nh_path = []\n").unwrap();
+    let bad = hvi()
+        .args(["study", study.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("h_path"));
+}
