@@ -4,7 +4,7 @@
 use crate::contact::active_set::{ContactOutcome, ContactState};
 use crate::fem::stress::cell_stresses;
 use crate::mesh::{self, Mesh};
-use crate::output::{self, CsvTable, Field, FieldValues, Frame, SeriesWriter};
+use crate::output::{self, CsvTable, Field, Frame, SeriesWriter};
 use crate::scene::{OutputField, Scene};
 use crate::solver::stats::timed;
 use crate::solver::{timeloop, FrameSink, Plan, RunStats, Simulation, SolveError, StepView};
@@ -114,11 +114,7 @@ impl FrameSink for FileSink {
         let mut point_fields = Vec::new();
         let mut cell_fields = Vec::new();
         if self.wants(OutputField::Displacement) {
-            point_fields.push(Field {
-                name: "displacement",
-                components: 3,
-                values: FieldValues::F64(&displacement),
-            });
+            point_fields.push(Field::f64("displacement", 3, &displacement));
         }
         let stresses = (self.wants(OutputField::Stress) || self.wants(OutputField::VonMises)).then(|| {
             timed(&mut self.stress_seconds, || {
@@ -128,18 +124,10 @@ impl FrameSink for FileSink {
         });
         if let Some(s) = &stresses {
             if self.wants(OutputField::Stress) {
-                cell_fields.push(Field {
-                    name: "stress",
-                    components: 9,
-                    values: FieldValues::F64(&s.tensor),
-                });
+                cell_fields.push(Field::f64("stress", 9, &s.tensor));
             }
             if self.wants(OutputField::VonMises) {
-                cell_fields.push(Field {
-                    name: "von_mises",
-                    components: 1,
-                    values: FieldValues::F64(&s.von_mises),
-                });
+                cell_fields.push(Field::f64("von_mises", 1, &s.von_mises));
             }
         }
         let n_points = mesh.points.len();
@@ -170,26 +158,10 @@ impl FrameSink for FileSink {
                 ]);
             }
             if self.wants(OutputField::Contact) {
-                point_fields.push(Field {
-                    name: "u_nu",
-                    components: 1,
-                    values: FieldValues::F64(&u_nu),
-                });
-                point_fields.push(Field {
-                    name: "contact_force",
-                    components: 1,
-                    values: FieldValues::F64(&force),
-                });
-                point_fields.push(Field {
-                    name: "contact_pressure",
-                    components: 1,
-                    values: FieldValues::F64(&pressure),
-                });
-                point_fields.push(Field {
-                    name: "contact_status",
-                    components: 1,
-                    values: FieldValues::I32(&status),
-                });
+                point_fields.push(Field::f64("u_nu", 1, &u_nu));
+                point_fields.push(Field::f64("contact_force", 1, &force));
+                point_fields.push(Field::f64("contact_pressure", 1, &pressure));
+                point_fields.push(Field::i32("contact_status", 1, &status));
             }
         }
         let frame = Frame {

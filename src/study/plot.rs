@@ -257,42 +257,53 @@ fn group_by(rows: &[Row], key: impl Fn(&Row) -> f64, along: impl Fn(&Row) -> f64
 
 /// H¹-seminorm error at T against h, one line per k (groups of ≥ 2 runs), with an O(h) guide.
 pub fn plot_error_vs_h(path: &Path, rows: &[Row]) -> Result<(), String> {
-    let groups = group_by(rows, |r| r.summary.k, |r| r.summary.h);
-    let series: Vec<Series> = groups
-        .iter()
-        .map(|(k, v)| Series {
-            name: format!("k = {}", fraction(*k)),
-            points: v.iter().map(|r| (r.summary.h, r.errors.at_final.h1_seminorm)).collect(),
-            labels: vec![],
-        })
-        .collect();
-    let guides = guide_at_finest(&series, "O(h)", 1.0).into_iter().collect::<Vec<_>>();
-    loglog_svg(
+    plot_error_against(
         path,
-        "H¹-seminorm error at T against the mesh size",
-        "h",
-        "|u_ref − u_hk|₁ at T",
-        &series,
-        &guides,
+        rows,
+        |r| (r.summary.h, r.summary.k),
+        ("h", "k"),
+        ("O(h)", 1.0),
+        "the mesh size",
     )
 }
 
 /// H¹-seminorm error at T against k, one line per h, with an O(k²) guide.
 pub fn plot_error_vs_k(path: &Path, rows: &[Row]) -> Result<(), String> {
-    let groups = group_by(rows, |r| r.summary.h, |r| r.summary.k);
+    plot_error_against(
+        path,
+        rows,
+        |r| (r.summary.k, r.summary.h),
+        ("k", "h"),
+        ("O(k²)", 2.0),
+        "the time step",
+    )
+}
+
+/// The H¹ error at T against the parameter `param(row).0`, one line per value of `param(row).1`.
+fn plot_error_against(
+    path: &Path,
+    rows: &[Row],
+    param: impl Fn(&Row) -> (f64, f64),
+    (x_name, line_name): (&str, &str),
+    (guide_name, guide_order): (&str, f64),
+    what: &str,
+) -> Result<(), String> {
+    let groups = group_by(rows, |r| param(r).1, |r| param(r).0);
     let series: Vec<Series> = groups
         .iter()
-        .map(|(h, v)| Series {
-            name: format!("h = {}", fraction(*h)),
-            points: v.iter().map(|r| (r.summary.k, r.errors.at_final.h1_seminorm)).collect(),
+        .map(|(fixed, v)| Series {
+            name: format!("{line_name} = {}", fraction(*fixed)),
+            points: v.iter().map(|r| (param(r).0, r.errors.at_final.h1_seminorm)).collect(),
             labels: vec![],
         })
         .collect();
-    let guides = guide_at_finest(&series, "O(k²)", 2.0).into_iter().collect::<Vec<_>>();
+    let guides = guide_at_finest(&series, guide_name, guide_order)
+        .into_iter()
+        .collect::<Vec<_>>();
     loglog_svg(
         path,
-        "H¹-seminorm error at T against the time step",
-        "k",
+        &format!("H¹-seminorm error at T against {what}"),
+        x_name,
         "|u_ref − u_hk|₁ at T",
         &series,
         &guides,

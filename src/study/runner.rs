@@ -357,24 +357,13 @@ impl Study {
             Reference::Exact(exact) => {
                 let on_mesh = |t: f64, u: &[[f64; 2]]| errors(&run.mesh.cells, &run.mesh.points, u, |x| exact(t, x));
                 let at_final = on_mesh(run.final_time, &run.final_displacement);
-                let mut max = (at_final.h1_seminorm, run.final_time);
-                let mut count = 1;
-                for (t, u) in &run.displacement_at {
-                    if (t - run.final_time).abs() <= time_tolerance(run.final_time) {
-                        continue;
-                    }
-                    let e = on_mesh(*t, u).h1_seminorm;
-                    count += 1;
-                    if e > max.0 {
-                        max = (e, *t);
-                    }
-                }
-                Ok(RunErrors {
-                    at_final,
-                    h1_max_over_time: max.0,
-                    h1_max_time: max.1,
-                    times_compared: count,
-                })
+                let tol = time_tolerance(run.final_time);
+                let others = run
+                    .displacement_at
+                    .iter()
+                    .filter(|(t, _)| (t - run.final_time).abs() > tol)
+                    .map(|(t, u)| (*t, on_mesh(*t, u).h1_seminorm));
+                Ok(with_max_over_time(at_final, run.final_time, others))
             }
             Reference::Run(reference) => {
                 let tol = time_tolerance(reference.final_time);
@@ -390,26 +379,15 @@ impl Study {
                 let at =
                     |u_ref: &[[f64; 2]], u: &[[f64; 2]]| seminorm_errors(&reference.mesh, u_ref, &transfer.apply(u));
                 let at_final = at(&reference.final_displacement, &run.final_displacement);
-                let mut max = (at_final.h1_seminorm, run.final_time);
-                let mut count = 1;
-                for (t, u) in &run.displacement_at {
-                    if (t - run.final_time).abs() <= tol {
-                        continue;
-                    }
-                    if let Some((_, u_ref)) = reference.displacement_at.iter().find(|(s, _)| (s - t).abs() <= tol) {
-                        let e = at(u_ref, u).h1_seminorm;
-                        count += 1;
-                        if e > max.0 {
-                            max = (e, *t);
-                        }
-                    }
-                }
-                Ok(RunErrors {
-                    at_final,
-                    h1_max_over_time: max.0,
-                    h1_max_time: max.1,
-                    times_compared: count,
-                })
+                let others = run
+                    .displacement_at
+                    .iter()
+                    .filter(|(t, _)| (t - run.final_time).abs() > tol)
+                    .filter_map(|(t, u)| {
+                        let (_, u_ref) = reference.displacement_at.iter().find(|(s, _)| (s - t).abs() <= tol)?;
+                        Some((*t, at(u_ref, u).h1_seminorm))
+                    });
+                Ok(with_max_over_time(at_final, run.final_time, others))
             }
         }
     }
@@ -543,4 +521,22 @@ pub fn run_plan(
         study.add_path(format!("k (h=1/{n})"), Refinement::K, runs)?;
     }
     Ok(study)
+}
+
+/// The errors at T plus the largest H¹ error over the other compared times `(t, error)`.
+fn with_max_over_time(at_final: FieldErrors, final_time: f64, others: impl Iterator<Item = (f64, f64)>) -> RunErrors {
+    let mut max = (at_final.h1_seminorm, final_time);
+    let mut count = 1;
+    for (t, e) in others {
+        count += 1;
+        if e > max.0 {
+            max = (e, t);
+        }
+    }
+    RunErrors {
+        at_final,
+        h1_max_over_time: max.0,
+        h1_max_time: max.1,
+        times_compared: count,
+    }
 }
