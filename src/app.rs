@@ -384,9 +384,10 @@ pub fn report(stats: &RunStats, out: &Path) -> String {
     }
     let _ = writeln!(
         s,
-        "  work: {} factorisation(s), {} sparse solves; peak memory {}",
+        "  work: {} factorisation(s), {} sparse solves, {} sparse forward sweeps; peak memory {}",
         stats.factorisations,
         stats.solves,
+        stats.sparse_forward_sweeps,
         stats
             .peak_memory_bytes
             .map_or("unknown".into(), |b| format!("{:.0} MiB", b as f64 / 1048576.0))
@@ -395,7 +396,7 @@ pub fn report(stats: &RunStats, out: &Path) -> String {
         s,
         "  time [s]: mesh {:.3}, assembly {:.3}, factorisation {:.3}, condensation {:.3}, steps {:.3} (history {:.3}, solves {:.3}, contact {:.3}), output {:.3}; total {:.3}",
         p.mesh, p.assembly, p.factorisation, p.condensation,
-        p.loads + p.history + p.free_solve + p.contact + p.recover, p.history, p.free_solve + p.recover, p.contact, p.output, p.total
+        p.loads + p.history + p.forward_sweep + p.contact + p.backward_sweep, p.history, p.forward_sweep + p.backward_sweep, p.contact, p.output, p.total
     );
     let _ = write!(
         s,

@@ -590,15 +590,14 @@ fn a_body_clamped_at_one_point() {
     let scene = Scene::from_toml_str(text, "corner.toml").unwrap();
     let mesh = parse_msh(Path::new("corner.msh"), msh22(&m).as_bytes()).unwrap();
     let e = solve_in_memory(&scene, mesh).err().expect("a singular problem");
-    assert_contains(
-        &e.to_string(),
-        &[
-            "corner.msh",
-            "not positive definite",
-            "the body is not held",
-            "clamped group",
-        ],
+    // Round-off decides whether the pivot fails ("not positive definite") or the probe solve
+    // after the factorisation catches it ("singular or nearly so"); both name the fix.
+    let text = e.to_string();
+    assert!(
+        text.contains("not positive definite") || text.contains("singular or nearly so"),
+        "{text}"
     );
+    assert_contains(&text, &["corner.msh", "the body is not held", "clamp"]);
 }
 
 /// Cholesky can succeed on round-off pivots for a singular matrix; the probe solve after the

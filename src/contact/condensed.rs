@@ -3,10 +3,9 @@
 //! contact normals, u_ν = d − W λ, and K is never refactorised.
 
 use crate::fem::DofMap;
-use crate::linalg::{Counters, Factor};
+use crate::linalg::{Counters, Factor, Forward, ForwardColumns};
 use crate::mesh::BoundaryPart;
 use faer::linalg::solvers::Solve;
-use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::Mat;
 
 /// The contact nodes with their nodal quadrature weights w_p, normals ν_p and bounds g_p,
@@ -78,51 +77,25 @@ impl ContactNodes {
     }
 }
 
-/// W = C K⁻¹ Cᵀ and its inverse Q = W⁻¹ (both m × m, dense, symmetric positive definite).
+/// W = C K⁻¹ Cᵀ and its inverse Q = W⁻¹ (both m × m, dense, symmetric positive definite),
+/// and G = L⁻¹ P Cᵀ, which moves a step between C and the factor's forward sweep:
+/// d = C K⁻¹ r = Gᵀ (L⁻¹ P r), and K⁻¹ (r − Cᵀ λ) = Pᵀ L⁻ᵀ (L⁻¹ P r − G λ).
 pub struct CondensedOperator {
     /// W (row-major m × m): normal displacement at p per unit normal force at q.
     pub w: Vec<f64>,
     /// Q = W⁻¹ (row-major m × m): the Schur-complement stiffness on the contact normals.
     pub q: Vec<f64>,
     pub m: usize,
+    /// G = L⁻¹ P Cᵀ, one sparse column per contact node.
+    pub columns: ForwardColumns,
 }
 
-/// Right-hand sides per block when forming K⁻¹ Cᵀ (bounds the n × block work array).
-const BLOCK: usize = 128;
-
 impl CondensedOperator {
-    /// Forms W with m solves against the cached factor, in blocks of right-hand sides.
+    /// Forms G with one sparse forward sweep per contact node and W = Gᵀ G.
     pub fn new(nodes: &ContactNodes, factor: &Factor, counters: &Counters) -> Result<Self, String> {
-        let (m, n) = (nodes.len(), factor.n());
-        let mut w = vec![0.0; m * m];
-        let mut block = Mat::<f64>::zeros(n, BLOCK.min(m.max(1)));
-        let mut start = 0;
-        while start < m {
-            let cols = BLOCK.min(m - start);
-            let mut z = block.as_mut().subcols_mut(0, cols);
-            z.fill(0.0);
-            for j in 0..cols {
-                for (d, c) in &nodes.rows[start + j] {
-                    z[(*d, j)] = *c;
-                }
-            }
-            factor.solve_block_in_place(z.rb_mut(), counters);
-            for j in 0..cols {
-                let col = z.rb().col(j);
-                for (p, row) in nodes.rows.iter().enumerate() {
-                    w[p * m + start + j] = row.iter().map(|(d, c)| c * col[*d]).sum();
-                }
-            }
-            start += cols;
-        }
-        // Symmetrise away round-off.
-        for p in 0..m {
-            for q in 0..p {
-                let avg = 0.5 * (w[p * m + q] + w[q * m + p]);
-                w[p * m + q] = avg;
-                w[q * m + p] = avg;
-            }
-        }
+        let m = nodes.len();
+        let columns = ForwardColumns::new(factor, &nodes.rows, counters);
+        let w = columns.gram();
         let wm = Mat::<f64>::from_fn(m, m, |i, j| w[i * m + j]);
         let llt = wm
             .llt(faer::Side::Lower)
@@ -134,7 +107,17 @@ impl CondensedOperator {
                 q[p * m + r] = 0.5 * (inv[(p, r)] + inv[(r, p)]);
             }
         }
-        Ok(CondensedOperator { w, q, m })
+        Ok(CondensedOperator { w, q, m, columns })
+    }
+
+    /// d = C K⁻¹ r from the forward sweep y = L⁻¹ P r.
+    pub fn normal_displacements(&self, y: &Forward, d: &mut [f64]) {
+        self.columns.transpose_apply(y, d);
+    }
+
+    /// y ← y − G λ: afterwards the backward sweep of y is K⁻¹ (r − Cᵀ λ).
+    pub fn subtract_forces(&self, lambda: &[f64], y: &mut Forward) {
+        self.columns.subtract_apply(lambda, y);
     }
 
     /// y = Q x.

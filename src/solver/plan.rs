@@ -94,11 +94,10 @@ impl Plan {
                     c.nodes.clamped_nodes.len()
                 ),
                 cost: format!(
-                    "condensation W = C K⁻¹ Cᵀ: {m} solves once, {:.1} MiB dense; per step one dense active-set solve of size {m} and one extra sparse solve",
+                    "condensation G = L⁻¹ P Cᵀ ({m} sparse forward sweeps) and W = Gᵀ G once, {:.1} MiB dense; per step one dense active-set solve of size {m} between the forward and backward sweeps of the step's one solve",
                     (2 * m * m * 8) as f64 / 1048576.0
                 ),
             });
-            solves_per_step += 1;
         }
         if sim.kernel.is_some() {
             factorisations += 1; // possibly K_A for step 0

@@ -14,9 +14,11 @@ pub struct PhaseTimes {
     pub condensation: f64,
     pub loads: f64,
     pub history: f64,
-    pub free_solve: f64,
+    /// Forward sweeps y = L⁻¹ P r.
+    pub forward_sweep: f64,
     pub contact: f64,
-    pub recover: f64,
+    /// Backward sweeps u = Pᵀ L⁻ᵀ (y − G λ), with the contact forces folded in.
+    pub backward_sweep: f64,
     pub stress: f64,
     pub output: f64,
     pub total: f64,
@@ -50,7 +52,10 @@ pub struct RunStats {
     pub history_algorithm: Option<String>,
     pub history_bytes: usize,
     pub factorisations: usize,
+    /// Whole solves (one forward and one backward sweep over the factor).
     pub solves: usize,
+    /// Sparse forward sweeps forming G = L⁻¹ P Cᵀ (one per contact node, once per factor).
+    pub sparse_forward_sweeps: usize,
     pub contact_solves: usize,
     pub frames_written: usize,
     pub newton_iterations: Vec<usize>,

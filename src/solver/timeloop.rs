@@ -3,13 +3,15 @@
 //! ```text
 //!   F_n            ← loads(t_n)                      (once, if no load depends on t)
 //!   rhs            ← F_n − K_B h_n                   (history, only with a memory kernel)
-//!   u_free         ← K⁻¹ rhs                         (free solve, cached factor)
-//!   λ              ← contact.solve(d = C u_free)     (only with contact)
-//!   u_n            ← K⁻¹ (rhs − Cᵀ λ)                (recover)
+//!   y              ← L⁻¹ P rhs                       (forward sweep, cached factor)
+//!   λ              ← contact.solve(d = Gᵀ y)         (only with contact; d = C K⁻¹ rhs)
+//!   y              ← y − G λ                         (only with contact)
+//!   u_n            ← Pᵀ L⁻ᵀ y = K⁻¹ (rhs − Cᵀ λ)     (backward sweep)
 //!   history.push(u_n); write the frame if it is an output step
 //! ```
 //!
-//! with K = K_A + (k/2) b(0) K_B factored once. Step 0 has no history and uses K_A alone;
+//! with K = Pᵀ L Lᵀ P = K_A + (k/2) b(0) K_B factored once and G = L⁻¹ P Cᵀ formed once
+//! (METHOD.md §4, "the fast path"): a step costs one solve, contact or not. Step 0 has no history and uses K_A alone;
 //! when its solution is not trivially zero and K ≠ K_A, K_A gets a factor of its own.
 
 use super::error::SolveError;
@@ -20,9 +22,8 @@ use crate::contact::CondensedOperator;
 use crate::fem::assembly::assemble_stiffness;
 use crate::fem::SymmetricMatrix;
 use crate::history::History;
-use crate::linalg::{Counters, Factor};
+use crate::linalg::{Analysis, Counters, Factor, Forward};
 use crate::material::IDENTITY_TENSOR;
-use faer::sparse::linalg::solvers::SymbolicLlt;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -55,7 +56,7 @@ struct StepOperator {
 impl StepOperator {
     fn new(
         sim: &Simulation,
-        symbolic: &SymbolicLlt<usize>,
+        symbolic: &Analysis,
         matrix: &SymmetricMatrix,
         counters: &Counters,
         stats: &mut RunStats,
@@ -85,32 +86,36 @@ impl StepOperator {
         Ok(StepOperator { factor, condensed })
     }
 
-    /// Solves one step: free solve, contact, recover. `rhs` is consumed into u_n.
+    /// Solves one step with one forward and one backward sweep over the factor:
+    /// y = L⁻¹ P rhs, d = C K⁻¹ rhs = Gᵀ y, contact → λ, y ← y − G λ, u_n = Pᵀ L⁻ᵀ y.
     fn solve(
         &self,
         sim: &Simulation,
         step: usize,
-        rhs: &mut Vec<f64>,
+        rhs: &[f64],
         state: Option<&mut ContactState>,
         counters: &Counters,
         stats: &mut RunStats,
     ) -> Result<(Vec<f64>, Option<ContactOutcome>), SolveError> {
-        let mut u = rhs.clone();
-        timed(&mut stats.phases.free_solve, || {
-            self.factor.solve_in_place(&mut u, counters)
-        });
-        let (Some(setup), Some(op), Some(state)) = (&sim.contact, &self.condensed, state) else {
-            return Ok((u, None));
+        let mut y = timed(&mut stats.phases.forward_sweep, || self.factor.forward(rhs));
+        let outcome = match (&sim.contact, &self.condensed, state) {
+            (Some(setup), Some(op), Some(state)) => {
+                let outcome = timed(&mut stats.phases.contact, || {
+                    contact_solve(sim, setup, op, step, &y, state)
+                })?;
+                stats.contact_solves += 1;
+                timed(&mut stats.phases.backward_sweep, || {
+                    op.subtract_forces(&state.force, &mut y)
+                });
+                Some(outcome)
+            }
+            _ => None,
         };
-        let outcome = timed(&mut stats.phases.contact, || {
-            contact_solve(sim, setup, op, step, &u, state)
-        })?;
-        stats.contact_solves += 1;
-        timed(&mut stats.phases.recover, || {
-            setup.nodes.subtract_transpose(&state.force, rhs);
-            self.factor.solve_in_place(rhs, counters);
+        let mut u = vec![0.0; rhs.len()];
+        timed(&mut stats.phases.backward_sweep, || {
+            self.factor.backward(y, &mut u, counters)
         });
-        Ok((std::mem::take(rhs), Some(outcome)))
+        Ok((u, outcome))
     }
 }
 
@@ -142,11 +147,11 @@ fn contact_solve(
     setup: &ContactSetup,
     op: &CondensedOperator,
     step: usize,
-    u_free: &[f64],
+    forward: &Forward,
     state: &mut ContactState,
 ) -> Result<ContactOutcome, SolveError> {
     let mut d = vec![0.0; setup.nodes.len()];
-    setup.nodes.normal_displacements(u_free, &mut d);
+    op.normal_displacements(forward, &mut d);
     let solver = ActiveSetSolver {
         operator: op,
         weights: &setup.nodes.weights,
@@ -173,7 +178,7 @@ pub struct Stepper<'s> {
     pub stats: RunStats,
     k_a: SymmetricMatrix,
     k_b: Option<SymmetricMatrix>,
-    symbolic: SymbolicLlt<usize>,
+    symbolic: Analysis,
     main: StepOperator,
     /// (k/2) b(0), the memory term's share of K.
     memory_diagonal: Option<f64>,
@@ -298,14 +303,14 @@ impl<'s> Stepper<'s> {
                     sim,
                     &self.symbolic,
                     &self.k_a,
-                    &mut rhs,
+                    &rhs,
                     self.contact.as_mut(),
                     &self.counters,
                     &mut self.stats,
                 )?
             } else {
                 self.main
-                    .solve(sim, n, &mut rhs, self.contact.as_mut(), &self.counters, &mut self.stats)?
+                    .solve(sim, n, &rhs, self.contact.as_mut(), &self.counters, &mut self.stats)?
             };
             if u.iter().any(|v| !v.is_finite()) {
                 return Err(SolveError::NonFinite { step: n, time: t });
@@ -371,6 +376,7 @@ impl<'s> Stepper<'s> {
         self.stats.history_bytes = self.history.as_ref().map_or(0, |h| h.bytes_held());
         self.stats.factorisations = self.counters.factorisations();
         self.stats.solves = self.counters.solves();
+        self.stats.sparse_forward_sweeps = self.counters.sparse_forward_sweeps();
         self.stats
     }
 }
@@ -405,9 +411,9 @@ pub fn run(sim: &Simulation, sink: &mut dyn FrameSink, stop: Option<&AtomicBool>
 /// exactly (no load, and the contact law exerts no force at 0) nothing is factorised.
 fn step_zero(
     sim: &Simulation,
-    symbolic: &SymbolicLlt<usize>,
+    symbolic: &Analysis,
     k_a: &SymmetricMatrix,
-    rhs: &mut Vec<f64>,
+    rhs: &[f64],
     state: Option<&mut ContactState>,
     counters: &Counters,
     stats: &mut RunStats,

@@ -128,7 +128,7 @@ impl RunSummary {
     /// Seconds of the time steps proper (loads, history, solves, contact, recovery).
     pub fn steps_seconds(&self) -> f64 {
         let p = &self.phases;
-        p.loads + p.history + p.free_solve + p.contact + p.recover
+        p.loads + p.history + p.forward_sweep + p.contact + p.backward_sweep
     }
 }
 

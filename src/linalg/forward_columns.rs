@@ -1,0 +1,279 @@
+//! G = L⁻¹ P Bᵀ for a sparse B with few rows (B = C, the contact normals; METHOD.md §4,
+//! "the fast path"), stored column by column in supernode segments.
+//!
+//! A column of Bᵀ has one or two nonzeros. Its forward sweep L⁻¹ P b is nonzero only on the
+//! supernodes of the path(s) from its entries to the root of the supernodal elimination tree,
+//! so it is computed by a sparse sweep over those supernodes alone, and stored as one
+//! segment per supernode. A few hundred paths of a 2D factor hold well under a tenth of the
+//! factor's entries, so Gᵀ y and y − G λ are cheap next to a sweep over L.
+
+use super::factor::{dot, Counters, Factor, Forward};
+use rayon::prelude::*;
+use std::sync::atomic::Ordering;
+
+/// One supernode's slice of a column of G: rows `start..start + len` of the factor's order.
+#[derive(Clone, Copy, Debug)]
+struct Segment {
+    supernode: usize,
+    start: usize,
+    len: usize,
+    /// Offset of the segment's values in [`ForwardColumns::values`].
+    offset: usize,
+}
+
+/// The columns of G = L⁻¹ P Bᵀ.
+pub struct ForwardColumns {
+    /// Column c has segments `segments[column_start[c]..column_start[c + 1]]`, in increasing
+    /// supernode order.
+    column_start: Vec<usize>,
+    segments: Vec<Segment>,
+    values: Vec<f64>,
+}
+
+impl ForwardColumns {
+    /// The forward sweeps of the columns of Bᵀ; `rows[c]` lists the (unknown, coefficient)
+    /// pairs of row c of B. One sparse sweep per row (counted).
+    pub fn new(factor: &Factor, rows: &[Vec<(usize, f64)>], counters: &Counters) -> Self {
+        counters.sparse_forward_sweeps.fetch_add(rows.len(), Ordering::Relaxed);
+        let n = factor.n();
+        let n_supernodes = factor.analysis().supernodes().len();
+        let columns: Vec<(Vec<Segment>, Vec<f64>)> = rows
+            .par_iter()
+            .map_init(
+                || (vec![0.0; n], vec![false; n_supernodes]),
+                |(work, marked), row| sparse_forward_sweep(factor, row, work, marked),
+            )
+            .collect();
+        let mut out = ForwardColumns {
+            column_start: vec![0],
+            segments: Vec::new(),
+            values: Vec::new(),
+        };
+        for (segments, values) in columns {
+            let base = out.values.len();
+            out.segments.extend(segments.into_iter().map(|s| Segment {
+                offset: s.offset + base,
+                ..s
+            }));
+            out.values.extend(values);
+            out.column_start.push(out.segments.len());
+        }
+        out
+    }
+
+    /// Number of columns (rows of B).
+    pub fn len(&self) -> usize {
+        self.column_start.len() - 1
+    }
+
+    /// True if there are no columns.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Stored entries (a measure of the cost of [`Self::transpose_apply`]).
+    pub fn nonzeros(&self) -> usize {
+        self.values.len()
+    }
+
+    fn column(&self, c: usize) -> &[Segment] {
+        &self.segments[self.column_start[c]..self.column_start[c + 1]]
+    }
+
+    fn segment_values(&self, s: &Segment) -> &[f64] {
+        &self.values[s.offset..s.offset + s.len]
+    }
+
+    /// out = Gᵀ y. With y = L⁻¹ P r this is B K⁻¹ r.
+    pub fn transpose_apply(&self, y: &Forward, out: &mut [f64]) {
+        for (c, o) in out.iter_mut().enumerate() {
+            *o = self
+                .column(c)
+                .iter()
+                .map(|s| dot(self.segment_values(s), &y.values[s.start..s.start + s.len]))
+                .sum();
+        }
+    }
+
+    /// y ← y − G λ. With y = L⁻¹ P r the backward sweep of the result is K⁻¹ (r − Bᵀ λ).
+    pub fn subtract_apply(&self, lambda: &[f64], y: &mut Forward) {
+        for (c, &l) in lambda.iter().enumerate() {
+            if l == 0.0 {
+                continue;
+            }
+            for s in self.column(c) {
+                let target = &mut y.values[s.start..s.start + s.len];
+                for (t, g) in target.iter_mut().zip(self.segment_values(s)) {
+                    *t -= l * g;
+                }
+            }
+        }
+    }
+
+    /// Gᵀ G (row-major, symmetric) = B K⁻¹ Bᵀ. Two columns meet only on the supernodes their
+    /// paths share, found by merging the two sorted segment lists.
+    pub fn gram(&self) -> Vec<f64> {
+        let m = self.len();
+        let rows: Vec<Vec<f64>> = (0..m)
+            .into_par_iter()
+            .map(|p| (0..=p).map(|q| self.column_dot(p, q)).collect())
+            .collect();
+        let mut w = vec![0.0; m * m];
+        for (p, row) in rows.iter().enumerate() {
+            for (q, &v) in row.iter().enumerate() {
+                w[p * m + q] = v;
+                w[q * m + p] = v;
+            }
+        }
+        w
+    }
+
+    fn column_dot(&self, p: usize, q: usize) -> f64 {
+        let (a, b) = (self.column(p), self.column(q));
+        let (mut i, mut j, mut sum) = (0, 0, 0.0);
+        while i < a.len() && j < b.len() {
+            match a[i].supernode.cmp(&b[j].supernode) {
+                std::cmp::Ordering::Less => i += 1,
+                std::cmp::Ordering::Greater => j += 1,
+                std::cmp::Ordering::Equal => {
+                    sum += dot(self.segment_values(&a[i]), self.segment_values(&b[j]));
+                    i += 1;
+                    j += 1;
+                }
+            }
+        }
+        sum
+    }
+}
+
+/// L⁻¹ P b for a sparse b, visiting only the supernodes on the paths from b's entries to the
+/// root (in increasing order, so every supernode is finished before its ancestors use it).
+/// `work` (length n, zero) and `marked` (one flag per supernode, false) are returned clean.
+fn sparse_forward_sweep(
+    factor: &Factor,
+    entries: &[(usize, f64)],
+    work: &mut [f64],
+    marked: &mut [bool],
+) -> (Vec<Segment>, Vec<f64>) {
+    let supernodes = factor.analysis().supernodes();
+    let mut path = Vec::new();
+    for &(i, c) in entries {
+        let row = factor.position(i);
+        work[row] += c;
+        let mut s = supernodes.supernode_of[row];
+        while s != usize::MAX && !marked[s] {
+            marked[s] = true;
+            path.push(s);
+            s = supernodes.parent[s];
+        }
+    }
+    path.sort_unstable();
+    let mut local = vec![0.0; supernodes.max_rows];
+    let mut segments = Vec::with_capacity(path.len());
+    let mut values = Vec::new();
+    for &s in &path {
+        factor.forward_supernode(s, work, &mut local);
+        let (start, len) = (supernodes.start[s], supernodes.width[s]);
+        segments.push(Segment {
+            supernode: s,
+            start,
+            len,
+            offset: values.len(),
+        });
+        values.extend_from_slice(&work[start..start + len]);
+    }
+    for &s in &path {
+        work[supernodes.start[s]..supernodes.start[s] + supernodes.width[s]].fill(0.0);
+        marked[s] = false;
+    }
+    (segments, values)
+}
+
+#[cfg(test)]
+mod tests {
+    //! G = L⁻¹ P Cᵀ against whole solves: Gᵀ (L⁻¹ P r) = C K⁻¹ r, Gᵀ G = C K⁻¹ Cᵀ, and
+    //! backward(forward(r) − G λ) = K⁻¹ (r − Cᵀ λ), for rows with one and two entries
+    //! anywhere in the mesh, on P1 and Q1 stiffness matrices.
+    use super::*;
+    use crate::fem::{assembly::assemble_stiffness, DofMap};
+    use crate::material::{Elasticity, PlaneModel};
+    use crate::mesh::structured::{rectangle, CellShape};
+    use crate::mesh::GroupSelector;
+    use proptest::prelude::*;
+
+    fn stiffness(shape: CellShape) -> crate::fem::SymmetricMatrix {
+        let mesh = rectangle(2.0, 1.0, 12, 7, shape);
+        let clamped = mesh.group_nodes(&GroupSelector::Name("Gamma1".into())).unwrap();
+        let dofs = DofMap::new(mesh.points.len(), &clamped);
+        let e = Elasticity {
+            youngs_modulus: 3.0,
+            poisson_ratio: 0.3,
+            plane: PlaneModel::Strain,
+        };
+        let [k] = assemble_stiffness(&mesh.cells, &mesh.points, &dofs, &[e.voigt()]);
+        k
+    }
+
+    fn solve(factor: &Factor, r: &[f64]) -> Vec<f64> {
+        let mut x = r.to_vec();
+        factor.solve_in_place(&mut x, &Counters::default());
+        x
+    }
+
+    fn rel(a: &[f64], b: &[f64]) -> f64 {
+        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
+        a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / scale
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+        #[test]
+        fn forward_columns_agree_with_whole_solves(
+            quad in any::<bool>(),
+            picks in proptest::collection::vec((0usize..10_000, 0usize..10_000, -1.0f64..1.0, -1.0f64..1.0, any::<bool>()), 1..12),
+            seed in 0u64..1000,
+        ) {
+            let k = stiffness(if quad { CellShape::Quad } else { CellShape::Tri });
+            let n = k.n();
+            let counters = Counters::default();
+            let factor = Factor::new(&Factor::analyse(&k).unwrap(), &k, &counters).unwrap();
+            let rows: Vec<Vec<(usize, f64)>> = picks
+                .iter()
+                .map(|&(i, j, a, b, two)| {
+                    let (i, j) = (i % n, j % n);
+                    if two && i != j { vec![(i, a + 1.5), (j, b)] } else { vec![(i, a + 1.5)] }
+                })
+                .collect();
+            let g = ForwardColumns::new(&factor, &rows, &counters);
+            prop_assert_eq!(counters.sparse_forward_sweeps(), rows.len());
+            let apply_c = |x: &[f64]| -> Vec<f64> { rows.iter().map(|r| r.iter().map(|(d, c)| c * x[*d]).sum()).collect() };
+            // W = C K⁻¹ Cᵀ column by column with whole solves.
+            let m = rows.len();
+            let gram = g.gram();
+            for q in 0..m {
+                let mut e = vec![0.0; n];
+                for (d, c) in &rows[q] { e[*d] += c; }
+                let column = apply_c(&solve(&factor, &e));
+                let ours: Vec<f64> = (0..m).map(|p| gram[p * m + q]).collect();
+                prop_assert!(rel(&ours, &column) < 1e-12, "W column {q}: {:.1e}", rel(&ours, &column));
+            }
+            // A right-hand side and forces.
+            let r: Vec<f64> = (0..n).map(|i| ((i as f64 + seed as f64) * 0.754_877_666).fract() - 0.5).collect();
+            let lambda: Vec<f64> = (0..m).map(|p| if p % 3 == 1 { 0.0 } else { (p as f64 * 0.618).fract() - 0.3 }).collect();
+            let mut y = factor.forward(&r);
+            let mut d = vec![0.0; m];
+            g.transpose_apply(&y, &mut d);
+            let expected_d = apply_c(&solve(&factor, &r));
+            prop_assert!(rel(&d, &expected_d) < 1e-12, "C K⁻¹ r: {:.1e}", rel(&d, &expected_d));
+            g.subtract_apply(&lambda, &mut y);
+            let mut u = vec![0.0; n];
+            factor.backward(y, &mut u, &counters);
+            let mut shifted = r.clone();
+            for (row, l) in rows.iter().zip(&lambda) {
+                for (i, c) in row { shifted[*i] -= c * l; }
+            }
+            let expected_u = solve(&factor, &shifted);
+            prop_assert!(rel(&u, &expected_u) < 1e-12, "K⁻¹(r − Cᵀλ): {:.1e}", rel(&u, &expected_u));
+        }
+    }
+}

@@ -1,0 +1,40 @@
+//! Sparse linear algebra with one cached Cholesky factor (METHOD.md §3–4).
+//!
+//! * [`Factor`]: K = Pᵀ L Lᵀ P, symbolic analysis (AMD ordering, supernodal) once, numeric
+//!   factorisation once per distinct matrix, and the two halves of a solve apart: the forward
+//!   sweep y = L⁻¹ P r ([`Factor::forward`]) and the backward sweep x = Pᵀ L⁻ᵀ y
+//!   ([`Factor::backward`]). A vector between the two sweeps has its own type, [`Forward`].
+//! * [`ForwardColumns`]: G = L⁻¹ P Cᵀ for a sparse C with few rows (the contact normals),
+//!   computed by sparse forward sweeps that touch only the supernodes on each column's path to
+//!   the root of the elimination tree. With it, C K⁻¹ r = Gᵀ (L⁻¹ P r) and
+//!   K⁻¹ (r − Cᵀ λ) = Pᵀ L⁻ᵀ (L⁻¹ P r − G λ): a contact step costs one forward and one backward
+//!   sweep, the cost of a single solve, and W = C K⁻¹ Cᵀ = Gᵀ G.
+//!
+//! ```
+//! use hvi::fem::{assembly::assemble_stiffness, DofMap};
+//! use hvi::linalg::{Counters, Factor};
+//! use hvi::material::{Elasticity, PlaneModel};
+//! use hvi::mesh::structured::{rectangle, CellShape};
+//! use hvi::mesh::GroupSelector;
+//!
+//! let mesh = rectangle(2.0, 1.0, 8, 4, CellShape::Quad);
+//! let clamped = mesh.group_nodes(&GroupSelector::Name("Gamma1".into())).unwrap();
+//! let dofs = DofMap::new(mesh.points.len(), &clamped);
+//! let elasticity = Elasticity { youngs_modulus: 1.0, poisson_ratio: 0.3, plane: PlaneModel::Stress };
+//! let [k] = assemble_stiffness(&mesh.cells, &mesh.points, &dofs, &[elasticity.voigt()]);
+//! let counters = Counters::default();
+//! let factor = Factor::new(&Factor::analyse(&k).unwrap(), &k, &counters).unwrap();
+//! // K⁻¹ (K 1) = 1
+//! let ones = vec![1.0; k.n()];
+//! let mut r = vec![0.0; k.n()];
+//! k.matvec(&ones, &mut r);
+//! let mut x = vec![0.0; k.n()];
+//! factor.backward(factor.forward(&r), &mut x, &counters);
+//! assert!(x.iter().all(|v| (v - 1.0).abs() < 1e-10));
+//! ```
+
+mod factor;
+mod forward_columns;
+
+pub use factor::{set_parallelism, Analysis, Counters, Factor, FactorError, Forward};
+pub use forward_columns::ForwardColumns;
