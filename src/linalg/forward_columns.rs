@@ -7,7 +7,8 @@
 //! segment per supernode. A few hundred paths of a 2D factor hold well under a tenth of the
 //! factor's entries, so Gᵀ y and y − G λ are cheap next to a sweep over L.
 
-use super::factor::{dot, Counters, Factor, Forward};
+use super::factor::{Counters, Factor, Forward};
+use super::supernodes::dot;
 use rayon::prelude::*;
 use std::sync::atomic::Ordering;
 

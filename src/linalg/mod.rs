@@ -35,6 +35,8 @@
 
 mod factor;
 mod forward_columns;
+mod schedule;
+mod supernodes;
 
 pub use factor::{set_parallelism, Analysis, Counters, Factor, FactorError, Forward};
 pub use forward_columns::ForwardColumns;

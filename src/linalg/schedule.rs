@@ -1,0 +1,325 @@
+//! The triangular sweeps, sequential or on several threads.
+//!
+//! A sweep is bound by how fast L streams from memory, and one core does not saturate the
+//! memory bus here (two sweeps in two processes run at the speed of one alone). The
+//! parallel sweeps split the supernodal elimination tree into disjoint subtrees ("pieces")
+//! and the supernodes above them ("top"):
+//!
+//! * forward: the pieces in parallel, each writing its own columns and accumulating its
+//!   updates of top rows in a private vector; the private vectors are added in; then the top
+//!   supernodes in order, on one thread;
+//! * backward: the top supernodes first, on one thread; then the pieces in parallel, each
+//!   reading the (now final) top rows from a shared copy and writing its own columns.
+//!
+//! Faer numbers supernodes in a postorder, so a subtree is a contiguous range of supernodes
+//! and of columns: the pieces are disjoint slices of the vector, and safe Rust can hand each
+//! to its own thread.
+
+use super::supernodes::{backward_block, forward_block, Supernodes};
+use rayon::prelude::*;
+use std::ops::Range;
+
+/// Below this many stored entries in L a sweep takes well under a millisecond and threads
+/// cost more than they save.
+const PARALLEL_MIN_ENTRIES: usize = 400_000;
+/// Split until no piece holds more than this share of the work (work stealing evens out
+/// the rest).
+const PIECES: usize = 12;
+/// Stop splitting when the top holds this share of the work.
+const MAX_TOP_SHARE: f64 = 0.2;
+
+/// A subtree of the supernodal elimination tree: supernodes `supernodes` (inclusive range
+/// in postorder) owning the columns `columns`.
+#[derive(Clone, Debug)]
+struct Piece {
+    supernodes: Range<usize>,
+    columns: Range<usize>,
+    entries: usize,
+}
+
+/// The split of the tree for parallel sweeps.
+pub(super) struct Schedule {
+    /// Ordered by their columns.
+    pieces: Vec<Piece>,
+    /// The supernodes above the pieces, ascending.
+    top: Vec<usize>,
+    /// The columns of the top supernodes, ascending.
+    top_rows: Vec<usize>,
+    /// For every column: its index in `top_rows`, or `u32::MAX` below the top.
+    top_slot: Vec<u32>,
+    /// Share of the stored entries in the top (sequential part).
+    pub top_share: f64,
+}
+
+impl Schedule {
+    /// Splits the tree, or `None` when L is too small to gain from threads or the tree does
+    /// not split into at least two pieces.
+    pub fn new(sn: &Supernodes) -> Option<Schedule> {
+        let ns = sn.len();
+        let mut subtree_entries = vec![0usize; ns];
+        let mut subtree_first: Vec<usize> = (0..ns).collect();
+        let mut subtree_count = vec![1usize; ns];
+        let mut children = vec![Vec::new(); ns];
+        let mut roots = Vec::new();
+        for s in 0..ns {
+            subtree_entries[s] += sn.entries(s);
+            match sn.parent[s] {
+                usize::MAX => roots.push(s),
+                p => {
+                    debug_assert!(p > s, "postorder: a parent comes after its children");
+                    subtree_entries[p] += subtree_entries[s];
+                    subtree_first[p] = subtree_first[p].min(subtree_first[s]);
+                    subtree_count[p] += subtree_count[s];
+                    children[p].push(s);
+                }
+            }
+        }
+        let total: usize = roots.iter().map(|&r| subtree_entries[r]).sum();
+        if total < PARALLEL_MIN_ENTRIES {
+            return None;
+        }
+        let mut frontier = roots;
+        let mut top = Vec::new();
+        let mut top_entries = 0;
+        loop {
+            let (k, &largest) = frontier.iter().enumerate().max_by_key(|(_, &s)| subtree_entries[s])?;
+            if subtree_entries[largest] * PIECES <= total || top_entries as f64 > MAX_TOP_SHARE * total as f64 {
+                break;
+            }
+            frontier.swap_remove(k);
+            top.push(largest);
+            top_entries += sn.entries(largest);
+            frontier.extend(&children[largest]);
+        }
+        if frontier.len() < 2 {
+            return None;
+        }
+        let mut pieces = Vec::with_capacity(frontier.len());
+        for &root in &frontier {
+            let first = subtree_first[root];
+            if subtree_count[root] != root - first + 1 {
+                return None; // not a postorder: keep the sequential sweeps
+            }
+            pieces.push(Piece {
+                supernodes: first..root + 1,
+                columns: sn.start[first]..sn.start[root] + sn.width[root],
+                entries: subtree_entries[root],
+            });
+        }
+        pieces.sort_by_key(|p| p.columns.start);
+        top.sort_unstable();
+        let n = sn.supernode_of.len();
+        let mut top_slot = vec![u32::MAX; n];
+        let mut top_rows = Vec::new();
+        for &s in &top {
+            for (c, slot) in top_slot.iter_mut().enumerate().skip(sn.start[s]).take(sn.width[s]) {
+                *slot = top_rows.len() as u32;
+                top_rows.push(c);
+            }
+        }
+        Some(Schedule {
+            pieces,
+            top,
+            top_rows,
+            top_slot,
+            top_share: top_entries as f64 / total as f64,
+        })
+    }
+
+    /// The entries of each piece, largest first (for reports).
+    pub fn piece_entries(&self) -> Vec<usize> {
+        let mut e: Vec<usize> = self.pieces.iter().map(|p| p.entries).collect();
+        e.sort_unstable_by(|a, b| b.cmp(a));
+        e
+    }
+
+    /// The pieces' slices of x, in the pieces' order.
+    fn split<'x>(&self, mut x: &'x mut [f64]) -> Vec<(&Piece, &'x mut [f64])> {
+        let mut offset = 0;
+        let mut out = Vec::with_capacity(self.pieces.len());
+        for piece in &self.pieces {
+            let rest = std::mem::take(&mut x);
+            let (_, rest) = rest.split_at_mut(piece.columns.start - offset);
+            let (mine, rest) = rest.split_at_mut(piece.columns.len());
+            out.push((piece, mine));
+            x = rest;
+            offset = piece.columns.end;
+        }
+        out
+    }
+
+    /// The forward sweep y ← L⁻¹ y on the pieces in parallel, then the top.
+    pub fn forward(&self, sn: &Supernodes, values: &[f64], y: &mut [f64]) {
+        let n_top = self.top_rows.len();
+        let mut work = self.split(y);
+        work.sort_by_key(|(p, _)| std::cmp::Reverse(p.entries)); // largest first
+        let updates: Vec<Vec<f64>> = work
+            .into_par_iter()
+            .map_init(
+                || vec![0.0; sn.max_rows],
+                |local, (piece, x)| {
+                    let mut top = vec![0.0; n_top];
+                    let (c0, c1) = (piece.columns.start, piece.columns.end);
+                    for s in piece.supernodes.clone() {
+                        let (width, start) = (sn.width[s], sn.start[s] - c0);
+                        let t = &mut local[..sn.rows(s)];
+                        t[..width].copy_from_slice(&x[start..start + width]);
+                        t[width..].fill(0.0);
+                        forward_block(sn.block(values, s), width, t);
+                        x[start..start + width].copy_from_slice(&t[..width]);
+                        for (&row, a) in sn.pattern(s).iter().zip(&t[width..]) {
+                            if row < c1 {
+                                x[row - c0] += a;
+                            } else {
+                                top[self.top_slot[row] as usize] += a;
+                            }
+                        }
+                    }
+                    top
+                },
+            )
+            .collect();
+        for update in &updates {
+            for (&row, a) in self.top_rows.iter().zip(update) {
+                y[row] += a;
+            }
+        }
+        let mut local = vec![0.0; sn.max_rows];
+        for &s in &self.top {
+            forward_supernode(sn, values, s, y, &mut local);
+        }
+    }
+
+    /// The backward sweep y ← L⁻ᵀ y: the top, then the pieces in parallel.
+    pub fn backward(&self, sn: &Supernodes, values: &[f64], y: &mut [f64]) {
+        let mut local = vec![0.0; sn.max_rows];
+        for &s in self.top.iter().rev() {
+            backward_supernode(sn, values, s, y, &mut local);
+        }
+        let shared: Vec<f64> = self.top_rows.iter().map(|&r| y[r]).collect();
+        let mut work = self.split(y);
+        work.sort_by_key(|(p, _)| std::cmp::Reverse(p.entries));
+        work.into_par_iter().for_each_init(
+            || vec![0.0; sn.max_rows],
+            |local, (piece, x)| {
+                let (c0, c1) = (piece.columns.start, piece.columns.end);
+                for s in piece.supernodes.clone().rev() {
+                    let (width, start) = (sn.width[s], sn.start[s] - c0);
+                    let t = &mut local[..sn.rows(s)];
+                    t[..width].copy_from_slice(&x[start..start + width]);
+                    for (a, &row) in t[width..].iter_mut().zip(sn.pattern(s)) {
+                        *a = if row < c1 {
+                            x[row - c0]
+                        } else {
+                            shared[self.top_slot[row] as usize]
+                        };
+                    }
+                    backward_block(sn.block(values, s), width, t);
+                    x[start..start + width].copy_from_slice(&t[..width]);
+                }
+            },
+        );
+    }
+}
+
+/// One supernode of the forward sweep on the whole vector.
+#[inline]
+pub(super) fn forward_supernode(sn: &Supernodes, values: &[f64], s: usize, x: &mut [f64], local: &mut [f64]) {
+    let (width, start) = (sn.width[s], sn.start[s]);
+    let t = &mut local[..sn.rows(s)];
+    t[..width].copy_from_slice(&x[start..start + width]);
+    t[width..].fill(0.0);
+    forward_block(sn.block(values, s), width, t);
+    x[start..start + width].copy_from_slice(&t[..width]);
+    for (&row, a) in sn.pattern(s).iter().zip(&t[width..]) {
+        x[row] += a;
+    }
+}
+
+/// One supernode of the backward sweep on the whole vector.
+#[inline]
+pub(super) fn backward_supernode(sn: &Supernodes, values: &[f64], s: usize, x: &mut [f64], local: &mut [f64]) {
+    let (width, start) = (sn.width[s], sn.start[s]);
+    let t = &mut local[..sn.rows(s)];
+    t[..width].copy_from_slice(&x[start..start + width]);
+    for (a, &row) in t[width..].iter_mut().zip(sn.pattern(s)) {
+        *a = x[row];
+    }
+    backward_block(sn.block(values, s), width, t);
+    x[start..start + width].copy_from_slice(&t[..width]);
+}
+
+/// The whole forward sweep on one thread.
+pub(super) fn forward_sequential(sn: &Supernodes, values: &[f64], y: &mut [f64]) {
+    let mut local = vec![0.0; sn.max_rows];
+    for s in 0..sn.len() {
+        forward_supernode(sn, values, s, y, &mut local);
+    }
+}
+
+/// The whole backward sweep on one thread.
+pub(super) fn backward_sequential(sn: &Supernodes, values: &[f64], y: &mut [f64]) {
+    let mut local = vec![0.0; sn.max_rows];
+    for s in (0..sn.len()).rev() {
+        backward_supernode(sn, values, s, y, &mut local);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The parallel sweeps against the sequential ones on a factor large enough to be split.
+    use super::super::{Counters, Factor};
+    use super::*;
+    use crate::fem::{assembly::assemble_stiffness, DofMap};
+    use crate::material::{Elasticity, PlaneModel};
+    use crate::mesh::structured::{rectangle, CellShape};
+    use crate::mesh::GroupSelector;
+
+    #[test]
+    fn parallel_sweeps_agree_with_sequential_sweeps() {
+        for shape in [CellShape::Quad, CellShape::Tri] {
+            let mesh = rectangle(2.0, 1.0, 96, 48, shape);
+            let clamped = mesh.group_nodes(&GroupSelector::Name("Gamma1".into())).unwrap();
+            let dofs = DofMap::new(mesh.points.len(), &clamped);
+            let e = Elasticity {
+                youngs_modulus: 1.0,
+                poisson_ratio: 0.3,
+                plane: PlaneModel::Stress,
+            };
+            let [k] = assemble_stiffness(&mesh.cells, &mesh.points, &dofs, &[e.voigt()]);
+            let analysis = Factor::analyse(&k).unwrap();
+            let schedule = analysis.schedule.as_deref().expect("a factor this size is split");
+            assert!(schedule.pieces.len() >= 2);
+            let factor = Factor::new(&analysis, &k, &Counters::default()).unwrap();
+            let (sn, values) = (analysis.supernodes(), factor.values());
+            let r: Vec<f64> = (0..k.n())
+                .map(|i| ((i as f64) * 0.618_033_988_7).fract() - 0.5)
+                .collect();
+            let (mut serial, mut parallel) = (r.clone(), r.clone());
+            forward_sequential(sn, values, &mut serial);
+            schedule.forward(sn, values, &mut parallel);
+            let scale = serial.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let diff = serial
+                .iter()
+                .zip(&parallel)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            // Only the order of the additions into top rows differs: round-off.
+            assert!(diff <= 1e-13 * scale, "forward: {diff:e} of {scale:e}");
+            backward_sequential(sn, values, &mut serial);
+            schedule.backward(sn, values, &mut parallel);
+            let scale = serial.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let diff = serial
+                .iter()
+                .zip(&parallel)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            assert!(diff <= 1e-12 * scale, "backward: {diff:e} of {scale:e}");
+            // and the solve is a solve: K x = r
+            let mut x = r.clone();
+            factor.solve_in_place(&mut x, &Counters::default());
+            let mut kx = vec![0.0; k.n()];
+            k.matvec(&x, &mut kx);
+            let residual = kx.iter().zip(&r).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            assert!(residual < 1e-9, "residual {residual:e}");
+        }
+    }
+}
