@@ -33,9 +33,19 @@ pub fn local_stiffness<const M: usize>(cell: &Cell, points: &[[f64; 2]], ds: &[V
         for (d, km) in ds.iter().zip(k.iter_mut()) {
             for j in 0..nl {
                 let db = super::super::material::elasticity::apply(d, &b[j]);
-                for i in 0..nl {
+                for i in 0..=j {
                     km[i][j] += w * (b[i][0] * db[0] + b[i][1] * db[1] + b[i][2] * db[2]);
                 }
+            }
+        }
+    }
+    // Bᵀ D B is symmetric (D is): the lower triangle mirrors the upper one.
+    let nl = 2 * cell.nodes().len();
+    for km in k.iter_mut() {
+        #[allow(clippy::needless_range_loop)] // reads row j while writing column j
+        for j in 0..nl {
+            for i in j + 1..nl {
+                km[i][j] = km[j][i];
             }
         }
     }

@@ -20,42 +20,64 @@ pub struct Pattern {
 }
 
 impl Pattern {
-    /// Builds the pattern of the element dof couplings.
+    /// Builds the pattern of the element dof couplings. Both components of a node are free or
+    /// both clamped, and free nodes are numbered in order (unknowns 2k, 2k + 1 for free node
+    /// k), so the pattern is built on nodes and expanded to 2 × 2 blocks: column 2k + c holds
+    /// the rows 2q, 2q + 1 of every free node q coupled with k, in order.
     pub fn new(cells: &[Cell], dofs: &DofMap) -> Self {
         let n = dofs.n_free();
-        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); n];
-        let mut local = Vec::with_capacity(8);
+        let free_node = |p: usize| {
+            let d = dofs.raw(p, 0);
+            (d != usize::MAX).then_some(d / 2)
+        };
+        // Node adjacency (including the node itself), sorted.
+        let mut adjacency: Vec<Vec<usize>> = vec![Vec::new(); n / 2];
+        let mut local: Vec<Option<usize>> = Vec::with_capacity(4);
         for cell in cells {
-            element_dofs(cell, dofs, &mut local);
-            for &j in local.iter().filter(|d| **d != usize::MAX) {
-                for &i in local.iter().filter(|d| **d != usize::MAX) {
-                    cols[j].push(i);
-                }
+            local.clear();
+            local.extend(cell.nodes().iter().map(|&p| free_node(p)));
+            for a in local.iter().flatten() {
+                adjacency[*a].extend(local.iter().flatten());
             }
+        }
+        for list in &mut adjacency {
+            list.sort_unstable();
+            list.dedup();
         }
         let mut col_ptr = Vec::with_capacity(n + 1);
         col_ptr.push(0);
-        let mut row_idx = Vec::new();
-        for c in cols.iter_mut() {
-            c.sort_unstable();
-            c.dedup();
-            row_idx.extend_from_slice(c);
-            col_ptr.push(row_idx.len());
+        let mut row_idx = Vec::with_capacity(adjacency.iter().map(|l| 4 * l.len()).sum());
+        for list in &adjacency {
+            for _component in 0..2 {
+                row_idx.extend(list.iter().flat_map(|&q| [2 * q, 2 * q + 1]));
+                col_ptr.push(row_idx.len());
+            }
         }
-        let mut scatter = Vec::new();
+        // Scatter: local entry (i, j) = (node b comp c', node a comp c) sits at
+        // col_ptr[2·a + c] + 2·(position of b in adjacency[a]) + c'.
+        let mut scatter = Vec::with_capacity(cells.iter().map(|c| 4 * c.nodes().len().pow(2)).sum());
         let mut scatter_offset = Vec::with_capacity(cells.len() + 1);
         scatter_offset.push(0);
         for cell in cells {
-            element_dofs(cell, dofs, &mut local);
-            for &j in &local {
-                for &i in &local {
-                    let pos = if i == usize::MAX || j == usize::MAX {
-                        usize::MAX
-                    } else {
-                        let col = &row_idx[col_ptr[j]..col_ptr[j + 1]];
-                        col_ptr[j] + col.binary_search(&i).expect("pattern holds every element coupling")
-                    };
-                    scatter.push(pos);
+            local.clear();
+            local.extend(cell.nodes().iter().map(|&p| free_node(p)));
+            let nl = 2 * local.len();
+            let start = scatter.len();
+            scatter.resize(start + nl * nl, usize::MAX);
+            let block = &mut scatter[start..];
+            for (ja, a) in local.iter().enumerate() {
+                let Some(a) = *a else { continue };
+                for (ib, b) in local.iter().enumerate() {
+                    let Some(b) = *b else { continue };
+                    let k = adjacency[a]
+                        .binary_search(&b)
+                        .expect("pattern holds every element coupling");
+                    for c in 0..2 {
+                        for c2 in 0..2 {
+                            // row-major over local dofs: (i, j) at i·nl + j
+                            block[(2 * ib + c2) * nl + 2 * ja + c] = col_ptr[2 * a + c] + 2 * k + c2;
+                        }
+                    }
                 }
             }
             scatter_offset.push(scatter.len());
