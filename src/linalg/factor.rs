@@ -123,7 +123,13 @@ impl Factor {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
             ..Default::default()
         };
-        let inner = factorize_symbolic_cholesky(matrix.pattern.symbolic(), Side::Lower, SymmetricOrdering::Amd, params)
+        let pattern = matrix.pattern.symbolic();
+        let node_order = node_ordering(pattern);
+        let ordering = match &node_order {
+            Some((fwd, inv)) => SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(fwd, inv, matrix.n())),
+            None => SymmetricOrdering::Amd,
+        };
+        let inner = factorize_symbolic_cholesky(pattern, Side::Lower, ordering, params)
             .map_err(|e| FactorError::Other(format!("{e:?}")))?;
         let supernodes = match inner.raw() {
             SymbolicCholeskyRaw::Supernodal(s) => Supernodes::new(s),
@@ -241,4 +247,56 @@ impl Factor {
     pub(super) fn forward_supernode(&self, s: usize, x: &mut [f64], local: &mut [f64]) {
         forward_supernode(&self.analysis.supernodes, &self.values, s, x, local)
     }
+}
+
+/// AMD on the nodes when the pattern is made of 2 × 2 node blocks (unknowns 2k, 2k + 1 of a
+/// node share their column pattern, as [`crate::fem::pattern::Pattern`] builds it), expanded
+/// to the unknowns with the two of a node kept together: a graph a quarter the size to order,
+/// and supernodes that never split a node. None if the pattern is not of that form.
+fn node_ordering(pattern: faer::sparse::SymbolicSparseColMatRef<'_, usize>) -> Option<(Vec<usize>, Vec<usize>)> {
+    let n = pattern.nrows();
+    if n % 2 != 0 || n == 0 {
+        return None;
+    }
+    let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+    let mut node_ptr = Vec::with_capacity(n / 2 + 1);
+    node_ptr.push(0);
+    let mut node_rows = Vec::with_capacity(row_idx.len() / 4);
+    for k in 0..n / 2 {
+        let (a, b) = (
+            &row_idx[col_ptr[2 * k]..col_ptr[2 * k + 1]],
+            &row_idx[col_ptr[2 * k + 1]..col_ptr[2 * k + 2]],
+        );
+        if a != b || a.len() % 2 != 0 {
+            return None;
+        }
+        for pair in a.chunks_exact(2) {
+            if pair[0] % 2 != 0 || pair[1] != pair[0] + 1 {
+                return None;
+            }
+            node_rows.push(pair[0] / 2);
+        }
+        node_ptr.push(node_rows.len());
+    }
+    let nodes = faer::sparse::SymbolicSparseColMatRef::new_checked(n / 2, n / 2, &node_ptr, None, &node_rows);
+    let (mut fwd, mut inv) = (vec![0usize; n / 2], vec![0usize; n / 2]);
+    let mut buffer = MemBuffer::try_new(faer::sparse::linalg::amd::order_scratch::<usize>(
+        n / 2,
+        node_rows.len(),
+    ))
+    .ok()?;
+    faer::sparse::linalg::amd::order(
+        &mut fwd,
+        &mut inv,
+        nodes,
+        Default::default(),
+        MemStack::new(&mut buffer),
+    )
+    .ok()?;
+    let dof_fwd: Vec<usize> = fwd.iter().flat_map(|&k| [2 * k, 2 * k + 1]).collect();
+    let mut dof_inv = vec![0; n];
+    for (i, &d) in dof_fwd.iter().enumerate() {
+        dof_inv[d] = i;
+    }
+    Some((dof_fwd, dof_inv))
 }
