@@ -8,6 +8,7 @@ pub mod assembly;
 pub mod dofs;
 pub mod element;
 pub mod loads;
+pub mod node_blocks;
 pub mod norms;
 pub mod pattern;
 pub mod quadrature;
@@ -15,4 +16,5 @@ pub mod stress;
 
 pub use assembly::{assemble_stiffness, StiffnessPair};
 pub use dofs::DofMap;
+pub use node_blocks::NodeBlockMatrix;
 pub use pattern::SymmetricMatrix;

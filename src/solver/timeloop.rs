@@ -20,7 +20,7 @@ use super::stats::{timed, RunStats};
 use crate::contact::active_set::{ActiveSetSolver, ContactOutcome, ContactState};
 use crate::contact::CondensedOperator;
 use crate::fem::assembly::assemble_stiffness;
-use crate::fem::SymmetricMatrix;
+use crate::fem::{NodeBlockMatrix, SymmetricMatrix};
 use crate::history::History;
 use crate::linalg::{Analysis, Counters, Factor, Forward};
 use crate::material::IDENTITY_TENSOR;
@@ -169,6 +169,22 @@ fn contact_solve(
     })
 }
 
+/// K_B as the time loop multiplies it: in node blocks (a third of the memory traffic) when
+/// its pattern allows, else as assembled.
+enum MemoryStiffness {
+    NodeBlocks(NodeBlockMatrix),
+    Full(SymmetricMatrix),
+}
+
+impl MemoryStiffness {
+    fn matvec(&self, x: &[f64], y: &mut [f64]) {
+        match self {
+            MemoryStiffness::NodeBlocks(m) => m.matvec(x, y),
+            MemoryStiffness::Full(m) => m.matvec(x, y),
+        }
+    }
+}
+
 /// The state of a run between steps: the assembled matrices, the cached factor, the history
 /// and the contact warm start. [`Stepper::prepare`] does the one-off work, [`Stepper::advance`]
 /// one time step (METHOD.md §3–4).
@@ -177,7 +193,8 @@ pub struct Stepper<'s> {
     pub counters: Counters,
     pub stats: RunStats,
     k_a: SymmetricMatrix,
-    k_b: Option<SymmetricMatrix>,
+    /// K_B for the memory load K_B h_n of every step.
+    k_b: Option<MemoryStiffness>,
     symbolic: Analysis,
     main: StepOperator,
     /// (k/2) b(0), the memory term's share of K.
@@ -243,6 +260,10 @@ impl<'s> Stepper<'s> {
                 stats.smallness = Some(law.relaxed_monotonicity() * op.trace_constant(&c.nodes.weights));
             }
         }
+        let k_b = k_b.map(|kb| match NodeBlockMatrix::new(&kb) {
+            Some(blocks) => MemoryStiffness::NodeBlocks(blocks),
+            None => MemoryStiffness::Full(kb),
+        });
         let history = sim.kernel.as_ref().map(|b| History::new(b, n_dof, k));
         let contact = sim.contact.as_ref().map(|c| ContactState::new(c.nodes.len()));
         let time_dependent_loads = sim.loads.is_time_dependent();
