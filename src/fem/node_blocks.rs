@@ -42,7 +42,10 @@ impl NodeBlockMatrix {
         // Column 2k and 2k + 1 hold the rows of block column k; by symmetry block (k, q) for
         // q ≥ k is the transpose of the stored block (q, k) of column k.
         for k in 0..n_nodes {
-            let (c0, c1) = (col_ptr[2 * k]..col_ptr[2 * k + 1], col_ptr[2 * k + 1]..col_ptr[2 * k + 2]);
+            let (c0, c1) = (
+                col_ptr[2 * k]..col_ptr[2 * k + 1],
+                col_ptr[2 * k + 1]..col_ptr[2 * k + 2],
+            );
             if row_idx[c0.clone()] != row_idx[c1.clone()] || c0.len() % 2 != 0 {
                 return None;
             }

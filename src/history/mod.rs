@@ -147,7 +147,10 @@ impl History {
                 }
             }
             Accumulator::Polynomial { moments, .. } => {
-                moments[0][range.clone()].iter_mut().zip(u).for_each(|(p, uv)| *p += omega * uv);
+                moments[0][range.clone()]
+                    .iter_mut()
+                    .zip(u)
+                    .for_each(|(p, uv)| *p += omega * uv);
                 // P_j(n+1) = Σ_{l ≤ j} C(j,l) k^{j−l} P_l(n) in descending j (uses old P_l, l < j).
                 for j in (1..moments.len()).rev() {
                     let (lower, upper) = moments.split_at_mut(j);

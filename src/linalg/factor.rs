@@ -103,6 +103,11 @@ pub struct Forward {
 }
 
 impl Forward {
+    /// A vector of `n` zeros, to be filled by [`Factor::forward_into`].
+    pub fn zeros(n: usize) -> Self {
+        Forward { values: vec![0.0; n] }
+    }
+
     /// The entries, in the factor's order.
     pub fn as_slice(&self) -> &[f64] {
         &self.values
@@ -211,18 +216,32 @@ impl Factor {
 
     /// The forward sweep y = L⁻¹ P r (half a solve; counted with its backward sweep).
     pub fn forward(&self, rhs: &[f64]) -> Forward {
+        let mut y = Forward {
+            values: vec![0.0; self.n],
+        };
+        self.forward_into(rhs, &mut y);
+        y
+    }
+
+    /// [`Self::forward`] into an existing vector (no allocation in a time loop).
+    pub fn forward_into(&self, rhs: &[f64], y: &mut Forward) {
         let (fwd, _) = self.permutation();
-        let mut y: Vec<f64> = fwd.iter().map(|&i| rhs[i]).collect();
+        y.values.clear();
+        y.values.extend(fwd.iter().map(|&i| rhs[i]));
         let sn = &self.analysis.supernodes;
         match self.parallel_schedule() {
-            Some(schedule) => schedule.forward(sn, &self.values, &mut y),
-            None => forward_sequential(sn, &self.values, &mut y),
+            Some(schedule) => schedule.forward(sn, &self.values, &mut y.values),
+            None => forward_sequential(sn, &self.values, &mut y.values),
         }
-        Forward { values: y }
     }
 
     /// The backward sweep x = Pᵀ L⁻ᵀ y, completing one solve: K⁻¹ r = backward(forward(r)).
     pub fn backward(&self, mut y: Forward, x: &mut [f64], counters: &Counters) {
+        self.backward_from(&mut y, x, counters);
+    }
+
+    /// [`Self::backward`] leaving y (overwritten) for reuse.
+    pub fn backward_from(&self, y: &mut Forward, x: &mut [f64], counters: &Counters) {
         counters.solves.fetch_add(1, Ordering::Relaxed);
         let sn = &self.analysis.supernodes;
         match self.parallel_schedule() {

@@ -88,34 +88,35 @@ impl StepOperator {
 
     /// Solves one step with one forward and one backward sweep over the factor:
     /// y = L⁻¹ P rhs, d = C K⁻¹ rhs = Gᵀ y, contact → λ, y ← y − G λ, u_n = Pᵀ L⁻ᵀ y.
+    /// `y` is a work vector, `u` receives u_n.
+    #[allow(clippy::too_many_arguments)]
     fn solve(
         &self,
         sim: &Simulation,
         step: usize,
         rhs: &[f64],
+        y: &mut Forward,
+        u: &mut [f64],
         state: Option<&mut ContactState>,
         counters: &Counters,
         stats: &mut RunStats,
-    ) -> Result<(Vec<f64>, Option<ContactOutcome>), SolveError> {
-        let mut y = timed(&mut stats.phases.forward_sweep, || self.factor.forward(rhs));
+    ) -> Result<Option<ContactOutcome>, SolveError> {
+        timed(&mut stats.phases.forward_sweep, || self.factor.forward_into(rhs, y));
         let outcome = match (&sim.contact, &self.condensed, state) {
             (Some(setup), Some(op), Some(state)) => {
                 let outcome = timed(&mut stats.phases.contact, || {
-                    contact_solve(sim, setup, op, step, &y, state)
+                    contact_solve(sim, setup, op, step, y, state)
                 })?;
                 stats.contact_solves += 1;
-                timed(&mut stats.phases.backward_sweep, || {
-                    op.subtract_forces(&state.force, &mut y)
-                });
+                timed(&mut stats.phases.backward_sweep, || op.subtract_forces(&state.force, y));
                 Some(outcome)
             }
             _ => None,
         };
-        let mut u = vec![0.0; rhs.len()];
         timed(&mut stats.phases.backward_sweep, || {
-            self.factor.backward(y, &mut u, counters)
+            self.factor.backward_from(y, u, counters)
         });
-        Ok((u, outcome))
+        Ok(outcome)
     }
 }
 
@@ -205,6 +206,9 @@ pub struct Stepper<'s> {
     /// No memory and constant loads: every step equals step 0.
     single_solve: bool,
     load: Vec<f64>,
+    /// Work vectors of a step: its right-hand side and its forward sweep.
+    rhs: Vec<f64>,
+    work: Forward,
     memory_load: Vec<f64>,
     memory_rhs: Vec<f64>,
     displacement: Vec<f64>,
@@ -281,6 +285,8 @@ impl<'s> Stepper<'s> {
             contact,
             time_dependent_loads,
             load: vec![0.0; n_dof],
+            rhs: vec![0.0; n_dof],
+            work: Forward::zeros(n_dof),
             memory_load: vec![0.0; n_dof],
             memory_rhs: vec![0.0; n_dof],
             displacement: vec![0.0; n_dof],
@@ -317,26 +323,27 @@ impl<'s> Stepper<'s> {
                 self.stats.contact.push(ContactOutcome { iterations: 0, ..o });
             }
         } else {
-            let mut rhs = self.load.clone();
+            let mut rhs = std::mem::take(&mut self.rhs);
+            rhs.copy_from_slice(&self.load);
             self.subtract_memory_load(n, &mut rhs);
-            let (u, outcome) = if n == 0 && self.history.is_some() {
-                step_zero(
+            let outcome = if n == 0 && self.history.is_some() {
+                self.step_zero(&rhs)?
+            } else {
+                self.main.solve(
                     sim,
-                    &self.symbolic,
-                    &self.k_a,
+                    n,
                     &rhs,
+                    &mut self.work,
+                    &mut self.displacement,
                     self.contact.as_mut(),
                     &self.counters,
                     &mut self.stats,
                 )?
-            } else {
-                self.main
-                    .solve(sim, n, &rhs, self.contact.as_mut(), &self.counters, &mut self.stats)?
             };
-            if u.iter().any(|v| !v.is_finite()) {
+            self.rhs = rhs;
+            if self.displacement.iter().any(|v| !v.is_finite()) {
                 return Err(SolveError::NonFinite { step: n, time: t });
             }
-            self.displacement = u;
             self.outcome = outcome;
             if let Some(o) = outcome {
                 self.stats.newton_iterations.push(o.iterations);
@@ -354,6 +361,43 @@ impl<'s> Stepper<'s> {
             contact: self.contact.as_ref(),
             outcome: self.outcome,
         })
+    }
+
+    /// Step 0 with a memory kernel: K_A u_0 + Cᵀλ = F_0 (no history term). When u_0 = 0 solves
+    /// it exactly (no load, and the contact law exerts no force at 0) nothing is factorised.
+    fn step_zero(&mut self, rhs: &[f64]) -> Result<Option<ContactOutcome>, SolveError> {
+        let sim = self.sim;
+        let law_at_zero = sim
+            .contact
+            .as_ref()
+            .and_then(|c| c.law.as_ref())
+            .map_or(0.0, |l| l.derivative(0.0));
+        let bound_ok = sim
+            .contact
+            .as_ref()
+            .and_then(|c| c.bound.as_ref())
+            .is_none_or(|g| g.iter().all(|v| *v >= 0.0));
+        if rhs.iter().all(|v| *v == 0.0) && law_at_zero == 0.0 && bound_ok {
+            let outcome = self.contact.as_mut().map(|s| {
+                let m = s.force.len();
+                *s = ContactState::new(m);
+                ContactOutcome::default()
+            });
+            self.displacement.fill(0.0);
+            return Ok(outcome);
+        }
+        let op = StepOperator::new(sim, &self.symbolic, &self.k_a, &self.counters, &mut self.stats)?;
+        let mut y = Forward::zeros(rhs.len());
+        op.solve(
+            sim,
+            0,
+            rhs,
+            &mut y,
+            &mut self.displacement,
+            self.contact.as_mut(),
+            &self.counters,
+            &mut self.stats,
+        )
     }
 
     /// rhs ← rhs − K_B h_n (METHOD.md §3); h_0 = 0.
@@ -426,37 +470,4 @@ pub fn run(sim: &Simulation, sink: &mut dyn FrameSink, stop: Option<&AtomicBool>
     stats.frames_written = frames;
     stats.phases.total = started.elapsed().as_secs_f64();
     Ok(stats)
-}
-
-/// Step 0 with a memory kernel: K_A u_0 + Cᵀλ = F_0 (no history term). When u_0 = 0 solves it
-/// exactly (no load, and the contact law exerts no force at 0) nothing is factorised.
-fn step_zero(
-    sim: &Simulation,
-    symbolic: &Analysis,
-    k_a: &SymmetricMatrix,
-    rhs: &[f64],
-    state: Option<&mut ContactState>,
-    counters: &Counters,
-    stats: &mut RunStats,
-) -> Result<(Vec<f64>, Option<ContactOutcome>), SolveError> {
-    let law_at_zero = sim
-        .contact
-        .as_ref()
-        .and_then(|c| c.law.as_ref())
-        .map_or(0.0, |l| l.derivative(0.0));
-    let bound_ok = sim
-        .contact
-        .as_ref()
-        .and_then(|c| c.bound.as_ref())
-        .is_none_or(|g| g.iter().all(|v| *v >= 0.0));
-    if rhs.iter().all(|v| *v == 0.0) && law_at_zero == 0.0 && bound_ok {
-        let outcome = state.map(|s| {
-            let m = s.force.len();
-            *s = ContactState::new(m);
-            ContactOutcome::default()
-        });
-        return Ok((vec![0.0; rhs.len()], outcome));
-    }
-    let op = StepOperator::new(sim, symbolic, k_a, counters, stats)?;
-    op.solve(sim, 0, rhs, state, counters, stats)
 }
