@@ -1,6 +1,7 @@
 //! The output module's files, read back: `.vtu` arrays bit for bit, the `.pvd` and
 //! `.vtu.series` indexes, CSV tables, and what is left on disk after failures.
 
+use hvi::mesh::structured::{rectangle, CellShape};
 use hvi::mesh::Cell;
 use hvi::output::{
     is_temporary_name, read_vtu_arrays, write_atomic, write_json_atomic, CsvTable, Field, FieldValues, Frame,
@@ -90,7 +91,8 @@ fn assert_vtu_matches(path: &Path, frame: &Frame) {
     let vtu = read_vtu_arrays(path).unwrap_or_else(|e| panic!("{e}"));
     let expected_points: Vec<[f64; 3]> = frame.points.iter().map(|p| [p[0], p[1], 0.0]).collect();
     assert_eq!(vtu.points, expected_points);
-    assert_eq!(vtu.cell_types, vec![9, 5]);
+    let expected_types: Vec<u8> = frame.cells.iter().map(Cell::vtk_type).collect();
+    assert_eq!(vtu.cell_types, expected_types);
     let expected_conn: Vec<Vec<usize>> = frame.cells.iter().map(|c| c.nodes().to_vec()).collect();
     assert_eq!(vtu.connectivity, expected_conn);
     for (fields, data, what) in [
@@ -456,4 +458,128 @@ fn read_vtu_arrays_reports_missing_and_foreign_files() {
     let junk = tmp.path().join("junk.vtu");
     std::fs::write(&junk, "<VTKFile type=\"PolyData\"></VTKFile>").unwrap();
     assert!(read_vtu_arrays(&junk).is_err());
+}
+
+/// Fields of every kind hvi writes (Float64 with 1, 2, 3 and 9 components, Int32) on a mesh,
+/// with values that expose any loss of bits (signed zeros, subnormals, NaN, infinities).
+struct MeshFields {
+    displacement: Vec<f64>,
+    pair: Vec<f64>,
+    status: Vec<i32>,
+    stress: Vec<f64>,
+    von_mises: Vec<f64>,
+    region: Vec<i32>,
+}
+
+impl MeshFields {
+    fn new(n_points: usize, n_cells: usize) -> Self {
+        let special = |k: usize| match k % 11 {
+            3 => f64::NAN,
+            7 => f64::NEG_INFINITY,
+            9 => 5e-324,
+            _ => awkward(k, 0.25),
+        };
+        MeshFields {
+            displacement: (0..3 * n_points)
+                .map(|k| if k % 3 == 2 { 0.0 } else { special(k) })
+                .collect(),
+            pair: (0..2 * n_points).map(|k| special(k + 1)).collect(),
+            status: (0..n_points)
+                .map(|k| [-1, 0, 1, 2, i32::MIN, i32::MAX][k % 6])
+                .collect(),
+            stress: (0..9 * n_cells).map(|k| special(k + 2)).collect(),
+            von_mises: (0..n_cells).map(|k| special(k + 5)).collect(),
+            region: (0..n_cells).map(|k| k as i32 - 3).collect(),
+        }
+    }
+
+    fn frame<'a>(&'a self, mesh: &'a hvi::mesh::Mesh, step: usize) -> Frame<'a> {
+        Frame {
+            step,
+            time: 0.25 * step as f64,
+            points: &mesh.points,
+            cells: &mesh.cells,
+            point_fields: vec![
+                Field::f64("displacement", 3, &self.displacement),
+                // a name that needs XML escaping
+                Field::f64("a&b \"q\" <x>'", 2, &self.pair),
+                Field::i32("contact_status", 1, &self.status),
+            ],
+            cell_fields: vec![
+                Field::f64("stress", 9, &self.stress),
+                Field::f64("von_mises", 1, &self.von_mises),
+                Field::i32("region", 1, &self.region),
+            ],
+        }
+    }
+}
+
+#[test]
+fn p1_and_q1_frames_read_back_bit_identically() {
+    for (shape, vtk_type) in [(CellShape::Tri, 5u8), (CellShape::Quad, 9u8)] {
+        let mesh = rectangle(2.0, 1.0, 7, 5, shape);
+        let data = MeshFields::new(mesh.points.len(), mesh.cells.len());
+        let tmp = tempfile::tempdir().unwrap();
+        let mut writer = SeriesWriter::create(tmp.path(), "sol").unwrap();
+        // the second frame reuses the writer's buffer; a smaller frame after a larger one too
+        let small = rectangle(1.0, 1.0, 2, 1, shape);
+        let small_data = MeshFields::new(small.points.len(), small.cells.len());
+        for (step, (m, d)) in [(&mesh, &data), (&mesh, &data), (&small, &small_data)]
+            .into_iter()
+            .enumerate()
+        {
+            let frame = d.frame(m, step);
+            let path = writer.write_frame(&frame).unwrap();
+            let bytes = std::fs::read(&path).unwrap();
+            let header = String::from_utf8_lossy(&bytes[..bytes.len().min(4096)]);
+            assert!(header.contains("<AppendedData encoding=\"raw\">"), "{header}");
+            assert!(!header.contains("format=\"binary\""), "{header}");
+            assert_vtu_matches(&path, &frame);
+            let vtu = read_vtu_arrays(&path).unwrap();
+            assert!(vtu.cell_types.iter().all(|&t| t == vtk_type));
+            assert_eq!(vtu.point_data.len(), 3);
+            assert_eq!(vtu.cell_data.len(), 3);
+        }
+        assert_no_temporaries(tmp.path());
+    }
+}
+
+#[test]
+fn truncated_frames_are_errors_not_panics() {
+    let mesh = rectangle(1.0, 1.0, 3, 2, CellShape::Quad);
+    let data = MeshFields::new(mesh.points.len(), mesh.cells.len());
+    let tmp = tempfile::tempdir().unwrap();
+    let mut writer = SeriesWriter::create(tmp.path(), "sol").unwrap();
+    let path = writer.write_frame(&data.frame(&mesh, 0)).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let marker = b"<AppendedData encoding=\"raw\">";
+    let tag = bytes.windows(marker.len()).position(|w| w == marker).unwrap();
+    let start = tag + bytes[tag..].iter().position(|&b| b == b'_').unwrap() + 1;
+    let end = bytes.len() - "\n  </AppendedData>\n</VTKFile>\n".len();
+    let cut = tmp.path().join("cut.vtu");
+
+    // cut in the middle of the appended data
+    std::fs::write(&cut, &bytes[..(start + end) / 2]).unwrap();
+    let err = read_vtu_arrays(&cut).unwrap_err();
+    assert!(matches!(err, OutputError::Format { .. }), "{err}");
+    let msg = err.to_string();
+    assert!(msg.contains("truncated") && msg.contains("cut.vtu"), "{msg}");
+
+    // any cut at all (only the final newline may go)
+    for len in 0..bytes.len() - 1 {
+        std::fs::write(&cut, &bytes[..len]).unwrap();
+        match std::panic::catch_unwind(|| read_vtu_arrays(&cut)) {
+            Ok(Err(_)) => {}
+            Ok(Ok(_)) => panic!("a file cut to {len} of {} bytes was read as complete", bytes.len()),
+            Err(_) => panic!("a file cut to {len} of {} bytes made the reader panic", bytes.len()),
+        }
+    }
+    std::fs::write(&cut, &bytes[..bytes.len() - 1]).unwrap();
+    assert_vtu_matches(&cut, &data.frame(&mesh, 0));
+
+    // a byte count that does not match the header is an error too
+    let mut bad = bytes.clone();
+    bad[start] ^= 0x08;
+    std::fs::write(&cut, &bad).unwrap();
+    assert!(read_vtu_arrays(&cut).is_err());
 }

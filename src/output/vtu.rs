@@ -1,19 +1,37 @@
-//! One frame as a VTK XML UnstructuredGrid (`.vtu`), through vtkio 0.7.0-rc2, and reading it
-//! back.
+//! One frame as a VTK XML UnstructuredGrid (`.vtu`), and reading it back.
 //!
 //! Layout: `Float64` points (x, y, 0), `UInt64` connectivity and offsets, `UInt8` types
 //! (5 triangle, 9 quad), each field a `Float64` or `Int32` array with its number of components;
-//! base64 binary, uncompressed or zlib-compressed (header type `UInt64`). vtkio marks the first
-//! 3-component array as the active vectors (so ParaView's Warp By Vector picks
-//! `displacement`), the first 9-component one as the active tensors, the first scalar as the
-//! active scalars.
+//! little-endian, header type `UInt64`. The first 3-component array of the point (cell) data is
+//! marked as the active vectors (so ParaView's Warp By Vector picks `displacement`), the first
+//! 9-component one as the active tensors, the first scalar as the active scalars.
 //!
+//! Uncompressed (the default, [`super::DEFAULT_COMPRESSION_LEVEL`]), the file is written by
+//! hand here, not through vtkio: an XML header whose `DataArray`s are all `format="appended"`
+//! with an `offset`, then one `<AppendedData encoding="raw">` block, `_` followed by, per
+//! array, its byte count (`UInt64`) and its little-endian bytes. vtkio 0.7.0-rc2 cannot write
+//! that layout: it always base64-encodes binary data, and quick_xml then escapes the whole
+//! base64 text; with the copies into vtkio's own buffers this cost ~74 ms per frame of 33k
+//! points / 32k quads (8.6 MB). The raw layout is 3/4 of the size and is built in one buffer
+//! (sized up front and kept across frames by [`VtuBuffer`]) that is written in one go.
+//!
+//! With zlib compression (level > 0, [`super::SeriesWriter::with_compression`]; no hvi command
+//! asks for it) the frame still goes through vtkio as inline base64 binary, compressed.
 //! vtkio's own file writer (`VTKFile::export`/`write`) wraps the destination in a `BufWriter`
 //! that it drops without checking the final flush, and writes with `write` rather than
 //! `write_all`, so a full disk could produce a silently truncated file. We therefore serialise
-//! into memory (which cannot fail that way) and write the bytes ourselves, atomically.
+//! into memory (which cannot fail that way) and write the bytes ourselves, atomically; the
+//! hand-written layout is written the same way.
+//!
+//! Reading ([`read_vtu_arrays`]): vtkio 0.7.0-rc2 cannot read raw appended data (its support
+//! sits behind a `binary` cfg feature its manifest does not declare; it rejects
+//! `encoding="raw"` with "unknown variant `raw`, expected `base64`"), so files with raw
+//! appended data are read by a small parser of exactly the layout written here, which reports a
+//! truncated or foreign file as an error; inline base64 files (hvi's earlier uncompressed
+//! layout, and the compressed one) are still read through vtkio.
 
 use super::atomic::write_atomic;
+use super::pvd::xml_escape;
 use super::{Field, FieldValues, Frame, OutputError};
 use crate::mesh::Cell;
 use std::collections::{BTreeMap, BTreeSet};
@@ -147,8 +165,9 @@ fn attribute(f: &Field) -> Attribute {
     })
 }
 
-/// Encodes a (validated) frame as the bytes of a `.vtu` file.
-pub(crate) fn encode_vtu(path: &Path, frame: &Frame, compression_level: u32) -> Result<Vec<u8>, OutputError> {
+/// Encodes a (validated) frame through vtkio as inline base64 binary, zlib-compressed if
+/// `compression_level` > 0 (the raw appended layout of [`encode_vtu_raw`] is uncompressed only).
+pub(crate) fn encode_vtu_vtkio(path: &Path, frame: &Frame, compression_level: u32) -> Result<Vec<u8>, OutputError> {
     let points: Vec<f64> = frame.points.iter().flat_map(|p| [p[0], p[1], 0.0]).collect();
     let n_conn = frame.cells.iter().map(|c| c.nodes().len()).sum();
     let mut connectivity = Vec::with_capacity(n_conn);
@@ -200,25 +219,211 @@ pub(crate) fn encode_vtu(path: &Path, frame: &Frame, compression_level: u32) -> 
     Ok(bytes)
 }
 
-/// Validates `frame` and writes it to `path` atomically.
-pub(crate) fn write_vtu(path: &Path, frame: &Frame, compression_level: u32) -> Result<(), OutputError> {
-    validate_frame(path, frame)?;
-    let bytes = encode_vtu(path, frame, compression_level)?;
-    write_atomic(path, &bytes)
+/// The byte buffer a [`super::SeriesWriter`] keeps across frames, so that every frame after the
+/// first is built in memory that is already allocated and mapped.
+#[derive(Default)]
+pub(crate) struct VtuBuffer(Vec<u8>);
+
+impl std::fmt::Debug for VtuBuffer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "VtuBuffer({} bytes reserved)", self.0.capacity())
+    }
 }
 
-/// Reads back a `.vtu` written by [`crate::output`] (one inline piece, binary or ASCII,
-/// compressed or not), checking that every array has the length its header announces.
+/// Validates `frame` and writes it to `path` atomically: raw appended binary built in `buffer`
+/// if `compression_level` is 0, else through vtkio (zlib, inline base64).
+pub(crate) fn write_vtu(
+    path: &Path,
+    frame: &Frame,
+    compression_level: u32,
+    buffer: &mut VtuBuffer,
+) -> Result<(), OutputError> {
+    validate_frame(path, frame)?;
+    if compression_level > 0 {
+        let bytes = encode_vtu_vtkio(path, frame, compression_level)?;
+        return write_atomic(path, &bytes);
+    }
+    encode_vtu_raw(frame, &mut buffer.0);
+    write_atomic(path, &buffer.0)
+}
+
+/// The end of a raw-appended file, after the last array's bytes.
+const RAW_FOOTER: &str = "\n  </AppendedData>\n</VTKFile>\n";
+
+/// The XML header of a raw-appended file: every `DataArray` declared with the offset of its
+/// byte count in the appended block, in the order the arrays follow there.
+struct RawHeader {
+    text: String,
+    /// Bytes of the appended block declared so far (byte counts included).
+    appended: usize,
+}
+
+impl RawHeader {
+    /// Declares the next array. `NumberOfComponents` is left out for one component (VTK's
+    /// default), as VTK and vtkio do: meshio reads an explicit 1 as an n × 1 array instead of n.
+    fn array(&mut self, vtk_type: &str, name: &str, components: usize, bytes: usize) {
+        use std::fmt::Write as _;
+        let _ = write!(
+            self.text,
+            "        <DataArray type=\"{vtk_type}\" Name=\"{}\"",
+            xml_escape(name)
+        );
+        if components != 1 {
+            let _ = write!(self.text, " NumberOfComponents=\"{components}\"");
+        }
+        let _ = writeln!(self.text, " format=\"appended\" offset=\"{}\"/>", self.appended);
+        self.appended += 8 + bytes;
+    }
+
+    /// `<PointData`/`<CellData` with the active scalars, vectors and tensors, its arrays, and
+    /// the closing tag.
+    fn fields(&mut self, tag: &str, fields: &[Field]) {
+        self.text.push_str("      <");
+        self.text.push_str(tag);
+        for (attr, components) in [("Scalars", 1), ("Vectors", 3), ("Tensors", 9)] {
+            if let Some(f) = fields.iter().find(|f| f.components == components) {
+                self.text.push_str(&format!(" {attr}=\"{}\"", xml_escape(f.name)));
+            }
+        }
+        self.text.push_str(">\n");
+        for f in fields {
+            let (vtk_type, size) = match f.values {
+                FieldValues::F64(_) => ("Float64", 8),
+                FieldValues::I32(_) => ("Int32", 4),
+            };
+            // (= size × components × count for a validated frame)
+            self.array(vtk_type, f.name, f.components, size * f.values.len());
+        }
+        self.text.push_str(&format!("      </{tag}>\n"));
+    }
+}
+
+/// Appends `count` items of `N` bytes each to `buf`: one resize, then each item's bytes in
+/// place (`items` must yield exactly `count` items).
+fn put_items<const N: usize, T>(
+    buf: &mut Vec<u8>,
+    count: usize,
+    items: impl Iterator<Item = T>,
+    bytes: impl Fn(T) -> [u8; N],
+) {
+    let start = buf.len();
+    buf.resize(start + N * count, 0);
+    let mut written = 0;
+    for (dst, item) in buf[start..].chunks_exact_mut(N).zip(items) {
+        dst.copy_from_slice(&bytes(item));
+        written += 1;
+    }
+    debug_assert_eq!(written, count);
+}
+
+/// Appends the `UInt64` byte count that precedes every array in the appended block.
+fn put_byte_count(buf: &mut Vec<u8>, bytes: usize) {
+    buf.extend_from_slice(&(bytes as u64).to_le_bytes());
+}
+
+fn put_field(buf: &mut Vec<u8>, f: &Field) {
+    match f.values {
+        FieldValues::F64(v) => {
+            put_byte_count(buf, 8 * v.len());
+            put_items(buf, v.len(), v.iter(), |x| x.to_le_bytes());
+        }
+        FieldValues::I32(v) => {
+            put_byte_count(buf, 4 * v.len());
+            put_items(buf, v.len(), v.iter(), |x| x.to_le_bytes());
+        }
+    }
+}
+
+/// Encodes a (validated) frame into `buf` (cleared first, reserved to the exact size) as a
+/// `.vtu` with raw appended binary data; see the module documentation for the layout.
+pub(crate) fn encode_vtu_raw(frame: &Frame, buf: &mut Vec<u8>) {
+    let (n_points, n_cells) = (frame.points.len(), frame.cells.len());
+    let n_conn: usize = frame.cells.iter().map(|c| c.nodes().len()).sum();
+    let mut h = RawHeader {
+        text: String::with_capacity(4096),
+        appended: 0,
+    };
+    h.text.push_str(concat!(
+        "<?xml version=\"1.0\"?>\n",
+        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
+        "  <UnstructuredGrid>\n",
+    ));
+    h.text.push_str(&format!(
+        "    <Piece NumberOfPoints=\"{n_points}\" NumberOfCells=\"{n_cells}\">\n"
+    ));
+    h.fields("PointData", &frame.point_fields);
+    h.fields("CellData", &frame.cell_fields);
+    h.text.push_str("      <Points>\n");
+    h.array("Float64", "Points", 3, 24 * n_points);
+    h.text.push_str("      </Points>\n      <Cells>\n");
+    h.array("UInt64", "connectivity", 1, 8 * n_conn);
+    h.array("UInt64", "offsets", 1, 8 * n_cells);
+    h.array("UInt8", "types", 1, n_cells);
+    h.text.push_str(concat!(
+        "      </Cells>\n",
+        "    </Piece>\n",
+        "  </UnstructuredGrid>\n",
+        "  <AppendedData encoding=\"raw\">\n",
+        "   _",
+    ));
+
+    let total = h.text.len() + h.appended + RAW_FOOTER.len();
+    buf.clear();
+    buf.reserve_exact(total);
+    buf.extend_from_slice(h.text.as_bytes());
+    for f in frame.point_fields.iter().chain(&frame.cell_fields) {
+        put_field(buf, f);
+    }
+    put_byte_count(buf, 24 * n_points);
+    put_items(buf, n_points, frame.points.iter(), |p| {
+        let mut b = [0u8; 24];
+        b[..8].copy_from_slice(&p[0].to_le_bytes());
+        b[8..16].copy_from_slice(&p[1].to_le_bytes());
+        b[16..].copy_from_slice(&0f64.to_le_bytes());
+        b
+    });
+    put_byte_count(buf, 8 * n_conn);
+    let nodes = frame.cells.iter().flat_map(|c| c.nodes().iter());
+    put_items(buf, n_conn, nodes, |&i| (i as u64).to_le_bytes());
+    put_byte_count(buf, 8 * n_cells);
+    let ends = frame.cells.iter().scan(0u64, |end, c| {
+        *end += c.nodes().len() as u64;
+        Some(*end)
+    });
+    put_items(buf, n_cells, ends, u64::to_le_bytes);
+    put_byte_count(buf, n_cells);
+    buf.extend(frame.cells.iter().map(Cell::vtk_type));
+    buf.extend_from_slice(RAW_FOOTER.as_bytes());
+    debug_assert_eq!(buf.len(), total);
+}
+
+/// Reads back a `.vtu` written by [`crate::output`] (one piece: raw appended binary as written
+/// now, or inline binary or ASCII, compressed or not, as written through vtkio), checking that
+/// every array has the length its header announces. A missing, foreign or truncated file is an
+/// error.
 pub fn read_vtu_arrays(path: &Path) -> Result<VtuContents, OutputError> {
-    use vtkio::xml;
     let bytes = std::fs::read(path).map_err(|e| OutputError::read(path, e))?;
+    match find_bytes(&bytes, b"<AppendedData") {
+        Some(at) => read_raw_appended(path, &bytes, at),
+        // A raw-appended file cut before its data block: report that, not vtkio's confusion.
+        None if find_bytes(&bytes, b"format=\"appended\"").is_some() => Err(OutputError::format(
+            path,
+            "the arrays are declared as appended data but the file has no <AppendedData> block; it is truncated",
+        )),
+        None => read_vtkio(path, &bytes),
+    }
+}
+
+/// Reads an inline (base64 or ASCII, possibly compressed) `.vtu` through vtkio.
+fn read_vtkio(path: &Path, bytes: &[u8]) -> Result<VtuContents, OutputError> {
+    use vtkio::xml;
     // vtkio silently drops arrays it fails to decode: count what the file announces.
-    let text = String::from_utf8_lossy(&bytes);
+    let text = String::from_utf8_lossy(bytes);
     let announced = (
         count_data_arrays(&text, "PointData"),
         count_data_arrays(&text, "CellData"),
     );
-    let file = VTKFile::parse(&bytes[..]).map_err(|e| match e {
+    let file = VTKFile::parse(bytes).map_err(|e| match e {
         xml::Error::IO(source) => OutputError::read(path, source),
         e => OutputError::Vtk {
             path: path.to_path_buf(),
@@ -272,23 +477,7 @@ pub fn read_vtu_arrays(path: &Path) -> Result<VtuContents, OutputError> {
             format!("{} cell offsets for {} cell types", offsets.len(), n_cells),
         ));
     }
-    let mut connectivity = Vec::with_capacity(n_cells);
-    let mut start = 0usize;
-    for &end in &offsets {
-        let end = end as usize;
-        if end < start || end > conn.len() {
-            return Err(OutputError::format(path, "cell offsets out of range"));
-        }
-        let nodes: Vec<usize> = conn[start..end].iter().map(|&i| i as usize).collect();
-        if let Some(&bad) = nodes.iter().find(|&&i| i >= points.len()) {
-            return Err(OutputError::format(
-                path,
-                format!("a cell refers to missing node {bad}"),
-            ));
-        }
-        connectivity.push(nodes);
-        start = end;
-    }
+    let connectivity = split_connectivity(path, &conn, &offsets, points.len())?;
 
     let point_data = collect_arrays(path, "point", piece.data.point, points.len(), announced.0)?;
     let cell_data = collect_arrays(path, "cell", piece.data.cell, n_cells, announced.1)?;
@@ -299,6 +488,37 @@ pub fn read_vtu_arrays(path: &Path) -> Result<VtuContents, OutputError> {
         point_data,
         cell_data,
     })
+}
+
+/// Splits `conn` at the cell end `offsets` into the node lists of the cells, checking that the
+/// offsets increase within `conn` and that every node exists.
+fn split_connectivity(
+    path: &Path,
+    conn: &[u64],
+    offsets: &[u64],
+    n_points: usize,
+) -> Result<Vec<Vec<usize>>, OutputError> {
+    let mut connectivity = Vec::with_capacity(offsets.len());
+    let mut start = 0usize;
+    for &end in offsets {
+        let end = usize::try_from(end).unwrap_or(usize::MAX);
+        if end < start || end > conn.len() {
+            return Err(OutputError::format(path, "cell offsets out of range"));
+        }
+        let nodes: Vec<usize> = conn[start..end]
+            .iter()
+            .map(|&i| usize::try_from(i).unwrap_or(usize::MAX))
+            .collect();
+        if let Some(&bad) = nodes.iter().find(|&&i| i >= n_points) {
+            return Err(OutputError::format(
+                path,
+                format!("a cell refers to missing node {bad}"),
+            ));
+        }
+        connectivity.push(nodes);
+        start = end;
+    }
+    Ok(connectivity)
 }
 
 fn collect_arrays(
@@ -353,4 +573,514 @@ fn count_data_arrays(text: &str, tag: &str) -> usize {
     }
     let end = rest.find(&format!("</{tag}>")).unwrap_or(rest.len());
     rest[..end].matches("<DataArray").count()
+}
+
+/// The first position of `needle` in `hay`.
+fn find_bytes(hay: &[u8], needle: &[u8]) -> Option<usize> {
+    hay.windows(needle.len()).position(|w| w == needle)
+}
+
+/// The scalar types of VTK XML data arrays.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Scalar {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    I64,
+    U64,
+    F32,
+    F64,
+}
+
+/// Decodes little-endian `bytes` (a whole number of `$t`) as `$t`, each converted by `$conv`.
+macro_rules! decode_le {
+    ($t:ty, $bytes:expr, $conv:expr) => {
+        $bytes
+            .chunks_exact(std::mem::size_of::<$t>())
+            .map(|c| <$t>::from_le_bytes(c.try_into().expect("chunk of the type's size")))
+            .map($conv)
+            .collect()
+    };
+}
+
+impl Scalar {
+    fn parse(name: &str) -> Option<Self> {
+        Some(match name {
+            "Int8" => Scalar::I8,
+            "UInt8" => Scalar::U8,
+            "Int16" => Scalar::I16,
+            "UInt16" => Scalar::U16,
+            "Int32" => Scalar::I32,
+            "UInt32" => Scalar::U32,
+            "Int64" => Scalar::I64,
+            "UInt64" => Scalar::U64,
+            "Float32" => Scalar::F32,
+            "Float64" => Scalar::F64,
+            _ => return None,
+        })
+    }
+
+    fn size(self) -> usize {
+        match self {
+            Scalar::I8 | Scalar::U8 => 1,
+            Scalar::I16 | Scalar::U16 => 2,
+            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
+            Scalar::I64 | Scalar::U64 | Scalar::F64 => 8,
+        }
+    }
+
+    /// The values as `f64` (exact for every type hvi writes).
+    fn to_f64(self, bytes: &[u8]) -> Vec<f64> {
+        match self {
+            Scalar::I8 => decode_le!(i8, bytes, f64::from),
+            Scalar::U8 => decode_le!(u8, bytes, f64::from),
+            Scalar::I16 => decode_le!(i16, bytes, f64::from),
+            Scalar::U16 => decode_le!(u16, bytes, f64::from),
+            Scalar::I32 => decode_le!(i32, bytes, f64::from),
+            Scalar::U32 => decode_le!(u32, bytes, f64::from),
+            Scalar::I64 => decode_le!(i64, bytes, |x| x as f64),
+            Scalar::U64 => decode_le!(u64, bytes, |x| x as f64),
+            Scalar::F32 => decode_le!(f32, bytes, f64::from),
+            Scalar::F64 => decode_le!(f64, bytes, |x| x),
+        }
+    }
+
+    /// The values of an integer array as `u64`; `None` for a float type or a negative value.
+    fn to_u64(self, bytes: &[u8]) -> Option<Vec<u64>> {
+        let signed = |v: Vec<i64>| v.into_iter().map(|x| u64::try_from(x).ok()).collect();
+        match self {
+            Scalar::I8 => signed(decode_le!(i8, bytes, i64::from)),
+            Scalar::I16 => signed(decode_le!(i16, bytes, i64::from)),
+            Scalar::I32 => signed(decode_le!(i32, bytes, i64::from)),
+            Scalar::I64 => signed(decode_le!(i64, bytes, |x| x)),
+            Scalar::U8 => Some(decode_le!(u8, bytes, u64::from)),
+            Scalar::U16 => Some(decode_le!(u16, bytes, u64::from)),
+            Scalar::U32 => Some(decode_le!(u32, bytes, u64::from)),
+            Scalar::U64 => Some(decode_le!(u64, bytes, |x| x)),
+            Scalar::F32 | Scalar::F64 => None,
+        }
+    }
+}
+
+/// One tag of the XML header: `<name a="v" ...>`, `<name .../>` or `</name>`.
+struct Tag<'a> {
+    name: &'a str,
+    attrs: Vec<(&'a str, String)>,
+    closing: bool,
+    self_closing: bool,
+}
+
+impl Tag<'_> {
+    fn attr(&self, key: &str) -> Option<&str> {
+        self.attrs.iter().find(|(k, _)| *k == key).map(|(_, v)| v.as_str())
+    }
+}
+
+/// Undoes the escapes [`xml_escape`] makes (other entities are kept as they are).
+fn xml_unescape(s: &str) -> String {
+    if !s.contains('&') {
+        return s.to_string();
+    }
+    s.replace("&lt;", "<")
+        .replace("&gt;", ">")
+        .replace("&quot;", "\"")
+        .replace("&apos;", "'")
+        .replace("&amp;", "&")
+}
+
+/// Parses the inside of a tag (between `<` and `>`); `None` if it is not a well-formed tag.
+fn parse_tag(inner: &str) -> Option<Tag<'_>> {
+    let (closing, inner) = match inner.strip_prefix('/') {
+        Some(rest) => (true, rest),
+        None => (false, inner),
+    };
+    let (self_closing, inner) = match inner.strip_suffix('/') {
+        Some(rest) => (true, rest),
+        None => (false, inner),
+    };
+    let name_end = inner.find(|c: char| c.is_ascii_whitespace()).unwrap_or(inner.len());
+    let name = &inner[..name_end];
+    if name.is_empty() {
+        return None;
+    }
+    let mut attrs = Vec::new();
+    let mut rest = inner[name_end..].trim_start();
+    while !rest.is_empty() {
+        let eq = rest.find('=')?;
+        let key = rest[..eq].trim_end();
+        let value = rest[eq + 1..].trim_start();
+        let quote = value.chars().next().filter(|&q| q == '"' || q == '\'')?;
+        let len = value[1..].find(quote)?;
+        attrs.push((key, xml_unescape(&value[1..1 + len])));
+        rest = value[len + 2..].trim_start();
+    }
+    Some(Tag {
+        name,
+        attrs,
+        closing,
+        self_closing,
+    })
+}
+
+/// The tags of `text` in order, skipping the XML declaration, comments and text between tags.
+fn parse_tags(text: &str) -> Result<Vec<Tag<'_>>, String> {
+    let mut tags = Vec::new();
+    let mut rest = text;
+    while let Some(open) = rest.find('<') {
+        rest = &rest[open + 1..];
+        if let Some(comment) = rest.strip_prefix("!--") {
+            let end = comment.find("-->").ok_or("an unterminated XML comment")?;
+            rest = &comment[end + 3..];
+            continue;
+        }
+        let close = rest.find('>').ok_or("an unterminated XML tag")?;
+        let inner = &rest[..close];
+        rest = &rest[close + 1..];
+        if inner.starts_with('?') {
+            continue;
+        }
+        tags.push(parse_tag(inner).ok_or_else(|| format!("a malformed XML tag <{inner}>"))?);
+    }
+    Ok(tags)
+}
+
+/// Where a `DataArray` of the header belongs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Section {
+    PointData,
+    CellData,
+    Points,
+    Cells,
+}
+
+/// A `DataArray` declared in the header of a raw-appended file.
+struct AppendedArray {
+    section: Section,
+    name: String,
+    scalar: Scalar,
+    components: usize,
+    /// Offset of the array's byte count in the appended block.
+    offset: usize,
+}
+
+/// Reads a `.vtu` whose arrays are in a raw `<AppendedData>` block (the layout written by
+/// [`encode_vtu_raw`]); `at` is the position of `<AppendedData`.
+fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents, OutputError> {
+    let fail = |detail: String| OutputError::format(path, detail);
+    let truncated = || fail("the file ends inside its appended data; it is truncated".into());
+    let header = std::str::from_utf8(&bytes[..at]).map_err(|_| fail("the XML header is not UTF-8".into()))?;
+    let tags = parse_tags(header).map_err(|e| fail(format!("the XML header has {e}")))?;
+
+    // The <AppendedData ...> tag, then whitespace and the '_' that starts the block.
+    let tag_len = bytes[at..].iter().position(|&b| b == b'>').ok_or_else(truncated)?;
+    let tag_text = std::str::from_utf8(&bytes[at + 1..at + tag_len])
+        .map_err(|_| fail("the <AppendedData> tag is not UTF-8".into()))?;
+    let appended_tag = parse_tag(tag_text).ok_or_else(|| fail("a malformed <AppendedData> tag".into()))?;
+    match appended_tag.attr("encoding") {
+        Some("raw") => {}
+        other => {
+            return Err(fail(format!(
+                "appended data with encoding {other:?} is not supported; only raw appended data is"
+            )))
+        }
+    }
+    let mut start = at + tag_len + 1;
+    while bytes.get(start).is_some_and(u8::is_ascii_whitespace) {
+        start += 1;
+    }
+    match bytes.get(start) {
+        Some(b'_') => {}
+        Some(_) => return Err(fail("the appended data does not start with '_'".into())),
+        None => return Err(truncated()),
+    }
+    let data = &bytes[start + 1..];
+
+    // The header: one UnstructuredGrid piece and its arrays.
+    let mut grid = false;
+    let mut piece: Option<(usize, usize)> = None;
+    let mut section = None;
+    let mut arrays = Vec::new();
+    for tag in &tags {
+        if tag.closing {
+            if matches!(tag.name, "PointData" | "CellData" | "Points" | "Cells") {
+                section = None;
+            }
+            continue;
+        }
+        match tag.name {
+            "VTKFile" => {
+                if tag.attr("type") != Some("UnstructuredGrid") {
+                    return Err(fail(format!(
+                        "a VTKFile of type {:?}, not an UnstructuredGrid",
+                        tag.attr("type").unwrap_or("(none)")
+                    )));
+                }
+                for (key, want) in [("byte_order", "LittleEndian"), ("header_type", "UInt64")] {
+                    if tag.attr(key) != Some(want) {
+                        return Err(fail(format!(
+                            "{key} {:?} is not supported; hvi writes and reads {want}",
+                            tag.attr(key).unwrap_or("(none)")
+                        )));
+                    }
+                }
+                if let Some(c) = tag.attr("compressor") {
+                    return Err(fail(format!("compressed ({c}) raw appended data is not supported")));
+                }
+            }
+            "UnstructuredGrid" => grid = true,
+            "Piece" => {
+                if piece.is_some() {
+                    return Err(fail("expected exactly one piece, found more".into()));
+                }
+                let count = |key: &str| {
+                    tag.attr(key)
+                        .and_then(|v| v.trim().parse::<usize>().ok())
+                        .ok_or_else(|| fail(format!("the Piece has no valid {key}")))
+                };
+                piece = Some((count("NumberOfPoints")?, count("NumberOfCells")?));
+            }
+            "PointData" if !tag.self_closing => section = Some(Section::PointData),
+            "CellData" if !tag.self_closing => section = Some(Section::CellData),
+            "Points" if !tag.self_closing => section = Some(Section::Points),
+            "Cells" if !tag.self_closing => section = Some(Section::Cells),
+            "DataArray" => {
+                let name = tag.attr("Name").unwrap_or("").to_string();
+                let section =
+                    section.ok_or_else(|| fail(format!("the DataArray \"{name}\" is outside the piece's data")))?;
+                if tag.attr("format") != Some("appended") {
+                    return Err(fail(format!(
+                        "the DataArray \"{name}\" is not in the appended data (format {:?})",
+                        tag.attr("format").unwrap_or("(none)")
+                    )));
+                }
+                let ty = tag.attr("type").unwrap_or("(none)");
+                let scalar = Scalar::parse(ty)
+                    .ok_or_else(|| fail(format!("the DataArray \"{name}\" has the unknown type {ty:?}")))?;
+                let components = match tag.attr("NumberOfComponents") {
+                    None => 1,
+                    Some(c) => c
+                        .trim()
+                        .parse::<usize>()
+                        .ok()
+                        .filter(|&c| c > 0)
+                        .ok_or_else(|| fail(format!("the DataArray \"{name}\" has {c:?} components")))?,
+                };
+                let offset = tag
+                    .attr("offset")
+                    .and_then(|o| o.trim().parse::<usize>().ok())
+                    .ok_or_else(|| fail(format!("the DataArray \"{name}\" has no valid offset")))?;
+                arrays.push(AppendedArray {
+                    section,
+                    name,
+                    scalar,
+                    components,
+                    offset,
+                });
+            }
+            _ => {}
+        }
+    }
+    if !grid {
+        return Err(fail("not an UnstructuredGrid".into()));
+    }
+    let (n_points, n_cells) = piece.ok_or_else(|| fail("no piece".into()))?;
+
+    // The bytes of each array: its UInt64 byte count, then that many bytes, all inside `data`.
+    let mut data_end = 0;
+    let mut array_bytes = |a: &AppendedArray, count: Option<usize>| -> Result<&[u8], OutputError> {
+        let start = a
+            .offset
+            .checked_add(8)
+            .filter(|&s| s <= data.len())
+            .ok_or_else(truncated)?;
+        let len = u64::from_le_bytes(data[a.offset..start].try_into().expect("8 bytes"));
+        let len = usize::try_from(len).map_err(|_| truncated())?;
+        let end = start
+            .checked_add(len)
+            .filter(|&e| e <= data.len())
+            .ok_or_else(truncated)?;
+        let expected = count.map(|n| n.saturating_mul(a.components).saturating_mul(a.scalar.size()));
+        if expected.is_some_and(|e| e != len) || len % (a.components * a.scalar.size()) != 0 {
+            return Err(fail(format!(
+                "the array \"{}\" has {len} bytes, which is not {} value(s) of {} component(s) of {} bytes",
+                a.name,
+                count.map_or("a whole number of".to_string(), |n| n.to_string()),
+                a.components,
+                a.scalar.size()
+            )));
+        }
+        data_end = data_end.max(end);
+        Ok(&data[start..end])
+    };
+    let find = |section: Section, name: &str| {
+        arrays
+            .iter()
+            .find(|a| a.section == section && (section == Section::Points || a.name == name))
+            .ok_or_else(|| fail(format!("no {name} array")))
+    };
+
+    let points_array = find(Section::Points, "Points")?;
+    if points_array.components != 3 {
+        return Err(fail(format!(
+            "points with {} coordinates, not 3",
+            points_array.components
+        )));
+    }
+    let coords = points_array.scalar.to_f64(array_bytes(points_array, Some(n_points))?);
+    let points: Vec<[f64; 3]> = coords.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+
+    let integers = |a: &AppendedArray, bytes: &[u8]| {
+        a.scalar.to_u64(bytes).ok_or_else(|| {
+            fail(format!(
+                "the cell array \"{}\" is not a non-negative integer array",
+                a.name
+            ))
+        })
+    };
+    let types_array = find(Section::Cells, "types")?;
+    let cell_types = integers(types_array, array_bytes(types_array, Some(n_cells))?)?
+        .into_iter()
+        .map(|t| u8::try_from(t).map_err(|_| fail(format!("the cell type {t} is not a VTK cell type"))))
+        .collect::<Result<Vec<u8>, _>>()?;
+    let offsets_array = find(Section::Cells, "offsets")?;
+    let offsets = integers(offsets_array, array_bytes(offsets_array, Some(n_cells))?)?;
+    let conn_array = find(Section::Cells, "connectivity")?;
+    let conn = integers(conn_array, array_bytes(conn_array, None)?)?;
+    if offsets.last().is_some_and(|&end| end != conn.len() as u64) {
+        return Err(fail(format!(
+            "the cell offsets end at {} but there are {} connectivity entries",
+            offsets.last().copied().unwrap_or(0),
+            conn.len()
+        )));
+    }
+    let connectivity = split_connectivity(path, &conn, &offsets, n_points)?;
+
+    let mut point_data = BTreeMap::new();
+    let mut cell_data = BTreeMap::new();
+    for a in &arrays {
+        let (map, count, location) = match a.section {
+            Section::PointData => (&mut point_data, n_points, "point"),
+            Section::CellData => (&mut cell_data, n_cells, "cell"),
+            Section::Points | Section::Cells => continue,
+        };
+        let values = a.scalar.to_f64(array_bytes(a, Some(count))?);
+        if map.insert(a.name.clone(), (a.components, values)).is_some() {
+            return Err(fail(format!("two {location} arrays are named \"{}\"", a.name)));
+        }
+    }
+
+    // Nothing but the end tags may follow the last array.
+    let tail = std::str::from_utf8(&data[data_end..]).unwrap_or("");
+    let tail: Vec<&str> = tail.split_ascii_whitespace().collect();
+    if tail != ["</AppendedData>", "</VTKFile>"] {
+        return Err(if "</AppendedData></VTKFile>".starts_with(&tail.concat()) {
+            truncated()
+        } else {
+            fail("unexpected bytes after the last array of the appended data".into())
+        });
+    }
+    Ok(VtuContents {
+        points,
+        cell_types,
+        connectivity,
+        point_data,
+        cell_data,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The arrays of a small two-cell frame.
+    struct Parts {
+        points: Vec<[f64; 2]>,
+        cells: Vec<Cell>,
+        u: Vec<f64>,
+        status: Vec<i32>,
+        stress: Vec<f64>,
+    }
+
+    impl Parts {
+        fn new() -> Self {
+            Parts {
+                points: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [2.0, 0.5]],
+                cells: vec![Cell::Quad4([0, 1, 2, 3]), Cell::Tri3([1, 4, 2])],
+                u: (0..15)
+                    .map(|k| if k % 3 == 2 { 0.0 } else { 0.1 * k as f64 - 0.7 })
+                    .collect(),
+                status: vec![-1, 0, 1, 2, i32::MAX],
+                stress: (0..18).map(|k| (k as f64).sqrt() - 2.0).collect(),
+            }
+        }
+    }
+
+    /// Files in hvi's earlier layout (inline base64 through vtkio, uncompressed) still read,
+    /// and give what the raw layout gives.
+    #[test]
+    fn earlier_base64_files_read_as_the_raw_layout() {
+        let p = Parts::new();
+        let frame = Frame {
+            step: 0,
+            time: 0.0,
+            points: &p.points,
+            cells: &p.cells,
+            point_fields: vec![
+                Field::f64("displacement", 3, &p.u),
+                Field::i32("contact_status", 1, &p.status),
+            ],
+            cell_fields: vec![Field::f64("stress", 9, &p.stress)],
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let (old, new) = (dir.path().join("old.vtu"), dir.path().join("new.vtu"));
+        let bytes = encode_vtu_vtkio(&old, &frame, 0).unwrap();
+        assert!(String::from_utf8_lossy(&bytes).contains("format=\"binary\""));
+        std::fs::write(&old, bytes).unwrap();
+        write_vtu(&new, &frame, 0, &mut VtuBuffer::default()).unwrap();
+        let (a, b) = (read_vtu_arrays(&old).unwrap(), read_vtu_arrays(&new).unwrap());
+        assert_eq!(a, b);
+        assert_eq!(
+            b.point_data["contact_status"],
+            (1, vec![-1.0, 0.0, 1.0, 2.0, i32::MAX as f64])
+        );
+    }
+
+    #[test]
+    fn buffer_is_sized_exactly_and_reused() {
+        let p = Parts::new();
+        let frame = Frame {
+            step: 0,
+            time: 0.0,
+            points: &p.points,
+            cells: &p.cells,
+            point_fields: vec![Field::f64("displacement", 3, &p.u)],
+            cell_fields: vec![],
+        };
+        let mut buf = Vec::new();
+        encode_vtu_raw(&frame, &mut buf);
+        assert_eq!(buf.len(), buf.capacity());
+        assert!(buf.ends_with(RAW_FOOTER.as_bytes()));
+        let (ptr, len) = (buf.as_ptr(), buf.len());
+        encode_vtu_raw(&frame, &mut buf);
+        assert_eq!((buf.as_ptr(), buf.len()), (ptr, len));
+    }
+
+    #[test]
+    fn tags_parse_with_escapes() {
+        let tags =
+            parse_tags("<?xml version=\"1.0\"?>\n<!-- c > d --><A x=\"1\" y='a&amp;b &quot;q&quot; &lt;&gt;'/></A>")
+                .unwrap();
+        assert_eq!(tags.len(), 2);
+        assert_eq!(
+            (tags[0].name, tags[0].self_closing, tags[0].closing),
+            ("A", true, false)
+        );
+        assert_eq!(tags[0].attr("y"), Some("a&b \"q\" <>"));
+        assert!(tags[1].closing);
+        assert!(parse_tags("<A x=\"1>").is_err());
+        assert!(parse_tags("<A x=1>").is_err());
+    }
 }
