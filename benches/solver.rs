@@ -1,6 +1,9 @@
 //! Benchmarks of the phases of a run on the paper's example (Q1, square cells h × h):
-//! assembly, symbolic and numeric factorisation, one solve with the cached factor, the
-//! contact condensation, one full time step, and whole runs at h = k = 1/64 and 1/128.
+//! assembly, symbolic and numeric factorisation, one solve with the cached factor (a forward
+//! and a backward sweep, on two threads when rayon has them), the contact condensation
+//! (G = L⁻¹PCᵀ and W = GᵀG), one full time step (memory load, forward sweep, contact solve,
+//! backward sweep, history update), and whole runs at h = k = 1/64 and 1/128. Issue 3's floor:
+//! one time step ≤ 3× one solve.
 //!
 //! `cargo bench --bench solver` (criterion; medians in target/criterion). Set
 //! `HVI_BENCH_FULL=1` to include the h = k = 1/128 whole run.
