@@ -1,0 +1,97 @@
+//! The zlib-compressed `.vtu` layout, through vtkio.
+//!
+//! With zlib compression (level > 0, [`SeriesWriter::with_compression`]; no hvi command
+//! asks for it) the frame still goes through vtkio as inline base64 binary, compressed.
+//! vtkio's own file writer (`VTKFile::export`/`write`) wraps the destination in a `BufWriter`
+//! that it drops without checking the final flush, and writes with `write` rather than
+//! `write_all`, so a full disk could produce a silently truncated file. We therefore serialise
+//! into memory (which cannot fail that way) and write the bytes ourselves, atomically; the
+//! hand-written layout is written the same way.
+//!
+//! [`SeriesWriter::with_compression`]: crate::output::SeriesWriter::with_compression
+
+use crate::mesh::Cell;
+use crate::output::{Field, FieldValues, Frame, OutputError};
+use std::path::Path;
+use vtkio::model::{
+    Attribute, Attributes, ByteOrder, CellType, Cells, DataArray, DataSet, ElementType, IOBuffer,
+    UnstructuredGridPiece, Version, VertexNumbers, Vtk,
+};
+use vtkio::xml::Compressor;
+
+fn attribute(f: &Field) -> Attribute {
+    let elem = match f.components {
+        1 => ElementType::Scalars {
+            num_comp: 1,
+            lookup_table: None,
+        },
+        3 => ElementType::Vectors,
+        9 => ElementType::Tensors,
+        n => ElementType::Generic(n as u32),
+    };
+    let data = match f.values {
+        FieldValues::F64(v) => IOBuffer::F64(v.to_vec()),
+        FieldValues::I32(v) => IOBuffer::I32(v.to_vec()),
+    };
+    Attribute::DataArray(DataArray {
+        name: f.name.to_string(),
+        elem,
+        data,
+    })
+}
+
+/// Encodes a (validated) frame through vtkio as inline base64 binary, zlib-compressed if
+/// `compression_level` > 0 (the raw appended layout of [`encode_vtu_raw`] is uncompressed only).
+///
+/// [`encode_vtu_raw`]: super::raw::encode_vtu_raw
+pub(super) fn encode_vtu_vtkio(path: &Path, frame: &Frame, compression_level: u32) -> Result<Vec<u8>, OutputError> {
+    let points: Vec<f64> = frame.points.iter().flat_map(|p| [p[0], p[1], 0.0]).collect();
+    let n_conn = frame.cells.iter().map(|c| c.nodes().len()).sum();
+    let mut connectivity = Vec::with_capacity(n_conn);
+    let mut offsets = Vec::with_capacity(frame.cells.len());
+    let mut types = Vec::with_capacity(frame.cells.len());
+    for cell in frame.cells {
+        connectivity.extend(cell.nodes().iter().map(|&i| i as u64));
+        offsets.push(connectivity.len() as u64);
+        types.push(match cell {
+            Cell::Tri3(_) => CellType::Triangle,
+            Cell::Quad4(_) => CellType::Quad,
+        });
+        debug_assert_eq!(*types.last().unwrap() as u8, cell.vtk_type());
+    }
+    let piece = UnstructuredGridPiece {
+        points: IOBuffer::F64(points),
+        cells: Cells {
+            cell_verts: VertexNumbers::XML { connectivity, offsets },
+            types,
+        },
+        data: Attributes {
+            point: frame.point_fields.iter().map(attribute).collect(),
+            cell: frame.cell_fields.iter().map(attribute).collect(),
+        },
+    };
+    let vtk = Vtk {
+        version: Version::new(),
+        title: String::new(),
+        byte_order: ByteOrder::native(),
+        file_path: None,
+        data: DataSet::inline(piece),
+    };
+    let compressor = if compression_level == 0 {
+        Compressor::None
+    } else {
+        Compressor::ZLib
+    };
+    let vtk_err = |e: &dyn std::fmt::Display| OutputError::Vtk {
+        path: path.to_path_buf(),
+        action: "encoding",
+        detail: e.to_string(),
+    };
+    let xml = vtk
+        .try_into_xml_format(compressor, compression_level.min(9))
+        .map_err(|e| vtk_err(&e))?;
+    let mut bytes = Vec::new();
+    xml.write(&mut bytes).map_err(|e| vtk_err(&e))?;
+    bytes.push(b'\n');
+    Ok(bytes)
+}
