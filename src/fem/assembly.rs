@@ -94,3 +94,27 @@ pub fn assemble_on<const M: usize>(
     }
     out
 }
+
+/// Stiffness matrices on the paper's rectangle (0,2)×(0,1) with Γ₁ clamped, for unit tests
+/// of the linear algebra: `nx × ny` cells of `shape`, one matrix per Voigt matrix.
+#[cfg(test)]
+pub(crate) fn rectangle_stiffness<const M: usize>(
+    nx: usize,
+    ny: usize,
+    shape: crate::mesh::structured::CellShape,
+    ds: &[VoigtMatrix; M],
+) -> [SymmetricMatrix; M] {
+    let mesh = crate::mesh::structured::rectangle(2.0, 1.0, nx, ny, shape);
+    let clamped = mesh
+        .group_nodes(&crate::mesh::GroupSelector::Name("Gamma1".into()))
+        .expect("the rectangle has Gamma1");
+    let dofs = DofMap::new(mesh.points.len(), &clamped);
+    assemble_stiffness(&mesh.cells, &mesh.points, &dofs, ds)
+}
+
+/// max |a − b| / max |b| (for tests comparing two computations of one vector).
+#[cfg(test)]
+pub(crate) fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
+    let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
+    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / scale
+}

@@ -196,22 +196,18 @@ mod tests {
     //! backward(forward(r) − G λ) = K⁻¹ (r − Cᵀ λ), for rows with one and two entries
     //! anywhere in the mesh, on P1 and Q1 stiffness matrices.
     use super::*;
-    use crate::fem::{assembly::assemble_stiffness, DofMap};
+    use crate::fem::assembly::{rectangle_stiffness, relative_difference as rel};
     use crate::material::{Elasticity, PlaneModel};
-    use crate::mesh::structured::{rectangle, CellShape};
-    use crate::mesh::GroupSelector;
+    use crate::mesh::structured::CellShape;
     use proptest::prelude::*;
 
     fn stiffness(shape: CellShape) -> crate::fem::SymmetricMatrix {
-        let mesh = rectangle(2.0, 1.0, 12, 7, shape);
-        let clamped = mesh.group_nodes(&GroupSelector::Name("Gamma1".into())).unwrap();
-        let dofs = DofMap::new(mesh.points.len(), &clamped);
         let e = Elasticity {
             youngs_modulus: 3.0,
             poisson_ratio: 0.3,
             plane: PlaneModel::Strain,
         };
-        let [k] = assemble_stiffness(&mesh.cells, &mesh.points, &dofs, &[e.voigt()]);
+        let [k] = rectangle_stiffness(12, 7, shape, &[e.voigt()]);
         k
     }
 
@@ -219,11 +215,6 @@ mod tests {
         let mut x = r.to_vec();
         factor.solve_in_place(&mut x, &Counters::default());
         x
-    }
-
-    fn rel(a: &[f64], b: &[f64]) -> f64 {
-        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
-        a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / scale
     }
 
     proptest! {
