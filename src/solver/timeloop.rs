@@ -301,7 +301,7 @@ impl<'s> Stepper<'s> {
         self.next
     }
 
-    /// Solves the next step: loads, history, free solve, contact, recover, history update.
+    /// Solves the next step: loads, memory load, forward sweep, contact, backward sweep, history update.
     pub fn advance(&mut self) -> Result<StepView<'_>, SolveError> {
         let n = self.next;
         let sim = self.sim;
