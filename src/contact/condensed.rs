@@ -66,15 +66,6 @@ impl ContactNodes {
             *o = row.iter().map(|(d, c)| c * u[*d]).sum();
         }
     }
-
-    /// f ← f − Cᵀ λ.
-    pub fn subtract_transpose(&self, lambda: &[f64], f: &mut [f64]) {
-        for (l, row) in lambda.iter().zip(&self.rows) {
-            for (d, c) in row {
-                f[*d] -= c * l;
-            }
-        }
-    }
 }
 
 /// W = C K⁻¹ Cᵀ and its inverse Q = W⁻¹ (both m × m, dense, symmetric positive definite),

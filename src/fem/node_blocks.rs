@@ -6,7 +6,7 @@
 //! and row index), this form 9 per stored entry (four values share one 4-byte index) over
 //! about half the entries. It also leaves more of the cache to the factor's sweeps.
 
-use super::pattern::SymmetricMatrix;
+use super::pattern::{NodeGraph, SymmetricMatrix};
 
 /// The upper-triangular 2 × 2 blocks of a symmetric matrix whose pattern is made of node
 /// blocks (unknowns 2k, 2k + 1 of node k), in block-row order.
@@ -25,13 +25,13 @@ impl NodeBlockMatrix {
     /// The node blocks of `matrix`, or None if its pattern is not made of 2 × 2 node blocks
     /// (odd order, or the two unknowns of a node with different patterns).
     pub fn new(matrix: &SymmetricMatrix) -> Option<Self> {
-        let n = matrix.n();
-        if n % 2 != 0 || n / 2 > u32::MAX as usize {
+        let sym = matrix.pattern.symbolic();
+        let graph = NodeGraph::of(sym)?;
+        let n_nodes = graph.len();
+        if n_nodes > u32::MAX as usize {
             return None;
         }
-        let sym = matrix.pattern.symbolic();
-        let (col_ptr, row_idx) = (sym.col_ptr(), sym.row_idx());
-        let n_nodes = n / 2;
+        let (col_ptr, v) = (sym.col_ptr(), &matrix.values);
         let mut out = NodeBlockMatrix {
             n_nodes,
             row_ptr: Vec::with_capacity(n_nodes + 1),
@@ -39,29 +39,15 @@ impl NodeBlockMatrix {
             values: Vec::new(),
         };
         out.row_ptr.push(0);
-        // Column 2k and 2k + 1 hold the rows of block column k; by symmetry block (k, q) for
-        // q ≥ k is the transpose of the stored block (q, k) of column k.
+        // Columns 2k and 2k + 1 hold the rows of block column k; by symmetry block (k, q) for
+        // q ≥ k is the transpose of the stored block (q, k) of column k:
+        // [a(2k,2q), a(2k,2q+1); a(2k+1,2q), a(2k+1,2q+1)] = [a(2q,2k), a(2q+1,2k); a(2q,2k+1), a(2q+1,2k+1)].
         for k in 0..n_nodes {
-            let (c0, c1) = (
-                col_ptr[2 * k]..col_ptr[2 * k + 1],
-                col_ptr[2 * k + 1]..col_ptr[2 * k + 2],
-            );
-            if row_idx[c0.clone()] != row_idx[c1.clone()] || c0.len() % 2 != 0 {
-                return None;
-            }
-            for (p, pair) in row_idx[c0.clone()].chunks_exact(2).enumerate() {
-                if pair[0] % 2 != 0 || pair[1] != pair[0] + 1 {
-                    return None;
-                }
-                let q = pair[0] / 2;
+            for (p, &q) in graph.coupled(k).iter().enumerate() {
                 if q < k {
                     continue;
                 }
-                let (a, b) = (c0.start + 2 * p, c1.start + 2 * p);
-                let v = &matrix.values;
-                // column 2k: rows 2q, 2q+1 → entries (2q, 2k), (2q+1, 2k); column 2k+1 likewise.
-                // Block (k, q) = transpose of block (q, k): [a(2k,2q), a(2k,2q+1); a(2k+1,2q), a(2k+1,2q+1)]
-                // and by symmetry a(2k, 2q) = a(2q, 2k) etc.
+                let (a, b) = (col_ptr[2 * k] + 2 * p, col_ptr[2 * k + 1] + 2 * p);
                 out.values.push([v[a], v[a + 1], v[b], v[b + 1]]);
                 out.col.push(q as u32);
             }

@@ -107,6 +107,63 @@ impl Pattern {
     }
 }
 
+/// The node graph of a pattern made of 2 × 2 node blocks — unknowns 2k, 2k + 1 of node k
+/// with one shared column pattern of row pairs (2q, 2q + 1), as [`Pattern::new`] builds it.
+/// Entry p of [`NodeGraph::coupled`]`(k)` is node q, whose rows 2q, 2q + 1 sit at positions
+/// `col_ptr[2k] + 2p` (+1) of column 2k and `col_ptr[2k + 1] + 2p` (+1) of column 2k + 1.
+#[derive(Clone, Debug)]
+pub struct NodeGraph {
+    /// Node k couples with `nodes[ptr[k]..ptr[k + 1]]` (ascending, itself included).
+    pub ptr: Vec<usize>,
+    pub nodes: Vec<usize>,
+}
+
+impl NodeGraph {
+    /// The node graph of `pattern`, or None if it is not made of 2 × 2 node blocks (odd
+    /// order, the two unknowns of a node with different patterns, or rows not in pairs).
+    pub fn of(pattern: SymbolicSparseColMatRef<'_, usize>) -> Option<Self> {
+        let n = pattern.nrows();
+        if n % 2 != 0 {
+            return None;
+        }
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let mut graph = NodeGraph {
+            ptr: Vec::with_capacity(n / 2 + 1),
+            nodes: Vec::with_capacity(row_idx.len() / 4),
+        };
+        graph.ptr.push(0);
+        for k in 0..n / 2 {
+            let first = &row_idx[col_ptr[2 * k]..col_ptr[2 * k + 1]];
+            if first != &row_idx[col_ptr[2 * k + 1]..col_ptr[2 * k + 2]] || first.len() % 2 != 0 {
+                return None;
+            }
+            for pair in first.chunks_exact(2) {
+                if pair[0] % 2 != 0 || pair[1] != pair[0] + 1 {
+                    return None;
+                }
+                graph.nodes.push(pair[0] / 2);
+            }
+            graph.ptr.push(graph.nodes.len());
+        }
+        Some(graph)
+    }
+
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        self.ptr.len() - 1
+    }
+
+    /// True if there are no nodes.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The nodes node k couples with, ascending.
+    pub fn coupled(&self, k: usize) -> &[usize] {
+        &self.nodes[self.ptr[k]..self.ptr[k + 1]]
+    }
+}
+
 /// The free-dof indices of a cell's local dofs, ordered (node a, component c) → 2a + c;
 /// constrained ones are `usize::MAX`.
 pub fn element_dofs(cell: &Cell, dofs: &DofMap, out: &mut Vec<usize>) {

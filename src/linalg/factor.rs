@@ -4,13 +4,14 @@
 //! sweeps.
 //!
 //! faer's high-level `Llt` solves only whole systems; the split sweeps and the sparse
-//! forward sweep of [`super::ForwardColumns`] need the supernodal factor itself, so this
-//! module drives faer's mid-level API (`factorize_symbolic_cholesky`,
-//! `factorize_numeric_llt`, `SupernodalLltRef::{l_solve, l_transpose_solve}`), forcing the
-//! supernodal structure so that one code path serves every size.
+//! forward sweeps of [`super::ForwardColumns`] need the supernodal factor itself, so this
+//! module drives faer's mid-level API (`factorize_symbolic_cholesky`, `factorize_numeric_llt`),
+//! forcing the supernodal structure so that one code path serves every size, and sweeps the
+//! factor with the kernels of `supernodes.rs` on the schedule of `schedule.rs`.
 
 use super::schedule::{backward_sequential, forward_sequential, forward_supernode, Schedule};
 use super::supernodes::Supernodes;
+use crate::fem::pattern::NodeGraph;
 use crate::fem::SymmetricMatrix;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltError;
@@ -71,28 +72,8 @@ pub struct Analysis {
 }
 
 impl Analysis {
-    /// Number of supernodes of L.
-    pub fn supernode_count(&self) -> usize {
-        self.supernodes.len()
-    }
-
-    /// Share of L's entries swept on one thread by the parallel sweeps (None: all of it).
-    pub fn sequential_share(&self) -> Option<f64> {
-        self.schedule.as_ref().map(|s| s.top_share)
-    }
-
-    /// Stored entries of each piece of the parallel sweeps, largest first.
-    pub fn parallel_pieces(&self) -> Vec<usize> {
-        self.schedule.as_ref().map_or(Vec::new(), |s| s.piece_entries())
-    }
-
     pub(super) fn supernodes(&self) -> &Supernodes {
         &self.supernodes
-    }
-
-    /// Number of stored entries of L.
-    pub fn factor_nonzeros(&self) -> usize {
-        self.inner.len_val()
     }
 }
 
@@ -106,11 +87,6 @@ impl Forward {
     /// A vector of `n` zeros, to be filled by [`Factor::forward_into`].
     pub fn zeros(n: usize) -> Self {
         Forward { values: vec![0.0; n] }
-    }
-
-    /// The entries, in the factor's order.
-    pub fn as_slice(&self) -> &[f64] {
-        &self.values
     }
 }
 
@@ -274,30 +250,9 @@ impl Factor {
 /// and supernodes that never split a node. None if the pattern is not of that form.
 fn node_ordering(pattern: faer::sparse::SymbolicSparseColMatRef<'_, usize>) -> Option<(Vec<usize>, Vec<usize>)> {
     let n = pattern.nrows();
-    if n % 2 != 0 || n == 0 {
-        return None;
-    }
-    let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
-    let mut node_ptr = Vec::with_capacity(n / 2 + 1);
-    node_ptr.push(0);
-    let mut node_rows = Vec::with_capacity(row_idx.len() / 4);
-    for k in 0..n / 2 {
-        let (a, b) = (
-            &row_idx[col_ptr[2 * k]..col_ptr[2 * k + 1]],
-            &row_idx[col_ptr[2 * k + 1]..col_ptr[2 * k + 2]],
-        );
-        if a != b || a.len() % 2 != 0 {
-            return None;
-        }
-        for pair in a.chunks_exact(2) {
-            if pair[0] % 2 != 0 || pair[1] != pair[0] + 1 {
-                return None;
-            }
-            node_rows.push(pair[0] / 2);
-        }
-        node_ptr.push(node_rows.len());
-    }
-    let nodes = faer::sparse::SymbolicSparseColMatRef::new_checked(n / 2, n / 2, &node_ptr, None, &node_rows);
+    let graph = NodeGraph::of(pattern).filter(|g| !g.is_empty())?;
+    let (node_ptr, node_rows) = (&graph.ptr, &graph.nodes);
+    let nodes = faer::sparse::SymbolicSparseColMatRef::new_checked(n / 2, n / 2, node_ptr, None, node_rows);
     let (mut fwd, mut inv) = (vec![0usize; n / 2], vec![0usize; n / 2]);
     let mut buffer = MemBuffer::try_new(faer::sparse::linalg::amd::order_scratch::<usize>(
         n / 2,

@@ -72,11 +72,6 @@ impl ForwardColumns {
         self.len() == 0
     }
 
-    /// Stored entries (a measure of the cost of [`Self::transpose_apply`]).
-    pub fn nonzeros(&self) -> usize {
-        self.values.len()
-    }
-
     fn column(&self, c: usize) -> &[Segment] {
         &self.segments[self.column_start[c]..self.column_start[c + 1]]
     }

@@ -47,8 +47,6 @@ pub(super) struct Schedule {
     top_rows: Vec<usize>,
     /// For every column: its index in `top_rows`, or `u32::MAX` below the top.
     top_slot: Vec<u32>,
-    /// Share of the stored entries in the top (sequential part).
-    pub top_share: f64,
 }
 
 impl Schedule {
@@ -122,15 +120,7 @@ impl Schedule {
             top,
             top_rows,
             top_slot,
-            top_share: top_entries as f64 / total as f64,
         })
-    }
-
-    /// The entries of each piece, largest first (for reports).
-    pub fn piece_entries(&self) -> Vec<usize> {
-        let mut e: Vec<usize> = self.pieces.iter().map(|p| p.entries).collect();
-        e.sort_unstable_by(|a, b| b.cmp(a));
-        e
     }
 
     /// The pieces' slices of x, in the pieces' order.
