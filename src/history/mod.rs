@@ -89,89 +89,62 @@ impl History {
 
     /// h_n for the next step n (zero for n = 0), written into `out`.
     pub fn memory_load(&self, out: &mut [f64]) {
-        if let Accumulator::Direct { kernel, past } = &self.acc {
-            let (k, n) = (self.step, self.next);
-            out.fill(0.0);
-            for (i, u) in past.iter().enumerate() {
-                let w = if i == 0 { 0.5 } else { 1.0 };
-                axpy(k * w * kernel.value((n - i) as f64 * k), u, out);
-            }
-            return;
-        }
-        // Chunk by chunk, so that the accumulators of a chunk are combined while in cache.
-        for (c, out) in out.chunks_mut(CHUNK).enumerate() {
-            self.memory_load_chunk(c * CHUNK, out);
-        }
-    }
-
-    fn memory_load_chunk(&self, start: usize, out: &mut [f64]) {
-        let (k, range) = (self.step, start..start + out.len());
-        out.fill(0.0);
+        let k = self.step;
+        out.iter_mut().for_each(|v| *v = 0.0);
         match &self.acc {
             Accumulator::Exponentials { terms, sums } => {
                 for ((c, _), s) in terms.iter().zip(sums) {
-                    axpy(k * c, &s[range.clone()], out);
+                    axpy(k * c, s, out);
                 }
             }
             Accumulator::Polynomial { coefficients, moments } => {
                 for (a, p) in coefficients.iter().zip(moments) {
-                    axpy(k * a, &p[range.clone()], out);
+                    axpy(k * a, p, out);
                 }
             }
-            Accumulator::Direct { .. } => unreachable!("the direct sum is not chunked"),
+            Accumulator::Direct { kernel, past } => {
+                let n = self.next;
+                for (i, u) in past.iter().enumerate() {
+                    let w = if i == 0 { 0.5 } else { 1.0 };
+                    axpy(k * w * kernel.value((n - i) as f64 * k), u, out);
+                }
+            }
         }
     }
 
     /// Records u_n of the step just solved and advances to n + 1.
     pub fn push(&mut self, u: &[f64]) {
+        let k = self.step;
         let omega = if self.next == 0 { 0.5 } else { 1.0 };
-        if let Accumulator::Direct { past, .. } = &mut self.acc {
-            past.push(u.to_vec());
-        } else {
-            for (c, u) in u.chunks(CHUNK).enumerate() {
-                self.push_chunk(c * CHUNK, u, omega);
-            }
-        }
-        self.next += 1;
-    }
-
-    fn push_chunk(&mut self, start: usize, u: &[f64], omega: f64) {
-        let (k, range) = (self.step, start..start + u.len());
         match &mut self.acc {
             Accumulator::Exponentials { terms, sums } => {
                 for ((_, tau), s) in terms.iter().zip(sums.iter_mut()) {
                     let decay = (-k / tau).exp();
-                    for (sv, uv) in s[range.clone()].iter_mut().zip(u) {
+                    for (sv, uv) in s.iter_mut().zip(u) {
                         *sv = decay * (*sv + omega * uv);
                     }
                 }
             }
             Accumulator::Polynomial { moments, .. } => {
-                moments[0][range.clone()]
-                    .iter_mut()
-                    .zip(u)
-                    .for_each(|(p, uv)| *p += omega * uv);
+                moments[0].iter_mut().zip(u).for_each(|(p, uv)| *p += omega * uv);
                 // P_j(n+1) = Σ_{l ≤ j} C(j,l) k^{j−l} P_l(n) in descending j (uses old P_l, l < j).
                 for j in (1..moments.len()).rev() {
                     let (lower, upper) = moments.split_at_mut(j);
-                    let pj = &mut upper[0][range.clone()];
+                    let pj = &mut upper[0];
                     let mut binom = 1.0;
                     for l in (0..j).rev() {
                         // C(j, l) built incrementally from C(j, j) = 1.
                         binom = binom * (l + 1) as f64 / (j - l) as f64;
                         let coef = binom * k.powi((j - l) as i32);
-                        axpy(coef, &lower[l][range.clone()], pj);
+                        axpy(coef, &lower[l], pj);
                     }
                 }
             }
-            Accumulator::Direct { .. } => unreachable!("the direct sum is not chunked"),
+            Accumulator::Direct { past, .. } => past.push(u.to_vec()),
         }
+        self.next += 1;
     }
 }
-
-/// Entries per chunk of the recursive accumulators (a few chunks of every accumulator fit in
-/// the first-level caches).
-const CHUNK: usize = 1024;
 
 fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
     y.iter_mut().zip(x).for_each(|(yv, xv)| *yv += a * xv);

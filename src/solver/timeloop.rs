@@ -11,7 +11,8 @@
 //! ```
 //!
 //! with K = Pᵀ L Lᵀ P = K_A + (k/2) b(0) K_B factored once and G = L⁻¹ P Cᵀ formed once
-//! (METHOD.md §4, "the fast path"): a step costs one solve, contact or not. Step 0 has no history and uses K_A alone;
+//! (METHOD.md §4, "the fast path"): a step costs one solve, contact or not.
+//! Step 0 has no history and uses K_A alone;
 //! when its solution is not trivially zero and K ≠ K_A, K_A gets a factor of its own.
 
 use super::error::SolveError;
