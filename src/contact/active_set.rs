@@ -25,11 +25,8 @@
 
 use super::condensed::CondensedOperator;
 use super::law::ContactLaw;
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch};
-use faer::linalg::cholesky::llt::solve::solve_in_place_with_conj;
-use faer::reborrow::{Reborrow, ReborrowMut};
-use faer::{Conj, MatMut, Par};
+use faer::linalg::solvers::Solve;
+use faer::Mat;
 
 /// Tolerance and iteration cap of the contact solve.
 #[derive(Clone, Copy, Debug)]
@@ -369,44 +366,23 @@ impl ActiveSetSolver<'_> {
             return Vec::new();
         }
         let m = self.m();
-        // (Q_ℐℐ + diag) assembled and factorised in place in a buffer kept by the thread, so
-        // a Newton iteration allocates nothing of size nf².
-        let try_solve = |diag: &dyn Fn(usize) -> f64| -> Option<Vec<f64>> {
-            NEWTON_MATRIX.with_borrow_mut(|h| {
-                h.clear();
-                h.extend((0..nf * nf).map(|k| {
-                    let (i, j) = (k % nf, k / nf); // column-major
-                    self.operator.q[free[i] * m + free[j]] + if i == j { diag(i) } else { 0.0 }
-                }));
-                let mut matrix = MatMut::from_column_major_slice_mut(&mut h[..], nf, nf);
-                let mut scratch = MemBuffer::new(cholesky_in_place_scratch::<f64>(nf, Par::Seq, Default::default()));
-                cholesky_in_place(
-                    matrix.rb_mut(),
-                    Default::default(),
-                    Par::Seq,
-                    MemStack::new(&mut scratch),
-                    Default::default(),
-                )
-                .ok()?;
-                let mut x: Vec<f64> = free.iter().map(|&p| grad[p]).collect();
-                solve_in_place_with_conj(
-                    matrix.rb(),
-                    Conj::No,
-                    MatMut::from_column_major_slice_mut(&mut x, nf, 1),
-                    Par::Seq,
-                    MemStack::new(&mut MemBuffer::new(StackReq::EMPTY)),
-                );
-                Some(x)
+        let rhs = Mat::<f64>::from_fn(nf, 1, |i, _| grad[free[i]]);
+        let build = |diag: &dyn Fn(usize) -> f64| {
+            Mat::<f64>::from_fn(nf, nf, |i, j| {
+                self.operator.q[free[i] * m + free[j]] + if i == j { diag(i) } else { 0.0 }
             })
         };
-        if let Some(x) = try_solve(&|i| curvature[i]) {
-            return x;
+        if let Ok(llt) = build(&|i| curvature[i]).llt(faer::Side::Lower) {
+            let x = llt.solve(&rhs);
+            return (0..nf).map(|i| x[(i, 0)]).collect();
         }
         outcome.convexified += 1;
         let mut shift = 0.0;
         loop {
-            if let Some(x) = try_solve(&|i| curvature[i].max(0.0) + shift) {
-                return x;
+            let h = build(&|i| curvature[i].max(0.0) + shift);
+            if let Ok(llt) = h.llt(faer::Side::Lower) {
+                let x = llt.solve(&rhs);
+                return (0..nf).map(|i| x[(i, 0)]).collect();
             }
             shift = if shift == 0.0 {
                 1e-12 * self.c(free[0])
@@ -443,9 +419,4 @@ impl ActiveSetSolver<'_> {
             };
         }
     }
-}
-
-thread_local! {
-    /// The Newton matrix Q_ℐℐ + diag of the last contact solve on this thread (reused).
-    static NEWTON_MATRIX: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
 }
