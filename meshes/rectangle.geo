@@ -1,22 +1,25 @@
 // The paper's domain Ω = (0,2)×(0,1), meshed with a structured (transfinite) grid.
 //
 //   gmsh -2 rectangle.geo -setnumber n 16 -setnumber quads 1 -format msh41 -o rect_q1_h16.msh
+//   gmsh -2 rectangle.geo -setnumber n 16 -setnumber quads 1 -setnumber plain 1 -format msh41 -o rect_q1_h16_plain.msh
 //
 // Parameters (override with -setnumber):
 //   n      cells per unit length, h = 1/n                                  (default 16)
 //   quads  1 = recombined quadrilaterals (Q1), 0 = triangles (P1)          (default 1)
 //   wide   1 = cells 2h×h (n parts along each side), 0 = square h×h cells  (default 0)
 //   mixed  1 = quadrilaterals on x < 1, triangles on x > 1 (a mixed mesh)  (default 0)
+//   plain  1 = only the groups the paper names (no Gamma2_top), 0 = all    (default 0)
 // The grid points are equally spaced, so the meshes for n, 2n, 4n, ... are nested.
 //
 // Physical groups (the tags a scene refers to):
 //   Curve   "Gamma1"     1  left side x = 0 (clamped)
 //   Curve   "Gamma2"     2  right side x = 2 and top y = 1 (loaded)
 //   Curve   "Gamma3"     3  bottom y = 0 (contact)
-//   Curve   "Gamma2_top" 4  top y = 1 only (its facets are also in Gamma2)
+//   Curve   "Gamma2_top" 4  top y = 1 only (its facets are also in Gamma2; not with plain 1)
 //   Surface "Omega"      5  the body
+// With plain 1 the tags stay as above (Omega is still 5), only Gamma2_top is left out.
 
-DefineConstant[ n = 16, quads = 1, wide = 0, mixed = 0 ];
+DefineConstant[ n = 16, quads = 1, wide = 0, mixed = 0, plain = 0 ];
 
 Lx = 2; Ly = 1;
 ny = n;                          // parts along the left/right sides
@@ -43,7 +46,9 @@ If (mixed == 0)
   Physical Curve("Gamma1", 1) = {4};
   Physical Curve("Gamma2", 2) = {2, 3};
   Physical Curve("Gamma3", 3) = {1};
-  Physical Curve("Gamma2_top", 4) = {3};
+  If (plain == 0)
+    Physical Curve("Gamma2_top", 4) = {3};
+  EndIf
   Physical Surface("Omega", 5) = {1};
 Else
   // Two surfaces split at x = Lx/2: quads on the left, triangles on the right.
@@ -68,6 +73,8 @@ Else
   Physical Curve("Gamma1", 1) = {6};
   Physical Curve("Gamma2", 2) = {3, 4, 5};
   Physical Curve("Gamma3", 3) = {1, 2};
-  Physical Curve("Gamma2_top", 4) = {4, 5};
+  If (plain == 0)
+    Physical Curve("Gamma2_top", 4) = {4, 5};
+  EndIf
   Physical Surface("Omega", 5) = {1, 2};
 EndIf

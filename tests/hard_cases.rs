@@ -487,10 +487,10 @@ fn case4_contact_configurations() {
     let m = || mesh_file("rect_q1_h8.msh");
     let cap = 30;
     // presses x < 1.5, lifts x > 1.5
-    let press_left = "traction.0.value=[\"0\", \"-0.1*(1-exp(-2*t))*(1.5-x)\"]";
+    let press_left = "traction.0.value=[\"0\", \"-0.1*(1-exp(-2*t))*(1.5-x)*ny\"]";
 
     // g = 0: the paper's load presses every contact node onto the bound from step 1 on.
-    let lift_right = "traction.0.value=[\"0\", \"-0.1*(1-exp(-2*t))*(1-x)*(2-x)\"]";
+    let lift_right = "traction.0.value=[\"0\", \"-0.1*(1-exp(-2*t))*(1-x)*(2-x)*ny\"]";
     let (g0, _) = solve_checked("4 g=0", &paper(&["time.steps=8", "contact.bound=0"]), m(), cap);
     let m_nodes = g0.sim.contact.as_ref().unwrap().nodes.len();
     assert!(
@@ -514,7 +514,7 @@ fn case4_contact_configurations() {
     // A large load: every contact node (the clamped corner is not one) on the bound.
     let (all, _) = solve_checked(
         "4 every node on the bound",
-        &paper(&["time.steps=8", "traction.0.value=[\"0\", \"-20*(1-exp(-2*t))\"]"]),
+        &paper(&["time.steps=8", "traction.0.value=[\"0\", \"-20*(1-exp(-2*t))*ny\"]"]),
         m(),
         cap,
     );
@@ -524,7 +524,7 @@ fn case4_contact_configurations() {
 
     // A tiny load under the odd law: the layer holds every node at the kink, |λ_p| < w_p S a,
     // and u_ν = O(ε) (a finer ε shrinks it in proportion).
-    let tiny = "traction.0.value=[\"0\", \"-1e-7*(1-exp(-2*t))*x\"]";
+    let tiny = "traction.0.value=[\"0\", \"-1e-7*(1-exp(-2*t))*x*ny\"]";
     let (t8, _) = solve_checked("4 tiny load eps=1e-8", &paper(&["time.steps=8", tiny]), m(), cap);
     let (t10, _) = solve_checked(
         "4 tiny load eps=1e-10",
@@ -546,7 +546,7 @@ fn case4_contact_configurations() {
 
     // No contact at all: an upward load with the one-sided law lifts Γ₃ off the layer, no
     // force acts, and the result is that of the same scene without [contact].
-    let up = "traction.0.value=[\"0\", \"0.1*(1-exp(-2*t))*x\"]";
+    let up = "traction.0.value=[\"0\", \"0.1*(1-exp(-2*t))*x*ny\"]";
     let (lifted, _) = solve_checked(
         "4 upward load, one-sided",
         &paper(&["time.steps=8", up, "contact.law.one_sided=true"]),
@@ -696,7 +696,7 @@ fn case5_incompressible_and_scaled() {
             "time.steps=16",
             "material.youngs_modulus=2e11",
             "memory.coefficients=[5e10, 2e11, 2e11]",
-            "traction.0.value=[\"0\", \"-2e10*(1-exp(-2*t))*x\"]",
+            "traction.0.value=[\"0\", \"-2e10*(1-exp(-2*t))*x*ny\"]",
             "contact.law.scale=2e10",
         ]),
         mesh_file("rect_q1_h16.msh"),

@@ -122,7 +122,7 @@ fn wrong_types_and_bad_values_name_the_key() {
         ("output.every=0", "output.every"),
         ("traction.0.value=[\"0\", \"sin(\"]", "traction[0].value[1]"),
         ("traction.0.value=[\"0\", \"log(x - 5)\"]", "traction[0].value[1]"),
-        ("traction.0.value=[\"z\", \"0\"]", "traction[0].value[0]"),
+        ("traction.0.value=[\"q\", \"0\"]", "traction[0].value[0]"),
         ("traction.0.value=[\"-x^2\", \"0\"]", "traction[0].value[0]"),
         ("memory.coefficients=[]", "memory.coefficients"),
     ] {

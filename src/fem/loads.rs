@@ -1,5 +1,6 @@
 //! Load vectors F(t) = ∫_Ω f₀·v dx + Σ_groups ∫_Γ f₂·v ds (METHOD.md §1), from expressions
-//! in (x, y, t). Quadrature points and shape values are computed once; each time step only
+//! in (x, y, z, t) and, for tractions, the facet's outward normal (nx, ny, nz) (the variables
+//! of [`crate::scene::TRACTION_VARIABLES`]). Quadrature points and shape values are computed once; each time step only
 //! evaluates the expressions, and a load that does not depend on t is assembled once.
 
 use super::dofs::DofMap;
@@ -13,6 +14,8 @@ use crate::scene::Expr;
 #[derive(Clone, Debug)]
 struct LoadPoint {
     x: [f64; 2],
+    /// The facet's outward unit normal (zero for a body force).
+    normal: [f64; 2],
     weight: f64,
     /// (node, N_node(x)) for the nodes of the cell or facet.
     shape: Vec<(usize, f64)>,
@@ -44,9 +47,12 @@ impl Loads {
         let mut qp = Vec::with_capacity(part.facets.len() * EDGE_GAUSS_3.len());
         for (f, len) in part.facets.iter().zip(&part.facet_lengths) {
             let (a, b) = (points[f[0]], points[f[1]]);
+            // the facet is oriented with the body on its left: outward normal (dy, −dx)/len
+            let normal = [(b[1] - a[1]) / len, -(b[0] - a[0]) / len];
             for &(s, w) in &EDGE_GAUSS_3 {
                 qp.push(LoadPoint {
                     x: [(1.0 - s) * a[0] + s * b[0], (1.0 - s) * a[1] + s * b[1]],
+                    normal,
                     weight: w * len,
                     shape: vec![(f[0], 1.0 - s), (f[1], s)],
                 });
@@ -67,6 +73,7 @@ impl Loads {
                 let s = shape_at(cell, points, q.xi);
                 qp.push(LoadPoint {
                     x: s.x,
+                    normal: [0.0; 2],
                     weight: q.weight * s.det_j,
                     shape: cell.nodes().iter().zip(&s.value).map(|(&n, &v)| (n, v)).collect(),
                 });
@@ -95,7 +102,8 @@ impl Loads {
         out.iter_mut().for_each(|v| *v = 0.0);
         for term in &self.terms {
             for p in &term.points {
-                let vars = [p.x[0], p.x[1], t];
+                // TRACTION_VARIABLES (x, y, z, t, nx, ny, nz); a body force uses the first four.
+                let vars = [p.x[0], p.x[1], 0.0, t, p.normal[0], p.normal[1], 0.0];
                 let f = [term.value[0].eval(&vars), term.value[1].eval(&vars)];
                 if let Some(c) = f.iter().position(|v| !v.is_finite()) {
                     return Err(format!(

@@ -16,6 +16,15 @@ literal_matcher_from_pattern!(SciNumber, r"^(([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+
 
 type Flat = FlatEx<f64, FloatOpsFactory<f64>, SciNumber>;
 
+/// The variables of a traction density: the point (x, y, z), the time t and the facet's outward
+/// unit normal (nx, ny, nz). In 2D, z = nz = 0. A load on a group that has several sides can use
+/// the normal to tell them apart: the paper's Γ₂ load is `-0.1*(1 - exp(-2*t))*x*ny`, zero on the
+/// right side (ny = 0) and the paper's load on the top (ny = 1).
+pub const TRACTION_VARIABLES: [&str; 7] = ["x", "y", "z", "t", "nx", "ny", "nz"];
+
+/// The variables of a body force density: the point (x, y, z) and the time t (z = 0 in 2D).
+pub const BODY_FORCE_VARIABLES: [&str; 4] = ["x", "y", "z", "t"];
+
 /// Rejects a unary minus whose operand is raised to a power (`-x^2`, `2*-(a+b)^3`), which exmex
 /// would read as (−x)², unlike the usual convention. Returns the column (1-based) of the minus.
 fn check_unary_minus_power(source: &str) -> Result<(), String> {

@@ -8,7 +8,7 @@ mod types;
 mod validate;
 
 pub use error::SceneError;
-pub use expr::Expr;
+pub use expr::{Expr, BODY_FORCE_VARIABLES, TRACTION_VARIABLES};
 pub use types::*;
 
 use std::path::Path;

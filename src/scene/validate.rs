@@ -206,8 +206,8 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
                 origin,
                 &format!("traction[{i}].value[{c}]"),
                 &tr.value[c],
-                &["x", "y", "t"],
-                &[0.0, 0.0, 0.0],
+                &super::TRACTION_VARIABLES,
+                &[0.0; 7],
             )?;
         }
     }
@@ -217,8 +217,8 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
                 origin,
                 &format!("body_force.value[{c}]"),
                 &f.value[c],
-                &["x", "y", "t"],
-                &[0.0, 0.0, 0.0],
+                &super::BODY_FORCE_VARIABLES,
+                &[0.0; 4],
             )?;
         }
     }

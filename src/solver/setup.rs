@@ -54,9 +54,9 @@ pub struct Simulation {
     pub threads: usize,
 }
 
-fn exprs(value: &[String; 2], origin: &str, key: &str) -> Result<[Expr; 2], SolveError> {
+fn exprs(value: &[String; 2], variables: &[&str], origin: &str, key: &str) -> Result<[Expr; 2], SolveError> {
     let parse = |i: usize| {
-        Expr::parse(&value[i], &["x", "y", "t"])
+        Expr::parse(&value[i], variables)
             .map_err(|e| SolveError::Setup(format!("{origin}: {key}[{i}] = \"{}\": {e}", value[i])))
     };
     Ok([parse(0)?, parse(1)?])
@@ -101,13 +101,18 @@ impl Simulation {
         for (i, t) in scene.traction.iter().enumerate() {
             let part = mesh.boundary(&t.group)?;
             let key = format!("traction[{i}].value");
-            loads.add_traction(&part, &mesh.points, exprs(&t.value, &origin, &key)?, &key);
+            loads.add_traction(
+                &part,
+                &mesh.points,
+                exprs(&t.value, &scene::TRACTION_VARIABLES, &origin, &key)?,
+                &key,
+            );
         }
         if let Some(f) = &scene.body_force {
             loads.add_body_force(
                 &mesh.cells,
                 &mesh.points,
-                exprs(&f.value, &origin, "body_force.value")?,
+                exprs(&f.value, &scene::BODY_FORCE_VARIABLES, &origin, "body_force.value")?,
                 "body_force.value",
             );
         }
