@@ -30,10 +30,10 @@ fn main() {
             &sim.mesh.cells,
             &sim.mesh.points,
             &sim.dofs,
-            &[sim.elasticity.voigt(), IDENTITY_TENSOR],
+            &[sim.elasticity.tensor(), IDENTITY_TENSOR],
         );
         let k = 1.0 / n as f64;
-        let matrix = k_a.plus_scaled(0.5 * k * 0.25, &k_b); // b(0) = 0.25 for (0.5 + s)²
+        let matrix = k_a.plus_scaled(0.5 * k * 0.25, &k_b).with_identity_rows(&sim.dofs); // b(0) = 0.25 for (0.5 + s)²
         let counters = Counters::default();
         let (mut sym, mut num, mut sol) = (vec![], vec![], vec![]);
         let rhs: Vec<f64> = {

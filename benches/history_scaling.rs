@@ -33,7 +33,7 @@ fn simulation(name: &str, n: usize) -> Simulation {
         &[format!("time.steps={n}"), format!("output.every={n}")],
     )
     .unwrap_or_else(|e| panic!("{name}: {e}"));
-    let mesh = hvi::mesh::read_msh(&root().join(MESH)).unwrap_or_else(|e| panic!("{MESH}: {e}"));
+    let mesh = hvi::mesh::read_mesh::<2>(&root().join(MESH)).unwrap_or_else(|e| panic!("{MESH}: {e}"));
     Simulation::new(&scene, mesh).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 

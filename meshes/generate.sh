@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Regenerates every .msh file in this folder from rectangle.geo (needs gmsh: `pip install gmsh`,
-# and python3 for the sparse-tag copy). Run from anywhere: bash meshes/generate.sh
+# Regenerates every .msh file in this folder from rectangle.geo, slab.geo, block.geo and bracket.geo
+# (needs gmsh: `pip install gmsh`, and python3 for the sparse-tag copy and check_orientation.py).
+# Run from anywhere: bash meshes/generate.sh
 set -euo pipefail
 cd "$(dirname "$0")"
 command -v gmsh >/dev/null || { echo "gmsh not found: pip install gmsh" >&2; exit 1; }
@@ -8,6 +9,11 @@ command -v gmsh >/dev/null || { echo "gmsh not found: pip install gmsh" >&2; exi
 mesh() { # mesh OUT ARGS...: mesh rectangle.geo with -setnumber ARGS into OUT
     local out=$1; shift
     gmsh -2 rectangle.geo "$@" -o "$out" >/dev/null
+    echo "wrote $out ($(wc -c <"$out") bytes)"
+}
+mesh3() { # mesh3 GEO OUT ARGS...: mesh GEO in 3D with -setnumber ARGS into OUT (MSH 4.1 ASCII)
+    local geo=$1 out=$2; shift 2
+    gmsh -3 "$geo" "$@" -format msh41 -o "$out" >/dev/null
     echo "wrote $out ($(wc -c <"$out") bytes)"
 }
 
@@ -24,6 +30,9 @@ mesh rect_q1_h16_v22.msh -setnumber n 16 -setnumber quads 1 -format msh22
 mesh rect_q1_h16_wide.msh -setnumber n 16 -setnumber quads 1 -setnumber wide 1 -format msh41
 # Mixed: quadrangles on x < 1, triangles on x > 1, h = 1/4.
 mesh rect_mixed_h4.msh -setnumber n 4 -setnumber mixed 1 -format msh41
+# Only the groups the paper names (Gamma1, Gamma2, Gamma3, Omega; no Gamma2_top).
+mesh rect_q1_h16_plain.msh -setnumber n 16 -setnumber quads 1 -setnumber plain 1 -format msh41
+mesh rect_p1_h8_plain.msh -setnumber n 8 -setnumber quads 0 -setnumber plain 1 -format msh41
 
 # Sparse node tags: a copy of rect_q1_h8.msh post-processed (by the python below, not by gmsh):
 # node tag t becomes 10 t + 3 (gaps, not starting at 1), element tag t becomes t + 1000, and the
@@ -59,3 +68,18 @@ while i < len(lines):
 open(dst, "w").write("\n".join(out))
 PY
 echo "wrote rect_q1_h8_sparse.msh ($(wc -c <rect_q1_h8_sparse.msh) bytes)"
+
+# 3D. The slab (0,2)x(0,1)x(0,Lz): rectangle.geo's grid extruded in cubic h x h x h cells.
+mesh3 slab.geo slab_q1_h8_z1.msh -setnumber n 8 -setnumber layers 1
+mesh3 slab.geo slab_q1_h8_z3.msh -setnumber n 8 -setnumber layers 3
+mesh3 slab.geo slab_q1_h16_z4.msh -setnumber n 16 -setnumber layers 4
+mesh3 slab.geo slab_p1_h4.msh -setnumber n 4 -setnumber layers 2 -setnumber hexes 0
+# The indentation block (0,1)x(0,1)x(0,0.5): unstructured tetrahedra and 8 x 8 x 4 hexahedra.
+mesh3 block.geo block_p1.msh -setnumber hexes 0 -setnumber lc 0.08
+mesh3 block.geo block_q1_h8.msh -setnumber hexes 1 -setnumber n 8
+# The L bracket (OpenCASCADE), tetrahedra.
+mesh3 bracket.geo bracket_p1.msh -setnumber lc 0.03
+
+# Orientation, boundary groups and the slabs' (x, y) grids of every MSH 4.1 ASCII file here: one
+# line per file (OK or FAILED) and any ERROR lines; fails the script if any check fails.
+python3 check_orientation.py | grep -E '^[^ ]|ERROR'

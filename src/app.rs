@@ -3,7 +3,7 @@
 
 use crate::contact::active_set::{ContactOutcome, ContactState};
 use crate::fem::stress::cell_stresses;
-use crate::mesh::{self, Mesh};
+use crate::mesh::{self, AnyMesh, Mesh};
 use crate::output::{self, CsvTable, Field, Frame, SeriesWriter};
 use crate::scene::{OutputField, Scene};
 use crate::solver::stats::timed;
@@ -18,7 +18,7 @@ use std::time::Instant;
 pub struct StoredStep {
     pub step: usize,
     pub time: f64,
-    /// u_n over the free unknowns.
+    /// u_n over all unknowns (D per node).
     pub displacement: Vec<f64>,
     pub memory_displacement: Option<Vec<f64>>,
     pub contact: Option<ContactState>,
@@ -31,8 +31,8 @@ pub struct MemorySink {
     pub steps: Vec<StoredStep>,
 }
 
-impl FrameSink for MemorySink {
-    fn write_frame(&mut self, _sim: &Simulation, view: &StepView) -> Result<(), SolveError> {
+impl<const D: usize> FrameSink<D> for MemorySink {
+    fn write_frame(&mut self, _sim: &Simulation<D>, view: &StepView) -> Result<(), SolveError> {
         self.steps.push(StoredStep {
             step: view.step,
             time: view.time,
@@ -49,6 +49,7 @@ impl FrameSink for MemorySink {
 pub struct FileSink {
     series: SeriesWriter,
     gamma3: Option<CsvTable>,
+    reactions: Option<CsvTable>,
     fields: Vec<OutputField>,
     progress: Option<indicatif::ProgressBar>,
     pub stress_seconds: f64,
@@ -56,14 +57,29 @@ pub struct FileSink {
 
 impl FileSink {
     /// Prepares the output directory (checked writable before any solving).
-    pub fn create(dir: &Path, sim: &Simulation, fields: &[OutputField], progress: bool) -> Result<Self, SolveError> {
+    pub fn create<const D: usize>(
+        dir: &Path,
+        sim: &Simulation<D>,
+        fields: &[OutputField],
+        progress: bool,
+    ) -> Result<Self, SolveError> {
         let series = SeriesWriter::create(dir, "solution")?;
         let gamma3 = match &sim.contact {
-            Some(_) if fields.contains(&OutputField::Contact) => Some(CsvTable::create(
-                &dir.join("gamma3.csv"),
-                &["time", "x", "y", "u_nu", "force", "pressure", "status"],
-            )?),
+            Some(_) if fields.contains(&OutputField::Contact) => {
+                let mut columns = vec!["time", "x", "y", "z"];
+                columns.truncate(1 + D);
+                columns.extend(["u_nu", "force", "pressure", "status"]);
+                Some(CsvTable::create(&dir.join("gamma3.csv"), &columns)?)
+            }
             _ => None,
+        };
+        let reactions = if sim.dirichlet.reaction_groups.is_empty() {
+            None
+        } else {
+            Some(CsvTable::create(
+                &dir.join("reactions.csv"),
+                &["time", "group", "component", "force"],
+            )?)
         };
         let progress = progress.then(|| {
             let bar = indicatif::ProgressBar::new(sim.time.steps as u64 + 1);
@@ -79,6 +95,7 @@ impl FileSink {
         Ok(FileSink {
             series,
             gamma3,
+            reactions,
             fields: fields.to_vec(),
             progress,
             stress_seconds: 0.0,
@@ -97,8 +114,8 @@ impl FileSink {
     }
 }
 
-impl FrameSink for FileSink {
-    fn step_done(&mut self, _sim: &Simulation, view: &StepView) {
+impl<const D: usize> FrameSink<D> for FileSink {
+    fn step_done(&mut self, _sim: &Simulation<D>, view: &StepView) {
         if let Some(bar) = &self.progress {
             bar.set_position(view.step as u64 + 1);
             if let Some(o) = view.outcome {
@@ -107,10 +124,13 @@ impl FrameSink for FileSink {
         }
     }
 
-    fn write_frame(&mut self, sim: &Simulation, view: &StepView) -> Result<(), SolveError> {
+    fn write_frame(&mut self, sim: &Simulation<D>, view: &StepView) -> Result<(), SolveError> {
         let mesh = &sim.mesh;
         let nodal = sim.dofs.to_nodal(view.displacement);
-        let displacement: Vec<f64> = nodal.iter().flat_map(|u| [u[0], u[1], 0.0]).collect();
+        let displacement: Vec<f64> = nodal
+            .iter()
+            .flat_map(|u| [u[0], u[1], u.get(2).copied().unwrap_or(0.0)])
+            .collect();
         let mut point_fields = Vec::new();
         let mut cell_fields = Vec::new();
         if self.wants(OutputField::Displacement) {
@@ -146,16 +166,10 @@ impl FrameSink for FileSink {
                 force[p] = state.force[k];
                 pressure[p] = state.force[k] / c.nodes.weights[k];
                 status[p] = state.status[k].code();
-                let x = mesh.points[p];
-                rows.push(vec![
-                    view.time,
-                    x[0],
-                    x[1],
-                    normal[k],
-                    force[p],
-                    pressure[p],
-                    status[p] as f64,
-                ]);
+                let mut row = vec![view.time];
+                row.extend_from_slice(&mesh.points[p]);
+                row.extend([normal[k], force[p], pressure[p], status[p] as f64]);
+                rows.push(row);
             }
             if self.wants(OutputField::Contact) {
                 point_fields.push(Field::f64("u_nu", 1, &u_nu));
@@ -176,6 +190,23 @@ impl FrameSink for FileSink {
         if let Some(csv) = &mut self.gamma3 {
             csv.append(&rows)?;
         }
+        if let (Some(csv), Some(values)) = (&mut self.reactions, view.reactions) {
+            let rows: Vec<Vec<String>> = sim
+                .dirichlet
+                .reaction_groups
+                .iter()
+                .zip(values)
+                .map(|(g, f)| {
+                    vec![
+                        output::format_number(view.time),
+                        g.group.clone(),
+                        ["x", "y", "z"][g.component].to_string(),
+                        output::format_number(*f),
+                    ]
+                })
+                .collect();
+            csv.append_text(&rows)?;
+        }
         Ok(())
     }
 }
@@ -193,7 +224,7 @@ pub struct Summary<'a> {
 
 /// Reads a mesh file, or builds the paper's rectangle (0,2)×(0,1) for a spec `rect:NXxNY`
 /// (quadrilaterals) or `rect:NXxNY:tri` (triangles) when no such file exists.
-pub fn read_mesh(path: &Path) -> Result<Mesh, SolveError> {
+pub fn read_mesh(path: &Path) -> Result<AnyMesh, SolveError> {
     let text = path.to_string_lossy();
     if let (Some(spec), false) = (text.strip_prefix("rect:"), path.exists()) {
         let (dims, shape) = match spec.split_once(':') {
@@ -211,7 +242,7 @@ pub fn read_mesh(path: &Path) -> Result<Mesh, SolveError> {
             .and_then(|(a, b)| Some((a.parse::<usize>().ok()?, b.parse::<usize>().ok()?)));
         return match parsed {
             Some((nx, ny)) if nx > 0 && ny > 0 && nx.saturating_mul(ny) <= 50_000_000 => {
-                Ok(mesh::structured::rectangle(2.0, 1.0, nx, ny, shape))
+                Ok(AnyMesh::Two(mesh::structured::rectangle(2.0, 1.0, nx, ny, shape)))
             }
             _ => Err(SolveError::Setup(format!(
                 "mesh spec {text}: expected rect:NXxNY[:tri] with NX, NY ≥ 1, e.g. rect:256x128 (the paper's domain (0,2)×(0,1), cells 2/NX × 1/NY)"
@@ -236,7 +267,21 @@ pub fn solve(opts: &SolveOptions, stop: Option<&AtomicBool>) -> Result<RunStats,
     let t0 = Instant::now();
     let mesh = read_mesh(&opts.mesh)?;
     let mesh_seconds = t0.elapsed().as_secs_f64();
-    let sim = Simulation::new(&scene, mesh)?;
+    match mesh {
+        AnyMesh::Two(m) => solve_dim(opts, &scene, m, mesh_seconds, stop),
+        AnyMesh::Three(m) => solve_dim(opts, &scene, m, mesh_seconds, stop),
+    }
+}
+
+/// [`solve`] on a mesh of dimension D.
+fn solve_dim<const D: usize>(
+    opts: &SolveOptions,
+    scene: &Scene,
+    mesh: Mesh<D>,
+    mesh_seconds: f64,
+    stop: Option<&AtomicBool>,
+) -> Result<RunStats, SolveError> {
+    let sim = Simulation::new(scene, mesh)?;
     let mut sink = FileSink::create(&opts.out, &sim, &scene.output.fields, opts.progress)?;
     output::write_atomic(&opts.out.join("scene.toml"), scene.to_toml_string().as_bytes())?;
     let result = timeloop::run(&sim, &mut sink, stop);
@@ -263,7 +308,10 @@ pub fn solve(opts: &SolveOptions, stop: Option<&AtomicBool>) -> Result<RunStats,
 }
 
 /// Solves in memory (no files): for tests, studies and examples.
-pub fn solve_in_memory(scene: &Scene, mesh: Mesh) -> Result<(Simulation, RunStats, MemorySink), SolveError> {
+pub fn solve_in_memory<const D: usize>(
+    scene: &Scene,
+    mesh: Mesh<D>,
+) -> Result<(Simulation<D>, RunStats, MemorySink), SolveError> {
     let sim = Simulation::new(scene, mesh)?;
     let mut sink = MemorySink::default();
     let stats = timeloop::run(&sim, &mut sink, None)?;
@@ -272,23 +320,41 @@ pub fn solve_in_memory(scene: &Scene, mesh: Mesh) -> Result<(Simulation, RunStat
 
 /// The report of `hvi check`.
 pub fn check(mesh_path: &Path, scene_path: Option<&Path>, overrides: &[String]) -> Result<String, SolveError> {
-    use std::fmt::Write;
     let scene = Scene::load(scene_path, overrides)?;
-    let mesh = read_mesh(mesh_path)?;
+    match read_mesh(mesh_path)? {
+        AnyMesh::Two(m) => check_dim(mesh_path, scene_path, &scene, m),
+        AnyMesh::Three(m) => check_dim(mesh_path, scene_path, &scene, m),
+    }
+}
+
+/// [`check`] on a mesh of dimension D.
+fn check_dim<const D: usize>(
+    mesh_path: &Path,
+    scene_path: Option<&Path>,
+    scene: &Scene,
+    mesh: Mesh<D>,
+) -> Result<String, SolveError> {
+    use std::fmt::Write;
     let mut out = String::new();
     let _ = writeln!(out, "mesh {}", mesh_path.display());
-    let tris = mesh
-        .cells
-        .iter()
-        .filter(|c| matches!(c, crate::mesh::Cell::Tri3(_)))
-        .count();
+    let count = |name: &str| mesh.cells.iter().filter(|c| c.name() == name).count();
+    let kinds: Vec<String> = if D == 2 {
+        vec![
+            format!("{} triangles", count("triangle")),
+            format!("{} quadrilaterals", count("quadrangle")),
+        ]
+    } else {
+        vec![
+            format!("{} tetrahedra", count("tetrahedron")),
+            format!("{} hexahedra", count("hexahedron")),
+        ]
+    };
     let _ = writeln!(
         out,
-        "  {} nodes, {} cells ({} triangles, {} quadrilaterals)",
+        "  {D}D: {} nodes, {} cells ({})",
         mesh.points.len(),
         mesh.cells.len(),
-        tris,
-        mesh.cells.len() - tris
+        kinds.join(", ")
     );
     let (hmin, hmax) = mesh.cell_size();
     let _ = writeln!(out, "  cell size h: {hmin:.4e} … {hmax:.4e}");
@@ -304,7 +370,7 @@ pub fn check(mesh_path: &Path, scene_path: Option<&Path>, overrides: &[String]) 
             g.cells.len()
         );
     }
-    let sim = Simulation::new(&scene, mesh)?;
+    let sim = Simulation::new(scene, mesh)?;
     let _ = writeln!(
         out,
         "scene {}",
@@ -312,7 +378,12 @@ pub fn check(mesh_path: &Path, scene_path: Option<&Path>, overrides: &[String]) 
             .display()
             .to_string())
     );
-    let _ = writeln!(out, "  unknowns: {} (clamped nodes eliminated)", sim.dofs.n_free());
+    let _ = writeln!(
+        out,
+        "  unknowns: {} free ({} prescribed components kept as identity rows)",
+        sim.dofs.n_free(),
+        sim.dofs.n_prescribed()
+    );
     let _ = writeln!(
         out,
         "  time: T = {}, {} steps of k = {:.4e}",
@@ -341,21 +412,29 @@ pub fn check(mesh_path: &Path, scene_path: Option<&Path>, overrides: &[String]) 
     Ok(out)
 }
 
-/// α_j λ_max(D^{1/2} C K_A⁻¹ Cᵀ D^{1/2}) (see [`crate::contact::CondensedOperator::trace_constant`]).
-pub fn smallness_ratio(sim: &Simulation, law: &crate::contact::ContactLaw) -> Result<f64, SolveError> {
+/// α_j λ_max(D^{1/2} C K_A⁻¹ Cᵀ D^{1/2}) (see
+/// [`crate::contact::DenseNormalStiffness::trace_constant`]).
+pub fn smallness_ratio<const D: usize>(
+    sim: &Simulation<D>,
+    law: &crate::contact::ContactLaw,
+) -> Result<f64, SolveError> {
     let c = sim
         .contact
         .as_ref()
         .ok_or_else(|| SolveError::Setup("no contact".into()))?;
-    let [k_a] = crate::fem::assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.voigt()]);
+    let [k_a] =
+        crate::fem::assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.tensor()]);
+    let k_a = k_a.with_identity_rows(&sim.dofs);
     let counters = crate::linalg::Counters::default();
     let symbolic = crate::linalg::Factor::analyse(&k_a).map_err(|e| SolveError::Setup(e.to_string()))?;
     let factor = crate::linalg::Factor::new(&symbolic, &k_a, &counters).map_err(|e| SolveError::Singular {
         mesh: sim.mesh.path.display().to_string(),
         detail: e.to_string(),
     })?;
-    let op = crate::contact::CondensedOperator::new(&c.nodes, &factor, &counters).map_err(SolveError::Setup)?;
-    Ok(law.relaxed_monotonicity() * op.trace_constant(&c.nodes.weights))
+    let op = crate::contact::SplitSweeps::new(&c.nodes, std::sync::Arc::new(factor), &counters)
+        .map_err(SolveError::Setup)?;
+    use crate::contact::Condensation;
+    Ok(law.relaxed_monotonicity() * op.stiffness().trace_constant(&c.nodes.weights))
 }
 
 /// The one-screen summary printed at the end of `hvi solve`.

@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use hvi::mesh::structured::{rectangle, CellShape};
-use hvi::mesh::{Mesh, PhysicalGroup};
+use hvi::mesh::{Facet, Mesh, PhysicalGroup};
 use hvi::scene::Scene;
 
 /// A scene from TOML text (panics with the error, which names the key).
@@ -14,7 +14,7 @@ pub fn scene(toml: &str) -> Scene {
 /// right+top, Gamma3 bottom, Gamma2_top top) plus a "Right" group for the right side.
 pub fn rectangle_with_sides(lx: f64, ly: f64, nx: usize, ny: usize, shape: CellShape) -> Mesh {
     let mut mesh = rectangle(lx, ly, nx, ny, shape);
-    let right: Vec<[usize; 2]> = mesh
+    let right: Vec<Facet> = mesh
         .groups
         .iter()
         .find(|g| g.name.as_deref() == Some("Gamma2"))
@@ -22,7 +22,7 @@ pub fn rectangle_with_sides(lx: f64, ly: f64, nx: usize, ny: usize, shape: CellS
         .facets
         .iter()
         .copied()
-        .filter(|f| f.iter().all(|&p| (mesh.points[p][0] - lx).abs() < 1e-12))
+        .filter(|f| f.nodes().iter().all(|&p| (mesh.points[p][0] - lx).abs() < 1e-12))
         .collect();
     mesh.groups.push(PhysicalGroup {
         dim: 1,

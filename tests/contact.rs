@@ -108,7 +108,7 @@ fn column_on_a_rigid_bound() {
 /// right part of Γ₃ at T.
 #[test]
 fn paper_example_satisfies_the_contact_law_at_every_node_and_step() {
-    let mesh = hvi::mesh::read_msh(std::path::Path::new(concat!(
+    let mesh = hvi::mesh::read_mesh::<2>(std::path::Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/meshes/rect_q1_h16.msh"
     )))

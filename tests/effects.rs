@@ -7,7 +7,7 @@
 
 use hvi::app::{solve_in_memory, MemorySink};
 use hvi::mesh::structured::{rectangle, CellShape};
-use hvi::mesh::{read_msh, Mesh};
+use hvi::mesh::{read_mesh, Mesh};
 use hvi::scene::{ContactLawSpec, ContactSpec, LawKind, MemoryKernelSpec, Scene};
 use hvi::solver::{Plan, RunStats, Simulation};
 use std::path::{Path, PathBuf};
@@ -98,7 +98,7 @@ fn load(name: &str, overrides: &[String]) -> Scene {
 
 fn mesh(name: &str) -> Mesh {
     let path = root().join("meshes").join(name);
-    read_msh(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    read_mesh::<2>(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 /// A tiny mesh of the paper's domain (4 × 2 Q1 cells: 30 unknowns, 5 contact nodes).
@@ -137,7 +137,7 @@ fn relative_difference(a: &MemorySink, b: &MemorySink) -> f64 {
 /// max over frames of ‖λ_a − λ_b‖∞ (nodal contact forces; a run without contact counts as λ = 0),
 /// relative to max over frames of ‖F_n‖∞ (the nodal load) — the force scale of the problem.
 fn contact_force_difference(sim: &Simulation, a: &MemorySink, b: &MemorySink) -> f64 {
-    let mut load = vec![0.0; sim.dofs.n_free()];
+    let mut load = vec![0.0; sim.dofs.n()];
     let mut scale = 0.0f64;
     let mut diff = 0.0f64;
     for (fa, fb) in a.steps.iter().zip(&b.steps) {
@@ -547,7 +547,7 @@ fn separable_history_is_independent_of_n_and_the_direct_sum_grows() {
     let bytes = |name: &str, n: usize| {
         let (sim, stats, _) = run(name, &load(name, &steps(n)), mesh.clone());
         assert_eq!(stats.contact_solves, 0, "{name}: memory only");
-        (sim.dofs.n_free(), stats)
+        (sim.dofs.n(), stats)
     };
     for (name, vectors, algorithm) in [
         ("memory_only.toml", 3, "recursive (polynomial moments)"),

@@ -18,13 +18,14 @@ fn voigt(plane: &str, nu: f64) -> [[f64; 3]; 3] {
     Elasticity {
         youngs_modulus: 1.0,
         poisson_ratio: nu,
-        plane: if plane == "stress" {
+        plane: Some(if plane == "stress" {
             PlaneModel::Stress
         } else {
             PlaneModel::Strain
-        },
+        }),
     }
-    .voigt()
+    .tensor()
+    .voigt_2d()
 }
 
 /// A constant strain field u = (a x, b x) (zero on the clamped side x = 0) is reproduced to

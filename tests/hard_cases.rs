@@ -17,7 +17,7 @@ mod common;
 use common::{distort_interior, scene};
 use hvi::app::{solve_in_memory, MemorySink};
 use hvi::contact::active_set::{ActiveSetSolver, ContactState};
-use hvi::contact::{CondensedOperator, NodeStatus};
+use hvi::contact::{Condensation, NodeStatus, NormalStiffness, SplitSweeps};
 use hvi::mesh::structured::{rectangle, CellShape};
 use hvi::mesh::Mesh;
 use hvi::scene::{Scene, DEFAULT_SCENE_TOML};
@@ -90,7 +90,7 @@ fn scene_with(text: &str, list: &[&str]) -> Scene {
 }
 
 fn mesh_file(name: &str) -> Mesh {
-    hvi::mesh::read_msh(&Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes").join(name)).unwrap()
+    hvi::mesh::read_mesh::<2>(&Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes").join(name)).unwrap()
 }
 
 /// The paper's domain (0,2)×(0,1) with nx × ny cells.
@@ -952,11 +952,13 @@ fn case8_several_local_minima() {
         let sim = &run.sim;
         let c = sim.contact.as_ref().unwrap();
         let [k_a] =
-            hvi::fem::assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.voigt()]);
+            hvi::fem::assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.tensor()]);
+        let k_a = k_a.with_identity_rows(&sim.dofs);
         let counters = hvi::linalg::Counters::default();
         let symbolic = hvi::linalg::Factor::analyse(&k_a).unwrap();
         let factor = hvi::linalg::Factor::new(&symbolic, &k_a, &counters).unwrap();
-        let op = CondensedOperator::new(&c.nodes, &factor, &counters).unwrap();
+        let condensed = SplitSweeps::new(&c.nodes, std::sync::Arc::new(factor), &counters).unwrap();
+        let op = condensed.stiffness();
         let m = op.m;
         let last = run.sink.steps.last().unwrap().contact.as_ref().unwrap();
         let d: Vec<f64> = (0..m)
@@ -964,7 +966,7 @@ fn case8_several_local_minima() {
             .collect();
         let (law, g, w) = (c.law.as_ref().unwrap(), c.bound.as_ref().unwrap(), &c.nodes.weights);
         let solver = ActiveSetSolver {
-            operator: &op,
+            operator: op,
             weights: w,
             law: Some(law),
             bound: Some(g),

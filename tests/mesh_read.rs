@@ -3,7 +3,7 @@
 //! kind of bad input.
 
 use hvi::mesh::structured::{rectangle, CellShape};
-use hvi::mesh::{parse_msh, read_msh, Cell, GroupSelector, Mesh, MeshError};
+use hvi::mesh::{parse_mesh, read_mesh, Cell, GroupSelector, Mesh, MeshError};
 use std::path::{Path, PathBuf};
 
 fn meshes_dir() -> PathBuf {
@@ -12,7 +12,7 @@ fn meshes_dir() -> PathBuf {
 
 fn read(name: &str) -> Mesh {
     let path = meshes_dir().join(name);
-    read_msh(&path).unwrap_or_else(|e| panic!("{e}"))
+    read_mesh::<2>(&path).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn bytes(name: &str) -> Vec<u8> {
@@ -60,6 +60,66 @@ const MESHES: &[(&str, usize, usize, Kind)] = &[
     // Only the paper's groups Gamma1, Gamma2, Gamma3 and Omega (`-setnumber plain 1`).
     ("rect_q1_h16_plain.msh", 32, 16, Kind::Quad),
     ("rect_p1_h8_plain.msh", 16, 8, Kind::Tri),
+];
+
+/// Every committed 3D mesh: file, nodes, cells, volume, (surface group, faces).
+#[allow(clippy::type_complexity)]
+const MESHES_3D: &[(&str, usize, usize, f64, &[(&str, usize)])] = &[
+    (
+        "slab_q1_h8_z1.msh",
+        306,
+        128,
+        0.25,
+        &[
+            ("Gamma1", 8),
+            ("Gamma2", 24),
+            ("Gamma3", 16),
+            ("Gamma2_top", 16),
+            ("Sides", 256),
+        ],
+    ),
+    (
+        "slab_q1_h8_z3.msh",
+        612,
+        384,
+        0.75,
+        &[("Gamma1", 24), ("Gamma2", 72), ("Gamma3", 48), ("Sides", 256)],
+    ),
+    (
+        "slab_q1_h16_z4.msh",
+        2805,
+        2048,
+        0.5,
+        &[("Gamma1", 64), ("Gamma3", 128), ("Sides", 1024)],
+    ),
+    (
+        "slab_p1_h4.msh",
+        135,
+        384,
+        1.0,
+        &[("Gamma1", 16), ("Gamma3", 32), ("Sides", 128)],
+    ),
+    (
+        "block_q1_h8.msh",
+        405,
+        256,
+        0.5,
+        &[("Gamma1", 64), ("Gamma2", 128), ("Gamma3", 64)],
+    ),
+    (
+        "block_p1.msh",
+        1309,
+        5301,
+        0.5,
+        &[("Gamma1", 406), ("Gamma2", 868), ("Gamma3", 406)],
+    ),
+    (
+        "bracket_p1.msh",
+        4972,
+        19951,
+        0.07637,
+        &[("Gamma1", 552), ("Gamma2", 328), ("Gamma3", 1270), ("Sides", 4498)],
+    ),
 ];
 
 fn close(a: f64, b: f64, tol: f64) -> bool {
@@ -196,9 +256,31 @@ fn every_committed_mesh_reads_with_the_expected_groups() {
     files.sort();
     for f in &files {
         assert!(
-            MESHES.iter().any(|m| m.0 == f),
-            "meshes/{f} has no expectations in MESHES: add it"
+            MESHES.iter().any(|m| m.0 == f) || MESHES_3D.iter().any(|m| m.0 == f),
+            "meshes/{f} has no expectations in MESHES or MESHES_3D: add it"
         );
+    }
+    for &(file, nodes, cells, measure, groups) in MESHES_3D {
+        let m = hvi::mesh::read_mesh::<3>(&meshes_dir().join(file)).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!((m.points.len(), m.cells.len()), (nodes, cells), "{file}: nodes, cells");
+        let volume: f64 = m
+            .cells
+            .iter()
+            .map(|c| {
+                hvi::fem::element::stiffness_rule(c)
+                    .iter()
+                    .map(|q| q.weight * hvi::fem::element::shape_at(c, &m.points, q.xi).det_j)
+                    .sum::<f64>()
+            })
+            .sum();
+        assert!((volume - measure).abs() <= 2e-3 * measure, "{file}: volume {volume}");
+        for &(name, facets) in groups {
+            let g = m.group(&sel(name), 2).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(g.facets.len(), facets, "{file}: {name}");
+            let part = m.boundary(&sel(name)).unwrap_or_else(|e| panic!("{e}"));
+            let total: f64 = part.weights.iter().sum();
+            assert!((total - part.length()).abs() <= 1e-12 * total, "{file}: {name} weights");
+        }
     }
     for &(file, nx, ny, kind) in MESHES {
         let m = read(file);
@@ -272,7 +354,7 @@ fn contiguous_permuted_node_tags_not_starting_at_1() {
             _ => out.push(l.to_string()),
         }
     }
-    let m = parse_msh(Path::new("contiguous.msh"), (out.join("\n") + "\n").as_bytes()).unwrap();
+    let m = parse_mesh::<2>(Path::new("contiguous.msh"), (out.join("\n") + "\n").as_bytes()).unwrap();
     let a = read("rect_q1_h8.msh");
     assert_eq!(m.points, a.points);
     assert_eq!(m.cells, a.cells);
@@ -283,7 +365,7 @@ fn contiguous_permuted_node_tags_not_starting_at_1() {
 fn crlf_line_endings_read_the_same() {
     for file in ["rect_q1_h8.msh", "rect_q1_h16_v22.msh"] {
         let crlf = text(file).replace('\n', "\r\n");
-        let m = parse_msh(Path::new(file), crlf.as_bytes()).unwrap_or_else(|e| panic!("{e}"));
+        let m = parse_mesh::<2>(Path::new(file), crlf.as_bytes()).unwrap_or_else(|e| panic!("{e}"));
         let a = read(file);
         assert_eq!((m.points, m.cells, m.groups), (a.points, a.cells, a.groups));
     }
@@ -377,7 +459,7 @@ fn nodal_normals_on_an_arc_are_radial_to_second_order() {
     for n in [16, 32, 64] {
         let path = dir.path().join(format!("quarter_disc_{n}.msh"));
         std::fs::write(&path, quarter_disc_v22(n)).unwrap();
-        let m = read_msh(&path).unwrap_or_else(|e| panic!("{e}"));
+        let m = read_mesh::<2>(&path).unwrap_or_else(|e| panic!("{e}"));
         let arc = m.boundary(&sel("Arc")).unwrap();
         assert_eq!(arc.nodes.len(), n + 1);
         let perimeter: f64 = arc.facet_lengths.iter().sum();
@@ -420,7 +502,7 @@ fn mixed_mesh_has_both_cell_kinds_and_one_omega() {
 // Bad input: every error names the file, the place and the fix; nothing panics.
 
 fn parse_err(name: &str, content: &[u8]) -> String {
-    match parse_msh(Path::new(name), content) {
+    match parse_mesh::<2>(Path::new(name), content) {
         Ok(_) => panic!("{name}: expected an error"),
         Err(e) => {
             let s = e.to_string();
@@ -512,7 +594,7 @@ fn corrupted_bytes_never_panic() {
                 let i = (state % b.len() as u64) as usize;
                 b[i] = (state >> 32) as u8;
             }
-            let _ = parse_msh(Path::new(file), &b);
+            let _ = parse_mesh::<2>(Path::new(file), &b);
         }
     }
 }
@@ -571,7 +653,7 @@ fn inverted_cell_is_reported_and_all_clockwise_is_flipped() {
     for l in all.iter_mut().skip(start + 1).take(128) {
         *l = reverse(l);
     }
-    let flipped = parse_msh(Path::new("cw.msh"), (all.join("\n") + "\n").as_bytes()).unwrap();
+    let flipped = parse_mesh::<2>(Path::new("cw.msh"), (all.join("\n") + "\n").as_bytes()).unwrap();
     let orig = read("rect_q1_h8.msh");
     assert_eq!(flipped.points, orig.points);
     assert_eq!(flipped.groups, orig.groups);
@@ -658,7 +740,7 @@ fn two_squares_v22(extra_nodes: &str, extra: &[&str]) -> String {
 #[test]
 fn small_v22_file_groups_and_points() {
     let t = two_squares_v22("", &["1 2 3 1 1 2", "1 2 3 1 2 3", "15 2 7 1 6"]);
-    let m = parse_msh(Path::new("small.msh"), t.as_bytes()).unwrap();
+    let m = parse_mesh::<2>(Path::new("small.msh"), t.as_bytes()).unwrap();
     assert_eq!(m.cells, vec![Cell::Quad4([0, 1, 4, 3]), Cell::Quad4([1, 2, 5, 4])]);
     assert_eq!(m.cell_tags, vec![1, 2]);
     assert_eq!(m.group_nodes(&sel("Gamma3")).unwrap(), vec![0, 1, 2]);
@@ -673,7 +755,7 @@ fn small_v22_file_groups_and_points() {
 fn facet_inside_the_body_is_not_a_boundary() {
     // Gamma3 = the edge x = 1 between the two squares.
     let t = two_squares_v22("", &["1 2 3 1 2 5"]);
-    let m = parse_msh(Path::new("inner.msh"), t.as_bytes()).unwrap();
+    let m = parse_mesh::<2>(Path::new("inner.msh"), t.as_bytes()).unwrap();
     let e = m.boundary(&sel("Gamma3")).unwrap_err();
     assert!(matches!(e, MeshError::NotBoundary { .. }));
     assert_contains(
@@ -687,7 +769,7 @@ fn facet_inside_the_body_is_not_a_boundary() {
     );
     // An edge that is no cell's edge (the diagonal of a square).
     let t = two_squares_v22("", &["1 2 3 1 1 5"]);
-    let m = parse_msh(Path::new("diag.msh"), t.as_bytes()).unwrap();
+    let m = parse_mesh::<2>(Path::new("diag.msh"), t.as_bytes()).unwrap();
     assert_contains(
         &m.boundary(&sel("Gamma3")).unwrap_err().to_string(),
         &["not an edge of any cell"],
@@ -718,8 +800,12 @@ fn unsupported_element_types_name_type_group_and_fix() {
     );
     // A tetrahedron (type 4).
     let t = two_squares_v22("7 0.5 0.5 0\n", &["4 2 9 1 1 2 4 7"]);
-    let s = parse_err("tet.msh", t.as_bytes());
-    assert_contains(&s, &["type 4", "tetrahedron", "tag 9", "gmsh -2"]);
+    // (A tetrahedron makes the file a 3D mesh; this one is flat, so it is degenerate.)
+    let s = match hvi::mesh::parse_msh(Path::new("tet.msh"), t.as_bytes()) {
+        Ok(_) => panic!("a flat tetrahedron must be an error"),
+        Err(e) => e.to_string(),
+    };
+    assert_contains(&s, &["tet.msh", "tetrahedron", "degenerate", "det J"]);
     // 9-node quadrangles in MSH 4.1, in a physical surface.
     let t41 = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n1\n2 5 \"Omega\"\n$EndPhysicalNames\n\
         $Entities\n0 0 1 0\n1 0 0 0 1 1 0 1 5 0\n$EndEntities\n\
@@ -745,7 +831,7 @@ fn unsupported_element_types_name_type_group_and_fix() {
             "1 4 1 4\n2 1 0 4\n1\n2\n3\n4",
         )
         .replace("0.5 0 0\n1 0.5 0\n0.5 1 0\n0 0.5 0\n0.5 0.5 0\n", "");
-    let m = parse_msh(Path::new("q4.msh"), ok.as_bytes()).unwrap();
+    let m = parse_mesh::<2>(Path::new("q4.msh"), ok.as_bytes()).unwrap();
     assert_eq!(m.cells, vec![Cell::Quad4([0, 1, 2, 3])]);
     assert_eq!(m.groups[0].name.as_deref(), Some("Omega"));
 }
@@ -802,6 +888,6 @@ fn bad_nodes_and_versions() {
         &["data size 3"],
     );
     // A file that does not exist: the path is in the message.
-    let e = read_msh(Path::new("no/such/mesh.msh")).unwrap_err();
+    let e = read_mesh::<2>(Path::new("no/such/mesh.msh")).unwrap_err();
     assert!(matches!(e, MeshError::Io { .. }) && e.to_string().contains("no/such/mesh.msh"));
 }

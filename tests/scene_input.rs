@@ -144,7 +144,7 @@ fn overrides_set_values_and_create_sections() {
     ])
     .unwrap();
     assert_eq!(s.time.steps, 64);
-    assert_eq!(s.material.plane, hvi::scene::Plane::Strain);
+    assert_eq!(s.material.plane, Some(hvi::scene::Plane::Strain));
     assert!(s.contact.as_ref().unwrap().law.as_ref().unwrap().one_sided);
     // a section the scene does not have
     let elastic = "[material]\nplane = \"stress\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n[time]\nfinal_time = 1.0\nsteps = 2\n";

@@ -102,7 +102,7 @@ fn points_outside_the_mesh_are_errors_naming_the_point_and_the_boundary_is_insid
     assert!(max_diff(&ok, &[[1.0, 2.0]; 5]) < 1e-14);
     let locator = Locator::new(&mesh);
     let (cell, xi) = locator.locate([0.3, 0.2]).unwrap();
-    let s = shape_at(&mesh.cells[cell], &mesh.points, xi);
+    let s = shape_at(&mesh.cells[cell], &mesh.points, [xi[0], xi[1], 0.0]);
     assert!((s.x[0] - 0.3).abs() < 1e-14 && (s.x[1] - 0.2).abs() < 1e-14);
 }
 
@@ -128,7 +128,7 @@ fn nested_meshes_carry_exactly_both_ways() {
         let direct = |x: [f64; 2]| {
             let (c, xi) = locator.locate(x).unwrap();
             let cell = &coarse.cells[c];
-            let s = shape_at(cell, &coarse.points, xi);
+            let s = shape_at(cell, &coarse.points, [xi[0], xi[1], 0.0]);
             let (mut v, mut g) = ([0.0; 2], [[0.0; 2]; 2]);
             for a in 0..s.n {
                 let ua = u[cell.nodes()[a]];

@@ -23,7 +23,7 @@
 //! It stops when the complementarity residual is below tolerance, and after a capped number
 //! of iterations reports failure instead of looping.
 
-use super::condensed::CondensedOperator;
+use super::condensed::NormalStiffness;
 use super::law::ContactLaw;
 use faer::linalg::solvers::Solve;
 use faer::Mat;
@@ -110,7 +110,7 @@ pub struct ContactFailure {
 
 /// The contact problem data of a run: condensed operator, nodal weights, law and bound.
 pub struct ActiveSetSolver<'a> {
-    pub operator: &'a CondensedOperator,
+    pub operator: &'a dyn NormalStiffness,
     pub weights: &'a [f64],
     pub law: Option<&'a ContactLaw>,
     /// g_p per node, or `None` for no bound.
@@ -123,7 +123,7 @@ const MIN_STEP: f64 = 1e-12;
 
 impl ActiveSetSolver<'_> {
     fn m(&self) -> usize {
-        self.operator.m
+        self.operator.m()
     }
 
     fn g(&self, p: usize) -> f64 {
@@ -158,7 +158,7 @@ impl ActiveSetSolver<'_> {
     }
 
     fn c(&self, p: usize) -> f64 {
-        self.operator.q[p * self.m() + p]
+        self.operator.q(p, p)
     }
 
     /// E(r + Δ) − E(r), formed from differences to avoid cancellation:
@@ -365,11 +365,10 @@ impl ActiveSetSolver<'_> {
         if nf == 0 {
             return Vec::new();
         }
-        let m = self.m();
         let rhs = Mat::<f64>::from_fn(nf, 1, |i, _| grad[free[i]]);
         let build = |diag: &dyn Fn(usize) -> f64| {
             Mat::<f64>::from_fn(nf, nf, |i, j| {
-                self.operator.q[free[i] * m + free[j]] + if i == j { diag(i) } else { 0.0 }
+                self.operator.q(free[i], free[j]) + if i == j { diag(i) } else { 0.0 }
             })
         };
         if let Ok(llt) = build(&|i| curvature[i]).llt(faer::Side::Lower) {

@@ -1,51 +1,72 @@
-//! The contact nodes of Γ₃ and the condensed operator W = C K⁻¹ Cᵀ (METHOD.md §4, "the fast
-//! path"): with the cached factor of K, the contact problem of each step lives on the m
-//! contact normals, u_ν = d − W λ, and K is never refactorised.
+//! The contact nodes of Γ₃ and the condensation of a step onto their normals (docs/method.md
+//! §4.5, §9): with a factor of K, the contact problem of each step lives on the m contact
+//! normals, u_ν = d − W λ with W = C K⁻¹ Cᵀ, and K is never refactorised.
+//!
+//! A [`Condensation`] is the seam between the time loop and the linear algebra: it turns a
+//! step's right-hand side into the free normal displacements d = C K⁻¹ r and, once the contact
+//! forces λ are known, recovers u = K⁻¹ (r − Cᵀ λ). Two implementations:
+//!
+//! * [`SplitSweeps`]: the faer factor's forward sweep y = L⁻¹ P r, d = Gᵀ y with G = L⁻¹ P Cᵀ,
+//!   then y ← y − G λ and the backward sweep: one solve per step.
+//! * [`StoredResponses`]: any [`LinearSolver`] and the stored responses Z = K⁻¹ Cᵀ: a whole
+//!   solve u_free = K⁻¹ r, d = C u_free, then u = u_free − Z λ. Simple, and what a backend that
+//!   cannot split its solves (an iterative or a distributed one) can offer.
+//!
+//! The active set sees only the [`NormalStiffness`] (Q = W⁻¹ and W).
 
 use crate::fem::DofMap;
-use crate::linalg::{Counters, Factor, Forward, ForwardColumns};
+use crate::linalg::{Counters, Factor, Forward, ForwardColumns, LinearSolver};
 use crate::mesh::BoundaryPart;
 use faer::linalg::solvers::Solve;
 use faer::Mat;
+use std::sync::Arc;
 
-/// The contact nodes with their nodal quadrature weights w_p, normals ν_p and bounds g_p,
-/// and the rows of C (u ↦ u_ν at the nodes).
+/// The contact nodes with their nodal quadrature weights w_p, normals ν_p, and the rows of C
+/// (u ↦ u_ν at the nodes) split into free and prescribed components.
 #[derive(Clone, Debug)]
-pub struct ContactNodes {
+pub struct ContactNodes<const D: usize> {
     /// Mesh node indices.
     pub nodes: Vec<usize>,
-    /// w_p: the share of Γ₃'s length carried by node p.
+    /// w_p: the share of Γ₃'s measure carried by node p.
     pub weights: Vec<f64>,
     /// ν_p: unit outward nodal normals.
-    pub normals: Vec<[f64; 2]>,
-    /// Rows of C: (free dof, coefficient) pairs.
+    pub normals: Vec<[f64; D]>,
+    /// Rows of C over the free unknowns: (unknown, coefficient) pairs.
     rows: Vec<Vec<(usize, f64)>>,
-    /// Γ₃ nodes dropped because they are clamped (u = 0 there, nothing to solve).
+    /// The prescribed components of each node's normal displacement: (unknown, coefficient).
+    prescribed: Vec<Vec<(usize, f64)>>,
+    /// Γ₃ nodes set aside because their normal displacement is prescribed (nothing to solve).
     pub clamped_nodes: Vec<usize>,
 }
 
-impl ContactNodes {
-    /// The contact nodes of a boundary part; nodes whose normal displacement is fixed by Γ₁
-    /// are set aside (they would make W singular).
-    pub fn new(part: &BoundaryPart, dofs: &DofMap) -> Self {
+impl<const D: usize> ContactNodes<D> {
+    /// The contact nodes of a boundary part; nodes whose normal displacement is fully
+    /// prescribed are set aside (they would make W singular).
+    pub fn new(part: &BoundaryPart<D>, dofs: &DofMap<D>) -> Self {
         let mut out = ContactNodes {
             nodes: Vec::new(),
             weights: Vec::new(),
             normals: Vec::new(),
             rows: Vec::new(),
+            prescribed: Vec::new(),
             clamped_nodes: Vec::new(),
         };
         for (k, &p) in part.nodes.iter().enumerate() {
             let nu = part.normals[k];
-            let row: Vec<(usize, f64)> = (0..2).filter_map(|c| dofs.get(p, c).map(|d| (d, nu[c]))).collect();
+            let row: Vec<(usize, f64)> = (0..D).filter_map(|c| dofs.get(p, c).map(|d| (d, nu[c]))).collect();
             if row.iter().all(|(_, v)| v.abs() < 1e-12) {
                 out.clamped_nodes.push(p);
                 continue;
             }
+            let fixed = (0..D)
+                .filter(|&c| dofs.get(p, c).is_none() && nu[c] != 0.0)
+                .map(|c| (dofs.index(p, c), nu[c]))
+                .collect();
             out.nodes.push(p);
             out.weights.push(part.weights[k]);
             out.normals.push(nu);
             out.rows.push(row);
+            out.prescribed.push(fixed);
         }
         out
     }
@@ -60,33 +81,59 @@ impl ContactNodes {
         self.nodes.is_empty()
     }
 
-    /// C u: the normal displacements at the contact nodes.
+    /// The rows of C over the free unknowns.
+    pub fn rows(&self) -> &[Vec<(usize, f64)>] {
+        &self.rows
+    }
+
+    /// The normal displacements u_ν = ν·u at the contact nodes of a full displacement vector.
     pub fn normal_displacements(&self, u: &[f64], out: &mut [f64]) {
-        for (o, row) in out.iter_mut().zip(&self.rows) {
-            *o = row.iter().map(|(d, c)| c * u[*d]).sum();
+        for ((o, row), fixed) in out.iter_mut().zip(&self.rows).zip(&self.prescribed) {
+            *o = row.iter().chain(fixed).map(|(d, c)| c * u[*d]).sum();
+        }
+    }
+
+    /// The part of u_ν that prescribed components contribute (zero when none is prescribed
+    /// on a contact node or the prescribed values are zero): added to d = C K⁻¹ r.
+    pub fn prescribed_offset(&self, values: &[f64], d: &mut [f64]) {
+        for (dp, fixed) in d.iter_mut().zip(&self.prescribed) {
+            *dp += fixed.iter().map(|(i, c)| c * values[*i]).sum::<f64>();
+        }
+    }
+
+    /// Cᵀ λ over all unknowns (prescribed components included: their share is a reaction).
+    pub fn add_forces(&self, lambda: &[f64], out: &mut [f64]) {
+        for ((l, row), fixed) in lambda.iter().zip(&self.rows).zip(&self.prescribed) {
+            for (d, c) in row.iter().chain(fixed) {
+                out[*d] += l * c;
+            }
         }
     }
 }
 
-/// W = C K⁻¹ Cᵀ and its inverse Q = W⁻¹ (both m × m, dense, symmetric positive definite),
-/// and G = L⁻¹ P Cᵀ, which moves a step between C and the factor's forward sweep:
-/// d = C K⁻¹ r = Gᵀ (L⁻¹ P r), and K⁻¹ (r − Cᵀ λ) = Pᵀ L⁻ᵀ (L⁻¹ P r − G λ).
-pub struct CondensedOperator {
-    /// W (row-major m × m): normal displacement at p per unit normal force at q.
-    pub w: Vec<f64>,
-    /// Q = W⁻¹ (row-major m × m): the Schur-complement stiffness on the contact normals.
-    pub q: Vec<f64>,
-    pub m: usize,
-    /// G = L⁻¹ P Cᵀ, one sparse column per contact node.
-    pub columns: ForwardColumns,
+/// The condensed stiffness of the contact normals as the active set uses it.
+pub trait NormalStiffness {
+    /// m.
+    fn m(&self) -> usize;
+    /// y = Q x, Q = W⁻¹.
+    fn apply_q(&self, x: &[f64], y: &mut [f64]);
+    /// Entry (p, r) of Q.
+    fn q(&self, p: usize, r: usize) -> f64;
 }
 
-impl CondensedOperator {
-    /// Forms G with one sparse forward sweep per contact node and W = Gᵀ G.
-    pub fn new(nodes: &ContactNodes, factor: &Factor, counters: &Counters) -> Result<Self, String> {
-        let m = nodes.len();
-        let columns = ForwardColumns::new(factor, &nodes.rows, counters);
-        let w = columns.gram();
+/// W and Q = W⁻¹, dense (m × m, row-major).
+#[derive(Clone, Debug)]
+pub struct DenseNormalStiffness {
+    /// W: normal displacement at p per unit normal force at q.
+    pub w: Vec<f64>,
+    /// Q = W⁻¹: the Schur-complement stiffness on the contact normals.
+    pub q: Vec<f64>,
+    pub m: usize,
+}
+
+impl DenseNormalStiffness {
+    /// Inverts W (symmetric positive definite) by a dense Cholesky factorisation.
+    pub fn from_w(w: Vec<f64>, m: usize) -> Result<Self, String> {
         let wm = Mat::<f64>::from_fn(m, m, |i, j| w[i * m + j]);
         let llt = wm
             .llt(faer::Side::Lower)
@@ -98,32 +145,12 @@ impl CondensedOperator {
                 q[p * m + r] = 0.5 * (inv[(p, r)] + inv[(r, p)]);
             }
         }
-        Ok(CondensedOperator { w, q, m, columns })
+        Ok(DenseNormalStiffness { w, q, m })
     }
 
-    /// d = C K⁻¹ r from the forward sweep y = L⁻¹ P r.
-    pub fn normal_displacements(&self, y: &Forward, d: &mut [f64]) {
-        self.columns.transpose_apply(y, d);
-    }
-
-    /// y ← y − G λ: afterwards the backward sweep of y is K⁻¹ (r − Cᵀ λ).
-    pub fn subtract_forces(&self, lambda: &[f64], y: &mut Forward) {
-        self.columns.subtract_apply(lambda, y);
-    }
-
-    /// y = Q x.
-    pub fn apply_q(&self, x: &[f64], y: &mut [f64]) {
-        for (p, yp) in y.iter_mut().enumerate() {
-            let row = &self.q[p * self.m..(p + 1) * self.m];
-            *yp = row.iter().zip(x).map(|(a, b)| a * b).sum();
-        }
-    }
-}
-
-impl CondensedOperator {
     /// λ_max(D^{1/2} W D^{1/2}) with D = diag(w): the largest ratio Σ_p w_p u_ν,p² / (uᵀ K u).
     /// The step energy ½uᵀKu + Σ w_p j(u_ν,p) is convex when α_j times this is below 1 —
-    /// the discrete form of the smallness condition α_j c_j² < m_A (METHOD.md §1).
+    /// the discrete form of the smallness condition α_j c_j² < m_A (docs/method.md §1).
     pub fn trace_constant(&self, weights: &[f64]) -> f64 {
         let m = self.m;
         if m == 0 {
@@ -148,5 +175,163 @@ impl CondensedOperator {
             lambda = next;
         }
         lambda
+    }
+}
+
+impl NormalStiffness for DenseNormalStiffness {
+    fn m(&self) -> usize {
+        self.m
+    }
+
+    fn apply_q(&self, x: &[f64], y: &mut [f64]) {
+        for (p, yp) in y.iter_mut().enumerate() {
+            let row = &self.q[p * self.m..(p + 1) * self.m];
+            *yp = row.iter().zip(x).map(|(a, b)| a * b).sum();
+        }
+    }
+
+    fn q(&self, p: usize, r: usize) -> f64 {
+        self.q[p * self.m + r]
+    }
+}
+
+/// The condensation of a step onto the contact normals (docs/method.md §9).
+pub trait Condensation: Send {
+    /// Which implementation ran (for the plan and summary.json).
+    fn name(&self) -> &'static str;
+    /// W and Q.
+    fn stiffness(&self) -> &DenseNormalStiffness;
+    /// Starts a step: d = C K⁻¹ rhs over the free unknowns, keeping what [`Self::recover`] needs.
+    fn free_normal(&mut self, rhs: &[f64], d: &mut [f64], counters: &Counters);
+    /// Completes it: u = K⁻¹ (rhs − Cᵀ λ) for the rhs of the last [`Self::free_normal`].
+    fn recover(&mut self, lambda: &[f64], u: &mut [f64], counters: &Counters);
+}
+
+/// The one-solve path of the faer factor: forward sweep, contact, backward sweep.
+pub struct SplitSweeps {
+    factor: Arc<Factor>,
+    /// G = L⁻¹ P Cᵀ, one sparse column per contact node.
+    columns: ForwardColumns,
+    stiffness: DenseNormalStiffness,
+    y: Forward,
+}
+
+impl SplitSweeps {
+    /// Forms G with one sparse forward sweep per contact node and W = Gᵀ G.
+    pub fn new<const D: usize>(
+        nodes: &ContactNodes<D>,
+        factor: Arc<Factor>,
+        counters: &Counters,
+    ) -> Result<Self, String> {
+        let columns = ForwardColumns::new(&factor, nodes.rows(), counters);
+        let stiffness = DenseNormalStiffness::from_w(columns.gram(), nodes.len())?;
+        let y = Forward::zeros(factor.n());
+        Ok(SplitSweeps {
+            factor,
+            columns,
+            stiffness,
+            y,
+        })
+    }
+}
+
+impl Condensation for SplitSweeps {
+    fn name(&self) -> &'static str {
+        "split sweeps (G = L⁻¹PCᵀ, one solve per step)"
+    }
+
+    fn stiffness(&self) -> &DenseNormalStiffness {
+        &self.stiffness
+    }
+
+    fn free_normal(&mut self, rhs: &[f64], d: &mut [f64], _counters: &Counters) {
+        self.factor.forward_into(rhs, &mut self.y);
+        self.columns.transpose_apply(&self.y, d);
+    }
+
+    fn recover(&mut self, lambda: &[f64], u: &mut [f64], counters: &Counters) {
+        self.columns.subtract_apply(lambda, &mut self.y);
+        self.factor.backward_from(&mut self.y, u, counters);
+    }
+}
+
+/// The simple path for any linear solver: stored responses Z = K⁻¹ Cᵀ (n × m).
+pub struct StoredResponses {
+    solver: Arc<dyn LinearSolver>,
+    rows: Vec<Vec<(usize, f64)>>,
+    /// Z column-major: column p is K⁻¹ (row p of C)ᵀ.
+    z: Vec<f64>,
+    stiffness: DenseNormalStiffness,
+    u_free: Vec<f64>,
+}
+
+impl StoredResponses {
+    /// m solves for Z (in blocks of right-hand sides) and W = C Z.
+    pub fn new<const D: usize>(
+        nodes: &ContactNodes<D>,
+        solver: Arc<dyn LinearSolver>,
+        counters: &Counters,
+    ) -> Result<Self, String> {
+        let (n, m) = (solver.n(), nodes.len());
+        let mut z = Vec::new();
+        z.try_reserve_exact(n * m)
+            .map_err(|_| format!("out of memory for the stored responses Z ({n} × {m})"))?;
+        z.resize(n * m, 0.0);
+        for (p, row) in nodes.rows().iter().enumerate() {
+            for &(d, c) in row {
+                z[p * n + d] = c;
+            }
+        }
+        solver.solve_many(&mut z, m, counters);
+        let rows = nodes.rows().to_vec();
+        let mut w = vec![0.0; m * m];
+        for (p, row) in rows.iter().enumerate() {
+            for q in 0..m {
+                w[p * m + q] = row.iter().map(|&(d, c)| c * z[q * n + d]).sum();
+            }
+        }
+        for p in 0..m {
+            for q in 0..p {
+                let v = 0.5 * (w[p * m + q] + w[q * m + p]);
+                w[p * m + q] = v;
+                w[q * m + p] = v;
+            }
+        }
+        Ok(StoredResponses {
+            solver,
+            rows,
+            z,
+            stiffness: DenseNormalStiffness::from_w(w, m)?,
+            u_free: vec![0.0; n],
+        })
+    }
+}
+
+impl Condensation for StoredResponses {
+    fn name(&self) -> &'static str {
+        "stored responses (Z = K⁻¹Cᵀ, one whole solve per step)"
+    }
+
+    fn stiffness(&self) -> &DenseNormalStiffness {
+        &self.stiffness
+    }
+
+    fn free_normal(&mut self, rhs: &[f64], d: &mut [f64], counters: &Counters) {
+        self.solver.solve(rhs, &mut self.u_free, counters);
+        for (dp, row) in d.iter_mut().zip(&self.rows) {
+            *dp = row.iter().map(|&(i, c)| c * self.u_free[i]).sum();
+        }
+    }
+
+    fn recover(&mut self, lambda: &[f64], u: &mut [f64], _counters: &Counters) {
+        let n = self.u_free.len();
+        u.copy_from_slice(&self.u_free);
+        for (p, &l) in lambda.iter().enumerate() {
+            if l != 0.0 {
+                for (ui, zi) in u.iter_mut().zip(&self.z[p * n..(p + 1) * n]) {
+                    *ui -= l * zi;
+                }
+            }
+        }
     }
 }

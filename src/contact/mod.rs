@@ -7,5 +7,5 @@ pub mod condensed;
 pub mod law;
 
 pub use active_set::{ActiveSetSolver, ContactOutcome, ContactSettings, NodeStatus};
-pub use condensed::{CondensedOperator, ContactNodes};
+pub use condensed::{Condensation, ContactNodes, DenseNormalStiffness, NormalStiffness, SplitSweeps, StoredResponses};
 pub use law::{ComplianceProfile, ContactLaw, PiecewiseLinear, Symmetry};

@@ -1,51 +1,69 @@
 //! Global assembly of the stiffness matrices K_A (elasticity A) and K_B (memory tensor B₀)
-//! (METHOD.md §3). Local matrices are computed in parallel with rayon; the scatter into the
-//! shared pattern is a sequential pass over precomputed positions.
+//! (docs/method.md §3, §8), written once for any dimension D. Local matrices are computed in
+//! parallel with rayon; the scatter into the shared pattern is a sequential pass over
+//! precomputed positions.
 
 use super::dofs::DofMap;
 use super::element::{shape_at, stiffness_rule, MAX_NODES};
 use super::pattern::{Pattern, SymmetricMatrix};
-use crate::material::VoigtMatrix;
+use crate::material::Isotropic;
 use crate::mesh::Cell;
 use rayon::prelude::*;
 use std::sync::Arc;
 
-const MAX_LOCAL: usize = 2 * MAX_NODES;
+/// Largest local size: 3 components × 8 nodes.
+const MAX_LOCAL: usize = 3 * MAX_NODES;
 
-/// A local stiffness matrix, row-major over the cell's 2·n_nodes dofs.
+/// A local stiffness matrix, row-major over the cell's D·n_nodes dofs (the leading block of a
+/// fixed-size array).
 pub type LocalMatrix = [[f64; MAX_LOCAL]; MAX_LOCAL];
 
-/// Local stiffness ∫_cell Bᵀ D B dx for each Voigt matrix in `ds` (computed together: they
-/// share the strain-displacement matrices B).
-pub fn local_stiffness<const M: usize>(cell: &Cell, points: &[[f64; 2]], ds: &[VoigtMatrix; M]) -> [LocalMatrix; M] {
+/// Local stiffness ∫_cell ε(v) : C ε(u) dx for each isotropic tensor C = (λ, μ) in `cs`: for
+/// dofs (a, i) and (b, j),
+///
+/// ```text
+///   K[(a,i),(b,j)] = ∫ λ ∂ᵢN_a ∂ⱼN_b + μ (δᵢⱼ ∇N_a·∇N_b + ∂ⱼN_a ∂ᵢN_b) dx
+/// ```
+///
+/// (computed together: they share the shape gradients).
+pub fn local_stiffness<const D: usize, const M: usize>(
+    cell: &Cell,
+    points: &[[f64; D]],
+    cs: &[Isotropic; M],
+) -> [LocalMatrix; M] {
     let mut k = [[[0.0; MAX_LOCAL]; MAX_LOCAL]; M];
+    let n = cell.nodes().len();
     for q in stiffness_rule(cell) {
         let s = shape_at(cell, points, q.xi);
         let w = q.weight * s.det_j;
-        // Columns of B for dof (a, c): the Voigt strain of the unit displacement N_a e_c.
-        let mut b = [[0.0; 3]; MAX_LOCAL];
-        for a in 0..s.n {
-            let [gx, gy] = s.grad[a];
-            b[2 * a] = [gx, 0.0, gy];
-            b[2 * a + 1] = [0.0, gy, gx];
-        }
-        let nl = 2 * s.n;
-        for (d, km) in ds.iter().zip(k.iter_mut()) {
-            for j in 0..nl {
-                let db = super::super::material::elasticity::apply(d, &b[j]);
-                for i in 0..=j {
-                    km[i][j] += w * (b[i][0] * db[0] + b[i][1] * db[1] + b[i][2] * db[2]);
+        for a in 0..n {
+            let ga = s.grad[a];
+            for b in a..n {
+                let gb = s.grad[b];
+                let dot: f64 = (0..D).map(|r| ga[r] * gb[r]).sum();
+                for (c, km) in cs.iter().zip(k.iter_mut()) {
+                    for i in 0..D {
+                        for j in 0..D {
+                            let mut v = c.lambda * ga[i] * gb[j] + c.mu * ga[j] * gb[i];
+                            if i == j {
+                                v += c.mu * dot;
+                            }
+                            km[D * a + i][D * b + j] += w * v;
+                        }
+                    }
                 }
             }
         }
     }
-    // Bᵀ D B is symmetric (D is): the lower triangle mirrors the upper one.
-    let nl = 2 * cell.nodes().len();
+    // Symmetric: the node blocks below the diagonal mirror those above it.
+    let nl = D * n;
     for km in k.iter_mut() {
         #[allow(clippy::needless_range_loop)] // reads row j while writing column j
         for j in 0..nl {
             for i in j + 1..nl {
-                km[i][j] = km[j][i];
+                if i / D > j / D {
+                    km[i][j] = km[j][i];
+                }
             }
         }
     }
@@ -58,35 +76,37 @@ pub struct StiffnessPair {
     pub memory: SymmetricMatrix,
 }
 
-/// Assembles the stiffness matrices of the Voigt matrices `ds` on a pattern built here.
-pub fn assemble_stiffness<const M: usize>(
+/// Assembles the stiffness matrices of the tensors `cs` on a pattern built here, over every
+/// unknown of `dofs` (prescribed ones included: docs/method.md §7).
+pub fn assemble_stiffness<const D: usize, const M: usize>(
     cells: &[Cell],
-    points: &[[f64; 2]],
-    dofs: &DofMap,
-    ds: &[VoigtMatrix; M],
+    points: &[[f64; D]],
+    dofs: &DofMap<D>,
+    cs: &[Isotropic; M],
 ) -> [SymmetricMatrix; M] {
-    let pattern = Arc::new(Pattern::new(cells, dofs));
-    assemble_on(&pattern, cells, points, ds)
+    let pattern = Arc::new(Pattern::new(cells, dofs.n_nodes(), D));
+    assemble_on(&pattern, cells, points, cs)
 }
 
-/// Assembles on an existing pattern (re-assembly reuses the scatter map).
-pub fn assemble_on<const M: usize>(
+/// Assembles on an existing pattern (re-assembly reuses the scatter map). Cells are done in
+/// chunks so that the local matrices held at once stay bounded.
+pub fn assemble_on<const D: usize, const M: usize>(
     pattern: &Arc<Pattern>,
     cells: &[Cell],
-    points: &[[f64; 2]],
-    ds: &[VoigtMatrix; M],
+    points: &[[f64; D]],
+    cs: &[Isotropic; M],
 ) -> [SymmetricMatrix; M] {
-    let locals: Vec<[LocalMatrix; M]> = cells.par_iter().map(|c| local_stiffness(c, points, ds)).collect();
     let mut out: [SymmetricMatrix; M] = std::array::from_fn(|_| SymmetricMatrix::zeros(pattern.clone()));
-    for (e, (cell, km)) in cells.iter().zip(&locals).enumerate() {
-        let nl = 2 * cell.nodes().len();
-        let pos = pattern.cell_scatter(e);
-        for (m, mat) in out.iter_mut().enumerate() {
-            for i in 0..nl {
-                for j in 0..nl {
-                    let p = pos[i * nl + j];
-                    if p != usize::MAX {
-                        mat.values[p] += km[m][i][j];
+    const CHUNK: usize = 4096;
+    for (chunk, cell_chunk) in cells.chunks(CHUNK).enumerate() {
+        let locals: Vec<[LocalMatrix; M]> = cell_chunk.par_iter().map(|c| local_stiffness(c, points, cs)).collect();
+        for (k, (cell, km)) in cell_chunk.iter().zip(&locals).enumerate() {
+            let nl = D * cell.nodes().len();
+            let pos = pattern.cell_scatter(chunk * CHUNK + k);
+            for (m, mat) in out.iter_mut().enumerate() {
+                for i in 0..nl {
+                    for j in 0..nl {
+                        mat.values[pos[i * nl + j]] += km[m][i][j];
                     }
                 }
             }
@@ -102,14 +122,15 @@ pub(crate) fn rectangle_stiffness<const M: usize>(
     nx: usize,
     ny: usize,
     shape: crate::mesh::structured::CellShape,
-    ds: &[VoigtMatrix; M],
+    cs: &[Isotropic; M],
 ) -> [SymmetricMatrix; M] {
     let mesh = crate::mesh::structured::rectangle(2.0, 1.0, nx, ny, shape);
     let clamped = mesh
         .group_nodes(&crate::mesh::GroupSelector::Name("Gamma1".into()))
         .expect("the rectangle has Gamma1");
-    let dofs = DofMap::new(mesh.points.len(), &clamped);
-    assemble_stiffness(&mesh.cells, &mesh.points, &dofs, ds)
+    let dofs = DofMap::<2>::new(mesh.points.len(), &clamped);
+    let mats = assemble_stiffness(&mesh.cells, &mesh.points, &dofs, cs);
+    mats.map(|m| m.with_identity_rows(&dofs))
 }
 
 /// max |a − b| / max |b| (for tests comparing two computations of one vector).

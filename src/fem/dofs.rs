@@ -1,79 +1,97 @@
-//! The degree-of-freedom map: two displacement components per node, with the clamped
-//! nodes of Γ₁ eliminated (u = 0 there), numbered node by node.
+//! The degree-of-freedom map: D displacement components per node, unknown D·node + c for
+//! component c of `node` (docs/method.md §7). Every component stays in the linear system; a
+//! prescribed component (Dirichlet) is flagged here and its row and column of the step matrix
+//! are replaced by the identity, so the matrices keep their D × D node blocks whatever is
+//! prescribed.
 
-/// Sentinel for a constrained (eliminated) degree of freedom.
-pub const CONSTRAINED: usize = usize::MAX;
-
-/// Maps (node, component) to a free unknown, or [`CONSTRAINED`].
+/// Maps (node, component) to its unknown and knows which components are prescribed.
 #[derive(Clone, Debug)]
-pub struct DofMap {
-    /// `dof[2 * node + c]` for component c ∈ {0, 1}.
-    dof: Vec<usize>,
-    n_free: usize,
+pub struct DofMap<const D: usize> {
+    prescribed: Vec<bool>,
+    n_prescribed: usize,
 }
 
-impl DofMap {
-    /// Numbers every component of every node not in `clamped` (sorted or not).
+impl<const D: usize> DofMap<D> {
+    /// Every component of `n_nodes` nodes, those of `clamped` nodes prescribed (all components).
     pub fn new(n_nodes: usize, clamped: &[usize]) -> Self {
-        let mut is_clamped = vec![false; n_nodes];
+        let mut map = DofMap {
+            prescribed: vec![false; D * n_nodes],
+            n_prescribed: 0,
+        };
         for &p in clamped {
-            is_clamped[p] = true;
-        }
-        let mut dof = vec![CONSTRAINED; 2 * n_nodes];
-        let mut next = 0;
-        for (p, &c) in is_clamped.iter().enumerate() {
-            if !c {
-                dof[2 * p] = next;
-                dof[2 * p + 1] = next + 1;
-                next += 2;
+            for c in 0..D {
+                map.prescribe(p, c);
             }
         }
-        DofMap { dof, n_free: next }
+        map
     }
 
-    /// The unknown of component `c` of `node`, if free.
+    /// Marks component `c` of `node` as prescribed.
+    pub fn prescribe(&mut self, node: usize, c: usize) {
+        let d = D * node + c;
+        if !self.prescribed[d] {
+            self.prescribed[d] = true;
+            self.n_prescribed += 1;
+        }
+    }
+
+    /// The unknown of component `c` of `node`, if it is free.
     #[inline]
     pub fn get(&self, node: usize, c: usize) -> Option<usize> {
-        let d = self.dof[2 * node + c];
-        (d != CONSTRAINED).then_some(d)
+        let d = D * node + c;
+        (!self.prescribed[d]).then_some(d)
     }
 
-    /// Raw index (possibly [`CONSTRAINED`]).
+    /// The unknown of component `c` of `node` (free or prescribed).
     #[inline]
-    pub fn raw(&self, node: usize, c: usize) -> usize {
-        self.dof[2 * node + c]
+    pub fn index(&self, node: usize, c: usize) -> usize {
+        D * node + c
     }
 
-    /// Number of free unknowns.
+    /// True if unknown `d` is prescribed.
+    #[inline]
+    pub fn is_prescribed(&self, d: usize) -> bool {
+        self.prescribed[d]
+    }
+
+    /// The prescribed flags of all unknowns.
+    pub fn prescribed(&self) -> &[bool] {
+        &self.prescribed
+    }
+
+    /// Number of unknowns of the linear system (D per node, prescribed ones included).
+    pub fn n(&self) -> usize {
+        self.prescribed.len()
+    }
+
+    /// Number of free unknowns (what the user's problem has).
     pub fn n_free(&self) -> usize {
-        self.n_free
+        self.prescribed.len() - self.n_prescribed
+    }
+
+    /// Number of prescribed components.
+    pub fn n_prescribed(&self) -> usize {
+        self.n_prescribed
     }
 
     /// Number of nodes.
     pub fn n_nodes(&self) -> usize {
-        self.dof.len() / 2
+        self.prescribed.len() / D
     }
 
-    /// Expands a vector of free unknowns to nodal displacements (zero on Γ₁).
-    pub fn to_nodal(&self, u: &[f64]) -> Vec<[f64; 2]> {
-        (0..self.n_nodes())
-            .map(|p| {
-                let c = |k| self.get(p, k).map_or(0.0, |d| u[d]);
-                [c(0), c(1)]
+    /// The unknowns as nodal displacements.
+    pub fn to_nodal(&self, u: &[f64]) -> Vec<[f64; D]> {
+        u.chunks_exact(D)
+            .map(|c| {
+                let mut v = [0.0; D];
+                v.copy_from_slice(c);
+                v
             })
             .collect()
     }
 
-    /// Restricts nodal values to the free unknowns.
-    pub fn from_nodal(&self, nodal: &[[f64; 2]]) -> Vec<f64> {
-        let mut u = vec![0.0; self.n_free];
-        for (p, v) in nodal.iter().enumerate() {
-            for (c, vc) in v.iter().enumerate() {
-                if let Some(d) = self.get(p, c) {
-                    u[d] = *vc;
-                }
-            }
-        }
-        u
+    /// Nodal values as the vector of unknowns.
+    pub fn from_nodal(&self, nodal: &[[f64; D]]) -> Vec<f64> {
+        nodal.iter().flatten().copied().collect()
     }
 }

@@ -1,60 +1,121 @@
-//! Load vectors F(t) = ∫_Ω f₀·v dx + Σ_groups ∫_Γ f₂·v ds (METHOD.md §1), from expressions
+//! Load vectors F(t) = ∫_Ω f₀·v dx + Σ_groups ∫_Γ f₂·v ds (docs/method.md §1), from expressions
 //! in (x, y, z, t) and, for tractions, the facet's outward normal (nx, ny, nz) (the variables
-//! of [`crate::scene::TRACTION_VARIABLES`]). Quadrature points and shape values are computed once; each time step only
-//! evaluates the expressions, and a load that does not depend on t is assembled once.
+//! of [`crate::scene::TRACTION_VARIABLES`]). Quadrature points and shape values are computed
+//! once; each time step only evaluates the expressions, and a load that does not depend on t is
+//! assembled once.
 
 use super::dofs::DofMap;
-use super::element::{load_rule, shape_at};
-use super::quadrature::EDGE_GAUSS_3;
-use crate::mesh::{BoundaryPart, Cell};
+use super::element::{load_rule, reference, shape_at};
+use super::quadrature::{EDGE_GAUSS_3, QUAD_GAUSS_2X2, TRI_3POINT};
+use crate::mesh::{BoundaryPart, Cell, Facet};
 use crate::scene::Expr;
 
-/// One quadrature point of a load integral: position, weight (with the Jacobian), and the
-/// free dofs × shape values it contributes to.
+/// One quadrature point of a load integral: position, outward normal, weight (with the
+/// Jacobian), and the nodes × shape values it contributes to.
 #[derive(Clone, Debug)]
-struct LoadPoint {
-    x: [f64; 2],
+struct LoadPoint<const D: usize> {
+    x: [f64; D],
     /// The facet's outward unit normal (zero for a body force).
-    normal: [f64; 2],
+    normal: [f64; D],
     weight: f64,
     /// (node, N_node(x)) for the nodes of the cell or facet.
     shape: Vec<(usize, f64)>,
 }
 
-/// A vector-valued load density f = (f_x, f_y) integrated over a set of points.
+/// A vector-valued load density f (D components) integrated over a set of points.
 #[derive(Clone, Debug)]
-struct LoadTerm {
+struct LoadTerm<const D: usize> {
     /// Where the load comes from, for messages (e.g. the scene key).
     label: String,
-    value: [Expr; 2],
-    points: Vec<LoadPoint>,
+    value: [Expr; D],
+    points: Vec<LoadPoint<D>>,
 }
 
 /// The load vector assembler of a scene.
-#[derive(Clone, Debug, Default)]
-pub struct Loads {
-    terms: Vec<LoadTerm>,
+#[derive(Clone, Debug)]
+pub struct Loads<const D: usize> {
+    terms: Vec<LoadTerm<D>>,
 }
 
-impl Loads {
+impl<const D: usize> Default for Loads<D> {
+    fn default() -> Self {
+        Loads { terms: Vec::new() }
+    }
+}
+
+/// Quadrature points of one facet: (position, outward unit normal, weight, shape values).
+type FacetPoint<const D: usize> = ([f64; D], [f64; D], f64, Vec<(usize, f64)>);
+
+/// Quadrature on a facet: 3-point Gauss on an edge, the 3-point rule on a triangle, 2×2 Gauss
+/// on a quadrilateral (exact for the products of shape functions with smooth loads to the order
+/// the elements need).
+fn facet_points<const D: usize>(points: &[[f64; D]], f: &Facet) -> Vec<FacetPoint<D>> {
+    let nodes = f.nodes();
+    let x = |i: usize| points[nodes[i]];
+    let combine = |values: &[f64]| -> [f64; D] {
+        std::array::from_fn(|k| values.iter().enumerate().map(|(a, v)| v * x(a)[k]).sum())
+    };
+    let mut out = Vec::new();
+    match f.len() {
+        2 => {
+            let (a, b) = (x(0), x(1));
+            let len = (0..D).map(|k| (b[k] - a[k]).powi(2)).sum::<f64>().sqrt();
+            // the facet is oriented with the body on its left: outward normal (dy, −dx)/len
+            let mut normal = [0.0; D];
+            normal[0] = (b[1] - a[1]) / len;
+            normal[1] = -(b[0] - a[0]) / len;
+            for &(s, w) in &EDGE_GAUSS_3 {
+                let v = [1.0 - s, s];
+                out.push((combine(&v), normal, w * len, vec![(nodes[0], v[0]), (nodes[1], v[1])]));
+            }
+        }
+        n => {
+            // A face as a 2D reference cell: tangents from the reference gradients.
+            let (cell, rule) = if n == 3 {
+                (Cell::Tri3([0, 1, 2]), &TRI_3POINT[..])
+            } else {
+                (Cell::Quad4([0, 1, 2, 3]), &QUAD_GAUSS_2X2[..])
+            };
+            for q in rule {
+                let (_, value, grad) = reference(&cell, q.xi);
+                let (mut t1, mut t2) = ([0.0; 3], [0.0; 3]);
+                for a in 0..n {
+                    for k in 0..D {
+                        t1[k] += grad[a][0] * x(a)[k];
+                        t2[k] += grad[a][1] * x(a)[k];
+                    }
+                }
+                let c = [
+                    t1[1] * t2[2] - t1[2] * t2[1],
+                    t1[2] * t2[0] - t1[0] * t2[2],
+                    t1[0] * t2[1] - t1[1] * t2[0],
+                ];
+                let da = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+                let normal = std::array::from_fn(|k| c[k] / da);
+                let shape = (0..n).map(|a| (nodes[a], value[a])).collect();
+                out.push((combine(&value[..n]), normal, q.weight * da, shape));
+            }
+        }
+    }
+    out
+}
+
+impl<const D: usize> Loads<D> {
     /// No loads.
     pub fn new() -> Self {
         Loads::default()
     }
 
-    /// Adds a traction density on a boundary part (2-node facets, 3-point Gauss per facet).
-    pub fn add_traction(&mut self, part: &BoundaryPart, points: &[[f64; 2]], value: [Expr; 2], label: &str) {
-        let mut qp = Vec::with_capacity(part.facets.len() * EDGE_GAUSS_3.len());
-        for (f, len) in part.facets.iter().zip(&part.facet_lengths) {
-            let (a, b) = (points[f[0]], points[f[1]]);
-            // the facet is oriented with the body on its left: outward normal (dy, −dx)/len
-            let normal = [(b[1] - a[1]) / len, -(b[0] - a[0]) / len];
-            for &(s, w) in &EDGE_GAUSS_3 {
+    /// Adds a traction density on a boundary part.
+    pub fn add_traction(&mut self, part: &BoundaryPart<D>, points: &[[f64; D]], value: [Expr; D], label: &str) {
+        let mut qp = Vec::with_capacity(part.facets.len() * 4);
+        for f in &part.facets {
+            for (x, normal, weight, shape) in facet_points(points, f) {
                 qp.push(LoadPoint {
-                    x: [(1.0 - s) * a[0] + s * b[0], (1.0 - s) * a[1] + s * b[1]],
+                    x,
                     normal,
-                    weight: w * len,
-                    shape: vec![(f[0], 1.0 - s), (f[1], s)],
+                    weight,
+                    shape,
                 });
             }
         }
@@ -66,14 +127,14 @@ impl Loads {
     }
 
     /// Adds a body force density on every cell.
-    pub fn add_body_force(&mut self, cells: &[Cell], points: &[[f64; 2]], value: [Expr; 2], label: &str) {
+    pub fn add_body_force(&mut self, cells: &[Cell], points: &[[f64; D]], value: [Expr; D], label: &str) {
         let mut qp = Vec::new();
         for cell in cells {
             for q in load_rule(cell) {
                 let s = shape_at(cell, points, q.xi);
                 qp.push(LoadPoint {
                     x: s.x,
-                    normal: [0.0; 2],
+                    normal: [0.0; D],
                     weight: q.weight * s.det_j,
                     shape: cell.nodes().iter().zip(&s.value).map(|(&n, &v)| (n, v)).collect(),
                 });
@@ -96,30 +157,34 @@ impl Loads {
         self.terms.is_empty()
     }
 
-    /// F(t) restricted to the free unknowns, written into `out` (overwritten). A load density
-    /// that is not finite at some quadrature point is an error naming the load, the point and t.
-    pub fn assemble(&self, t: f64, dofs: &DofMap, out: &mut [f64]) -> Result<(), String> {
+    /// F(t) over all unknowns (prescribed components included: their share enters the
+    /// reactions), written into `out` (overwritten).
+    /// A load density that is not finite at some quadrature point is an error naming the load,
+    /// the point and t.
+    pub fn assemble(&self, t: f64, dofs: &DofMap<D>, out: &mut [f64]) -> Result<(), String> {
         out.iter_mut().for_each(|v| *v = 0.0);
         for term in &self.terms {
             for p in &term.points {
                 // TRACTION_VARIABLES (x, y, z, t, nx, ny, nz); a body force uses the first four.
-                let vars = [p.x[0], p.x[1], 0.0, t, p.normal[0], p.normal[1], 0.0];
-                let f = [term.value[0].eval(&vars), term.value[1].eval(&vars)];
+                let mut vars = [0.0; 7];
+                vars[..D].copy_from_slice(&p.x);
+                vars[4..4 + D].copy_from_slice(&p.normal);
+                vars[3] = t;
+                let f: [f64; D] = std::array::from_fn(|c| term.value[c].eval(&vars));
                 if let Some(c) = f.iter().position(|v| !v.is_finite()) {
+                    let at: Vec<String> = p.x.iter().map(|v| v.to_string()).collect();
                     return Err(format!(
-                        "{}[{c}] = \"{}\" is {} at (x, y) = ({}, {}), t = {t}; make the expression finite on the whole group",
+                        "{}[{c}] = \"{}\" is {} at (x, y{}) = ({}), t = {t}; make the expression finite on the whole group",
                         term.label,
                         term.value[c].source(),
                         f[c],
-                        p.x[0],
-                        p.x[1]
+                        if D == 3 { ", z" } else { "" },
+                        at.join(", ")
                     ));
                 }
                 for &(node, n) in &p.shape {
                     for (c, fc) in f.iter().enumerate() {
-                        if let Some(d) = dofs.get(node, c) {
-                            out[d] += p.weight * fc * n;
-                        }
+                        out[dofs.index(node, c)] += p.weight * fc * n;
                     }
                 }
             }

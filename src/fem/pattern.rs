@@ -2,6 +2,10 @@
 //! mesh, with a precomputed scatter map from each cell's local matrix into the value array.
 //! Every matrix of a run (K_A, K_B, K = K_A + c·K_B) shares the pattern, so re-assembly and
 //! linear combinations are plain loops over values.
+//!
+//! The pattern is built on nodes and expanded to D × D node blocks (unknowns D·k + c of node
+//! k, docs/method.md §7): the block size is part of the pattern, so the ordering and the
+//! node-block product know it without guessing.
 
 use super::dofs::DofMap;
 use crate::mesh::Cell;
@@ -12,70 +16,71 @@ use std::sync::Arc;
 #[derive(Debug)]
 pub struct Pattern {
     pub n: usize,
+    /// Unknowns per node (the dimension D).
+    pub block: usize,
     symbolic: SymbolicSparseColMat<usize>,
-    /// For cell e and local pair (i, j) of its 2·n_local element dofs: the position of that
-    /// entry in the value array, or `usize::MAX` if either dof is constrained.
+    /// Node k couples with `nodes.coupled(k)`.
+    nodes: NodeGraph,
+    /// For cell e and local pair (i, j) of its D·n_local element dofs: the position of that
+    /// entry in the value array.
     scatter: Vec<usize>,
     scatter_offset: Vec<usize>,
 }
 
 impl Pattern {
-    /// Builds the pattern of the element dof couplings. Both components of a node are free or
-    /// both clamped, and free nodes are numbered in order (unknowns 2k, 2k + 1 for free node
-    /// k), so the pattern is built on nodes and expanded to 2 × 2 blocks: column 2k + c holds
-    /// the rows 2q, 2q + 1 of every free node q coupled with k, in order.
-    pub fn new(cells: &[Cell], dofs: &DofMap) -> Self {
-        let n = dofs.n_free();
-        let free_node = |p: usize| {
-            let d = dofs.raw(p, 0);
-            (d != usize::MAX).then_some(d / 2)
-        };
+    /// Builds the pattern of the element couplings of `cells` on `n_nodes` nodes with `block`
+    /// unknowns each: column D·k + c holds the rows D·q … D·q + D − 1 of every node q coupled
+    /// with k, in order.
+    pub fn new(cells: &[Cell], n_nodes: usize, block: usize) -> Self {
+        let d = block;
+        let n = d * n_nodes;
         // Node adjacency (including the node itself), sorted.
-        let mut adjacency: Vec<Vec<usize>> = vec![Vec::new(); n / 2];
-        let mut local: Vec<Option<usize>> = Vec::with_capacity(4);
+        let mut adjacency: Vec<Vec<usize>> = vec![Vec::new(); n_nodes];
         for cell in cells {
-            local.clear();
-            local.extend(cell.nodes().iter().map(|&p| free_node(p)));
-            for a in local.iter().flatten() {
-                adjacency[*a].extend(local.iter().flatten());
+            for &a in cell.nodes() {
+                adjacency[a].extend_from_slice(cell.nodes());
             }
         }
         for list in &mut adjacency {
             list.sort_unstable();
             list.dedup();
         }
+        let mut graph = NodeGraph {
+            ptr: Vec::with_capacity(n_nodes + 1),
+            nodes: Vec::with_capacity(adjacency.iter().map(Vec::len).sum()),
+        };
+        graph.ptr.push(0);
         let mut col_ptr = Vec::with_capacity(n + 1);
         col_ptr.push(0);
-        let mut row_idx = Vec::with_capacity(adjacency.iter().map(|l| 4 * l.len()).sum());
+        let mut row_idx = Vec::with_capacity(adjacency.iter().map(|l| d * d * l.len()).sum());
         for list in &adjacency {
-            for _component in 0..2 {
-                row_idx.extend(list.iter().flat_map(|&q| [2 * q, 2 * q + 1]));
+            graph.nodes.extend_from_slice(list);
+            graph.ptr.push(graph.nodes.len());
+            for _component in 0..d {
+                row_idx.extend(list.iter().flat_map(|&q| (0..d).map(move |c| d * q + c)));
                 col_ptr.push(row_idx.len());
             }
         }
         // Scatter: local entry (i, j) = (node b comp c', node a comp c) sits at
-        // col_ptr[2·a + c] + 2·(position of b in adjacency[a]) + c'.
-        let mut scatter = Vec::with_capacity(cells.iter().map(|c| 4 * c.nodes().len().pow(2)).sum());
+        // col_ptr[D·a + c] + D·(position of b in adjacency[a]) + c'.
+        let mut scatter = Vec::with_capacity(cells.iter().map(|c| d * d * c.nodes().len().pow(2)).sum());
         let mut scatter_offset = Vec::with_capacity(cells.len() + 1);
         scatter_offset.push(0);
         for cell in cells {
-            local.clear();
-            local.extend(cell.nodes().iter().map(|&p| free_node(p)));
-            let nl = 2 * local.len();
+            let local = cell.nodes();
+            let nl = d * local.len();
             let start = scatter.len();
             scatter.resize(start + nl * nl, usize::MAX);
             let block = &mut scatter[start..];
-            for (ja, a) in local.iter().enumerate() {
-                let Some(a) = *a else { continue };
-                for (ib, b) in local.iter().enumerate() {
-                    let Some(b) = *b else { continue };
+            for (ja, &a) in local.iter().enumerate() {
+                for (ib, &b) in local.iter().enumerate() {
                     let k = adjacency[a]
                         .binary_search(&b)
                         .expect("pattern holds every element coupling");
-                    for c in 0..2 {
-                        for c2 in 0..2 {
+                    for c in 0..d {
+                        for c2 in 0..d {
                             // row-major over local dofs: (i, j) at i·nl + j
-                            block[(2 * ib + c2) * nl + 2 * ja + c] = col_ptr[2 * a + c] + 2 * k + c2;
+                            block[(d * ib + c2) * nl + d * ja + c] = col_ptr[d * a + c] + d * k + c2;
                         }
                     }
                 }
@@ -85,7 +90,9 @@ impl Pattern {
         let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
         Pattern {
             n,
+            block,
             symbolic,
+            nodes: graph,
             scatter,
             scatter_offset,
         }
@@ -105,12 +112,16 @@ impl Pattern {
     pub fn symbolic(&self) -> SymbolicSparseColMatRef<'_, usize> {
         self.symbolic.as_ref()
     }
+
+    /// The node graph the pattern was expanded from.
+    pub fn node_graph(&self) -> &NodeGraph {
+        &self.nodes
+    }
 }
 
-/// The node graph of a pattern made of 2 × 2 node blocks — unknowns 2k, 2k + 1 of node k
-/// with one shared column pattern of row pairs (2q, 2q + 1), as [`Pattern::new`] builds it.
-/// Entry p of [`NodeGraph::coupled`]`(k)` is node q, whose rows 2q, 2q + 1 sit at positions
-/// `col_ptr[2k] + 2p` (+1) of column 2k and `col_ptr[2k + 1] + 2p` (+1) of column 2k + 1.
+/// The node graph of a pattern made of D × D node blocks. Entry p of
+/// [`NodeGraph::coupled`]`(k)` is node q, whose rows D·q … D·q + D − 1 sit at positions
+/// `col_ptr[D·k + c] + D·p` (+ c') of column D·k + c.
 #[derive(Clone, Debug)]
 pub struct NodeGraph {
     /// Node k couples with `nodes[ptr[k]..ptr[k + 1]]` (ascending, itself included).
@@ -119,35 +130,6 @@ pub struct NodeGraph {
 }
 
 impl NodeGraph {
-    /// The node graph of `pattern`, or None if it is not made of 2 × 2 node blocks (odd
-    /// order, the two unknowns of a node with different patterns, or rows not in pairs).
-    pub fn of(pattern: SymbolicSparseColMatRef<'_, usize>) -> Option<Self> {
-        let n = pattern.nrows();
-        if n % 2 != 0 {
-            return None;
-        }
-        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
-        let mut graph = NodeGraph {
-            ptr: Vec::with_capacity(n / 2 + 1),
-            nodes: Vec::with_capacity(row_idx.len() / 4),
-        };
-        graph.ptr.push(0);
-        for k in 0..n / 2 {
-            let first = &row_idx[col_ptr[2 * k]..col_ptr[2 * k + 1]];
-            if first != &row_idx[col_ptr[2 * k + 1]..col_ptr[2 * k + 2]] || first.len() % 2 != 0 {
-                return None;
-            }
-            for pair in first.chunks_exact(2) {
-                if pair[0] % 2 != 0 || pair[1] != pair[0] + 1 {
-                    return None;
-                }
-                graph.nodes.push(pair[0] / 2);
-            }
-            graph.ptr.push(graph.nodes.len());
-        }
-        Some(graph)
-    }
-
     /// Number of nodes.
     pub fn len(&self) -> usize {
         self.ptr.len() - 1
@@ -161,16 +143,6 @@ impl NodeGraph {
     /// The nodes node k couples with, ascending.
     pub fn coupled(&self, k: usize) -> &[usize] {
         &self.nodes[self.ptr[k]..self.ptr[k + 1]]
-    }
-}
-
-/// The free-dof indices of a cell's local dofs, ordered (node a, component c) → 2a + c;
-/// constrained ones are `usize::MAX`.
-pub fn element_dofs(cell: &Cell, dofs: &DofMap, out: &mut Vec<usize>) {
-    out.clear();
-    for &p in cell.nodes() {
-        out.push(dofs.raw(p, 0));
-        out.push(dofs.raw(p, 1));
     }
 }
 
@@ -224,6 +196,35 @@ impl SymmetricMatrix {
                 *yj = s;
             }
         });
+    }
+
+    /// The entries of column j: (row, value).
+    pub fn column(&self, j: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
+        let sym = self.pattern.symbolic();
+        let range = sym.col_ptr()[j]..sym.col_ptr()[j + 1];
+        sym.row_idx()[range.clone()]
+            .iter()
+            .copied()
+            .zip(self.values[range].iter().copied())
+    }
+
+    /// The matrix with the rows and columns of the prescribed unknowns replaced by those of the
+    /// identity (docs/method.md §7): symmetric positive definite when the free block is, and
+    /// the same pattern (the entries become explicit zeros).
+    pub fn with_identity_rows<const D: usize>(&self, dofs: &DofMap<D>) -> SymmetricMatrix {
+        let mut out = self.clone();
+        let sym = self.pattern.symbolic();
+        let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+        for j in 0..self.n() {
+            let column_prescribed = dofs.is_prescribed(j);
+            for q in cp[j]..cp[j + 1] {
+                let i = ri[q];
+                if column_prescribed || dofs.is_prescribed(i) {
+                    out.values[q] = if i == j { 1.0 } else { 0.0 };
+                }
+            }
+        }
+        out
     }
 
     /// faer's view of the matrix.

@@ -1,55 +1,63 @@
-//! Quadrature rules on the reference cells and the reference interval.
+//! Quadrature rules on the reference cells and the reference interval (docs/method.md §2, §8).
+//! Reference points have three coordinates; 2D rules leave the third at 0.
 
-/// A quadrature point on a reference cell: coordinates (ξ, η) and weight.
+/// A quadrature point on a reference cell: coordinates (ξ, η, ζ) and weight.
 #[derive(Clone, Copy, Debug)]
 pub struct QuadPoint {
-    pub xi: [f64; 2],
+    pub xi: [f64; 3],
     pub weight: f64,
 }
 
 const G: f64 = 0.577_350_269_189_625_8; // 1/√3
 
+const fn qp(x: f64, y: f64, z: f64, weight: f64) -> QuadPoint {
+    QuadPoint { xi: [x, y, z], weight }
+}
+
 /// 2×2 Gauss rule on [−1, 1]²: exact for bicubic integrands (Q1 stiffness on parallelograms).
 pub const QUAD_GAUSS_2X2: [QuadPoint; 4] = [
-    QuadPoint {
-        xi: [-G, -G],
-        weight: 1.0,
-    },
-    QuadPoint {
-        xi: [G, -G],
-        weight: 1.0,
-    },
-    QuadPoint {
-        xi: [G, G],
-        weight: 1.0,
-    },
-    QuadPoint {
-        xi: [-G, G],
-        weight: 1.0,
-    },
+    qp(-G, -G, 0.0, 1.0),
+    qp(G, -G, 0.0, 1.0),
+    qp(G, G, 0.0, 1.0),
+    qp(-G, G, 0.0, 1.0),
+];
+
+/// 2×2×2 Gauss rule on [−1, 1]³: exact for tricubic integrands (Q1 stiffness on parallelepipeds).
+pub const HEX_GAUSS_2X2X2: [QuadPoint; 8] = [
+    qp(-G, -G, -G, 1.0),
+    qp(G, -G, -G, 1.0),
+    qp(G, G, -G, 1.0),
+    qp(-G, G, -G, 1.0),
+    qp(-G, -G, G, 1.0),
+    qp(G, -G, G, 1.0),
+    qp(G, G, G, 1.0),
+    qp(-G, G, G, 1.0),
 ];
 
 /// 3-point rule on the reference triangle {ξ, η ≥ 0, ξ + η ≤ 1}: exact for quadratics.
 pub const TRI_3POINT: [QuadPoint; 3] = [
-    QuadPoint {
-        xi: [1.0 / 6.0, 1.0 / 6.0],
-        weight: 1.0 / 6.0,
-    },
-    QuadPoint {
-        xi: [2.0 / 3.0, 1.0 / 6.0],
-        weight: 1.0 / 6.0,
-    },
-    QuadPoint {
-        xi: [1.0 / 6.0, 2.0 / 3.0],
-        weight: 1.0 / 6.0,
-    },
+    qp(1.0 / 6.0, 1.0 / 6.0, 0.0, 1.0 / 6.0),
+    qp(2.0 / 3.0, 1.0 / 6.0, 0.0, 1.0 / 6.0),
+    qp(1.0 / 6.0, 2.0 / 3.0, 0.0, 1.0 / 6.0),
 ];
 
 /// 1-point (centroid) rule on the reference triangle: exact for P1 stiffness (constant strain).
-pub const TRI_CENTROID: [QuadPoint; 1] = [QuadPoint {
-    xi: [1.0 / 3.0, 1.0 / 3.0],
-    weight: 0.5,
-}];
+pub const TRI_CENTROID: [QuadPoint; 1] = [qp(1.0 / 3.0, 1.0 / 3.0, 0.0, 0.5)];
+
+/// 1-point (centroid) rule on the reference tetrahedron {ξ, η, ζ ≥ 0, ξ + η + ζ ≤ 1}: exact for
+/// P1 stiffness.
+pub const TET_CENTROID: [QuadPoint; 1] = [qp(0.25, 0.25, 0.25, 1.0 / 6.0)];
+
+const TA: f64 = 0.585_410_196_624_968_5; // (5 + 3√5)/20
+const TB: f64 = 0.138_196_601_125_010_5; // (5 − √5)/20
+
+/// 4-point rule on the reference tetrahedron: exact for quadratics.
+pub const TET_4POINT: [QuadPoint; 4] = [
+    qp(TB, TB, TB, 1.0 / 24.0),
+    qp(TA, TB, TB, 1.0 / 24.0),
+    qp(TB, TA, TB, 1.0 / 24.0),
+    qp(TB, TB, TA, 1.0 / 24.0),
+];
 
 /// 2-point Gauss rule on [0, 1] (parameter s along an edge), weights summing to 1: exact for cubics.
 pub const EDGE_GAUSS_2: [(f64, f64); 2] = [(0.5 - 0.5 * G, 0.5), (0.5 + 0.5 * G, 0.5)];
@@ -60,6 +68,53 @@ pub const EDGE_GAUSS_3: [(f64, f64); 3] = [
     (0.5, 8.0 / 18.0),
     (0.887_298_334_620_741_7, 5.0 / 18.0),
 ];
+
+/// 3-point Gauss rule on [−1, 1].
+pub const GAUSS_3: [(f64, f64); 3] = [
+    (-0.774_596_669_241_483_4, 5.0 / 9.0),
+    (0.0, 8.0 / 9.0),
+    (0.774_596_669_241_483_4, 5.0 / 9.0),
+];
+
+/// A collapsed (Duffy) tensor rule on the reference tetrahedron from 3 Gauss points per
+/// direction: 27 points, positive weights, exact for polynomials of degree 3 (used for error
+/// integrals, where its cost does not matter).
+pub fn tet_duffy_27() -> Vec<QuadPoint> {
+    let mut out = Vec::with_capacity(27);
+    for &(a, wa) in &GAUSS_3 {
+        for &(b, wb) in &GAUSS_3 {
+            for &(c, wc) in &GAUSS_3 {
+                // (u, v, w) ∈ [0, 1]³ → ξ = u, η = (1 − u) v, ζ = (1 − u)(1 − v) w
+                let (u, v, w) = (0.5 * (a + 1.0), 0.5 * (b + 1.0), 0.5 * (c + 1.0));
+                let jac = (1.0 - u) * (1.0 - u) * (1.0 - v);
+                out.push(qp(
+                    u,
+                    (1.0 - u) * v,
+                    (1.0 - u) * (1.0 - v) * w,
+                    wa * wb * wc / 8.0 * jac,
+                ));
+            }
+        }
+    }
+    out
+}
+
+/// 3×3 (×3) Gauss on [−1, 1]^d (error integrals on quadrilaterals and hexahedra).
+pub fn tensor_gauss_3(dim: usize) -> Vec<QuadPoint> {
+    let mut out = Vec::new();
+    for &(a, wa) in &GAUSS_3 {
+        for &(b, wb) in &GAUSS_3 {
+            if dim == 2 {
+                out.push(qp(a, b, 0.0, wa * wb));
+            } else {
+                for &(c, wc) in &GAUSS_3 {
+                    out.push(qp(a, b, c, wa * wb * wc));
+                }
+            }
+        }
+    }
+    out
+}
 
 #[cfg(test)]
 mod tests {
@@ -73,9 +128,24 @@ mod tests {
             .map(|p| p.weight * p.xi[0].powi(2) * p.xi[1].powi(2))
             .sum();
         assert!((q - 4.0 / 9.0).abs() < 1e-14);
+        // ∫_{[-1,1]^3} ξ² η² ζ² = 8/27
+        let h: f64 = HEX_GAUSS_2X2X2
+            .iter()
+            .map(|p| p.weight * (p.xi[0] * p.xi[1] * p.xi[2]).powi(2))
+            .sum();
+        assert!((h - 8.0 / 27.0).abs() < 1e-14);
         // ∫_T ξ η = 1/24
         let t: f64 = TRI_3POINT.iter().map(|p| p.weight * p.xi[0] * p.xi[1]).sum();
         assert!((t - 1.0 / 24.0).abs() < 1e-14);
+        // ∫_tet ξ² = 1/60, ∫_tet ξ η = 1/120, volume 1/6
+        let t2: f64 = TET_4POINT.iter().map(|p| p.weight * p.xi[0] * p.xi[0]).sum();
+        let t11: f64 = TET_4POINT.iter().map(|p| p.weight * p.xi[0] * p.xi[1]).sum();
+        assert!((t2 - 1.0 / 60.0).abs() < 1e-15 && (t11 - 1.0 / 120.0).abs() < 1e-15);
+        let d = tet_duffy_27();
+        let vol: f64 = d.iter().map(|p| p.weight).sum();
+        // ∫_tet ξ ζ² = 2!·1!/(3+3)! ·... = 1/360 (Dirichlet integral a!b!c!/(a+b+c+3)!)
+        let xz2: f64 = d.iter().map(|p| p.weight * p.xi[0] * p.xi[2] * p.xi[2]).sum();
+        assert!((vol - 1.0 / 6.0).abs() < 1e-15 && (xz2 - 2.0 / 720.0).abs() < 1e-15);
         // ∫_0^1 s^3 = 1/4, ∫_0^1 s^5 = 1/6
         let e: f64 = EDGE_GAUSS_2.iter().map(|(s, w)| w * s.powi(3)).sum();
         assert!((e - 0.25).abs() < 1e-14);

@@ -1,9 +1,8 @@
 //! Cell stresses for output: σ = Aε(u_n) + B₀ ε(m_n) at the cell centroid, where
-//! m_n = k Σ'_{i≤n} b(t_n − t_i) u_i is the memory displacement (METHOD.md §2), and the
-//! von Mises equivalent stress.
+//! m_n = h_n + (k/2) b(0) u_n is the memory displacement (docs/method.md §3), and the von Mises
+//! equivalent stress, in any dimension.
 
 use super::element::{reference_centroid, shape_at, strain};
-use crate::material::elasticity::apply;
 use crate::material::{Elasticity, IDENTITY_TENSOR};
 use crate::mesh::Cell;
 use rayon::prelude::*;
@@ -14,33 +13,51 @@ pub struct CellStresses {
     pub von_mises: Vec<f64>,
 }
 
-/// Evaluates the stress of every cell at its centroid.
-pub fn cell_stresses(
+/// The von Mises stress of a symmetric 3×3 tensor.
+pub fn von_mises(s: &[[f64; 3]; 3]) -> f64 {
+    let d = (s[0][0] - s[1][1]).powi(2) + (s[1][1] - s[2][2]).powi(2) + (s[2][2] - s[0][0]).powi(2);
+    let shear = s[0][1].powi(2) + s[1][2].powi(2) + s[0][2].powi(2);
+    (0.5 * d + 3.0 * shear).sqrt()
+}
+
+/// Evaluates the stress of every cell at its centroid. In 2D the out-of-plane stress σ₃₃ of
+/// plane strain is included (zero in plane stress).
+pub fn cell_stresses<const D: usize>(
     cells: &[Cell],
-    points: &[[f64; 2]],
+    points: &[[f64; D]],
     elasticity: &Elasticity,
-    u: &[[f64; 2]],
-    memory: Option<&[[f64; 2]]>,
+    u: &[[f64; D]],
+    memory: Option<&[[f64; D]]>,
 ) -> CellStresses {
-    let d = elasticity.voigt();
+    let a = elasticity.tensor();
     let per_cell: Vec<([f64; 9], f64)> = cells
         .par_iter()
         .map(|cell| {
             let s = shape_at(cell, points, reference_centroid(cell));
-            let local = |field: &[[f64; 2]]| -> Vec<[f64; 2]> { cell.nodes().iter().map(|&p| field[p]).collect() };
+            let local = |field: &[[f64; D]]| -> Vec<[f64; D]> { cell.nodes().iter().map(|&p| field[p]).collect() };
             let e = strain(&s, &local(u));
-            let mut sig = apply(&d, &e);
-            let szz = elasticity.out_of_plane_stress(&e);
+            let mut sig = a.apply(&e);
+            let trace: f64 = (0..D).map(|i| e[i][i]).sum();
+            let mut full = [[0.0; 3]; 3];
             if let Some(m) = memory {
-                let em = strain(&s, &local(m));
-                let sm = apply(&IDENTITY_TENSOR, &em);
-                for k in 0..3 {
-                    sig[k] += sm[k];
+                let sm = IDENTITY_TENSOR.apply(&strain(&s, &local(m)));
+                for i in 0..D {
+                    for j in 0..D {
+                        sig[i][j] += sm[i][j];
+                    }
                 }
             }
-            let [sxx, syy, sxy] = sig;
-            let vm = (0.5 * ((sxx - syy).powi(2) + (syy - szz).powi(2) + (szz - sxx).powi(2)) + 3.0 * sxy * sxy).sqrt();
-            ([sxx, sxy, 0.0, sxy, syy, 0.0, 0.0, 0.0, szz], vm)
+            for i in 0..D {
+                for j in 0..D {
+                    full[i][j] = sig[i][j];
+                }
+            }
+            if D == 2 {
+                full[2][2] = elasticity.out_of_plane_stress(trace);
+            }
+            let vm = von_mises(&full);
+            let flat: [f64; 9] = std::array::from_fn(|k| full[k / 3][k % 3]);
+            (flat, vm)
         })
         .collect();
     CellStresses {

@@ -11,7 +11,6 @@
 
 use super::schedule::{backward_sequential, forward_sequential, forward_supernode, Schedule};
 use super::supernodes::Supernodes;
-use crate::fem::pattern::NodeGraph;
 use crate::fem::SymmetricMatrix;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltError;
@@ -105,7 +104,7 @@ impl Factor {
             ..Default::default()
         };
         let pattern = matrix.pattern.symbolic();
-        let node_order = node_ordering(pattern);
+        let node_order = node_ordering(&matrix.pattern);
         let ordering = match &node_order {
             Some((fwd, inv)) => SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(fwd, inv, matrix.n())),
             None => SymmetricOrdering::Amd,
@@ -244,19 +243,21 @@ impl Factor {
     }
 }
 
-/// AMD on the nodes when the pattern is made of 2 × 2 node blocks (unknowns 2k, 2k + 1 of a
-/// node share their column pattern, as [`crate::fem::pattern::Pattern`] builds it), expanded
-/// to the unknowns with the two of a node kept together: a graph a quarter the size to order,
-/// and supernodes that never split a node. None if the pattern is not of that form.
-fn node_ordering(pattern: faer::sparse::SymbolicSparseColMatRef<'_, usize>) -> Option<(Vec<usize>, Vec<usize>)> {
-    let n = pattern.nrows();
-    let graph = NodeGraph::of(pattern).filter(|g| !g.is_empty())?;
-    let (node_ptr, node_rows) = (&graph.ptr, &graph.nodes);
-    let nodes = faer::sparse::SymbolicSparseColMatRef::new_checked(n / 2, n / 2, node_ptr, None, node_rows);
-    let (mut fwd, mut inv) = (vec![0usize; n / 2], vec![0usize; n / 2]);
+/// AMD on the node graph of the pattern, expanded to the D unknowns of each node, kept
+/// together: a graph D² times smaller to order, and supernodes that never split a node.
+fn node_ordering(pattern: &crate::fem::pattern::Pattern) -> Option<(Vec<usize>, Vec<usize>)> {
+    let d = pattern.block;
+    let n = pattern.n;
+    let graph = pattern.node_graph();
+    if graph.is_empty() {
+        return None;
+    }
+    let n_nodes = graph.len();
+    let nodes = faer::sparse::SymbolicSparseColMatRef::new_checked(n_nodes, n_nodes, &graph.ptr, None, &graph.nodes);
+    let (mut fwd, mut inv) = (vec![0usize; n_nodes], vec![0usize; n_nodes]);
     let mut buffer = MemBuffer::try_new(faer::sparse::linalg::amd::order_scratch::<usize>(
-        n / 2,
-        node_rows.len(),
+        n_nodes,
+        graph.nodes.len(),
     ))
     .ok()?;
     faer::sparse::linalg::amd::order(
@@ -267,10 +268,10 @@ fn node_ordering(pattern: faer::sparse::SymbolicSparseColMatRef<'_, usize>) -> O
         MemStack::new(&mut buffer),
     )
     .ok()?;
-    let dof_fwd: Vec<usize> = fwd.iter().flat_map(|&k| [2 * k, 2 * k + 1]).collect();
+    let dof_fwd: Vec<usize> = fwd.iter().flat_map(|&k| (0..d).map(move |c| d * k + c)).collect();
     let mut dof_inv = vec![0; n];
-    for (i, &d) in dof_fwd.iter().enumerate() {
-        dof_inv[d] = i;
+    for (i, &p) in dof_fwd.iter().enumerate() {
+        dof_inv[p] = i;
     }
     Some((dof_fwd, dof_inv))
 }

@@ -200,9 +200,9 @@ mod tests {
         let e = Elasticity {
             youngs_modulus: 3.0,
             poisson_ratio: 0.3,
-            plane: PlaneModel::Strain,
+            plane: Some(PlaneModel::Strain),
         };
-        let [k] = rectangle_stiffness(12, 7, shape, &[e.voigt()]);
+        let [k] = rectangle_stiffness(12, 7, shape, &[e.tensor()]);
         k
     }
 

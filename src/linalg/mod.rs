@@ -1,4 +1,4 @@
-//! Sparse linear algebra with one cached Cholesky factor (METHOD.md §3–4).
+//! Sparse linear algebra with one cached Cholesky factor (docs/method.md §3–4, §9).
 //!
 //! * [`Factor`]: K = Pᵀ L Lᵀ P, symbolic analysis (AMD ordering, supernodal) once, numeric
 //!   factorisation once per distinct matrix, and the two halves of a solve apart: the forward
@@ -19,9 +19,10 @@
 //!
 //! let mesh = rectangle(2.0, 1.0, 8, 4, CellShape::Quad);
 //! let clamped = mesh.group_nodes(&GroupSelector::Name("Gamma1".into())).unwrap();
-//! let dofs = DofMap::new(mesh.points.len(), &clamped);
-//! let elasticity = Elasticity { youngs_modulus: 1.0, poisson_ratio: 0.3, plane: PlaneModel::Stress };
-//! let [k] = assemble_stiffness(&mesh.cells, &mesh.points, &dofs, &[elasticity.voigt()]);
+//! let dofs = DofMap::<2>::new(mesh.points.len(), &clamped);
+//! let elasticity = Elasticity { youngs_modulus: 1.0, poisson_ratio: 0.3, plane: Some(PlaneModel::Stress) };
+//! let [k] = assemble_stiffness(&mesh.cells, &mesh.points, &dofs, &[elasticity.tensor()]);
+//! let k = k.with_identity_rows(&dofs);
 //! let counters = Counters::default();
 //! let factor = Factor::new(&Factor::analyse(&k).unwrap(), &k, &counters).unwrap();
 //! // K⁻¹ (K 1) = 1
@@ -40,3 +41,33 @@ mod supernodes;
 
 pub use factor::{set_parallelism, Analysis, Counters, Factor, FactorError, Forward};
 pub use forward_columns::ForwardColumns;
+
+/// Solves with a fixed matrix K (docs/method.md §9): the seam a second linear-algebra backend
+/// plugs into. The cached faer [`Factor`] is one implementation.
+pub trait LinearSolver: Send + Sync {
+    /// Order of K.
+    fn n(&self) -> usize;
+    /// x = K⁻¹ rhs (one counted solve).
+    fn solve(&self, rhs: &[f64], x: &mut [f64], counters: &Counters);
+    /// B ← K⁻¹ B for `k` right-hand sides stored column-major in `b` (n × k).
+    fn solve_many(&self, b: &mut [f64], k: usize, counters: &Counters) {
+        let n = self.n();
+        let mut x = vec![0.0; n];
+        for c in 0..k {
+            let col = &mut b[c * n..(c + 1) * n];
+            self.solve(col, &mut x, counters);
+            col.copy_from_slice(&x);
+        }
+    }
+}
+
+impl LinearSolver for Factor {
+    fn n(&self) -> usize {
+        Factor::n(self)
+    }
+
+    fn solve(&self, rhs: &[f64], x: &mut [f64], counters: &Counters) {
+        x.copy_from_slice(rhs);
+        self.solve_in_place(x, counters);
+    }
+}

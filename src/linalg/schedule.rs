@@ -269,10 +269,10 @@ mod tests {
         let e = Elasticity {
             youngs_modulus: 1.0,
             poisson_ratio: 0.3,
-            plane: PlaneModel::Stress,
+            plane: Some(PlaneModel::Stress),
         };
         for shape in [CellShape::Quad, CellShape::Tri] {
-            let [k] = rectangle_stiffness(96, 48, shape, &[e.voigt()]);
+            let [k] = rectangle_stiffness(96, 48, shape, &[e.tensor()]);
             let analysis = Factor::analyse(&k).unwrap();
             let schedule = analysis.schedule.as_deref().expect("a factor this size is split");
             assert!(schedule.pieces.len() >= 2);

@@ -1,14 +1,61 @@
-//! Isotropic linear elasticity in 2D (EXAMPLE.md (5.1)), in Voigt form with engineering
-//! shear strain: stress [σ₁₁, σ₂₂, σ₁₂] = D · [ε₁₁, ε₂₂, γ₁₂ = 2ε₁₂].
+//! Isotropic linear elasticity on full symmetric tensors in any dimension (docs/method.md §1,
+//! §8): every tensor hvi uses is isotropic, Aε = λ tr(ε) I + 2μ ε, so a pair (λ, μ) carries it.
+//!
+//! * 3D and 2D plane strain: the Lamé constants of (E, ν).
+//! * 2D plane stress (the paper's (5.1), docs/example.md): (Aε)ᵢⱼ = Eν/(1−ν²) tr ε δᵢⱼ + E/(1+ν) εᵢⱼ,
+//!   i.e. λ* = Eν/(1−ν²) and the same μ.
+//! * The paper's memory tensor B₀ = I (B₀ε = ε): λ = 0, μ = ½.
 
-/// A 3×3 matrix acting on Voigt strain vectors.
-pub type VoigtMatrix = [[f64; 3]; 3];
+/// An isotropic fourth-order tensor: C ε = λ tr(ε) I + 2μ ε.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Isotropic {
+    pub lambda: f64,
+    pub mu: f64,
+}
 
-/// The identity fourth-order tensor, B₀ = I: (B₀ε) = ε, i.e. σ₁₂ = ε₁₂ = γ₁₂ / 2.
-/// The paper's relaxation tensor (EXAMPLE.md: (B(s)ε, τ) = b(s)(ε, τ)).
-pub const IDENTITY_TENSOR: VoigtMatrix = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.5]];
+/// The identity tensor, B₀ = I: (B₀ε) = ε. The paper's relaxation tensor (docs/example.md:
+/// (B(s)ε, τ) = b(s)(ε, τ)).
+pub const IDENTITY_TENSOR: Isotropic = Isotropic { lambda: 0.0, mu: 0.5 };
 
-/// Which 2D reduction of 3D elasticity.
+impl Isotropic {
+    /// σ = C ε.
+    pub fn apply<const D: usize>(&self, e: &[[f64; D]; D]) -> [[f64; D]; D] {
+        let tr: f64 = (0..D).map(|i| e[i][i]).sum();
+        let mut s = [[0.0; D]; D];
+        for i in 0..D {
+            for j in 0..D {
+                s[i][j] = 2.0 * self.mu * e[i][j];
+            }
+            s[i][i] += self.lambda * tr;
+        }
+        s
+    }
+
+    /// The 2D Voigt matrix D acting on [ε₁₁, ε₂₂, γ₁₂ = 2ε₁₂] (for writing the tractions of a
+    /// known stress, and for readers used to the Voigt form).
+    pub fn voigt_2d(&self) -> [[f64; 3]; 3] {
+        let (l, m) = (self.lambda, self.mu);
+        [[l + 2.0 * m, l, 0.0], [l, l + 2.0 * m, 0.0], [0.0, 0.0, m]]
+    }
+
+    /// `self + c·other` (tensors are linear in (λ, μ)).
+    pub fn plus_scaled(&self, c: f64, other: &Isotropic) -> Isotropic {
+        Isotropic {
+            lambda: self.lambda + c * other.lambda,
+            mu: self.mu + c * other.mu,
+        }
+    }
+
+    /// The tensor scaled by c.
+    pub fn scaled(&self, c: f64) -> Isotropic {
+        Isotropic {
+            lambda: c * self.lambda,
+            mu: c * self.mu,
+        }
+    }
+}
+
+/// Which 2D reduction of 3D elasticity; `None` in 3D.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PlaneModel {
     /// σ₃₃ = 0 (thin plate; the paper's (5.1)).
@@ -17,34 +64,26 @@ pub enum PlaneModel {
     Strain,
 }
 
-/// Isotropic elasticity with Young's modulus E and Poisson's ratio ν.
+/// Isotropic elasticity with Young's modulus E and Poisson's ratio ν; `plane` is the 2D
+/// reduction (None for a 3D body).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Elasticity {
     pub youngs_modulus: f64,
     pub poisson_ratio: f64,
-    pub plane: PlaneModel,
+    pub plane: Option<PlaneModel>,
 }
 
 impl Elasticity {
-    /// The Voigt matrix D of A.
-    ///
-    /// Plane stress (5.1): (Aε)ᵢⱼ = Eν/(1−ν²)(ε₁₁+ε₂₂)δᵢⱼ + E/(1+ν) εᵢⱼ.
-    /// Plane strain: λ tr ε δᵢⱼ + 2μ εᵢⱼ with the Lamé constants of (E, ν).
-    pub fn voigt(&self) -> VoigtMatrix {
+    /// The tensor A as (λ, μ) on the tensors of the body's dimension.
+    pub fn tensor(&self) -> Isotropic {
         let (e, nu) = (self.youngs_modulus, self.poisson_ratio);
+        let (lambda, mu) = self.lame();
         match self.plane {
-            PlaneModel::Stress => {
-                let c = e / (1.0 - nu * nu);
-                [[c, c * nu, 0.0], [c * nu, c, 0.0], [0.0, 0.0, c * (1.0 - nu) / 2.0]]
-            }
-            PlaneModel::Strain => {
-                let (lambda, mu) = self.lame();
-                [
-                    [lambda + 2.0 * mu, lambda, 0.0],
-                    [lambda, lambda + 2.0 * mu, 0.0],
-                    [0.0, 0.0, mu],
-                ]
-            }
+            Some(PlaneModel::Stress) => Isotropic {
+                lambda: e * nu / (1.0 - nu * nu),
+                mu,
+            },
+            Some(PlaneModel::Strain) | None => Isotropic { lambda, mu },
         }
     }
 
@@ -54,30 +93,21 @@ impl Elasticity {
         (e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), e / (2.0 * (1.0 + nu)))
     }
 
-    /// The out-of-plane stress σ₃₃ for an in-plane strain (zero in plane stress).
-    pub fn out_of_plane_stress(&self, strain: &[f64; 3]) -> f64 {
+    /// The out-of-plane stress σ₃₃ of a 2D strain (zero in plane stress and in 3D, where the
+    /// strain has its own third component).
+    pub fn out_of_plane_stress(&self, trace: f64) -> f64 {
         match self.plane {
-            PlaneModel::Stress => 0.0,
-            PlaneModel::Strain => self.lame().0 * (strain[0] + strain[1]),
+            Some(PlaneModel::Strain) => self.lame().0 * trace,
+            _ => 0.0,
         }
     }
 
-    /// Coercivity constant m_A of A on symmetric tensors: the smallest eigenvalue of A as a
-    /// map on (ε₁₁, ε₂₂, ε₁₂) with the Frobenius inner product (used by the smallness check).
-    pub fn coercivity(&self) -> f64 {
-        let d = self.voigt();
-        // Volumetric/deviatoric split: eigenvalues d00 + d01, d00 − d01 and 2·d22 (shear, Frobenius scaling).
-        (d[0][0] + d[0][1]).min(d[0][0] - d[0][1]).min(2.0 * d[2][2])
+    /// Coercivity constant m_A of A on symmetric tensors (Frobenius inner product): the
+    /// smallest eigenvalue, min(2μ, 2μ + Dλ) for Aε = λ tr ε I + 2μ ε in dimension D.
+    pub fn coercivity(&self, dim: usize) -> f64 {
+        let t = self.tensor();
+        (2.0 * t.mu).min(2.0 * t.mu + dim as f64 * t.lambda)
     }
-}
-
-/// σ = D ε for a Voigt matrix.
-pub fn apply(d: &VoigtMatrix, e: &[f64; 3]) -> [f64; 3] {
-    let mut s = [0.0; 3];
-    for (r, row) in d.iter().enumerate() {
-        s[r] = row[0] * e[0] + row[1] * e[1] + row[2] * e[2];
-    }
-    s
 }
 
 #[cfg(test)]
@@ -89,14 +119,27 @@ mod tests {
         let a = Elasticity {
             youngs_modulus: 1.0,
             poisson_ratio: 0.3,
-            plane: PlaneModel::Stress,
+            plane: Some(PlaneModel::Stress),
         };
-        let eps = [0.1, -0.2, 0.06]; // γ = 0.06 → ε₁₂ = 0.03
-        let s = apply(&a.voigt(), &eps);
+        let eps = [[0.1, 0.03], [0.03, -0.2]];
+        let s = a.tensor().apply(&eps);
         let (e, k) = (1.0, 0.3);
-        let tr = eps[0] + eps[1];
-        let s11 = e * k / (1.0 - k * k) * tr + e / (1.0 + k) * eps[0];
+        let tr = eps[0][0] + eps[1][1];
+        let s11 = e * k / (1.0 - k * k) * tr + e / (1.0 + k) * eps[0][0];
         let s12 = e / (1.0 + k) * 0.03;
-        assert!((s[0] - s11).abs() < 1e-15 && (s[2] - s12).abs() < 1e-15);
+        assert!((s[0][0] - s11).abs() < 1e-15 && (s[0][1] - s12).abs() < 1e-15);
+    }
+
+    #[test]
+    fn three_d_tensor_is_hookes_law() {
+        // uniaxial stress σ₁₁ = E ε₁₁ with ε₂₂ = ε₃₃ = −ν ε₁₁
+        let a = Elasticity {
+            youngs_modulus: 3.0,
+            poisson_ratio: 0.25,
+            plane: None,
+        };
+        let eps = [[1.0, 0.0, 0.0], [0.0, -0.25, 0.0], [0.0, 0.0, -0.25]];
+        let s = a.tensor().apply(&eps);
+        assert!((s[0][0] - 3.0).abs() < 1e-14 && s[1][1].abs() < 1e-14 && s[2][2].abs() < 1e-14);
     }
 }

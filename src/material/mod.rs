@@ -3,5 +3,5 @@
 pub mod elasticity;
 pub mod kernel;
 
-pub use elasticity::{Elasticity, PlaneModel, VoigtMatrix, IDENTITY_TENSOR};
+pub use elasticity::{Elasticity, Isotropic, PlaneModel, IDENTITY_TENSOR};
 pub use kernel::RelaxationKernel;

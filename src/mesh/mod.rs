@@ -1,21 +1,25 @@
-//! The mesh: gmsh MSH files (4.1 ASCII and binary, 2.2 ASCII) and a built-in rectangle mesher.
+//! The mesh: gmsh MSH files (4.1 ASCII and binary, 2.2 ASCII) and built-in structured meshers,
+//! in two or three dimensions (docs/method.md §2, §8).
 //!
-//! [`read_msh`] reads a file into a [`Mesh`]: dense 0-based points (in ascending order of the
-//! gmsh node tags), every 2D element as a counter-clockwise [`Cell`], and the physical groups
-//! (`Physical Point/Curve/Surface` of the `.geo`) with their `$PhysicalNames`. A scene refers
-//! to a group by name or tag ([`GroupSelector`]); [`Mesh::boundary`] turns a curve group into
-//! an oriented [`BoundaryPart`] with outward normals and nodal quadrature weights.
+//! [`read_msh`] reads a file into an [`AnyMesh`]: a [`Mesh<2>`] when the file has only points,
+//! lines, triangles and quadrangles in a plane z = const, a [`Mesh<3>`] when it has tetrahedra or
+//! hexahedra. Points are dense and 0-based (in ascending order of the gmsh node tags), every cell of
+//! the body's dimension is a positively oriented [`Cell`], and the physical groups keep their
+//! `$PhysicalNames`. A scene refers to a group by name or tag ([`GroupSelector`]);
+//! [`Mesh::boundary`] turns a group of facets (curves in 2D, surfaces in 3D) into an oriented
+//! [`BoundaryPart`] with outward normals and nodal quadrature weights.
 //!
 //! Only first-order elements are read: points (gmsh type 15), 2-node lines (1), 3-node
-//! triangles (2) and 4-node quadrilaterals (3); anything else is an error that says how to
-//! re-mesh. Every problem found is reported with the file, the place (line number for ASCII
-//! files, node or element tag) and what to do: hvi never panics on a bad file and never
-//! allocates in proportion to a count in a header that the file is too short to hold.
+//! triangles (2), 4-node quadrilaterals (3), 4-node tetrahedra (4) and 8-node hexahedra (5);
+//! anything else is an error that says how to re-mesh. Every problem found is reported with the
+//! file, the place (line number for ASCII files, node or element tag) and what to do: hvi never
+//! panics on a bad file and never allocates in proportion to a count in a header that the file
+//! is too short to hold.
 //!
 //! Cells are not reordered or repaired, with one exception: if *every* cell of the file is
-//! clockwise (a surface whose normal points to −z, e.g. a curve loop given clockwise in the
-//! `.geo`), all cells are flipped to counter-clockwise. A mesh with only some clockwise cells
-//! is an error naming the first of them.
+//! inverted (a 2D surface whose normal points to −z, a 3D mesh written with the other
+//! handedness), all cells are flipped. A mesh with only some inverted cells is an error naming
+//! the first of them.
 
 mod cell;
 mod error;
@@ -26,7 +30,7 @@ mod physical_names;
 pub mod structured;
 mod topology;
 
-pub use cell::Cell;
+pub use cell::{Cell, Facet};
 pub use error::MeshError;
 pub use group::GroupSelector;
 pub use topology::BoundaryPart;
@@ -35,15 +39,15 @@ use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// A 2D mesh with its physical groups.
+/// A mesh of a body in D = 2 or 3 dimensions with its physical groups.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Mesh {
+pub struct Mesh<const D: usize = 2> {
     /// The file read (or a label such as `<rectangle 16x8>` for a generated mesh).
     pub path: PathBuf,
-    /// Node coordinates, dense and 0-based (the file's node tags in ascending order); the
+    /// Node coordinates, dense and 0-based (the file's node tags in ascending order); a 2D
     /// file's constant z is dropped.
-    pub points: Vec<[f64; 2]>,
-    /// Every 2D element of the file, counter-clockwise, in file order.
+    pub points: Vec<[f64; D]>,
+    /// Every D-dimensional element of the file, positively oriented, in file order.
     pub cells: Vec<Cell>,
     /// The gmsh element tag of each cell, for messages.
     pub cell_tags: Vec<usize>,
@@ -51,17 +55,35 @@ pub struct Mesh {
     pub groups: Vec<PhysicalGroup>,
 }
 
-/// A physical group: a `Physical Point` (dim 0), `Physical Curve` (dim 1) or
-/// `Physical Surface` (dim 2) of the `.geo`.
+/// A mesh of either dimension, as read from a file: the caller dispatches once on it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AnyMesh {
+    Two(Mesh<2>),
+    Three(Mesh<3>),
+}
+
+impl AnyMesh {
+    /// The spatial dimension.
+    pub fn dim(&self) -> usize {
+        match self {
+            AnyMesh::Two(_) => 2,
+            AnyMesh::Three(_) => 3,
+        }
+    }
+}
+
+/// A physical group: a `Physical Point` (dim 0), `Physical Curve` (dim 1), `Physical Surface`
+/// (dim 2) or `Physical Volume` (dim 3) of the `.geo`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PhysicalGroup {
     pub dim: u8,
     pub tag: i32,
     /// The name given in `$PhysicalNames`, if any.
     pub name: Option<String>,
-    /// Dim 1: the group's 2-node line elements (node indices, as written in the file).
-    pub facets: Vec<[usize; 2]>,
-    /// Dim 2: indices into [`Mesh::cells`].
+    /// Groups of a dimension below the body's: the group's line, triangle or quadrangle
+    /// elements (node indices, as written in the file).
+    pub facets: Vec<Facet>,
+    /// Groups of the body's dimension: indices into [`Mesh::cells`].
     pub cells: Vec<usize>,
     /// Dim 0: the group's point elements (node indices).
     pub nodes: Vec<usize>,
@@ -84,8 +106,9 @@ impl PhysicalGroup {
     }
 }
 
-/// Reads a gmsh MSH file: 4.1 (ASCII or binary) or 2.2 (ASCII), chosen from `$MeshFormat`.
-pub fn read_msh(path: &Path) -> Result<Mesh, MeshError> {
+/// Reads a gmsh MSH file: 4.1 (ASCII or binary) or 2.2 (ASCII), chosen from `$MeshFormat`; the
+/// dimension from its elements.
+pub fn read_msh(path: &Path) -> Result<AnyMesh, MeshError> {
     let bytes = std::fs::read(path).map_err(|source| MeshError::Io {
         path: path.to_path_buf(),
         source,
@@ -93,17 +116,45 @@ pub fn read_msh(path: &Path) -> Result<Mesh, MeshError> {
     parse_msh(path, &bytes)
 }
 
+/// Reads a gmsh MSH file that must hold a D-dimensional body; a file of the other dimension is
+/// an error that says so.
+pub fn read_mesh<const D: usize>(path: &Path) -> Result<Mesh<D>, MeshError> {
+    into_dim(read_msh(path)?, path)
+}
+
 /// Parses the bytes of an MSH file already in memory; `path` is used in messages only.
-pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<Mesh, MeshError> {
+pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<AnyMesh, MeshError> {
     let header = Header::parse(path, bytes)?;
     let raw = match header.version {
         Version::V2 => msh22::parse(path, bytes, header.body)?,
         Version::V41 => msh41::parse(path, bytes, &header)?,
     };
-    build(path, raw)
+    if raw.element_types.iter().any(|&t| matches!(t, 4 | 5)) {
+        build::<3>(path, raw).map(AnyMesh::Three)
+    } else {
+        build::<2>(path, raw).map(AnyMesh::Two)
+    }
 }
 
-impl Mesh {
+/// [`parse_msh`] for a body of dimension D.
+pub fn parse_mesh<const D: usize>(path: &Path, bytes: &[u8]) -> Result<Mesh<D>, MeshError> {
+    into_dim(parse_msh(path, bytes)?, path)
+}
+
+fn into_dim<const D: usize>(mesh: AnyMesh, path: &Path) -> Result<Mesh<D>, MeshError> {
+    let got = mesh.dim();
+    let any: Box<dyn std::any::Any> = match mesh {
+        AnyMesh::Two(m) => Box::new(m),
+        AnyMesh::Three(m) => Box::new(m),
+    };
+    any.downcast::<Mesh<D>>().map(|m| *m).map_err(|_| MeshError::Invalid {
+        path: path.to_path_buf(),
+        place: "$Elements".into(),
+        detail: format!("this is a {got}D mesh, but a {D}D mesh is needed here"),
+    })
+}
+
+impl<const D: usize> Mesh<D> {
     /// The physical group of dimension `dim` that `sel` names. A name that is not found but
     /// reads as an integer is also tried as a tag. If there is none, the error lists every
     /// group the mesh has.
@@ -147,26 +198,35 @@ impl Mesh {
         }
     }
 
-    /// A dimension-1 group as an oriented boundary part (see [`BoundaryPart`]). Every facet of
-    /// the group must be an edge of exactly one cell.
-    pub fn boundary(&self, sel: &GroupSelector) -> Result<BoundaryPart, MeshError> {
-        let group = self.group(sel, 1)?;
+    /// A group of facets (dimension D − 1) as an oriented boundary part (see [`BoundaryPart`]).
+    /// Every facet of the group must be a facet of exactly one cell.
+    pub fn boundary(&self, sel: &GroupSelector) -> Result<BoundaryPart<D>, MeshError> {
+        let group = self.group(sel, (D - 1) as u8)?;
         topology::boundary_part(self, group)
     }
 
-    /// The sorted, unique node indices of a dimension-1 group (or, if there is none of that
-    /// name or tag, of a dimension-0 group).
+    /// The sorted, unique node indices of a group: of dimension D − 1 (facets) if there is one
+    /// of that name or tag, else of a lower dimension (curves of a 3D mesh, points).
     pub fn group_nodes(&self, sel: &GroupSelector) -> Result<Vec<usize>, MeshError> {
-        let mut nodes: Vec<usize> = match self.group(sel, 1) {
-            Ok(g) => g.facets.iter().flatten().copied().collect(),
-            Err(e) => match self.group(sel, 0) {
-                Ok(g) => g.nodes.clone(),
-                Err(_) => return Err(e),
-            },
-        };
-        nodes.sort_unstable();
-        nodes.dedup();
-        Ok(nodes)
+        let mut first_error = None;
+        for dim in (0..D as u8).rev() {
+            match self.group(sel, dim) {
+                Ok(g) => {
+                    let mut nodes: Vec<usize> = if dim == 0 {
+                        g.nodes.clone()
+                    } else {
+                        g.facets.iter().flat_map(|f| f.nodes().to_vec()).collect()
+                    };
+                    nodes.sort_unstable();
+                    nodes.dedup();
+                    return Ok(nodes);
+                }
+                Err(e) => {
+                    first_error.get_or_insert(e);
+                }
+            }
+        }
+        Err(first_error.expect("D ≥ 1"))
     }
 
     /// (min, max) over the cells of the longest cell edge: the mesh size h. (0, 0) if there
@@ -175,13 +235,7 @@ impl Mesh {
         let mut lo = f64::INFINITY;
         let mut hi = 0.0_f64;
         for c in &self.cells {
-            let longest = c
-                .edges()
-                .map(|[a, b]| {
-                    let (p, q) = (self.points[a], self.points[b]);
-                    (q[0] - p[0]).hypot(q[1] - p[1])
-                })
-                .fold(0.0_f64, f64::max);
+            let longest = longest_edge(&self.points, c);
             lo = lo.min(longest);
             hi = hi.max(longest);
         }
@@ -191,6 +245,17 @@ impl Mesh {
             (lo, hi)
         }
     }
+}
+
+fn distance<const D: usize>(p: &[f64; D], q: &[f64; D]) -> f64 {
+    (0..D).map(|k| (q[k] - p[k]).powi(2)).sum::<f64>().sqrt()
+}
+
+fn longest_edge<const D: usize>(points: &[[f64; D]], c: &Cell) -> f64 {
+    c.edges()
+        .iter()
+        .map(|&[a, b]| distance(&points[a], &points[b]))
+        .fold(0.0_f64, f64::max)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -572,12 +637,31 @@ fn signed_area(points: &[[f64; 2]], nodes: &[usize]) -> f64 {
     0.5 * a
 }
 
-fn fmt_point(p: [f64; 2]) -> String {
-    format!("({:?}, {:?})", p[0], p[1])
+fn fmt_point<const D: usize>(p: [f64; D]) -> String {
+    let parts: Vec<String> = p.iter().map(|v| format!("{v:?}")).collect();
+    format!("({})", parts.join(", "))
 }
 
-/// Turns what a reader found into a [`Mesh`], validating it.
-fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
+/// The smallest det J of a 3D cell over its stiffness quadrature points and its corners, and
+/// where it is (reference coordinates).
+fn min_det_3d(points: &[[f64; 3]], cell: &Cell) -> (f64, [f64; 3]) {
+    let mut at: Vec<[f64; 3]> = crate::fem::element::stiffness_rule(cell).iter().map(|q| q.xi).collect();
+    if let Cell::Hex8(_) = cell {
+        for &x in &[-1.0, 1.0] {
+            for &y in &[-1.0, 1.0] {
+                for &z in &[-1.0, 1.0] {
+                    at.push([x, y, z]);
+                }
+            }
+        }
+    }
+    at.iter()
+        .map(|&xi| (crate::fem::element::shape_at(cell, points, xi).det_j, xi))
+        .fold((f64::INFINITY, [0.0; 3]), |a, b| if b.0 < a.0 { b } else { a })
+}
+
+/// Turns what a reader found into a [`Mesh`] of dimension D, validating it.
+fn build<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Result<Mesh<D>, MeshError> {
     let invalid = |place: String, detail: String| MeshError::Invalid {
         path: path.to_path_buf(),
         place,
@@ -587,11 +671,11 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
     if n == 0 {
         return Err(invalid(
             "$Nodes".into(),
-            "the mesh has no nodes; mesh the geometry (gmsh -2) before saving".into(),
+            "the mesh has no nodes; mesh the geometry (gmsh -2 or -3) before saving".into(),
         ));
     }
 
-    // Coordinates: finite, planar.
+    // Coordinates: finite; planar in 2D.
     for (i, c) in raw.coords.iter().enumerate() {
         if !c.iter().all(|v| v.is_finite()) {
             return Err(invalid(
@@ -603,28 +687,31 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
             ));
         }
     }
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for c in &raw.coords {
-        for k in 0..2 {
-            lo[k] = lo[k].min(c[k]);
-            hi[k] = hi[k].max(c[k]);
+    if D == 2 {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for c in &raw.coords {
+            for k in 0..2 {
+                lo[k] = lo[k].min(c[k]);
+                hi[k] = hi[k].max(c[k]);
+            }
         }
-    }
-    let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(f64::MIN_POSITIVE);
-    let z0 = raw.coords[0][2];
-    if let Some(i) = raw
-        .coords
-        .iter()
-        .position(|c| (c[2] - z0).abs() > 1e-9 * extent.max(z0.abs()))
-    {
-        return Err(invalid(
-            raw.node_place(i, true),
-            format!(
-                "node {} has z = {:?} but node {} has z = {:?}: hvi is 2D and needs a mesh in a plane z = const; \
-                 mesh a plane surface (gmsh -2) of a geometry with constant z",
-                raw.node_tags[i], raw.coords[i][2], raw.node_tags[0], z0
-            ),
-        ));
+        let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(f64::MIN_POSITIVE);
+        let z0 = raw.coords[0][2];
+        if let Some(i) = raw
+            .coords
+            .iter()
+            .position(|c| (c[2] - z0).abs() > 1e-9 * extent.max(z0.abs()))
+        {
+            return Err(invalid(
+                raw.node_place(i, true),
+                format!(
+                    "node {} has z = {:?} but node {} has z = {:?}, and the mesh has no tetrahedra or hexahedra: a 2D \
+                     mesh must lie in a plane z = const; mesh a plane surface (gmsh -2), or mesh the volume (gmsh -3) \
+                     for a 3D body",
+                    raw.node_tags[i], raw.coords[i][2], raw.node_tags[0], z0
+                ),
+            ));
+        }
     }
 
     // Dense numbering in ascending tag order; duplicate tags are an error.
@@ -647,7 +734,10 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
     for (r, &i) in order.iter().enumerate() {
         rank[i] = r;
     }
-    let points: Vec<[f64; 2]> = order.iter().map(|&i| [raw.coords[i][0], raw.coords[i][1]]).collect();
+    let points: Vec<[f64; D]> = order
+        .iter()
+        .map(|&i| std::array::from_fn(|k| raw.coords[i][k]))
+        .collect();
     let index = TagIndex::new(&raw.node_tags, &rank);
 
     // Elements.
@@ -671,12 +761,12 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
     let mut cells = Vec::new();
     let mut cell_tags = Vec::new();
     let mut cell_element = Vec::new();
-    let mut nodes = [0usize; 4];
+    let mut nodes = [0usize; 8];
     for e in 0..raw.element_tags.len() {
         let ty = raw.element_types[e];
         let origin = &raw.origins[raw.element_origin[e] as usize];
         let info = element_type_info(ty);
-        if !matches!(ty, 1 | 2 | 3 | 15) {
+        if !matches!(ty, 1 | 2 | 3 | 4 | 5 | 15) {
             let dim = info.map_or(2, |i| i.2);
             let group_text = if origin.physical.is_empty() {
                 match origin.entity {
@@ -697,9 +787,11 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
                 format!("in physical group {}", names.join(", "))
             };
             let (name, fix) = match info {
-                Some((name, _, 3)) => (
+                Some((name, _, 3)) if matches!(ty, 6 | 7) => (
                     name,
-                    "hvi is 2D: mesh only the surface (gmsh -2) and put the body in a Physical Surface",
+                    "hvi computes on tetrahedra and hexahedra only: mesh the volume with tetrahedra (no Recombine in \
+                     the extrusion, Mesh.Algorithm3D = 1) or with hexahedra throughout (transfinite volumes with \
+                     Recombine)",
                 ),
                 Some((name, _, _)) => (
                     name,
@@ -708,8 +800,8 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
                 ),
                 None => (
                     "an element type hvi does not know",
-                    "hvi reads only points (15), 2-node lines (1), 3-node triangles (2) and 4-node quadrangles (3): \
-                     mesh with gmsh -2 -order 1",
+                    "hvi reads only points (15), 2-node lines (1), 3-node triangles (2), 4-node quadrangles (3), \
+                     4-node tetrahedra (4) and 8-node hexahedra (5): mesh with gmsh -2 -order 1 (-3 for a volume)",
                 ),
             };
             return Err(MeshError::UnsupportedElement {
@@ -759,28 +851,32 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
                 ));
             }
         }
+        let element_dim = info.map_or(0, |i| i.2) as usize;
         match ty {
             15 => {
                 for &p in &origin.physical {
                     group(&mut groups, 0, p).nodes.push(nodes[0]);
                 }
             }
-            1 => {
+            _ if element_dim < D => {
                 for &p in &origin.physical {
-                    group(&mut groups, 1, p).facets.push([nodes[0], nodes[1]]);
+                    group(&mut groups, element_dim as u8, p)
+                        .facets
+                        .push(Facet::from_slice(nodes));
                 }
             }
             _ => {
                 let c = cells.len();
-                cells.push(if ty == 2 {
-                    Cell::Tri3([nodes[0], nodes[1], nodes[2]])
-                } else {
-                    Cell::Quad4([nodes[0], nodes[1], nodes[2], nodes[3]])
+                cells.push(match ty {
+                    2 => Cell::Tri3([nodes[0], nodes[1], nodes[2]]),
+                    3 => Cell::Quad4([nodes[0], nodes[1], nodes[2], nodes[3]]),
+                    4 => Cell::Tet4([nodes[0], nodes[1], nodes[2], nodes[3]]),
+                    _ => Cell::Hex8(std::array::from_fn(|k| nodes[k])),
                 });
                 cell_tags.push(raw.element_tags[e] as usize);
                 cell_element.push(e);
                 for &p in &origin.physical {
-                    group(&mut groups, 2, p).cells.push(c);
+                    group(&mut groups, D as u8, p).cells.push(c);
                 }
             }
         }
@@ -793,14 +889,64 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
                 .into(),
         ));
     }
+    if D == 2 {
+        let points2: Vec<[f64; 2]> = points.iter().map(|p| [p[0], p[1]]).collect();
+        orient_2d(path, &raw, &points2, &mut cells, &cell_tags, &cell_element)?;
+    } else {
+        let points3: Vec<[f64; 3]> = points.iter().map(|p| [p[0], p[1], p[2]]).collect();
+        orient_3d(path, &raw, &points3, &mut cells, &cell_tags, &cell_element)?;
+    }
 
-    // Orientation: all counter-clockwise, or all clockwise (then flipped), else an error.
-    let areas: Vec<f64> = cells.iter().map(|c| signed_area(&points, c.nodes())).collect();
+    // Every node must be in a cell, or the stiffness matrix is singular.
+    let mut used = vec![false; n];
+    for c in &cells {
+        for &p in c.nodes() {
+            used[p] = true;
+        }
+    }
+    if let Some(r) = used.iter().position(|u| !u) {
+        let i = order[r];
+        return Err(invalid(
+            raw.node_place(i, false),
+            format!(
+                "node {} at {} belongs to no {D}D element, so its displacement would be undetermined; remove \
+                 unmeshed points from the geometry, or save without Mesh.SaveAll = 1",
+                raw.node_tags[i],
+                fmt_point(points[r])
+            ),
+        ));
+    }
+
+    for p in &raw.names {
+        group(&mut groups, p.dim, p.tag).name = Some(p.name.clone());
+    }
+    Ok(Mesh {
+        path: path.to_path_buf(),
+        points,
+        cells,
+        cell_tags,
+        groups: groups.into_values().collect(),
+    })
+}
+
+/// 2D orientation: all counter-clockwise, or all clockwise (then flipped), else an error; no
+/// zero-area cells; convex quadrangles.
+fn orient_2d(
+    path: &Path,
+    raw: &RawMesh<'_>,
+    points: &[[f64; 2]],
+    cells: &mut [Cell],
+    cell_tags: &[usize],
+    cell_element: &[usize],
+) -> Result<(), MeshError> {
+    let invalid = |place: String, detail: String| MeshError::Invalid {
+        path: path.to_path_buf(),
+        place,
+        detail,
+    };
+    let areas: Vec<f64> = cells.iter().map(|c| signed_area(points, c.nodes())).collect();
     for (c, &a) in areas.iter().enumerate() {
-        let longest = cells[c]
-            .edges()
-            .map(|[p, q]| (points[q][0] - points[p][0]).hypot(points[q][1] - points[p][1]))
-            .fold(0.0_f64, f64::max);
+        let longest = longest_edge(points, &cells[c]);
         if a.abs() <= 1e-14 * longest * longest {
             return Err(invalid(
                 raw.element_place(cell_element[c]),
@@ -810,11 +956,8 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
     }
     let clockwise = areas.iter().filter(|&&a| a < 0.0).count();
     if clockwise == cells.len() {
-        for c in &mut cells {
-            *c = match *c {
-                Cell::Tri3([a, b, c]) => Cell::Tri3([a, c, b]),
-                Cell::Quad4([a, b, c, d]) => Cell::Quad4([a, d, c, b]),
-            };
+        for c in cells.iter_mut() {
+            *c = c.flipped();
         }
     } else if clockwise > 0 {
         let c = areas.iter().position(|&a| a < 0.0).unwrap_or(0);
@@ -849,35 +992,60 @@ fn build(path: &Path, raw: RawMesh<'_>) -> Result<Mesh, MeshError> {
             }
         }
     }
+    Ok(())
+}
 
-    // Every node must be in a cell, or the stiffness matrix is singular.
-    let mut used = vec![false; n];
-    for c in &cells {
-        for &p in c.nodes() {
-            used[p] = true;
+/// 3D orientation: det J > 0 at every stiffness quadrature point (and hexahedron corner) of
+/// every cell, or < 0 everywhere in every cell (then all are flipped); else an error naming the
+/// element and the point.
+fn orient_3d(
+    path: &Path,
+    raw: &RawMesh<'_>,
+    points: &[[f64; 3]],
+    cells: &mut [Cell],
+    cell_tags: &[usize],
+    cell_element: &[usize],
+) -> Result<(), MeshError> {
+    let invalid = |place: String, detail: String| MeshError::Invalid {
+        path: path.to_path_buf(),
+        place,
+        detail,
+    };
+    let check = |cells: &[Cell]| -> Vec<(f64, [f64; 3], f64)> {
+        cells
+            .iter()
+            .map(|c| {
+                let (det, xi) = min_det_3d(points, c);
+                let h = longest_edge(points, c);
+                (det, xi, h)
+            })
+            .collect()
+    };
+    let mut dets = check(cells);
+    let inverted = dets.iter().filter(|d| d.0 < 0.0).count();
+    if inverted == cells.len() {
+        for c in cells.iter_mut() {
+            *c = c.flipped();
+        }
+        dets = check(cells);
+    }
+    for (c, &(det, xi, h)) in dets.iter().enumerate() {
+        if det <= 1e-12 * h * h * h {
+            let s = crate::fem::element::shape_at(&cells[c], points, xi);
+            return Err(invalid(
+                raw.element_place(cell_element[c]),
+                format!(
+                    "{} {} is {} (det J = {det:e} at {}); {} of {} cells are inverted. Re-mesh (check the \
+                     orientation of extruded or transfinite volumes, or let gmsh mesh the volume with tetrahedra)",
+                    cells[c].name(),
+                    cell_tags[c],
+                    if det < 0.0 { "inverted" } else { "degenerate" },
+                    fmt_point(s.x),
+                    dets.iter().filter(|d| d.0 <= 0.0).count(),
+                    cells.len()
+                ),
+            ));
         }
     }
-    if let Some(r) = used.iter().position(|u| !u) {
-        let i = order[r];
-        return Err(invalid(
-            raw.node_place(i, false),
-            format!(
-                "node {} at {} belongs to no 2D element, so its displacement would be undetermined; remove \
-                 unmeshed points from the geometry, or save without Mesh.SaveAll = 1",
-                raw.node_tags[i],
-                fmt_point(points[r])
-            ),
-        ));
-    }
-
-    for p in &raw.names {
-        group(&mut groups, p.dim, p.tag).name = Some(p.name.clone());
-    }
-    Ok(Mesh {
-        path: path.to_path_buf(),
-        points,
-        cells,
-        cell_tags,
-        groups: groups.into_values().collect(),
-    })
+    Ok(())
 }

@@ -5,7 +5,7 @@
 //! `Gamma3` (dim 1, tag 3, y = 0), `Gamma2_top` (dim 1, tag 4, y = ly only; its facets are also
 //! in Gamma2) and `Omega` (dim 2, tag 5, every cell).
 
-use super::{Cell, Mesh, PhysicalGroup};
+use super::{Cell, Facet, Mesh, PhysicalGroup};
 use std::path::PathBuf;
 
 /// The cell shape of [`rectangle`].
@@ -67,7 +67,7 @@ pub fn rectangle(lx: f64, ly: f64, nx: usize, ny: usize, kind: CellShape) -> Mes
         dim: 1,
         tag,
         name: Some(name.to_string()),
-        facets,
+        facets: facets.into_iter().map(Facet::from).collect(),
         cells: Vec::new(),
         nodes: Vec::new(),
     };

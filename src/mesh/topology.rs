@@ -1,44 +1,120 @@
-//! Boundary parts: a curve group (Γ₁, Γ₂, Γ₃) as oriented facets with outward normals and
-//! nodal quadrature weights.
+//! Boundary parts: a group of facets (curves in 2D, surfaces in 3D: Γ₁, Γ₂, Γ₃) as oriented
+//! facets with outward normals and nodal quadrature weights (docs/method.md §2, §8).
 
-use super::{fmt_point, Mesh, MeshError, PhysicalGroup};
+use super::{fmt_point, Facet, Mesh, MeshError, PhysicalGroup};
+use crate::fem::quadrature::QUAD_GAUSS_2X2;
 use std::collections::HashMap;
 
-/// A dimension-1 physical group as a part of the boundary of the body.
+/// A group of facets as a part of the boundary of the body.
 #[derive(Clone, Debug, PartialEq)]
-pub struct BoundaryPart {
+pub struct BoundaryPart<const D: usize> {
     /// How messages name it, e.g. `Gamma3 (tag 3)`.
     pub label: String,
-    /// The group's facets (duplicates removed), each oriented so that the body lies on its
-    /// left, i.e. as the counter-clockwise edge of its cell: the outward unit normal of
-    /// `[a, b]` is `(dy, −dx)/len` with `(dx, dy) = x_b − x_a`.
-    pub facets: Vec<[usize; 2]>,
-    /// Length of each facet.
+    /// The group's facets (duplicates removed), each oriented like the facet of its cell, so
+    /// that its outward normal follows from the node order ((dy, −dx) for an edge, the
+    /// right-hand rule for a face).
+    pub facets: Vec<Facet>,
+    /// Measure of each facet: length in 2D, area in 3D.
     pub facet_lengths: Vec<f64>,
     /// Sorted unique node indices on the part.
     pub nodes: Vec<usize>,
-    /// Per node of `nodes`: half the length of every adjacent facet of this part (the
-    /// trapezoidal / nodal quadrature weight; they sum to the length of the part).
+    /// Per node of `nodes`: the lumped facet mass ∫ N_p ds over the part (half of each adjacent
+    /// edge in 2D, a third of each adjacent triangle, ∫ N_p over each adjacent quadrilateral;
+    /// they sum to the measure of the part).
     pub weights: Vec<f64>,
-    /// Per node of `nodes`: the normalised, length-weighted mean of the outward unit normals of
-    /// the adjacent facets of this part. On a smooth curve meshed with smoothly varying facet
-    /// lengths this is the curve's normal to O(h²); at a corner of the part it bisects.
-    pub normals: Vec<[f64; 2]>,
+    /// Per node of `nodes`: the normalised sum over the adjacent facets of ∫ N_p ν ds — the
+    /// facet-measure-weighted mean of the outward unit normals. On a smooth boundary meshed
+    /// with smoothly varying facets this is the boundary's normal to O(h²); at an edge or a
+    /// corner of the part it bisects.
+    pub normals: Vec<[f64; D]>,
 }
 
-impl BoundaryPart {
+impl<const D: usize> BoundaryPart<D> {
     /// Position of node index `p` in [`BoundaryPart::nodes`], if it is on the part.
     pub fn local(&self, p: usize) -> Option<usize> {
         self.nodes.binary_search(&p).ok()
     }
 
-    /// The total length of the part.
+    /// The total measure (length or area) of the part.
     pub fn length(&self) -> f64 {
         self.facet_lengths.iter().sum()
     }
 }
 
-pub(crate) fn boundary_part(mesh: &Mesh, group: &PhysicalGroup) -> Result<BoundaryPart, MeshError> {
+fn sub<const D: usize>(a: &[f64; D], b: &[f64; D]) -> [f64; 3] {
+    let mut v = [0.0; 3];
+    for k in 0..D {
+        v[k] = a[k] - b[k];
+    }
+    v
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn norm(v: [f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+/// Quadrature of one facet: for each node, ∫ N_a ds and ∫ N_a n ds (n the outward unit normal,
+/// so the second is an area vector), and the facet's measure.
+pub(crate) fn facet_integrals<const D: usize>(points: &[[f64; D]], f: &Facet) -> (Vec<f64>, Vec<[f64; 3]>, f64) {
+    let x = |i: usize| points[f.nodes()[i]];
+    match f.len() {
+        2 => {
+            // (dy, −dx) is the outward normal times the length.
+            let d = sub(&x(1), &x(0));
+            let len = norm(d);
+            let n = [d[1] / 2.0, -d[0] / 2.0, 0.0];
+            (vec![len / 2.0; 2], vec![n; 2], len)
+        }
+        3 => {
+            let a = cross(sub(&x(1), &x(0)), sub(&x(2), &x(0)));
+            let area = 0.5 * norm(a);
+            let share = [a[0] / 6.0, a[1] / 6.0, a[2] / 6.0];
+            (vec![area / 3.0; 3], vec![share; 3], area)
+        }
+        _ => {
+            // bilinear face: 2×2 Gauss on [−1, 1]², tangents ∂x/∂ξ, ∂x/∂η
+            let (mut w, mut nv, mut area) = (vec![0.0; 4], vec![[0.0; 3]; 4], 0.0);
+            const C: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+            for q in &QUAD_GAUSS_2X2 {
+                let (xi, eta) = (q.xi[0], q.xi[1]);
+                let (mut t1, mut t2) = ([0.0; 3], [0.0; 3]);
+                let mut value = [0.0; 4];
+                for (a, c) in C.iter().enumerate() {
+                    value[a] = 0.25 * (1.0 + c[0] * xi) * (1.0 + c[1] * eta);
+                    let (g1, g2) = (0.25 * c[0] * (1.0 + c[1] * eta), 0.25 * c[1] * (1.0 + c[0] * xi));
+                    let p = x(a);
+                    for k in 0..D {
+                        t1[k] += g1 * p[k];
+                        t2[k] += g2 * p[k];
+                    }
+                }
+                let dn = cross(t1, t2);
+                let da = norm(dn) * q.weight;
+                area += da;
+                for a in 0..4 {
+                    w[a] += value[a] * da;
+                    for k in 0..3 {
+                        nv[a][k] += value[a] * dn[k] * q.weight;
+                    }
+                }
+            }
+            (w, nv, area)
+        }
+    }
+}
+
+pub(crate) fn boundary_part<const D: usize>(
+    mesh: &Mesh<D>,
+    group: &PhysicalGroup,
+) -> Result<BoundaryPart<D>, MeshError> {
     let label = group.label();
     let pts = &mesh.points;
     let not_boundary = |detail: String| MeshError::NotBoundary {
@@ -46,90 +122,109 @@ pub(crate) fn boundary_part(mesh: &Mesh, group: &PhysicalGroup) -> Result<Bounda
         group: label.clone(),
         detail,
     };
-    let key = |[a, b]: [usize; 2]| if a < b { (a, b) } else { (b, a) };
 
     // The group's facets, each once, in the group's order.
-    let mut slot: HashMap<(usize, usize), usize> = HashMap::with_capacity(group.facets.len());
-    let mut facets: Vec<[usize; 2]> = Vec::with_capacity(group.facets.len());
+    let mut slot: HashMap<[usize; 4], usize> = HashMap::with_capacity(group.facets.len());
+    let mut facets: Vec<Facet> = Vec::with_capacity(group.facets.len());
     for &f in &group.facets {
-        if f[0] == f[1] || f[0] >= pts.len() || f[1] >= pts.len() {
+        if f.dim() != D - 1 {
             return Err(not_boundary(format!(
-                "facet {f:?} is degenerate or refers to a node that does not exist"
+                "the group holds a {}-node element; a boundary part of a {D}D body is made of {}",
+                f.len(),
+                if D == 2 {
+                    "2-node lines"
+                } else {
+                    "triangles and quadrangles"
+                }
             )));
         }
-        slot.entry(key(f)).or_insert_with(|| {
+        if f.nodes().iter().any(|&p| p >= pts.len()) {
+            return Err(not_boundary(format!(
+                "facet {f:?} refers to a node that does not exist"
+            )));
+        }
+        slot.entry(f.key()).or_insert_with(|| {
             facets.push(f);
             facets.len() - 1
         });
     }
     if facets.is_empty() {
-        return Err(not_boundary(
-            "the group has no line elements; give it the boundary curves in the .geo (Physical Curve) and mesh again"
-                .into(),
-        ));
+        return Err(not_boundary(format!(
+            "the group has no {} elements; give it the boundary {} in the .geo and mesh again",
+            if D == 2 { "line" } else { "surface" },
+            if D == 2 {
+                "curves (Physical Curve)"
+            } else {
+                "surfaces (Physical Surface)"
+            }
+        )));
     }
 
-    // Orient each facet like the counter-clockwise edge of its (single) cell.
+    // Orient each facet like the outward facet of its (single) cell.
     let as_given = facets.clone();
     let mut count = vec![0u32; facets.len()];
     for cell in &mesh.cells {
-        for e in cell.edges() {
-            if let Some(&k) = slot.get(&key(e)) {
+        for e in cell.facets() {
+            if let Some(&k) = slot.get(&e.key()) {
                 count[k] += 1;
                 facets[k] = e;
             }
         }
     }
-    let show = |f: [usize; 2]| format!("facet {}–{}", fmt_point(pts[f[0]]), fmt_point(pts[f[1]]));
+    let show = |f: &Facet| {
+        let corners: Vec<String> = f.nodes().iter().map(|&p| fmt_point(pts[p])).collect();
+        format!("facet {}", corners.join("–"))
+    };
     for (k, &c) in count.iter().enumerate() {
         match c {
             1 => {}
             0 => {
                 return Err(not_boundary(format!(
-                    "{} is not an edge of any cell; the group must be made of edges of the mesh on its boundary",
-                    show(as_given[k])
+                    "{} is not {} of any cell; the group must be made of {} of the mesh on its boundary",
+                    show(&as_given[k]),
+                    if D == 2 { "an edge" } else { "a face" },
+                    if D == 2 { "edges" } else { "faces" }
                 )))
             }
             _ => {
                 return Err(not_boundary(format!(
                     "{} is shared by {} cells, so it is inside the body; a boundary part must be on the outer boundary \
-                     (check the Physical Curve of this group in the .geo)",
-                    show(as_given[k]),
-                    if c == 2 { "two".to_string() } else { c.to_string() }
+                     (check the {} of this group in the .geo)",
+                    show(&as_given[k]),
+                    if c == 2 { "two".to_string() } else { c.to_string() },
+                    if D == 2 { "Physical Curve" } else { "Physical Surface" }
                 )))
             }
         }
     }
 
-    let facet_lengths: Vec<f64> = facets
-        .iter()
-        .map(|&[a, b]| (pts[b][0] - pts[a][0]).hypot(pts[b][1] - pts[a][1]))
-        .collect();
-    let mut nodes: Vec<usize> = facets.iter().flatten().copied().collect();
+    let mut nodes: Vec<usize> = facets.iter().flat_map(|f| f.nodes().to_vec()).collect();
     nodes.sort_unstable();
     nodes.dedup();
     let mut weights = vec![0.0; nodes.len()];
-    let mut sums = vec![[0.0; 2]; nodes.len()];
-    for (&[a, b], &len) in facets.iter().zip(&facet_lengths) {
-        // (dy, −dx) is the outward normal times the length.
-        let n = [pts[b][1] - pts[a][1], -(pts[b][0] - pts[a][0])];
-        for p in [a, b] {
+    let mut sums = vec![[0.0; 3]; nodes.len()];
+    let mut facet_lengths = Vec::with_capacity(facets.len());
+    for f in &facets {
+        let (w, nv, measure) = facet_integrals(pts, f);
+        facet_lengths.push(measure);
+        for (a, &p) in f.nodes().iter().enumerate() {
             let i = nodes.binary_search(&p).unwrap_or(0);
-            weights[i] += 0.5 * len;
-            sums[i][0] += n[0];
-            sums[i][1] += n[1];
+            weights[i] += w[a];
+            for k in 0..3 {
+                sums[i][k] += nv[a][k];
+            }
         }
     }
     let mut normals = Vec::with_capacity(nodes.len());
     for (i, s) in sums.iter().enumerate() {
-        let norm = s[0].hypot(s[1]);
-        if norm.is_nan() || norm <= 1e-12 * weights[i] {
+        let len = norm(*s);
+        if len.is_nan() || len <= 1e-12 * weights[i] {
             return Err(not_boundary(format!(
                 "at node {} the outward normals of its facets cancel: the part folds back on itself",
                 fmt_point(pts[nodes[i]])
             )));
         }
-        normals.push([s[0] / norm, s[1] / norm]);
+        normals.push(std::array::from_fn(|k| s[k] / len));
     }
     Ok(BoundaryPart {
         label,

@@ -54,6 +54,15 @@ impl CsvTable {
     /// Appends `rows` as one block; an error if any row's length differs from the header's
     /// (then nothing is written).
     pub fn append(&mut self, rows: &[Vec<f64>]) -> Result<(), OutputError> {
+        let text: Vec<Vec<String>> = rows
+            .iter()
+            .map(|r| r.iter().map(|&x| format_number(x)).collect())
+            .collect();
+        self.append_text(&text)
+    }
+
+    /// Appends rows of already formatted cells (text columns such as a group name), then flushes.
+    pub fn append_text(&mut self, rows: &[Vec<String>]) -> Result<(), OutputError> {
         if let Some((row, r)) = rows.iter().enumerate().find(|(_, r)| r.len() != self.columns) {
             return Err(OutputError::CsvRow {
                 path: self.path.clone(),
@@ -67,11 +76,11 @@ impl CsvTable {
         }
         let mut block = String::with_capacity(rows.len() * self.columns * 24);
         for r in rows {
-            for (i, &x) in r.iter().enumerate() {
+            for (i, x) in r.iter().enumerate() {
                 if i > 0 {
                     block.push(',');
                 }
-                block.push_str(&format_number(x));
+                block.push_str(x);
             }
             block.push('\n');
         }

@@ -89,13 +89,13 @@ impl<'a> Field<'a> {
 
 /// One output step of a 2D solution.
 #[derive(Clone, Debug)]
-pub struct Frame<'a> {
+pub struct Frame<'a, const D: usize = 2> {
     /// Names the file: `<basename>_<step:05>.vtu`.
     pub step: usize,
     /// The physical time, listed in the `.pvd` and `.vtu.series`; must be finite.
     pub time: f64,
-    /// Written as 3D points with z = 0.
-    pub points: &'a [[f64; 2]],
+    /// Written as 3D points (z = 0 for a 2D frame).
+    pub points: &'a [[f64; D]],
     pub cells: &'a [crate::mesh::Cell],
     /// E.g. "displacement" with 3 components (z = 0) for ParaView's Warp By Vector.
     pub point_fields: Vec<Field<'a>>,
@@ -189,7 +189,7 @@ impl SeriesWriter {
     /// in the same directory, then rename), then rewrites `<basename>.pvd` and
     /// `<basename>.vtu.series` atomically, listing every frame written so far with its time.
     /// Writing a step again replaces its file and its entry. Returns the `.vtu` path.
-    pub fn write_frame(&mut self, frame: &Frame) -> Result<PathBuf, OutputError> {
+    pub fn write_frame<const D: usize>(&mut self, frame: &Frame<D>) -> Result<PathBuf, OutputError> {
         let path = self.dir.join(format!("{}_{:05}.vtu", self.basename, frame.step));
         vtu::write_vtu(&path, frame, self.compression_level, &mut self.buffer)?;
         let mut frames = self.frames.clone();

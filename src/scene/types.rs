@@ -16,6 +16,8 @@ pub struct Scene {
     pub memory: Option<MemoryKernelSpec>,
     pub time: TimeSpec,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub dirichlet: Vec<DirichletSpec>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub traction: Vec<TractionSpec>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub body_force: Option<BodyForceSpec>,
@@ -31,15 +33,14 @@ pub struct Scene {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Groups {
-    #[serde(default = "default_clamped")]
-    pub clamped: GroupSelector,
+    /// Γ₁, every component zero. Absent: "Gamma1" — unless the scene has `[[dirichlet]]`
+    /// sections, which then say everything that is prescribed ([`Scene::clamped_group`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clamped: Option<GroupSelector>,
     #[serde(default = "default_contact")]
     pub contact: GroupSelector,
 }
 
-fn default_clamped() -> GroupSelector {
-    GroupSelector::Name("Gamma1".into())
-}
 fn default_contact() -> GroupSelector {
     GroupSelector::Name("Gamma3".into())
 }
@@ -47,10 +48,34 @@ fn default_contact() -> GroupSelector {
 impl Default for Groups {
     fn default() -> Self {
         Groups {
-            clamped: default_clamped(),
+            clamped: None,
             contact: default_contact(),
         }
     }
+}
+
+impl Scene {
+    /// The group clamped in every component: `groups.clamped`, or "Gamma1" when the scene says
+    /// neither that nor any `[[dirichlet]]` section.
+    pub fn clamped_group(&self) -> Option<GroupSelector> {
+        match &self.groups.clamped {
+            Some(g) => Some(g.clone()),
+            None if self.dirichlet.is_empty() => Some(GroupSelector::Name("Gamma1".into())),
+            None => None,
+        }
+    }
+}
+
+/// Prescribed displacement components on a group (docs/method.md §7).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DirichletSpec {
+    pub group: GroupSelector,
+    /// Which components: any of "x", "y", "z".
+    pub components: Vec<String>,
+    /// One expression of (x, y, z, t) per listed component; absent: all zero.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub value: Option<Vec<String>>,
 }
 
 /// Plane stress or plane strain.
@@ -65,7 +90,9 @@ pub enum Plane {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Material {
-    pub plane: Plane,
+    /// The 2D model (required for a 2D mesh, an error for a 3D one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plane: Option<Plane>,
     pub youngs_modulus: f64,
     pub poisson_ratio: f64,
 }
@@ -103,14 +130,16 @@ pub struct TimeSpec {
 #[serde(deny_unknown_fields)]
 pub struct TractionSpec {
     pub group: GroupSelector,
-    pub value: [String; 2],
+    /// One expression per component (2 in 2D, 3 in 3D).
+    pub value: Vec<String>,
 }
 
 /// A body force density.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BodyForceSpec {
-    pub value: [String; 2],
+    /// One expression per component (2 in 2D, 3 in 3D).
+    pub value: Vec<String>,
 }
 
 /// Contact on Γ₃: the bound u_ν ≤ g and/or a normal-compliance law.
@@ -160,6 +189,20 @@ pub struct SolverSpec {
     pub tolerance: f64,
     #[serde(default = "default_max_iterations")]
     pub max_iterations: usize,
+    /// How a step is condensed onto the contact normals (docs/method.md §9).
+    #[serde(default)]
+    pub condensation: CondensationKind,
+}
+
+/// The implementations of the contact condensation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CondensationKind {
+    /// The faer factor's forward and backward sweeps around the contact solve (one solve).
+    #[default]
+    SplitSweeps,
+    /// Stored responses Z = K⁻¹Cᵀ and a whole solve per step.
+    StoredResponses,
 }
 
 fn default_tolerance() -> f64 {
@@ -174,6 +217,7 @@ impl Default for SolverSpec {
         SolverSpec {
             tolerance: default_tolerance(),
             max_iterations: default_max_iterations(),
+            condensation: CondensationKind::default(),
         }
     }
 }

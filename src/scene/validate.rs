@@ -15,6 +15,7 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
             "material",
             "memory",
             "time",
+            "dirichlet",
             "traction",
             "body_force",
             "contact",
@@ -32,6 +33,7 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
         "memory.terms" => vec!["coefficient", "relaxation_time"],
         "time" => vec!["final_time", "steps"],
         "traction" => vec!["group", "value"],
+        "dirichlet" => vec!["group", "components", "value"],
         "body_force" => vec!["value"],
         "contact" => vec!["bound", "law"],
         "contact.law" => {
@@ -45,7 +47,7 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
             });
             keys
         }
-        "solver" => vec!["tolerance", "max_iterations"],
+        "solver" => vec!["tolerance", "max_iterations", "condensation"],
         "output" => vec!["every", "fields"],
         _ => return None,
     })
@@ -200,8 +202,51 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
         }
         Some(MemoryKernelSpec::Polynomial { .. }) | None => {}
     }
+    for (i, dc) in scene.dirichlet.iter().enumerate() {
+        if dc.components.is_empty() {
+            return Err(invalid(
+                origin,
+                &format!("dirichlet[{i}].components"),
+                "[]",
+                "list the prescribed components, e.g. components = [\"z\"] or [\"x\", \"y\"]",
+            ));
+        }
+        for (k, c) in dc.components.iter().enumerate() {
+            if !matches!(c.as_str(), "x" | "y" | "z") || dc.components[..k].contains(c) {
+                return Err(invalid(
+                    origin,
+                    &format!("dirichlet[{i}].components"),
+                    format!("{:?}", dc.components),
+                    "components are \"x\", \"y\" and \"z\", each at most once",
+                ));
+            }
+        }
+        if let Some(values) = &dc.value {
+            if values.len() != dc.components.len() {
+                return Err(invalid(
+                    origin,
+                    &format!("dirichlet[{i}].value"),
+                    format!("{values:?}"),
+                    &format!(
+                        "give one expression per listed component ({} of them), or omit value for zero",
+                        dc.components.len()
+                    ),
+                ));
+            }
+            for (c, v) in values.iter().enumerate() {
+                compile(
+                    origin,
+                    &format!("dirichlet[{i}].value[{c}]"),
+                    v,
+                    &super::BODY_FORCE_VARIABLES,
+                    &[0.0; 4],
+                )?;
+            }
+        }
+    }
     for (i, tr) in scene.traction.iter().enumerate() {
-        for c in 0..2 {
+        check_components(origin, &format!("traction[{i}].value"), &tr.value)?;
+        for c in 0..tr.value.len() {
             compile(
                 origin,
                 &format!("traction[{i}].value[{c}]"),
@@ -212,7 +257,8 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
         }
     }
     if let Some(f) = &scene.body_force {
-        for c in 0..2 {
+        check_components(origin, "body_force.value", &f.value)?;
+        for c in 0..f.value.len() {
             compile(
                 origin,
                 &format!("body_force.value[{c}]"),
@@ -257,6 +303,20 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
         return Err(invalid(origin, "output.every", 0, "write every n-th step with n ≥ 1"));
     }
     Ok(())
+}
+
+/// A vector load has 2 or 3 components (the mesh decides which is right).
+fn check_components(origin: &str, key: &str, value: &[String]) -> Result<(), SceneError> {
+    if matches!(value.len(), 2 | 3) {
+        Ok(())
+    } else {
+        Err(invalid(
+            origin,
+            key,
+            format!("{value:?}"),
+            "give one expression per component: [\"fx\", \"fy\"] in 2D, [\"fx\", \"fy\", \"fz\"] in 3D",
+        ))
+    }
 }
 
 fn check_law(law: &ContactLawSpec, origin: &str) -> Result<(), SceneError> {

@@ -1,7 +1,8 @@
 //! From a validated scene and a mesh to a solved time series: the [`Simulation`] holds the
 //! discrete problem with only the effects the scene names, [`plan::Plan`] says what they cost,
-//! and [`timeloop`] is the short driver of METHOD.md §3–4.
+//! and [`timeloop`] is the short driver of docs/method.md §3–4.
 
+pub mod dirichlet;
 pub mod error;
 pub mod plan;
 pub mod setup;
@@ -11,5 +12,5 @@ pub mod timeloop;
 pub use error::SolveError;
 pub use plan::Plan;
 pub use setup::{ContactSetup, Simulation, TimeGrid};
-pub use stats::{PhaseTimes, RunStats};
+pub use stats::{PhaseTimes, Reaction, RunStats};
 pub use timeloop::{FrameSink, StepView};

@@ -22,16 +22,45 @@ pub struct Plan {
 
 impl Plan {
     /// The plan of `sim`.
-    pub fn new(sim: &Simulation) -> Self {
+    pub fn new<const D: usize>(sim: &Simulation<D>) -> Self {
         let n = sim.dofs.n_free();
         let mut effects = vec![Effect {
             name: "elasticity",
             detail: format!(
-                "{:?} plane, E = {}, ν = {}",
-                sim.elasticity.plane, sim.elasticity.youngs_modulus, sim.elasticity.poisson_ratio
+                "{}, E = {}, ν = {}",
+                match sim.elasticity.plane {
+                    Some(p) => format!(
+                        "2D, plane {}",
+                        if p == crate::material::PlaneModel::Stress {
+                            "stress"
+                        } else {
+                            "strain"
+                        }
+                    ),
+                    None => "3D".to_string(),
+                },
+                sim.elasticity.youngs_modulus,
+                sim.elasticity.poisson_ratio
             ),
             cost: format!("K_A assembled once ({n} unknowns), factorised once"),
         }];
+        if sim.dirichlet.is_nonzero() {
+            effects.push(Effect {
+                name: "dirichlet",
+                detail: format!(
+                    "{} prescribed components in {} (group, component) pairs, {}",
+                    sim.dirichlet.len(),
+                    sim.dirichlet.reaction_groups.len(),
+                    if sim.dirichlet.is_time_dependent() {
+                        "values depend on t"
+                    } else {
+                        "non-zero values, constant in time"
+                    }
+                ),
+                cost: "identity rows in K; the prescribed part moves to the right-hand side (lifting) every step"
+                    .into(),
+            });
+        }
         let mut factorisations = 1;
         let mut solves_per_step = 1;
         if let Some(kernel) = &sim.kernel {
@@ -93,16 +122,22 @@ impl Plan {
                     parts.join(" + "),
                     c.nodes.clamped_nodes.len()
                 ),
-                cost: format!(
-                    "condensation G = L⁻¹ P Cᵀ ({m} sparse forward sweeps) and W = Gᵀ G once, {:.1} MiB dense; per step one dense active-set solve of size {m} between the forward and backward sweeps of the step's one solve",
-                    (2 * m * m * 8) as f64 / 1048576.0
-                ),
+                cost: match sim.condensation {
+                    crate::scene::CondensationKind::SplitSweeps => format!(
+                        "condensation by split sweeps: G = L⁻¹ P Cᵀ ({m} sparse forward sweeps) and W = Gᵀ G once, {:.1} MiB dense; per step one dense active-set solve of size {m} between the forward and backward sweeps of the step's one solve",
+                        (2 * m * m * 8) as f64 / 1048576.0
+                    ),
+                    crate::scene::CondensationKind::StoredResponses => format!(
+                        "condensation by stored responses: Z = K⁻¹ Cᵀ ({m} solves, {:.1} MiB) and W = C Z once; per step one whole solve, a dense active-set solve of size {m} and u = u_free − Z λ",
+                        (n * m * 8) as f64 / 1048576.0
+                    ),
+                },
             });
         }
         if sim.kernel.is_some() {
             factorisations += 1; // possibly K_A for step 0
         }
-        if sim.kernel.is_none() && !sim.loads.is_time_dependent() {
+        if sim.kernel.is_none() && !sim.loads.is_time_dependent() && !sim.dirichlet.is_time_dependent() {
             solves_per_step = 0;
         }
         Plan {

@@ -1,12 +1,14 @@
-//! The discrete problem of a scene on a mesh, holding only the effects the scene names:
-//! no `[memory]` → no kernel, no `[contact]` → no contact nodes, no load → no load terms.
+//! The discrete problem of a scene on a mesh of dimension D, holding only the effects the scene
+//! names: no `[memory]` → no kernel, no `[contact]` → no contact nodes, no load → no load terms,
+//! no non-zero prescribed value → no lifting.
 
+use super::dirichlet::Dirichlet;
 use super::error::SolveError;
 use crate::contact::{ComplianceProfile, ContactLaw, ContactNodes, ContactSettings, PiecewiseLinear, Symmetry};
 use crate::fem::loads::Loads;
 use crate::fem::DofMap;
 use crate::material::{Elasticity, PlaneModel, RelaxationKernel};
-use crate::mesh::Mesh;
+use crate::mesh::{GroupSelector, Mesh};
 use crate::scene::{self, Expr, Scene};
 
 /// Uniform time steps t_n = n k, k = T / N (METHOD.md §2).
@@ -33,8 +35,8 @@ impl TimeGrid {
 
 /// Contact on Γ₃: nodes, the compliance law and/or the bound, and the solver settings.
 #[derive(Clone, Debug)]
-pub struct ContactSetup {
-    pub nodes: ContactNodes,
+pub struct ContactSetup<const D: usize> {
+    pub nodes: ContactNodes<D>,
     pub law: Option<ContactLaw>,
     /// g_p per contact node.
     pub bound: Option<Vec<f64>>,
@@ -42,44 +44,74 @@ pub struct ContactSetup {
 }
 
 /// Everything a run needs, built once from scene + mesh.
-pub struct Simulation {
-    pub mesh: Mesh,
-    pub dofs: DofMap,
+pub struct Simulation<const D: usize = 2> {
+    pub mesh: Mesh<D>,
+    pub dofs: DofMap<D>,
+    /// The prescribed components and their values (docs/method.md §7).
+    pub dirichlet: Dirichlet<D>,
     pub elasticity: Elasticity,
     pub kernel: Option<RelaxationKernel>,
-    pub loads: Loads,
-    pub contact: Option<ContactSetup>,
+    pub loads: Loads<D>,
+    pub contact: Option<ContactSetup<D>>,
     pub time: TimeGrid,
     pub output_every: usize,
     pub threads: usize,
+    /// How a step is condensed onto the contact normals.
+    pub condensation: scene::CondensationKind,
 }
 
-fn exprs(value: &[String; 2], variables: &[&str], origin: &str, key: &str) -> Result<[Expr; 2], SolveError> {
+fn exprs<const D: usize>(
+    value: &[String],
+    variables: &[&str],
+    origin: &str,
+    key: &str,
+) -> Result<[Expr; D], SolveError> {
+    if value.len() != D {
+        return Err(SolveError::Setup(format!(
+            "{origin}: {key} has {} components but the mesh is {D}D: give {D} expressions ({})",
+            value.len(),
+            ["x", "y", "z"][..D].join(", ")
+        )));
+    }
     let parse = |i: usize| {
         Expr::parse(&value[i], variables)
             .map_err(|e| SolveError::Setup(format!("{origin}: {key}[{i}] = \"{}\": {e}", value[i])))
     };
-    Ok([parse(0)?, parse(1)?])
+    let mut out = Vec::with_capacity(D);
+    for i in 0..D {
+        out.push(parse(i)?);
+    }
+    Ok(out.try_into().unwrap_or_else(|_| unreachable!("D expressions")))
 }
 
-impl Simulation {
+impl<const D: usize> Simulation<D> {
     /// Builds the discrete problem of `scene` on `mesh`.
-    pub fn new(scene: &Scene, mesh: Mesh) -> Result<Self, SolveError> {
-        let clamped = mesh.group_nodes(&scene.groups.clamped)?;
-        if clamped.is_empty() {
-            return Err(SolveError::NoClampedNodes {
-                mesh: mesh.path.display().to_string(),
-                group: scene.groups.clamped.to_string(),
-            });
-        }
-        let dofs = DofMap::new(mesh.points.len(), &clamped);
+    pub fn new(scene: &Scene, mesh: Mesh<D>) -> Result<Self, SolveError> {
+        let origin = mesh.path.display().to_string();
+        let clamped: Option<GroupSelector> = scene.clamped_group();
+        let (dofs, dirichlet) = Dirichlet::new(&mesh, clamped.as_ref(), &scene.dirichlet)?;
+        let plane = match (D, scene.material.plane) {
+            (2, Some(p)) => Some(match p {
+                scene::Plane::Stress => PlaneModel::Stress,
+                scene::Plane::Strain => PlaneModel::Strain,
+            }),
+            (2, None) => {
+                return Err(SolveError::Setup(format!(
+                    "{origin} is a 2D mesh: say which 2D model in the scene, material.plane = \"stress\" or \"strain\""
+                )))
+            }
+            (_, Some(_)) => {
+                return Err(SolveError::Setup(format!(
+                    "{origin} is a 3D mesh, but the scene sets material.plane: plane stress and plane strain are 2D \
+                     models; remove material.plane for a 3D body"
+                )))
+            }
+            (_, None) => None,
+        };
         let elasticity = Elasticity {
             youngs_modulus: scene.material.youngs_modulus,
             poisson_ratio: scene.material.poisson_ratio,
-            plane: match scene.material.plane {
-                scene::Plane::Stress => PlaneModel::Stress,
-                scene::Plane::Strain => PlaneModel::Strain,
-            },
+            plane,
         };
         let kernel = match &scene.memory {
             None => None,
@@ -96,7 +128,6 @@ impl Simulation {
                 ),
             }),
         };
-        let origin = mesh.path.display().to_string();
         let mut loads = Loads::new();
         for (i, t) in scene.traction.iter().enumerate() {
             let part = mesh.boundary(&t.group)?;
@@ -170,6 +201,7 @@ impl Simulation {
         Ok(Simulation {
             mesh,
             dofs,
+            dirichlet,
             elasticity,
             kernel,
             loads,
@@ -180,6 +212,7 @@ impl Simulation {
             },
             output_every: scene.output.every,
             threads: 1,
+            condensation: scene.solver.condensation,
         })
     }
 

@@ -62,9 +62,22 @@ pub struct RunStats {
     pub contact: Vec<ContactOutcome>,
     pub max_contact_residual: f64,
     pub smallness: Option<f64>,
+    /// Which condensation of the contact normals ran (docs/method.md §9), if any.
+    pub condensation: Option<String>,
+    /// Reaction forces at every output step: one row per (time, group, component).
+    pub reactions: Vec<Reaction>,
     /// Peak resident memory of the process (VmHWM, Linux), in bytes.
     pub peak_memory_bytes: Option<u64>,
     pub phases: PhaseTimes,
+}
+
+/// The reaction force of one prescribed (group, component) at one output time (docs/method.md §7).
+#[derive(Clone, Debug, Serialize)]
+pub struct Reaction {
+    pub time: f64,
+    pub group: String,
+    pub component: &'static str,
+    pub force: f64,
 }
 
 /// The process's peak resident set size (VmHWM from /proc/self/status), if available.

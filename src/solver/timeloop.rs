@@ -1,34 +1,37 @@
-//! The time loop (METHOD.md §3–4). Per step n:
+//! The time loop (docs/method.md §3–4, §7, §9), written once for both dimensions. Per step n:
 //!
 //! ```text
 //!   F_n            ← loads(t_n)                      (once, if no load depends on t)
 //!   rhs            ← F_n − K_B h_n                   (history, only with a memory kernel)
-//!   y              ← L⁻¹ P rhs                       (forward sweep, cached factor)
-//!   λ              ← contact.solve(d = Gᵀ y)         (only with contact; d = C K⁻¹ rhs)
-//!   y              ← y − G λ                         (only with contact)
-//!   u_n            ← Pᵀ L⁻ᵀ y = K⁻¹ (rhs − Cᵀ λ)     (backward sweep)
-//!   history.push(u_n); write the frame if it is an output step
+//!   rhs            ← lift(rhs, g(t_n))               (prescribed components: rhs_f −= K_fp g, rhs_p = g)
+//!   d              ← C K⁻¹ rhs                       (condensation: start the step's solve)
+//!   λ              ← contact.solve(d)                (only with contact)
+//!   u_n            ← K⁻¹ (rhs − Cᵀ λ)                (condensation: complete the solve)
+//!   history.push(u_n); reactions and the frame if it is an output step
 //! ```
 //!
-//! with K = Pᵀ L Lᵀ P = K_A + (k/2) b(0) K_B factored once and G = L⁻¹ P Cᵀ formed once
-//! (METHOD.md §4, "the fast path"): a step costs one solve, contact or not.
-//! Step 0 has no history and uses K_A alone;
-//! when its solution is not trivially zero and K ≠ K_A, K_A gets a factor of its own.
+//! with K = K_A + (k/2) b(0) K_B factored once (identity rows at prescribed components). The
+//! solve goes through the [`LinearSolver`] and [`Condensation`] seams; the default condensation
+//! is the faer factor's split sweeps (docs/method.md §4.5): a step costs one solve, contact or
+//! not. Step 0 has no history and uses K_A alone; when its solution is not trivially zero and
+//! K ≠ K_A, K_A gets a factor of its own.
 
 use super::error::SolveError;
 use super::setup::{ContactSetup, Simulation};
-use super::stats::{timed, RunStats};
+use super::stats::{timed, Reaction, RunStats};
 use crate::contact::active_set::{ActiveSetSolver, ContactOutcome, ContactState};
-use crate::contact::CondensedOperator;
+use crate::contact::{Condensation, SplitSweeps, StoredResponses};
 use crate::fem::assembly::assemble_stiffness;
 use crate::fem::{NodeBlockMatrix, SymmetricMatrix};
 use crate::history::History;
-use crate::linalg::{Analysis, Counters, Factor, Forward};
+use crate::linalg::{Analysis, Counters, Factor, LinearSolver};
 use crate::material::IDENTITY_TENSOR;
+use crate::scene::CondensationKind;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::Instant;
 
-/// What the driver shows a sink after a step: all vectors over the free unknowns.
+/// What the driver shows a sink after a step: all vectors over all unknowns (D per node).
 pub struct StepView<'a> {
     pub step: usize,
     pub time: f64,
@@ -38,86 +41,157 @@ pub struct StepView<'a> {
     pub memory_displacement: Option<&'a [f64]>,
     pub contact: Option<&'a ContactState>,
     pub outcome: Option<ContactOutcome>,
+    /// The reaction of each of the simulation's reaction groups (output steps only).
+    pub reactions: Option<&'a [f64]>,
 }
 
 /// Receives the steps of a run (the output layer implements this; tests collect in memory).
-pub trait FrameSink {
+pub trait FrameSink<const D: usize> {
     /// Called after every step (for progress reporting).
-    fn step_done(&mut self, _sim: &Simulation, _view: &StepView) {}
+    fn step_done(&mut self, _sim: &Simulation<D>, _view: &StepView) {}
     /// Called for every output step.
-    fn write_frame(&mut self, sim: &Simulation, view: &StepView) -> Result<(), SolveError>;
+    fn write_frame(&mut self, sim: &Simulation<D>, view: &StepView) -> Result<(), SolveError>;
 }
 
-/// A factor of a step matrix and, with contact, its condensed operator.
+/// The columns of the prescribed unknowns of an unmodified matrix (all rows): what the
+/// prescribed part of the system contributes (docs/method.md §7).
+struct PrescribedColumns {
+    /// (prescribed unknown j, its column entries (i, K_ij)).
+    columns: Vec<(usize, Vec<(usize, f64)>)>,
+}
+
+impl PrescribedColumns {
+    fn new<const D: usize>(matrix: &SymmetricMatrix, dofs: &crate::fem::DofMap<D>) -> Self {
+        let columns = (0..matrix.n())
+            .filter(|&j| dofs.is_prescribed(j))
+            .map(|j| (j, matrix.column(j).collect()))
+            .collect();
+        PrescribedColumns { columns }
+    }
+
+    /// rhs_i −= Σ_j K_ij g_j at the free rows i.
+    fn lift<const D: usize>(&self, g: &[f64], dofs: &crate::fem::DofMap<D>, rhs: &mut [f64]) {
+        for (j, col) in &self.columns {
+            if g[*j] != 0.0 {
+                for &(i, v) in col {
+                    if !dofs.is_prescribed(i) {
+                        rhs[i] -= v * g[*j];
+                    }
+                }
+            }
+        }
+    }
+
+    /// (K x)_j at each prescribed j, added into `out` (indexed like the columns).
+    fn add_product(&self, x: &[f64], out: &mut [f64]) {
+        for ((_, col), o) in self.columns.iter().zip(out.iter_mut()) {
+            *o += col.iter().map(|&(i, v)| v * x[i]).sum::<f64>();
+        }
+    }
+}
+
+/// A factor of a step matrix and, with contact, its condensation.
 struct StepOperator {
-    factor: Factor,
-    condensed: Option<CondensedOperator>,
+    solver: Arc<Factor>,
+    condensed: Option<Box<dyn Condensation>>,
+    /// The unmodified columns of the prescribed unknowns (for lifting).
+    lifting: Option<PrescribedColumns>,
 }
 
 impl StepOperator {
-    fn new(
-        sim: &Simulation,
+    fn new<const D: usize>(
+        sim: &Simulation<D>,
         symbolic: &Analysis,
         matrix: &SymmetricMatrix,
         counters: &Counters,
         stats: &mut RunStats,
     ) -> Result<Self, SolveError> {
+        let lifting = sim
+            .dirichlet
+            .is_nonzero()
+            .then(|| PrescribedColumns::new(matrix, &sim.dofs));
+        let matrix = matrix.with_identity_rows(&sim.dofs);
         let factor = timed(&mut stats.phases.factorisation, || {
-            Factor::new(symbolic, matrix, counters)
+            Factor::new(symbolic, &matrix, counters)
         })
         .map_err(|e| SolveError::Singular {
             mesh: sim.mesh.path.display().to_string(),
             detail: e.to_string(),
         })?;
-        timed(&mut stats.phases.factorisation, || probe_singularity(&factor, matrix)).map_err(|detail| {
+        timed(&mut stats.phases.factorisation, || probe_singularity(&factor, &matrix)).map_err(|detail| {
             SolveError::Singular {
                 mesh: sim.mesh.path.display().to_string(),
                 detail,
             }
         })?;
-        let condensed = match &sim.contact {
+        let factor = Arc::new(factor);
+        let condensed: Option<Box<dyn Condensation>> = match &sim.contact {
             Some(c) if !c.nodes.is_empty() => Some(
-                timed(&mut stats.phases.condensation, || {
-                    CondensedOperator::new(&c.nodes, &factor, counters)
-                })
+                timed(
+                    &mut stats.phases.condensation,
+                    || -> Result<Box<dyn Condensation>, String> {
+                        Ok(match sim.condensation {
+                            CondensationKind::SplitSweeps => {
+                                Box::new(SplitSweeps::new(&c.nodes, factor.clone(), counters)?)
+                            }
+                            CondensationKind::StoredResponses => {
+                                let solver: Arc<dyn LinearSolver> = factor.clone();
+                                Box::new(StoredResponses::new(&c.nodes, solver, counters)?)
+                            }
+                        })
+                    },
+                )
                 .map_err(SolveError::Setup)?,
             ),
             _ => None,
         };
-        Ok(StepOperator { factor, condensed })
+        if let Some(c) = &condensed {
+            stats.condensation = Some(c.name().to_string());
+        }
+        Ok(StepOperator {
+            solver: factor,
+            condensed,
+            lifting,
+        })
     }
 
-    /// Solves one step with one forward and one backward sweep over the factor:
-    /// y = L⁻¹ P rhs, d = C K⁻¹ rhs = Gᵀ y, contact → λ, y ← y − G λ, u_n = Pᵀ L⁻ᵀ y.
-    /// `y` is a work vector, `u` receives u_n.
+    /// Solves one step: d = C K⁻¹ rhs, contact → λ, u_n = K⁻¹ (rhs − Cᵀ λ). `offset` is the
+    /// prescribed part of u_ν (None when it is zero); `u` receives u_n.
     #[allow(clippy::too_many_arguments)]
-    fn solve(
-        &self,
-        sim: &Simulation,
+    fn solve<const D: usize>(
+        &mut self,
+        sim: &Simulation<D>,
         step: usize,
         rhs: &[f64],
-        y: &mut Forward,
+        offset: Option<&[f64]>,
         u: &mut [f64],
         state: Option<&mut ContactState>,
         counters: &Counters,
         stats: &mut RunStats,
     ) -> Result<Option<ContactOutcome>, SolveError> {
-        timed(&mut stats.phases.forward_sweep, || self.factor.forward_into(rhs, y));
-        let outcome = match (&sim.contact, &self.condensed, state) {
+        match (&sim.contact, self.condensed.as_mut(), state) {
             (Some(setup), Some(op), Some(state)) => {
+                let mut d = vec![0.0; setup.nodes.len()];
+                timed(&mut stats.phases.forward_sweep, || {
+                    op.free_normal(rhs, &mut d, counters)
+                });
+                if let Some(g) = offset {
+                    setup.nodes.prescribed_offset(g, &mut d);
+                }
                 let outcome = timed(&mut stats.phases.contact, || {
-                    contact_solve(sim, setup, op, step, y, state)
+                    contact_solve(sim, setup, op.as_ref(), step, &d, state)
                 })?;
                 stats.contact_solves += 1;
-                timed(&mut stats.phases.backward_sweep, || op.subtract_forces(&state.force, y));
-                Some(outcome)
+                timed(&mut stats.phases.backward_sweep, || {
+                    op.recover(&state.force, u, counters)
+                });
+                Ok(Some(outcome))
             }
-            _ => None,
-        };
-        timed(&mut stats.phases.backward_sweep, || {
-            self.factor.backward_from(y, u, counters)
-        });
-        Ok(outcome)
+            _ => {
+                timed(&mut stats.phases.backward_sweep, || self.solver.solve(rhs, u, counters));
+                Ok(None)
+            }
+        }
     }
 }
 
@@ -144,24 +218,22 @@ fn probe_singularity(factor: &Factor, matrix: &SymmetricMatrix) -> Result<(), St
     }
 }
 
-fn contact_solve(
-    sim: &Simulation,
-    setup: &ContactSetup,
-    op: &CondensedOperator,
+fn contact_solve<const D: usize>(
+    sim: &Simulation<D>,
+    setup: &ContactSetup<D>,
+    op: &dyn Condensation,
     step: usize,
-    forward: &Forward,
+    d: &[f64],
     state: &mut ContactState,
 ) -> Result<ContactOutcome, SolveError> {
-    let mut d = vec![0.0; setup.nodes.len()];
-    op.normal_displacements(forward, &mut d);
     let solver = ActiveSetSolver {
-        operator: op,
+        operator: op.stiffness(),
         weights: &setup.nodes.weights,
         law: setup.law.as_ref(),
         bound: setup.bound.as_deref(),
         settings: setup.settings,
     };
-    solver.solve(&d, state).map_err(|f| SolveError::ContactFailed {
+    solver.solve(d, state).map_err(|f| SolveError::ContactFailed {
         step,
         time: sim.time.time(step),
         iterations: f.outcome.iterations,
@@ -172,13 +244,14 @@ fn contact_solve(
 }
 
 /// K_B as the time loop multiplies it: in node blocks (a third of the memory traffic) when
-/// its pattern allows, else as assembled.
-enum MemoryStiffness {
-    NodeBlocks(NodeBlockMatrix),
+/// its pattern allows, else as assembled. Unmodified: the memory load includes the history of
+/// prescribed displacements (docs/method.md §7).
+enum MemoryStiffness<const D: usize> {
+    NodeBlocks(NodeBlockMatrix<D>),
     Full(SymmetricMatrix),
 }
 
-impl MemoryStiffness {
+impl<const D: usize> MemoryStiffness<D> {
     fn matvec(&self, x: &[f64], y: &mut [f64]) {
         match self {
             MemoryStiffness::NodeBlocks(m) => m.matvec(x, y),
@@ -187,29 +260,89 @@ impl MemoryStiffness {
     }
 }
 
+/// The reaction forces at the prescribed components (docs/method.md §7):
+/// R = K_A u_n + K_B m_n − F_n + Cᵀ λ at each prescribed unknown.
+struct Reactions {
+    k_a: PrescribedColumns,
+    k_b: Option<PrescribedColumns>,
+    /// Per reaction group: positions of its unknowns in the prescribed columns.
+    groups: Vec<Vec<usize>>,
+    totals: Vec<f64>,
+}
+
+impl Reactions {
+    fn new<const D: usize>(sim: &Simulation<D>, k_a: &SymmetricMatrix, k_b: Option<&SymmetricMatrix>) -> Self {
+        let k_a = PrescribedColumns::new(k_a, &sim.dofs);
+        let position: std::collections::HashMap<usize, usize> =
+            k_a.columns.iter().enumerate().map(|(k, (j, _))| (*j, k)).collect();
+        let groups = sim
+            .dirichlet
+            .reaction_groups
+            .iter()
+            .map(|g| g.unknowns.iter().map(|d| position[d]).collect())
+            .collect();
+        Reactions {
+            k_b: k_b.map(|m| PrescribedColumns::new(m, &sim.dofs)),
+            groups,
+            totals: vec![0.0; sim.dirichlet.reaction_groups.len()],
+            k_a,
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn compute<const D: usize>(
+        &mut self,
+        sim: &Simulation<D>,
+        u: &[f64],
+        memory: Option<&[f64]>,
+        load: &[f64],
+        contact: Option<&ContactState>,
+    ) -> &[f64] {
+        let mut r = vec![0.0; self.k_a.columns.len()];
+        self.k_a.add_product(u, &mut r);
+        if let (Some(kb), Some(m)) = (&self.k_b, memory) {
+            kb.add_product(m, &mut r);
+        }
+        let mut force = vec![0.0; u.len()];
+        if let (Some(c), Some(state)) = (&sim.contact, contact) {
+            c.nodes.add_forces(&state.force, &mut force);
+        }
+        for (rk, (j, _)) in r.iter_mut().zip(&self.k_a.columns) {
+            *rk += force[*j] - load[*j];
+        }
+        for (total, members) in self.totals.iter_mut().zip(&self.groups) {
+            *total = members.iter().map(|&k| r[k]).sum();
+        }
+        &self.totals
+    }
+}
+
 /// The state of a run between steps: the assembled matrices, the cached factor, the history
 /// and the contact warm start. [`Stepper::prepare`] does the one-off work, [`Stepper::advance`]
-/// one time step (METHOD.md §3–4).
-pub struct Stepper<'s> {
-    sim: &'s Simulation,
+/// one time step (docs/method.md §3–4).
+pub struct Stepper<'s, const D: usize> {
+    sim: &'s Simulation<D>,
     pub counters: Counters,
     pub stats: RunStats,
     k_a: SymmetricMatrix,
     /// K_B for the memory load K_B h_n of every step.
-    k_b: Option<MemoryStiffness>,
+    k_b: Option<MemoryStiffness<D>>,
     symbolic: Analysis,
     main: StepOperator,
     /// (k/2) b(0), the memory term's share of K.
     memory_diagonal: Option<f64>,
     history: Option<History>,
     contact: Option<ContactState>,
+    reactions: Option<Reactions>,
+    reaction_values: Vec<f64>,
     time_dependent_loads: bool,
-    /// No memory and constant loads: every step equals step 0.
+    /// No memory, constant loads and constant prescribed values: every step equals step 0.
     single_solve: bool,
     load: Vec<f64>,
-    /// Work vectors of a step: its right-hand side and its forward sweep.
+    /// Prescribed values g(t_n) over all unknowns (only when some is non-zero).
+    prescribed: Option<Vec<f64>>,
+    /// Work vectors of a step.
     rhs: Vec<f64>,
-    work: Forward,
     memory_load: Vec<f64>,
     memory_rhs: Vec<f64>,
     displacement: Vec<f64>,
@@ -218,10 +351,10 @@ pub struct Stepper<'s> {
     next: usize,
 }
 
-impl<'s> Stepper<'s> {
+impl<'s, const D: usize> Stepper<'s, D> {
     /// Assembles K_A (and K_B with memory), factorises K = K_A + (k/2) b(0) K_B once, and
     /// condenses the contact normals.
-    pub fn prepare(sim: &'s Simulation) -> Result<Self, SolveError> {
+    pub fn prepare(sim: &'s Simulation<D>) -> Result<Self, SolveError> {
         crate::linalg::set_parallelism(sim.threads);
         let counters = Counters::default();
         let mut stats = RunStats {
@@ -236,16 +369,16 @@ impl<'s> Stepper<'s> {
             ..Default::default()
         };
         let k = sim.time.step();
-        let n_dof = sim.dofs.n_free();
+        let n_dof = sim.dofs.n();
         let (points, cells) = (&sim.mesh.points, &sim.mesh.cells);
-        let d_a = sim.elasticity.voigt();
+        let a = sim.elasticity.tensor();
         let (k_a, k_b) = timed(&mut stats.phases.assembly, || match &sim.kernel {
             Some(_) => {
-                let [a, b] = assemble_stiffness(cells, points, &sim.dofs, &[d_a, IDENTITY_TENSOR]);
+                let [a, b] = assemble_stiffness(cells, points, &sim.dofs, &[a, IDENTITY_TENSOR]);
                 (a, Some(b))
             }
             None => {
-                let [a] = assemble_stiffness(cells, points, &sim.dofs, &[d_a]);
+                let [a] = assemble_stiffness(cells, points, &sim.dofs, &[a]);
                 (a, None)
             }
         });
@@ -262,9 +395,10 @@ impl<'s> Stepper<'s> {
         };
         if let (Some(op), Some(c)) = (&main.condensed, &sim.contact) {
             if let Some(law) = &c.law {
-                stats.smallness = Some(law.relaxed_monotonicity() * op.trace_constant(&c.nodes.weights));
+                stats.smallness = Some(law.relaxed_monotonicity() * op.stiffness().trace_constant(&c.nodes.weights));
             }
         }
+        let reactions = (!sim.dirichlet.reaction_groups.is_empty()).then(|| Reactions::new(sim, &k_a, k_b.as_ref()));
         let k_b = k_b.map(|kb| match NodeBlockMatrix::new(&kb) {
             Some(blocks) => MemoryStiffness::NodeBlocks(blocks),
             None => MemoryStiffness::Full(kb),
@@ -281,13 +415,15 @@ impl<'s> Stepper<'s> {
             symbolic,
             main,
             memory_diagonal,
-            single_solve: history.is_none() && !time_dependent_loads,
+            single_solve: history.is_none() && !time_dependent_loads && !sim.dirichlet.is_time_dependent(),
             history,
             contact,
+            reaction_values: Vec::new(),
+            reactions,
             time_dependent_loads,
             load: vec![0.0; n_dof],
+            prescribed: sim.dirichlet.is_nonzero().then(|| vec![0.0; n_dof]),
             rhs: vec![0.0; n_dof],
-            work: Forward::zeros(n_dof),
             memory_load: vec![0.0; n_dof],
             memory_rhs: vec![0.0; n_dof],
             displacement: vec![0.0; n_dof],
@@ -302,7 +438,7 @@ impl<'s> Stepper<'s> {
         self.next
     }
 
-    /// Solves the next step: loads, memory load, forward sweep, contact, backward sweep, history update.
+    /// Solves the next step: loads, memory load, lifting, contact, recovery, history update.
     pub fn advance(&mut self) -> Result<StepView<'_>, SolveError> {
         let n = self.next;
         let sim = self.sim;
@@ -317,6 +453,15 @@ impl<'s> Stepper<'s> {
                 }
             })?;
         }
+        if let Some(g) = &mut self.prescribed {
+            if n == 0 || sim.dirichlet.is_time_dependent() {
+                sim.dirichlet.values(t, g).map_err(|detail| SolveError::NonFiniteLoad {
+                    step: n,
+                    time: t,
+                    detail,
+                })?;
+            }
+        }
         if self.single_solve && n > 0 {
             // Nothing changes: the state of step 0 stands for every step.
             if let Some(o) = self.outcome {
@@ -328,13 +473,14 @@ impl<'s> Stepper<'s> {
             rhs.copy_from_slice(&self.load);
             self.subtract_memory_load(n, &mut rhs);
             let outcome = if n == 0 && self.history.is_some() {
-                self.step_zero(&rhs)?
+                self.step_zero(&mut rhs)?
             } else {
+                lift(&self.main, sim, self.prescribed.as_deref(), &mut rhs);
                 self.main.solve(
                     sim,
                     n,
                     &rhs,
-                    &mut self.work,
+                    self.prescribed.as_deref(),
                     &mut self.displacement,
                     self.contact.as_mut(),
                     &self.counters,
@@ -353,6 +499,25 @@ impl<'s> Stepper<'s> {
             }
         }
         self.update_history(n);
+        let output = sim.is_output_step(n);
+        if let (Some(r), true) = (&mut self.reactions, output) {
+            let memory = if n == 0 {
+                None
+            } else {
+                self.memory_displacement.as_deref()
+            };
+            let values = r.compute(sim, &self.displacement, memory, &self.load, self.contact.as_ref());
+            self.reaction_values.clear();
+            self.reaction_values.extend_from_slice(values);
+            for (g, &force) in sim.dirichlet.reaction_groups.iter().zip(values) {
+                self.stats.reactions.push(Reaction {
+                    time: t,
+                    group: g.group.clone(),
+                    component: ["x", "y", "z"][g.component],
+                    force,
+                });
+            }
+        }
         self.next += 1;
         Ok(StepView {
             step: n,
@@ -361,12 +526,14 @@ impl<'s> Stepper<'s> {
             memory_displacement: self.memory_displacement.as_deref(),
             contact: self.contact.as_ref(),
             outcome: self.outcome,
+            reactions: (self.reactions.is_some() && output).then_some(&self.reaction_values[..]),
         })
     }
 
     /// Step 0 with a memory kernel: K_A u_0 + Cᵀλ = F_0 (no history term). When u_0 = 0 solves
-    /// it exactly (no load, and the contact law exerts no force at 0) nothing is factorised.
-    fn step_zero(&mut self, rhs: &[f64]) -> Result<Option<ContactOutcome>, SolveError> {
+    /// it exactly (no load, no prescribed value, and the contact law exerts no force at 0)
+    /// nothing is factorised.
+    fn step_zero(&mut self, rhs: &mut [f64]) -> Result<Option<ContactOutcome>, SolveError> {
         let sim = self.sim;
         let law_at_zero = sim
             .contact
@@ -378,7 +545,8 @@ impl<'s> Stepper<'s> {
             .as_ref()
             .and_then(|c| c.bound.as_ref())
             .is_none_or(|g| g.iter().all(|v| *v >= 0.0));
-        if rhs.iter().all(|v| *v == 0.0) && law_at_zero == 0.0 && bound_ok {
+        let prescribed_zero = self.prescribed.as_ref().is_none_or(|g| g.iter().all(|v| *v == 0.0));
+        if rhs.iter().all(|v| *v == 0.0) && law_at_zero == 0.0 && bound_ok && prescribed_zero {
             let outcome = self.contact.as_mut().map(|s| {
                 let m = s.force.len();
                 *s = ContactState::new(m);
@@ -387,13 +555,13 @@ impl<'s> Stepper<'s> {
             self.displacement.fill(0.0);
             return Ok(outcome);
         }
-        let op = StepOperator::new(sim, &self.symbolic, &self.k_a, &self.counters, &mut self.stats)?;
-        let mut y = Forward::zeros(rhs.len());
+        let mut op = StepOperator::new(sim, &self.symbolic, &self.k_a, &self.counters, &mut self.stats)?;
+        lift(&op, sim, self.prescribed.as_deref(), rhs);
         op.solve(
             sim,
             0,
             rhs,
-            &mut y,
+            self.prescribed.as_deref(),
             &mut self.displacement,
             self.contact.as_mut(),
             &self.counters,
@@ -401,7 +569,7 @@ impl<'s> Stepper<'s> {
         )
     }
 
-    /// rhs ← rhs − K_B h_n (METHOD.md §3); h_0 = 0.
+    /// rhs ← rhs − K_B h_n (docs/method.md §3); h_0 = 0.
     fn subtract_memory_load(&mut self, n: usize, rhs: &mut [f64]) {
         let (Some(history), Some(k_b)) = (&self.history, &self.k_b) else {
             return;
@@ -447,8 +615,25 @@ impl<'s> Stepper<'s> {
     }
 }
 
+/// The prescribed components in a right-hand side (docs/method.md §7): rhs_f −= K_fp g at the
+/// free rows, rhs_p = g_p at the prescribed ones (zero without non-zero values).
+fn lift<const D: usize>(op: &StepOperator, sim: &Simulation<D>, g: Option<&[f64]>, rhs: &mut [f64]) {
+    if let (Some(g), Some(columns)) = (g, &op.lifting) {
+        columns.lift(g, &sim.dofs, rhs);
+    }
+    for (d, r) in rhs.iter_mut().enumerate() {
+        if sim.dofs.is_prescribed(d) {
+            *r = g.map_or(0.0, |g| g[d]);
+        }
+    }
+}
+
 /// Runs the whole time series, handing every step to `sink`. `stop` is polled once per step.
-pub fn run(sim: &Simulation, sink: &mut dyn FrameSink, stop: Option<&AtomicBool>) -> Result<RunStats, SolveError> {
+pub fn run<const D: usize>(
+    sim: &Simulation<D>,
+    sink: &mut dyn FrameSink<D>,
+    stop: Option<&AtomicBool>,
+) -> Result<RunStats, SolveError> {
     let started = Instant::now();
     let mut stepper = Stepper::prepare(sim)?;
     let mut output_seconds = 0.0;

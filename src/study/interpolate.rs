@@ -159,7 +159,7 @@ impl<'m> Locator<'m> {
         for &x in to_points {
             let (c, xi) = self.locate(x).ok_or_else(|| self.outside_message(x))?;
             let cell = &self.cells[c];
-            let s = shape_at(cell, self.points, xi);
+            let s = shape_at(cell, self.points, [xi[0], xi[1], 0.0]);
             let mut nodes = [0usize; MAX_NODES];
             let mut w = [0.0; MAX_NODES];
             nodes[..s.n].copy_from_slice(&cell.nodes()[..s.n]);
@@ -322,6 +322,8 @@ pub fn reference_coordinates(cell: &Cell, points: &[[f64; 2]], x: [f64; 2]) -> (
             }
             (xi, dist)
         }
+        // The interpolation between meshes of a study is 2D (3D cells never reach it).
+        Cell::Tet4(_) | Cell::Hex8(_) => ([0.0; 2], f64::INFINITY),
     }
 }
 

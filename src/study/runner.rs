@@ -138,7 +138,7 @@ struct KeepSink<'a> {
     last: Option<Vec<[f64; 2]>>,
 }
 
-impl FrameSink for KeepSink<'_> {
+impl FrameSink<2> for KeepSink<'_> {
     fn step_done(&mut self, sim: &Simulation, view: &StepView) {
         let last = view.step == sim.time.steps;
         let wanted = self.keep.wants(sim, view.step, view.time);
@@ -202,7 +202,7 @@ pub fn run_with(mesh: Mesh, scene: &Scene, options: &RunOptions) -> Result<RunRe
 pub fn longest_edge(mesh: &Mesh) -> f64 {
     mesh.cells
         .iter()
-        .flat_map(|c| c.edges().collect::<Vec<_>>())
+        .flat_map(|c| c.edges())
         .map(|[a, b]| {
             let (p, q) = (mesh.points[a], mesh.points[b]);
             ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt()

@@ -138,7 +138,10 @@ pub fn run_spec(spec: &StudySpec, dir: &Path, out: &Path, extra: &[String], name
         let n: usize = n
             .parse()
             .map_err(|_| format!("{name}: mesh_files key `{n}` is not an integer n = 1/h"))?;
-        files.insert(n, crate::mesh::read_msh(&dir.join(file)).map_err(|e| e.to_string())?);
+        files.insert(
+            n,
+            crate::mesh::read_mesh::<2>(&dir.join(file)).map_err(|e| e.to_string())?,
+        );
     }
     let make_mesh = |n: usize| -> Mesh {
         match files.get(&n) {

@@ -47,7 +47,7 @@ impl FieldValues<'_> {
 }
 
 /// Checks everything that would make a broken or misleading file, before anything is written.
-pub(crate) fn validate_frame(path: &Path, frame: &Frame) -> Result<(), OutputError> {
+pub(crate) fn validate_frame<const D: usize>(path: &Path, frame: &Frame<D>) -> Result<(), OutputError> {
     if !frame.time.is_finite() {
         return Err(OutputError::invalid_frame(
             path,
@@ -58,11 +58,7 @@ pub(crate) fn validate_frame(path: &Path, frame: &Frame) -> Result<(), OutputErr
         ));
     }
     let n_points = frame.points.len();
-    if let Some(p) = frame
-        .points
-        .iter()
-        .position(|p| !(p[0].is_finite() && p[1].is_finite()))
-    {
+    if let Some(p) = frame.points.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
         return Err(OutputError::invalid_frame(
             path,
             format!("point {p} has a non-finite coordinate {:?}", frame.points[p]),
@@ -130,9 +126,9 @@ impl std::fmt::Debug for VtuBuffer {
 
 /// Validates `frame` and writes it to `path` atomically: raw appended binary built in `buffer`
 /// if `compression_level` is 0, else through vtkio (zlib, inline base64).
-pub(crate) fn write_vtu(
+pub(crate) fn write_vtu<const D: usize>(
     path: &Path,
-    frame: &Frame,
+    frame: &Frame<D>,
     compression_level: u32,
     buffer: &mut VtuBuffer,
 ) -> Result<(), OutputError> {

@@ -105,7 +105,7 @@ fn put_field(buf: &mut Vec<u8>, f: &Field) {
 
 /// Encodes a (validated) frame into `buf` (cleared first, reserved to the exact size) as a
 /// `.vtu` with raw appended binary data; see the module documentation for the layout.
-pub(super) fn encode_vtu_raw(frame: &Frame, buf: &mut Vec<u8>) {
+pub(super) fn encode_vtu_raw<const D: usize>(frame: &Frame<D>, buf: &mut Vec<u8>) {
     let (n_points, n_cells) = (frame.points.len(), frame.cells.len());
     let n_conn: usize = frame.cells.iter().map(|c| c.nodes().len()).sum();
     let mut h = RawHeader {
@@ -148,7 +148,7 @@ pub(super) fn encode_vtu_raw(frame: &Frame, buf: &mut Vec<u8>) {
         let mut b = [0u8; 24];
         b[..8].copy_from_slice(&p[0].to_le_bytes());
         b[8..16].copy_from_slice(&p[1].to_le_bytes());
-        b[16..].copy_from_slice(&0f64.to_le_bytes());
+        b[16..].copy_from_slice(&p.get(2).copied().unwrap_or(0.0).to_le_bytes());
         b
     });
     put_byte_count(buf, 8 * n_conn);

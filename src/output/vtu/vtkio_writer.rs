@@ -44,8 +44,16 @@ fn attribute(f: &Field) -> Attribute {
 /// `compression_level` > 0 (the raw appended layout of [`encode_vtu_raw`] is uncompressed only).
 ///
 /// [`encode_vtu_raw`]: super::raw::encode_vtu_raw
-pub(super) fn encode_vtu_vtkio(path: &Path, frame: &Frame, compression_level: u32) -> Result<Vec<u8>, OutputError> {
-    let points: Vec<f64> = frame.points.iter().flat_map(|p| [p[0], p[1], 0.0]).collect();
+pub(super) fn encode_vtu_vtkio<const D: usize>(
+    path: &Path,
+    frame: &Frame<D>,
+    compression_level: u32,
+) -> Result<Vec<u8>, OutputError> {
+    let points: Vec<f64> = frame
+        .points
+        .iter()
+        .flat_map(|p| [p[0], p[1], p.get(2).copied().unwrap_or(0.0)])
+        .collect();
     let n_conn = frame.cells.iter().map(|c| c.nodes().len()).sum();
     let mut connectivity = Vec::with_capacity(n_conn);
     let mut offsets = Vec::with_capacity(frame.cells.len());
@@ -56,6 +64,8 @@ pub(super) fn encode_vtu_vtkio(path: &Path, frame: &Frame, compression_level: u3
         types.push(match cell {
             Cell::Tri3(_) => CellType::Triangle,
             Cell::Quad4(_) => CellType::Quad,
+            Cell::Tet4(_) => CellType::Tetra,
+            Cell::Hex8(_) => CellType::Hexahedron,
         });
         debug_assert_eq!(*types.last().unwrap() as u8, cell.vtk_type());
     }

@@ -1,0 +1,291 @@
+//! Prescribed displacement components (docs/method.md §7): `groups.clamped` (every component
+//! zero) and `[[dirichlet]]` sections (chosen components, values g(x, y, z, t)). Decided here,
+//! once: which unknowns are prescribed, their values at a time t, the groups whose reactions are
+//! reported, and whether the prescribed components stop every rigid motion of the body.
+
+use super::error::SolveError;
+use crate::fem::DofMap;
+use crate::mesh::{GroupSelector, Mesh};
+use crate::scene::{DirichletSpec, Expr, BODY_FORCE_VARIABLES};
+use std::collections::HashMap;
+
+/// The unknowns of one (group, component) whose reaction is reported.
+#[derive(Clone, Debug)]
+pub struct ReactionGroup {
+    /// The group as the scene names it, e.g. `"Gamma1"`.
+    pub group: String,
+    /// 0, 1 or 2 (x, y, z).
+    pub component: usize,
+    pub unknowns: Vec<usize>,
+}
+
+/// The prescribed components of a run and their values.
+#[derive(Clone, Debug)]
+pub struct Dirichlet<const D: usize> {
+    /// Every prescribed unknown with the expression of its value (None: zero).
+    entries: Vec<(usize, Option<usize>)>,
+    exprs: Vec<Expr>,
+    /// Node coordinates of each entry's node (for evaluating the expressions).
+    at: Vec<[f64; D]>,
+    /// The (group, component) pairs whose reactions are reported, in scene order.
+    pub reaction_groups: Vec<ReactionGroup>,
+}
+
+const COMPONENTS: [&str; 3] = ["x", "y", "z"];
+
+impl<const D: usize> Dirichlet<D> {
+    /// The degree-of-freedom map and the prescribed values of `clamped` (every component zero)
+    /// and the `[[dirichlet]]` sections on `mesh`. A component prescribed twice with different
+    /// values is an error naming both; so is a body whose prescribed components leave a rigid
+    /// motion free.
+    pub fn new(
+        mesh: &Mesh<D>,
+        clamped: Option<&GroupSelector>,
+        sections: &[DirichletSpec],
+    ) -> Result<(DofMap<D>, Self), SolveError> {
+        let origin = mesh.path.display().to_string();
+        let mut dofs = DofMap::new(mesh.points.len(), &[]);
+        let mut out = Dirichlet {
+            entries: Vec::new(),
+            exprs: Vec::new(),
+            at: Vec::new(),
+            reaction_groups: Vec::new(),
+        };
+        // unknown → (who set it, the value's text)
+        let mut set_by: HashMap<usize, (String, String)> = HashMap::new();
+        let mut prescribe = |dofs: &mut DofMap<D>,
+                             out: &mut Dirichlet<D>,
+                             node: usize,
+                             c: usize,
+                             who: &str,
+                             text: &str,
+                             expr: Option<usize>|
+         -> Result<(), SolveError> {
+            let d = dofs.index(node, c);
+            match set_by.get(&d) {
+                Some((other, t)) if t != text => {
+                    let p = mesh.points[node];
+                    return Err(SolveError::Setup(format!(
+                        "{origin}: component {} of the node at {p:?} is prescribed by {other} as \"{t}\" and by {who} \
+                         as \"{text}\"; give the shared nodes one value (or leave the component out of one section)",
+                        COMPONENTS[c]
+                    )));
+                }
+                Some(_) => return Ok(()),
+                None => {}
+            }
+            set_by.insert(d, (who.to_string(), text.to_string()));
+            dofs.prescribe(node, c);
+            out.entries.push((d, expr));
+            out.at.push(mesh.points[node]);
+            Ok(())
+        };
+        if let Some(sel) = clamped {
+            let nodes = mesh.group_nodes(sel)?;
+            if nodes.is_empty() {
+                return Err(SolveError::NoClampedNodes {
+                    mesh: origin,
+                    group: sel.to_string(),
+                });
+            }
+            for c in 0..D {
+                let mut unknowns = Vec::with_capacity(nodes.len());
+                for &p in &nodes {
+                    prescribe(&mut dofs, &mut out, p, c, "groups.clamped", "0", None)?;
+                    unknowns.push(dofs.index(p, c));
+                }
+                out.reaction_groups.push(ReactionGroup {
+                    group: group_name(sel),
+                    component: c,
+                    unknowns,
+                });
+            }
+        }
+        for (i, section) in sections.iter().enumerate() {
+            let nodes = mesh.group_nodes(&section.group)?;
+            if nodes.is_empty() {
+                return Err(SolveError::Setup(format!(
+                    "{origin}: dirichlet[{i}].group = {} has no nodes",
+                    section.group
+                )));
+            }
+            let who = format!("dirichlet[{i}] (group {})", section.group);
+            for (k, name) in section.components.iter().enumerate() {
+                let Some(c) = COMPONENTS[..D].iter().position(|n| n == name) else {
+                    return Err(SolveError::Setup(format!(
+                        "{origin}: dirichlet[{i}].components names \"{name}\", but the mesh is {D}D (components {})",
+                        COMPONENTS[..D].join(", ")
+                    )));
+                };
+                let text = section.value.as_ref().map_or("0", |v| v[k].as_str()).trim().to_string();
+                let expr = if text == "0" {
+                    None
+                } else {
+                    let e = Expr::parse(&text, &BODY_FORCE_VARIABLES).map_err(|e| {
+                        SolveError::Setup(format!("{origin}: dirichlet[{i}].value[{k}] = \"{text}\": {e}"))
+                    })?;
+                    out.exprs.push(e);
+                    Some(out.exprs.len() - 1)
+                };
+                let mut unknowns = Vec::with_capacity(nodes.len());
+                for &p in &nodes {
+                    prescribe(&mut dofs, &mut out, p, c, &who, &text, expr)?;
+                    unknowns.push(dofs.index(p, c));
+                }
+                out.reaction_groups.push(ReactionGroup {
+                    group: group_name(&section.group),
+                    component: c,
+                    unknowns,
+                });
+            }
+        }
+        out.check_rigid_motions(mesh, &dofs)?;
+        Ok((dofs, out))
+    }
+
+    /// True if some prescribed value is not identically zero (then the prescribed part moves
+    /// to the right-hand side every step; else nothing is done for it).
+    pub fn is_nonzero(&self) -> bool {
+        !self.exprs.is_empty()
+    }
+
+    /// True if a prescribed value depends on t.
+    pub fn is_time_dependent(&self) -> bool {
+        self.exprs.iter().any(|e| e.depends_on("t"))
+    }
+
+    /// Number of prescribed unknowns.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// True if nothing is prescribed.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    /// The prescribed values at time t over all unknowns (zero at free ones), into `out`. A
+    /// value that is not finite is an error naming the expression, the point and t.
+    pub fn values(&self, t: f64, out: &mut [f64]) -> Result<(), String> {
+        out.fill(0.0);
+        for (&(d, e), x) in self.entries.iter().zip(&self.at) {
+            if let Some(e) = e {
+                let mut vars = [0.0; 4];
+                vars[..D].copy_from_slice(x);
+                vars[3] = t;
+                let v = self.exprs[e].eval(&vars);
+                if !v.is_finite() {
+                    return Err(format!(
+                        "prescribed displacement \"{}\" is {v} at {x:?}, t = {t}; make it finite on its group",
+                        self.exprs[e].source()
+                    ));
+                }
+                out[d] = v;
+            }
+        }
+        Ok(())
+    }
+
+    /// The rigid motions of the body (D translations, D(D−1)/2 rotations about the centroid)
+    /// that no prescribed component stops: an error naming them.
+    fn check_rigid_motions(&self, mesh: &Mesh<D>, dofs: &DofMap<D>) -> Result<(), SolveError> {
+        let n = mesh.points.len().max(1) as f64;
+        let mut centre = [0.0; D];
+        for p in &mesh.points {
+            for k in 0..D {
+                centre[k] += p[k] / n;
+            }
+        }
+        let extent = mesh
+            .points
+            .iter()
+            .map(|p| (0..D).map(|k| (p[k] - centre[k]).powi(2)).sum::<f64>().sqrt())
+            .fold(f64::MIN_POSITIVE, f64::max);
+        // Modes: translations e_k, then rotations (2D: about z; 3D: about x, y, z).
+        let names: Vec<&str> = if D == 2 {
+            vec!["translation in x", "translation in y", "rotation in the plane"]
+        } else {
+            vec![
+                "translation in x",
+                "translation in y",
+                "translation in z",
+                "rotation about x",
+                "rotation about y",
+                "rotation about z",
+            ]
+        };
+        let modes = names.len();
+        let mut gram = nalgebra::DMatrix::<f64>::zeros(modes, modes);
+        let mut row = vec![0.0; modes];
+        for d in (0..dofs.n()).filter(|&d| dofs.is_prescribed(d)) {
+            let (node, c) = (d / D, d % D);
+            let x: Vec<f64> = (0..D).map(|k| (mesh.points[node][k] - centre[k]) / extent).collect();
+            row.fill(0.0);
+            row[c] = 1.0;
+            if D == 2 {
+                // ω e_z × x = ω (−y, x)
+                row[2] = if c == 0 { -x[1] } else { x[0] };
+            } else {
+                // ω e_a × x, component c
+                for a in 0..3 {
+                    let e = [(a == 0) as u8 as f64, (a == 1) as u8 as f64, (a == 2) as u8 as f64];
+                    let cross = [
+                        e[1] * x[2] - e[2] * x[1],
+                        e[2] * x[0] - e[0] * x[2],
+                        e[0] * x[1] - e[1] * x[0],
+                    ];
+                    row[3 + a] = cross[c];
+                }
+            }
+            for i in 0..modes {
+                for j in 0..modes {
+                    gram[(i, j)] += row[i] * row[j];
+                }
+            }
+        }
+        let eigen = gram.symmetric_eigen();
+        let largest = eigen.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
+        let free_modes = eigen
+            .eigenvalues
+            .iter()
+            .filter(|&&v| v <= 1e-10 * largest.max(1.0))
+            .count();
+        if free_modes == 0 {
+            return Ok(());
+        }
+        // Translations along an axis no prescribed component acts on are free; what is free
+        // beyond them are rotations.
+        let mut free: Vec<String> = (0..D)
+            .filter(|&c| !(0..dofs.n()).any(|d| d % D == c && dofs.is_prescribed(d)))
+            .map(|c| names[c].to_string())
+            .collect();
+        let rotations = free_modes.saturating_sub(free.len());
+        if rotations > 0 {
+            free.push(if D == 2 {
+                "the rotation in the plane (the prescribed components act at a single point)".to_string()
+            } else {
+                format!(
+                    "{rotations} rotation{} (the prescribed components act at too few points or along one line)",
+                    if rotations == 1 { "" } else { "s" }
+                )
+            });
+        }
+        Err(SolveError::Singular {
+            mesh: mesh.path.display().to_string(),
+            detail: format!(
+                "the body is not held against rigid motions: {} {} free ({} components prescribed); clamp a group \
+                 (groups.clamped) or prescribe more components with [[dirichlet]] sections",
+                free.join(", "),
+                if free_modes == 1 { "is" } else { "are" },
+                self.entries.len()
+            ),
+        })
+    }
+}
+
+fn group_name(sel: &GroupSelector) -> String {
+    match sel {
+        GroupSelector::Name(n) => n.clone(),
+        GroupSelector::Tag(t) => t.to_string(),
+    }
+}
