@@ -1,5 +1,5 @@
-"""An independent, vectorised numpy/scipy implementation of hvi's scheme (METHOD.md §2-§5) for the
-paper's example (EXAMPLE.md, with the readings of examples/paper.toml): the reference that hvi's
+"""An independent, vectorised numpy/scipy implementation of hvi's scheme (docs/method.md §2-§5) for the
+paper's example (docs/example.md, with the readings of examples/paper.toml): the reference that hvi's
 whole-run time is measured against (benches/whole_run_vs_numpy.py).
 
 Q1 elements on the structured nx x ny mesh of (0,2)x(0,1), plane stress E = 1, nu = 0.3, memory

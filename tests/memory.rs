@@ -1,4 +1,4 @@
-//! The memory term against closed forms. With ν = 0 in plane stress, A = E·B₀ (EXAMPLE.md's
+//! The memory term against closed forms. With ν = 0 in plane stress, A = E·B₀ (docs/example.md's
 //! B₀ = I), so K_A = E K_B and a load F(t) = F̂ gives u(t) = φ(t) û with K_A û = F̂ and the
 //! scalar Volterra equation E φ(t) + ∫₀ᵗ b(t − s) φ(s) ds = 1.
 

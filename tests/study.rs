@@ -1,4 +1,4 @@
-//! The convergence-study machinery (METHOD.md §6): interpolation between meshes (exact for
+//! The convergence-study machinery (docs/method.md §6): interpolation between meshes (exact for
 //! linear fields on any meshes, exact for nested meshes), observed orders against an exact
 //! solution and against a fine reference run, and a reduced version of the paper's study.
 

@@ -1,8 +1,8 @@
 //! The contact problem of one time step on the m contact normals, solved by a globalised
-//! primal–dual active-set method (METHOD.md §4).
+//! primal–dual active-set method (docs/method.md §4).
 //!
 //! With u_ν = r and the condensed stiffness Q = W⁻¹, one step is the bound-constrained
-//! minimisation (METHOD.md §3, condensed)
+//! minimisation (docs/method.md §3, condensed)
 //!
 //! ```text
 //!     minimise  E(r) = ½ (r − d)ᵀ Q (r − d) + Σ_p w_p j_ε(r_p)   subject to  r_p ≤ g_p,

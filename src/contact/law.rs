@@ -1,5 +1,5 @@
 //! Normal-compliance laws j_ν of the deformable layer and their regularisation
-//! (METHOD.md §4, EXAMPLE.md (5.2)–(5.3)).
+//! (docs/method.md §4, docs/example.md (5.2)–(5.3)).
 //!
 //! A law is a *profile* φ(s), s ≥ 0, φ(0) = 0, scaled by S and composed with a smooth
 //! "magnitude" ρ_ε(r) of the normal displacement r = u_ν:
@@ -14,7 +14,7 @@
 /// The profile φ of a law: value, slope μ = φ' and curvature φ''.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ComplianceProfile {
-    /// φ(s) = b s + (a − b)(1 − e^{−αs})/α, i.e. μ(s) = (a − b)e^{−αs} + b (EXAMPLE.md (5.3)).
+    /// φ(s) = b s + (a − b)(1 − e^{−αs})/α, i.e. μ(s) = (a − b)e^{−αs} + b (docs/example.md (5.3)).
     Paper { a: f64, b: f64, alpha: f64 },
     /// μ(s) = s^p (classical normal compliance c·(u_ν)₊^p, with c = S), p ≥ 1.
     Power { exponent: f64 },
@@ -197,7 +197,7 @@ impl ContactLaw {
     }
 
     /// α_j: the relaxed-monotonicity constant of j (S · sup(−φ'')); uniqueness of the
-    /// continuous problem needs α_j c_j² < m_A (METHOD.md §1).
+    /// continuous problem needs α_j c_j² < m_A (docs/method.md §1).
     pub fn relaxed_monotonicity(&self) -> f64 {
         self.scale * self.profile.max_negative_curvature()
     }

@@ -1,4 +1,4 @@
-//! Contact on Γ₃ (METHOD.md §4): the normal-compliance law j_ν with its regularisation, the
+//! Contact on Γ₃ (docs/method.md §4): the normal-compliance law j_ν with its regularisation, the
 //! condensed operator W = C K⁻¹ Cᵀ on the contact normals, and the globalised primal–dual
 //! active-set (projected semismooth Newton) solver of one time step.
 

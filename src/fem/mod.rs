@@ -1,7 +1,7 @@
 //! Finite elements: reference elements, quadrature, the degree-of-freedom map, the sparse
 //! pattern built once, and global assembly of stiffness matrices and load vectors.
 //!
-//! METHOD.md §2: P1 on triangles, Q1 on quadrilaterals, nodal basis; Γ₁ (clamped) is
+//! docs/method.md §2: P1 on triangles, Q1 on quadrilaterals, nodal basis; Γ₁ (clamped) is
 //! eliminated from the unknowns so the assembled matrices stay symmetric positive definite.
 
 pub mod assembly;

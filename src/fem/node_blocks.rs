@@ -1,7 +1,7 @@
 //! A symmetric matrix stored as the upper triangle of its D × D node blocks, for a product
 //! that moves a third of the bytes of the full compressed-column form.
 //!
-//! The memory term multiplies K_B by a vector every time step (METHOD.md §3, rhs = F − K_B h),
+//! The memory term multiplies K_B by a vector every time step (docs/method.md §3, rhs = F − K_B h),
 //! and that product is bound by memory traffic: full storage reads 16 bytes per entry (value
 //! and row index), this form 9 per stored entry (four values share one 4-byte index) over
 //! about half the entries. It also leaves more of the cache to the factor's sweeps.

@@ -1,4 +1,4 @@
-//! The memory term of the trapezoidal rule (METHOD.md §2–3, §5):
+//! The memory term of the trapezoidal rule (docs/method.md §2–3, §5):
 //!
 //! ```text
 //!     h_n = k Σ_{i=0}^{n−1} ω_i b(t_n − t_i) u_i,    ω_0 = ½, ω_i = 1 (i ≥ 1),

@@ -1,4 +1,4 @@
-//! G = L⁻¹ P Bᵀ for a sparse B with few rows (B = C, the contact normals; METHOD.md §4,
+//! G = L⁻¹ P Bᵀ for a sparse B with few rows (B = C, the contact normals; docs/method.md §4,
 //! "the fast path"), stored column by column in supernode segments.
 //!
 //! A column of Bᵀ has one or two nonzeros. Its forward sweep L⁻¹ P b is nonzero only on the

@@ -1,4 +1,4 @@
-//! Relaxation kernels b(s) of the memory term B(s) = b(s)·B₀ (METHOD.md §1, §5).
+//! Relaxation kernels b(s) of the memory term B(s) = b(s)·B₀ (docs/method.md §1, §5).
 //!
 //! The kernel's *structure* decides how the history sum is computed: polynomials and sums of
 //! exponentials separate in (t_n − t_i) and admit exact O(1)-per-step recursions; anything

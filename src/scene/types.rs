@@ -171,7 +171,7 @@ fn default_regularisation() -> f64 {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum LawKind {
-    /// μ(s) = (a − b) e^{−αs} + b (EXAMPLE.md (5.3)).
+    /// μ(s) = (a − b) e^{−αs} + b (docs/example.md (5.3)).
     Paper { scale: f64, a: f64, b: f64, alpha: f64 },
     /// μ(s) = s^p: p_ν = S (u_ν)₊^p.
     Power { scale: f64, exponent: f64 },

@@ -11,7 +11,7 @@ use crate::material::{Elasticity, PlaneModel, RelaxationKernel};
 use crate::mesh::{GroupSelector, Mesh};
 use crate::scene::{self, Expr, Scene};
 
-/// Uniform time steps t_n = n k, k = T / N (METHOD.md §2).
+/// Uniform time steps t_n = n k, k = T / N (docs/method.md §2).
 #[derive(Clone, Copy, Debug)]
 pub struct TimeGrid {
     pub final_time: f64,

@@ -1,5 +1,5 @@
 //! Run statistics: sizes, per-phase wall time, counters and per-step contact iterations,
-//! written to `summary.json` (ARCHITECTURE.md: timing per phase is collected in one place).
+//! written to `summary.json` (docs/README.md: timing per phase is collected in one place).
 
 use crate::contact::active_set::ContactOutcome;
 use serde::Serialize;

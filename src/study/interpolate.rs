@@ -1,4 +1,4 @@
-//! Point location and interpolation of nodal P1/Q1 fields between meshes (METHOD.md §6: a
+//! Point location and interpolation of nodal P1/Q1 fields between meshes (docs/method.md §6: a
 //! coarse solution is compared with the reference by carrying it onto the reference mesh).
 //!
 //! [`Locator`] puts the cells of a mesh into a uniform bucket grid over their bounding boxes,

@@ -1,4 +1,4 @@
-//! Convergence studies (METHOD.md §6, the paper's Tables 1–2): runs along refinement paths in
+//! Convergence studies (docs/method.md §6, the paper's Tables 1–2): runs along refinement paths in
 //! h and in k, their errors against a reference run or an exact solution, observed orders,
 //! and the tables (Markdown, CSV) and plots (SVG, PNG) that report them.
 //!

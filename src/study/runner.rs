@@ -1,4 +1,4 @@
-//! Runs of a convergence study and their errors against a reference (METHOD.md §6).
+//! Runs of a convergence study and their errors against a reference (docs/method.md §6).
 //!
 //! [`run`] solves one scene on one mesh and keeps what a study needs: the nodal displacement
 //! at T and at the chosen output times, the per-phase times, the Newton count and the peak
