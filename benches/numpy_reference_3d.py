@@ -15,7 +15,9 @@ order that puts the m contact normal unknowns (the u_y of the contact nodes) LAS
 ordering (--ordering) is computed by CHOLMOD on K_ii (the other unknowns), the contact unknowns are
 appended, and the permuted K is factored with CHOLMOD's natural ordering. The trailing m x m block
 L_cc of the factor then gives the condensed stiffness Q = W^-1 = S = K_cc - K_ci K_ii^-1 K_ic =
-L_cc L_cc' with no extra solve (read from CHOLMOD's sparse copy of L, which is then dropped).
+L_cc L_cc' with no extra solve. L_cc is read in place from the last supernodes of CHOLMOD's factor
+(through ctypes: sksparse exposes no such access, and its L() copies the whole factor twice, some
+seconds at n = 48); the layout is checked, with L() as the fallback (--lcc copy forces it).
 One sparse solve per step: y = L^-1 b (forward), the free contact displacement is
 -L_cc^-T y_c (dense m x m triangular solve), the contact problem gives u_nu = r, so the contact
 unknowns u_c = -r are known; replacing y_c by L_cc' u_c and solving L' x = [y_i; L_cc' u_c]
@@ -30,11 +32,14 @@ complementarity residual. Python loops run only over time steps, Newton iteratio
     python3 benches/numpy_reference_3d.py --n 32 --steps 32 [--save out.npy] [--ordering best|amd|metis|nesdis|default]
 
 --save writes the final nodal displacement, shape (nodes, 3), node i + (2n+1)(j + (n+1)k) at
-(i h, j h, k h). --ordering best factors with each of amd, metis, nesdis and CHOLMOD's default
-(all timed and reported, nnz(L) for each) and keeps the fastest; the default, metis, is what that
-survey picked at n = 32, 40, 48. --no-contact / --no-memory drop contact / memory (check (1):
-K u = F); --check-2d also runs benches/numpy_reference.py in plane strain on the 2n x n grid and
-compares (the 3D solution is z-independent, u_z = 0). --threads sets the BLAS threads (default 1).
+(i h, j h, k h). --ordering best factors with each of metis, nesdis and CHOLMOD's default (each
+timed, nnz(L) reported) and keeps the fastest; metis (the default) and nesdis tie within noise at
+n = 32, 40, 48 (nesdis 1-2 % less fill), CHOLMOD's default picks metis's ordering here, and amd has
+1.6-1.7x the fill and 3x the factorisation time. --no-contact / --no-memory drop contact / memory
+(check (1): K u = F); --check-2d also runs benches/numpy_reference.py in plane strain on the 2n x n
+grid and compares (the 3D solution is z-independent with u_z = 0); --direct-history checks the
+moment recursion against the O(N^2) sum. --threads sets the BLAS threads (default 1, as the 2D
+peer; 2 gained about 15 % in the factorisation at n = 40 and nothing in the solves).
 
 Install (Debian 12; its SuiteSparse 5.12 needs scikit-sparse < 0.5):
     apt-get update && apt-get install -y libsuitesparse-dev
@@ -46,6 +51,7 @@ This script then loads OpenBLAS for itself only (--blas auto, by LD_LIBRARY_PATH
 whatever the system's libblas.so.3 alternative points to.
 """
 import argparse
+import ctypes
 import math
 import os
 import sys
@@ -238,7 +244,56 @@ def contact_solve(q, w, d, r, stats):
         r = trial
 
 
-def factor_contact_last(kmat, cdof, ordering):
+class _CholmodFactor(ctypes.Structure):
+    """cholmod_factor of SuiteSparse 5.x (cholmod_core.h), to read the supernodes in place."""
+    _fields_ = ([(f, ctypes.c_size_t) for f in ("n", "minor")]
+                + [(f, ctypes.c_void_p) for f in ("Perm", "ColCount", "IPerm")] + [("nzmax", ctypes.c_size_t)]
+                + [(f, ctypes.c_void_p) for f in ("p", "i", "x", "z", "nz", "next", "prev")]
+                + [(f, ctypes.c_size_t) for f in ("nsuper", "ssize", "xsize", "maxcsize", "maxesize")]
+                + [(f, ctypes.c_void_p) for f in ("super", "pi", "px", "s")]
+                + [(f, ctypes.c_int) for f in ("ordering", "is_ll", "is_super", "is_monotonic", "itype",
+                                                "xtype", "dtype", "useGPU")])
+
+
+def _factor_struct(fac, n):
+    """The cholmod_factor behind a sksparse Factor (the pointer stored right after its _common
+    attribute in the Cython object), if it is the real double supernodal LL' of size n; else None."""
+    words = (ctypes.c_void_p * 6).from_address(id(fac))
+    for k in range(2, 5):
+        if words[k] == id(fac._common) and words[k + 1]:
+            st = _CholmodFactor.from_address(words[k + 1])
+            if (st.n, st.is_super, st.is_ll, st.xtype, st.dtype) == (n, 1, 1, 1, 0) and st.itype in (0, 2):
+                return st
+    return None
+
+
+def trailing_block(fac, n, m):
+    """(L_cc, nnz(L)) read in place from CHOLMOD's supernodal factor: supernode k holds columns
+    super[k]..super[k+1]-1, rows s[pi[k]:pi[k+1]], values x[px[k]:] column-major. None if the
+    layout is not the expected one."""
+    st = _factor_struct(fac, n)
+    if st is None:
+        return None
+    ity, cty = (np.int32, ctypes.c_int32) if st.itype == 0 else (np.int64, ctypes.c_int64)
+    view = lambda ptr, ct, count, dt: np.frombuffer((ct * count).from_address(ptr), dtype=dt)
+    ns = st.nsuper
+    sup, pi, px = (view(p, cty, ns + 1, ity).astype(np.int64) for p in (st.super, st.pi, st.px))
+    srow = view(st.s, cty, st.ssize, ity)
+    xval = view(st.x, ctypes.c_double, st.xsize, np.float64)
+    ncol, nrow = np.diff(sup), np.diff(pi)
+    nnz = int(np.sum(ncol * (ncol + 1) // 2 + ncol * (nrow - ncol)))   # as L() would count
+    c0 = n - m
+    l_cc = np.zeros((m, m))
+    for k in np.flatnonzero(sup[1:] > c0):
+        rows = srow[pi[k]:pi[k + 1]]
+        k0, k1 = sup[k], sup[k + 1]
+        block = xval[px[k]:px[k] + len(rows) * (k1 - k0)].reshape(k1 - k0, len(rows))  # [col, row]
+        cols, sel = np.arange(max(k0, c0), k1), rows >= c0
+        l_cc[np.ix_(rows[sel] - c0, cols - c0)] = block[cols - k0][:, sel].T
+    return np.tril(l_cc), nnz
+
+
+def factor_contact_last(kmat, cdof, ordering, copy_l=False):
     """CHOLMOD LL' of K with the contact unknowns last: (factor, permutation, L_cc, timings)."""
     n, m = kmat.shape[0], len(cdof)
     t0 = time.perf_counter()
@@ -255,14 +310,17 @@ def factor_contact_last(kmat, cdof, ordering):
     del kp
     if not np.array_equal(fac.P(), np.arange(n)):
         raise RuntimeError("CHOLMOD permuted the natural ordering")
-    # L(): CHOLMOD turns the factor simplicial in place (its solves were no slower here) and
-    # returns a sparse copy, of which only the trailing m columns are kept
-    lower = fac.L()
-    nnz = lower.nnz
-    at = lower.indptr[n - m]
-    l_cc = np.zeros((m, m))
-    l_cc[lower.indices[at:] - (n - m), np.repeat(np.arange(m), np.diff(lower.indptr[n - m:]))] = lower.data[at:]
-    del lower
+    got = None if copy_l else trailing_block(fac, n, m)
+    if got is None:                   # sksparse's L(): a simplicial sparse copy of the whole factor
+        if not copy_l:
+            print("  (CHOLMOD's factor layout not recognised: reading L_cc from L())")
+        lower = fac.L()
+        at = lower.indptr[n - m]
+        l_cc = np.zeros((m, m))
+        l_cc[lower.indices[at:] - (n - m), np.repeat(np.arange(m), np.diff(lower.indptr[n - m:]))] = lower.data[at:]
+        got = l_cc, lower.nnz
+        del lower
+    l_cc, nnz = got
     t3 = time.perf_counter()
     return fac, perm, l_cc, nnz, {"ordering": t1 - t0, "factorisation": t2 - t1, "condensation": t3 - t2}
 
@@ -347,6 +405,9 @@ def main():
     ap.add_argument("--steps", type=int, default=32)
     ap.add_argument("--save", help="write the final nodal displacement (nodes x 3) to this .npy")
     ap.add_argument("--ordering", default="metis", choices=["best", "amd", "metis", "nesdis", "default"])
+    ap.add_argument("--lcc", default="struct", choices=["struct", "copy"],
+                    help="read L_cc in place from CHOLMOD's supernodes (struct) or from sksparse's "
+                    "L(), a sparse copy of the whole factor (copy)")
     ap.add_argument("--no-contact", action="store_true")
     ap.add_argument("--no-memory", action="store_true")
     ap.add_argument("--check-2d", action="store_true",
@@ -384,7 +445,7 @@ def main():
     methods = ["metis", "nesdis", "default"] if args.ordering == "best" else [args.ordering]
     best = None
     for method in methods:
-        got = factor_contact_last(kmat, cdof, method)
+        got = factor_contact_last(kmat, cdof, method, args.lcc == "copy")
         print(f"  ordering {method:7s} (on K_ii, contact last): nnz(L) {got[3]}, ordering "
               f"{got[4]['ordering']:.3f} s, factorisation {got[4]['factorisation']:.3f} s, "
               f"L_cc {got[4]['condensation']:.3f} s", flush=True)
@@ -401,7 +462,6 @@ def main():
     # ---- time steps --------------------------------------------------------------------------
     tic = time.perf_counter()
     stats = {"cuts": 0, "factorisations": 0}
-    inner = np.arange(n - m)
     moments = np.zeros((3, n))                                      # M_j = sum w_i (t_n - t_i)^j u_i
     r = np.zeros(m)
     u = np.zeros(n)

@@ -393,6 +393,30 @@ fn check_dim<const D: usize>(
     );
     let _ = writeln!(out, "plan:");
     let _ = write!(out, "{}", Plan::new(&sim));
+    // The factor: symbolic analysis only (cheap), so its size is known before solving.
+    let [k_a] =
+        crate::fem::assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.tensor()]);
+    let analysis = crate::linalg::Factor::analyse(&k_a).map_err(|e| SolveError::Setup(e.to_string()))?;
+    let factor_bytes = 8 * analysis.factor_entries() as u64;
+    let _ = writeln!(
+        out,
+        "factor: {} ordering, nnz(L) = {} ({:.1} MiB per factor, at most 2 factors)",
+        analysis.ordering(),
+        analysis.factor_entries(),
+        factor_bytes as f64 / 1048576.0
+    );
+    if let Some(available) = available_memory_bytes() {
+        if 2 * factor_bytes > available {
+            return Err(SolveError::Setup(format!(
+                "{}: the factor needs {:.1} GiB ({} entries, twice with memory) but {:.1} GiB are available; use a \
+                 coarser mesh (fewer unknowns) or a machine with more memory",
+                mesh_path.display(),
+                2.0 * factor_bytes as f64 / 1073741824.0,
+                analysis.factor_entries(),
+                available as f64 / 1073741824.0
+            )));
+        }
+    }
     if let Some(c) = &sim.contact {
         let _ = writeln!(out, "contact: {} nodes on {}", c.nodes.len(), scene.groups.contact);
         if let Some(law) = &c.law {
@@ -410,6 +434,14 @@ fn check_dim<const D: usize>(
         }
     }
     Ok(out)
+}
+
+/// MemAvailable of /proc/meminfo (Linux), in bytes.
+fn available_memory_bytes() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
 }
 
 /// α_j λ_max(D^{1/2} C K_A⁻¹ Cᵀ D^{1/2}) (see
@@ -503,6 +535,12 @@ pub fn plot(run_dir: &Path, scale: f64) -> Result<Vec<PathBuf>, SolveError> {
         .last()
         .ok_or_else(|| fail("solution.pvd lists no frame".into()))?;
     let vtu = output::read_vtu_arrays(&run_dir.join(last))?;
+    if vtu.points.iter().any(|p| p[2] != 0.0) {
+        return Err(fail(format!(
+            "{last} is a 3D run; hvi plot draws 2D runs only: open solution.pvd in ParaView (Warp By Vector on \
+             displacement, colour by von_mises), or read gamma3.csv"
+        )));
+    }
     let points: Vec<[f64; 2]> = vtu.points.iter().map(|p| [p[0], p[1]]).collect();
     let cells: Vec<crate::mesh::Cell> = vtu
         .connectivity

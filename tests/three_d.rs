@@ -225,10 +225,8 @@ fn patch_test_on_distorted_tetrahedra_and_hexahedra() {
 #[test]
 fn rollers_under_uniaxial_traction_give_the_exact_field_and_reaction() {
     let (e, nu, sigma) = (2.0, 0.25, 0.01);
-    let base = format!(
-        "[[dirichlet]]\ngroup = \"Gamma1\"\ncomponents = [\"x\"]\n[[dirichlet]]\ngroup = \"Gamma3\"\ncomponents = [\"y\"]\n\
-         [time]\nfinal_time = 1.0\nsteps = 2\n"
-    );
+    let base = "[[dirichlet]]\ngroup = \"Gamma1\"\ncomponents = [\"x\"]\n[[dirichlet]]\ngroup = \"Gamma3\"\ncomponents = [\"y\"]\n\
+         [time]\nfinal_time = 1.0\nsteps = 2\n";
     // 2D plane stress: ε_xx = σ/E, ε_yy = −νσ/E; area of x = 0: 1.
     let toml2 = format!(
         "{base}[material]\nplane = \"stress\"\nyoungs_modulus = {e}\npoisson_ratio = {nu}\n\

@@ -71,6 +71,16 @@ pub struct Analysis {
 }
 
 impl Analysis {
+    /// Number of stored entries of the factor L (what a numeric factorisation allocates).
+    pub fn factor_entries(&self) -> usize {
+        self.inner.len_val()
+    }
+
+    /// The ordering used (for the plan).
+    pub fn ordering(&self) -> &'static str {
+        "AMD on the node graph"
+    }
+
     pub(super) fn supernodes(&self) -> &Supernodes {
         &self.supernodes
     }
