@@ -226,6 +226,35 @@ pub struct Summary<'a> {
 /// (quadrilaterals) or `rect:NXxNY:tri` (triangles) when no such file exists.
 pub fn read_mesh(path: &Path) -> Result<AnyMesh, SolveError> {
     let text = path.to_string_lossy();
+    if let (Some(spec), false) = (text.strip_prefix("box:"), path.exists()) {
+        let (dims, shape) = match spec.split_once(':') {
+            Some((d, "tet")) => (d, mesh::structured::SolidShape::Tet),
+            Some((d, "hex")) | Some((d, "")) => (d, mesh::structured::SolidShape::Hex),
+            None => (spec, mesh::structured::SolidShape::Hex),
+            Some((_, other)) => {
+                return Err(SolveError::Setup(format!(
+                    "mesh spec {text}: unknown cell shape `{other}` (use hex or tet)"
+                )))
+            }
+        };
+        let parsed: Option<Vec<usize>> = dims.split('x').map(|v| v.parse::<usize>().ok()).collect();
+        return match parsed.as_deref() {
+            Some(&[nx, ny, nz])
+                if nx > 0 && ny > 0 && nz > 0 && nx.saturating_mul(ny).saturating_mul(nz) <= 20_000_000 =>
+            {
+                // cubic cells: the slab (0,2)×(0,1)×(0, nz/ny) for nx = 2 ny
+                let h = 1.0 / ny as f64;
+                Ok(AnyMesh::Three(mesh::structured::block(
+                    [nx as f64 * h, 1.0, nz as f64 * h],
+                    [nx, ny, nz],
+                    shape,
+                )))
+            }
+            _ => Err(SolveError::Setup(format!(
+                "mesh spec {text}: expected box:NXxNYxNZ[:tet] with counts ≥ 1, e.g. box:64x32x8 (cubic cells of size 1/NY: the slab (0, NX/NY)×(0,1)×(0, NZ/NY))"
+            ))),
+        };
+    }
     if let (Some(spec), false) = (text.strip_prefix("rect:"), path.exists()) {
         let (dims, shape) = match spec.split_once(':') {
             Some((d, "tri")) => (d, mesh::structured::CellShape::Tri),

@@ -318,3 +318,46 @@ fn free_rigid_motions_are_named() {
     .to_string();
     assert!(err.contains("2D models"), "{err}");
 }
+
+/// The built-in block mesher: both cell shapes fill the box, every group is a boundary part
+/// whose weights add up to its area, and the slab mesh of gmsh equals it node for node.
+#[test]
+fn structured_block_matches_the_gmsh_slab() {
+    use hvi::mesh::structured::{block, SolidShape};
+    use hvi::mesh::GroupSelector;
+    for shape in [SolidShape::Hex, SolidShape::Tet] {
+        let m = block([2.0, 1.0, 0.25], [8, 4, 2], shape);
+        let volume: f64 = m
+            .cells
+            .iter()
+            .map(|c| {
+                hvi::fem::element::stiffness_rule(c)
+                    .iter()
+                    .map(|q| q.weight * hvi::fem::element::shape_at(c, &m.points, q.xi).det_j)
+                    .sum::<f64>()
+            })
+            .sum();
+        assert!((volume - 0.5).abs() < 1e-13, "{shape:?}: volume {volume}");
+        for (name, area) in [("Gamma1", 0.25), ("Gamma2", 0.75), ("Gamma3", 0.5), ("Sides", 4.0)] {
+            let part = m
+                .boundary(&GroupSelector::from(name))
+                .unwrap_or_else(|e| panic!("{shape:?}: {e}"));
+            let w: f64 = part.weights.iter().sum();
+            assert!((w - area).abs() < 1e-13, "{shape:?} {name}: {w}");
+        }
+    }
+    let gmsh = mesh::<3>("slab_q1_h8_z1.msh");
+    let ours = block([2.0, 1.0, 0.125], [16, 8, 1], SolidShape::Hex);
+    let key = |p: &[f64; 3]| {
+        [
+            (p[0] * 1e6).round() as i64,
+            (p[1] * 1e6).round() as i64,
+            (p[2] * 1e6).round() as i64,
+        ]
+    };
+    let mut a: Vec<_> = gmsh.points.iter().map(key).collect();
+    let mut b: Vec<_> = ours.points.iter().map(key).collect();
+    a.sort();
+    b.sort();
+    assert_eq!(a, b);
+}

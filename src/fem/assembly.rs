@@ -4,19 +4,12 @@
 //! precomputed positions.
 
 use super::dofs::DofMap;
-use super::element::{shape_at, stiffness_rule, MAX_NODES};
+use super::element::{shape_at, stiffness_rule};
 use super::pattern::{Pattern, SymmetricMatrix};
 use crate::material::Isotropic;
 use crate::mesh::Cell;
 use rayon::prelude::*;
 use std::sync::Arc;
-
-/// Largest local size: 3 components × 8 nodes.
-const MAX_LOCAL: usize = 3 * MAX_NODES;
-
-/// A local stiffness matrix, row-major over the cell's D·n_nodes dofs (the leading block of a
-/// fixed-size array).
-pub type LocalMatrix = [[f64; MAX_LOCAL]; MAX_LOCAL];
 
 /// Local stiffness ∫_cell ε(v) : C ε(u) dx for each isotropic tensor C = (λ, μ) in `cs`: for
 /// dofs (a, i) and (b, j),
@@ -25,14 +18,19 @@ pub type LocalMatrix = [[f64; MAX_LOCAL]; MAX_LOCAL];
 ///   K[(a,i),(b,j)] = ∫ λ ∂ᵢN_a ∂ⱼN_b + μ (δᵢⱼ ∇N_a·∇N_b + ∂ⱼN_a ∂ᵢN_b) dx
 /// ```
 ///
-/// (computed together: they share the shape gradients).
+/// (computed together: they share the shape gradients), written row-major into `out[m]`
+/// (each nl × nl, nl = D · nodes of the cell, zeroed here).
 pub fn local_stiffness<const D: usize, const M: usize>(
     cell: &Cell,
     points: &[[f64; D]],
     cs: &[Isotropic; M],
-) -> [LocalMatrix; M] {
-    let mut k = [[[0.0; MAX_LOCAL]; MAX_LOCAL]; M];
+    out: &mut [&mut [f64]; M],
+) {
     let n = cell.nodes().len();
+    let nl = D * n;
+    for km in out.iter_mut() {
+        km[..nl * nl].fill(0.0);
+    }
     for q in stiffness_rule(cell) {
         let s = shape_at(cell, points, q.xi);
         let w = q.weight * s.det_j;
@@ -41,14 +39,15 @@ pub fn local_stiffness<const D: usize, const M: usize>(
             for b in a..n {
                 let gb = s.grad[b];
                 let dot: f64 = (0..D).map(|r| ga[r] * gb[r]).sum();
-                for (c, km) in cs.iter().zip(k.iter_mut()) {
+                for (c, km) in cs.iter().zip(out.iter_mut()) {
                     for i in 0..D {
+                        let row = (D * a + i) * nl + D * b;
                         for j in 0..D {
                             let mut v = c.lambda * ga[i] * gb[j] + c.mu * ga[j] * gb[i];
                             if i == j {
                                 v += c.mu * dot;
                             }
-                            km[D * a + i][D * b + j] += w * v;
+                            km[row + j] += w * v;
                         }
                     }
                 }
@@ -56,18 +55,13 @@ pub fn local_stiffness<const D: usize, const M: usize>(
         }
     }
     // Symmetric: the node blocks below the diagonal mirror those above it.
-    let nl = D * n;
-    for km in k.iter_mut() {
-        #[allow(clippy::needless_range_loop)] // reads row j while writing column j
-        for j in 0..nl {
-            for i in j + 1..nl {
-                if i / D > j / D {
-                    km[i][j] = km[j][i];
-                }
+    for km in out.iter_mut() {
+        for i in 0..nl {
+            for j in 0..(i / D) * D {
+                km[i * nl + j] = km[j * nl + i];
             }
         }
     }
-    k
 }
 
 /// K_A and K_B on one pattern.
@@ -89,7 +83,8 @@ pub fn assemble_stiffness<const D: usize, const M: usize>(
 }
 
 /// Assembles on an existing pattern (re-assembly reuses the scatter map). Cells are done in
-/// chunks so that the local matrices held at once stay bounded.
+/// chunks, each chunk's local matrices computed in parallel into one buffer, so that the local
+/// matrices held at once stay bounded.
 pub fn assemble_on<const D: usize, const M: usize>(
     pattern: &Arc<Pattern>,
     cells: &[Cell],
@@ -97,17 +92,26 @@ pub fn assemble_on<const D: usize, const M: usize>(
     cs: &[Isotropic; M],
 ) -> [SymmetricMatrix; M] {
     let mut out: [SymmetricMatrix; M] = std::array::from_fn(|_| SymmetricMatrix::zeros(pattern.clone()));
+    let nl_max = D * cells.iter().map(|c| c.nodes().len()).max().unwrap_or(0);
+    let stride = nl_max * nl_max;
     const CHUNK: usize = 4096;
+    let mut buffer = vec![0.0; CHUNK.min(cells.len()) * M * stride];
     for (chunk, cell_chunk) in cells.chunks(CHUNK).enumerate() {
-        let locals: Vec<[LocalMatrix; M]> = cell_chunk.par_iter().map(|c| local_stiffness(c, points, cs)).collect();
-        for (k, (cell, km)) in cell_chunk.iter().zip(&locals).enumerate() {
+        buffer
+            .par_chunks_mut(M * stride)
+            .zip(cell_chunk.par_iter())
+            .for_each(|(local, cell)| {
+                let mut parts = local.chunks_mut(stride);
+                let mut views: [&mut [f64]; M] = std::array::from_fn(|_| parts.next().expect("M parts"));
+                local_stiffness(cell, points, cs, &mut views);
+            });
+        for (k, (cell, local)) in cell_chunk.iter().zip(buffer.chunks(M * stride)).enumerate() {
             let nl = D * cell.nodes().len();
             let pos = pattern.cell_scatter(chunk * CHUNK + k);
             for (m, mat) in out.iter_mut().enumerate() {
-                for i in 0..nl {
-                    for j in 0..nl {
-                        mat.values[pos[i * nl + j]] += km[m][i][j];
-                    }
+                let km = &local[m * stride..m * stride + nl * nl];
+                for (p, v) in pos.iter().zip(km) {
+                    mat.values[*p] += v;
                 }
             }
         }

@@ -93,3 +93,150 @@ pub fn rectangle(lx: f64, ly: f64, nx: usize, ny: usize, kind: CellShape) -> Mes
         groups,
     }
 }
+
+/// The cell shape of [`block`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SolidShape {
+    /// Trilinear hexahedra (Q1), one per grid box.
+    Hex,
+    /// Linear tetrahedra (P1): each grid box split into six around its diagonal from the
+    /// corner (0, 0, 0) to (1, 1, 1) (conforming across boxes).
+    Tet,
+}
+
+/// A structured mesh of the box (0, lx) × (0, ly) × (0, lz) with `nx` × `ny` × `nz` grid boxes and
+/// the groups of `meshes/slab.geo`: `Gamma1` (dim 2, tag 1, x = 0), `Gamma2` (tag 2, x = lx and
+/// y = ly), `Gamma3` (tag 3, y = 0), `Gamma2_top` (tag 4, y = ly only), `Sides` (tag 6, z = 0 and
+/// z = lz) and `Omega` (dim 3, tag 5). Point `i + (nx + 1)(j + (ny + 1) k)` is at
+/// `(i lx / nx, j ly / ny, k lz / nz)`. The path is `<block NXxNYxNZ>`.
+///
+/// # Panics
+/// If a count is 0 or a length is not positive and finite (a programming error, not bad input).
+pub fn block(l: [f64; 3], n: [usize; 3], kind: SolidShape) -> Mesh<3> {
+    assert!(n.iter().all(|&v| v > 0), "block: counts must be positive (got {n:?})");
+    assert!(
+        l.iter().all(|&v| v > 0.0 && v.is_finite()),
+        "block: lengths must be positive (got {l:?})"
+    );
+    let [nx, ny, nz] = n;
+    let id = |i: usize, j: usize, k: usize| i + (nx + 1) * (j + (ny + 1) * k);
+    let mut points = Vec::with_capacity((nx + 1) * (ny + 1) * (nz + 1));
+    for k in 0..=nz {
+        for j in 0..=ny {
+            for i in 0..=nx {
+                points.push([
+                    l[0] * i as f64 / nx as f64,
+                    l[1] * j as f64 / ny as f64,
+                    l[2] * k as f64 / nz as f64,
+                ]);
+            }
+        }
+    }
+    let mut cells = Vec::new();
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let c = [
+                    id(i, j, k),
+                    id(i + 1, j, k),
+                    id(i + 1, j + 1, k),
+                    id(i, j + 1, k),
+                    id(i, j, k + 1),
+                    id(i + 1, j, k + 1),
+                    id(i + 1, j + 1, k + 1),
+                    id(i, j + 1, k + 1),
+                ];
+                match kind {
+                    SolidShape::Hex => cells.push(Cell::Hex8(c)),
+                    SolidShape::Tet => {
+                        // Six tetrahedra sharing the diagonal c0–c6 (Kuhn's split), each positive.
+                        for [a, b] in [[1, 2], [2, 3], [3, 7], [7, 4], [4, 5], [5, 1]] {
+                            let t = Cell::Tet4([c[0], c[a], c[b], c[6]]);
+                            let (p0, p1, p2, p3) = (points[c[0]], points[c[a]], points[c[b]], points[c[6]]);
+                            let d = |p: [f64; 3], q: [f64; 3]| [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
+                            let (u, v, w) = (d(p0, p1), d(p0, p2), d(p0, p3));
+                            let det = u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0])
+                                + u[2] * (v[0] * w[1] - v[1] * w[0]);
+                            cells.push(if det > 0.0 { t } else { t.flipped() });
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let cell_tags = (1..=cells.len()).collect();
+    // Boundary faces, each oriented outward (counter-clockwise seen from outside).
+    let faces = |fixed: usize, at_max: bool| -> Vec<Facet> {
+        let mut out = Vec::new();
+        let (a, b) = match fixed {
+            0 => (1, 2),
+            1 => (2, 0),
+            _ => (0, 1),
+        };
+        for q in 0..n[b] {
+            for p in 0..n[a] {
+                let corner = |dp: usize, dq: usize| {
+                    let mut ijk = [0usize; 3];
+                    ijk[fixed] = if at_max { n[fixed] } else { 0 };
+                    ijk[a] = p + dp;
+                    ijk[b] = q + dq;
+                    id(ijk[0], ijk[1], ijk[2])
+                };
+                // (a, b, fixed) is a right-handed cyclic triple: a × b points along +fixed.
+                let ccw = [corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1)];
+                match kind {
+                    SolidShape::Hex => {
+                        out.push(Facet::from(if at_max { ccw } else { [ccw[0], ccw[3], ccw[2], ccw[1]] }))
+                    }
+                    SolidShape::Tet => {
+                        // The faces of the six tetrahedra on a box face: split along the diagonal
+                        // through the box's corner nearest (0, 0, 0) or farthest from it.
+                        // (every box face holds exactly one end of the diagonal c0–c6: ccw[0]–ccw[2])
+                        for t in [[ccw[0], ccw[1], ccw[2]], [ccw[0], ccw[2], ccw[3]]] {
+                            out.push(Facet::from(if at_max { t } else { [t[0], t[2], t[1]] }));
+                        }
+                    }
+                }
+            }
+        }
+        out
+    };
+    let (x0, x1, y0, y1, z0, z1) = (
+        faces(0, false),
+        faces(0, true),
+        faces(1, false),
+        faces(1, true),
+        faces(2, false),
+        faces(2, true),
+    );
+    let surface = |tag: i32, name: &str, facets: Vec<Facet>| PhysicalGroup {
+        dim: 2,
+        tag,
+        name: Some(name.to_string()),
+        facets,
+        cells: Vec::new(),
+        nodes: Vec::new(),
+    };
+    let groups = vec![
+        surface(1, "Gamma1", x0),
+        surface(2, "Gamma2", x1.iter().chain(&y1).copied().collect()),
+        surface(3, "Gamma3", y0),
+        surface(4, "Gamma2_top", y1),
+        PhysicalGroup {
+            dim: 3,
+            tag: 5,
+            name: Some("Omega".to_string()),
+            facets: Vec::new(),
+            cells: (0..cells.len()).collect(),
+            nodes: Vec::new(),
+        },
+        surface(6, "Sides", z0.into_iter().chain(z1).collect()),
+    ];
+    Mesh {
+        path: PathBuf::from(format!("<block {nx}x{ny}x{nz}>")),
+        points,
+        cells,
+        cell_tags,
+        groups,
+    }
+}
