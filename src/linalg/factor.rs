@@ -65,6 +65,7 @@ pub fn set_parallelism(threads: usize) {
 #[derive(Clone)]
 pub struct Analysis {
     inner: Arc<SymbolicCholesky<usize>>,
+    ordering: NodeOrdering,
     supernodes: Arc<Supernodes>,
     /// The split of the elimination tree for parallel sweeps (None: sequential only).
     pub(super) schedule: Option<Arc<Schedule>>,
@@ -76,9 +77,12 @@ impl Analysis {
         self.inner.len_val()
     }
 
-    /// The ordering used (for the plan).
+    /// The ordering used (for the plan and summary.json).
     pub fn ordering(&self) -> &'static str {
-        "AMD on the node graph"
+        match self.ordering {
+            NodeOrdering::Amd => "AMD on the node graph",
+            NodeOrdering::NestedDissection => "nested dissection (METIS) on the node graph",
+        }
     }
 
     pub(super) fn supernodes(&self) -> &Supernodes {
@@ -107,14 +111,44 @@ pub struct Factor {
 }
 
 impl Factor {
-    /// Symbolic analysis of the pattern of `matrix` (reusable for every matrix on it).
+    /// Symbolic analysis of the pattern of `matrix` (reusable for every matrix on it), with the
+    /// ordering chosen by the measured rule (docs/method.md §9): AMD on the node graph in 2D
+    /// (nested dissection gives no less fill there), and in 3D whichever of AMD and nested
+    /// dissection gives the smaller factor (nested dissection, from a few thousand nodes on).
     pub fn analyse(matrix: &SymmetricMatrix) -> Result<Analysis, FactorError> {
+        let mut choices = vec![NodeOrdering::Amd];
+        if matrix.pattern.block == 3 {
+            choices.push(NodeOrdering::NestedDissection);
+        }
+        let mut best: Option<Analysis> = None;
+        for ordering in choices {
+            let Ok(a) = Self::analyse_with(matrix, ordering) else {
+                continue;
+            };
+            if best.as_ref().is_none_or(|b| a.factor_entries() < b.factor_entries()) {
+                best = Some(a);
+            }
+        }
+        match best {
+            Some(a) => Ok(a),
+            None => Self::analyse_with(matrix, NodeOrdering::Amd),
+        }
+    }
+
+    /// Symbolic analysis with a given ordering of the node graph.
+    pub fn analyse_with(matrix: &SymmetricMatrix, ordering: NodeOrdering) -> Result<Analysis, FactorError> {
         let params = CholeskySymbolicParams {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
             ..Default::default()
         };
         let pattern = matrix.pattern.symbolic();
-        let node_order = node_ordering(&matrix.pattern);
+        let node_order = match ordering {
+            NodeOrdering::Amd => amd_ordering(&matrix.pattern),
+            NodeOrdering::NestedDissection => Some(
+                nested_dissection(&matrix.pattern).ok_or_else(|| FactorError::Other("METIS NodeND failed".into()))?,
+            ),
+        };
+        let ordering_used = ordering;
         let ordering = match &node_order {
             Some((fwd, inv)) => SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(fwd, inv, matrix.n())),
             None => SymmetricOrdering::Amd,
@@ -129,6 +163,7 @@ impl Factor {
         };
         Ok(Analysis {
             inner: Arc::new(inner),
+            ordering: ordering_used,
             schedule: Schedule::new(&supernodes).map(Arc::new),
             supernodes: Arc::new(supernodes),
         })
@@ -253,9 +288,70 @@ impl Factor {
     }
 }
 
+/// A fill-reducing ordering of the node graph.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NodeOrdering {
+    /// Approximate minimum degree (faer).
+    Amd,
+    /// Nested dissection (METIS_NodeND, vendored METIS 5).
+    NestedDissection,
+}
+
+/// A node ordering (fwd: new → old node) expanded to the D unknowns of each node, kept together.
+fn expand(fwd: &[usize], d: usize) -> (Vec<usize>, Vec<usize>) {
+    let dof_fwd: Vec<usize> = fwd.iter().flat_map(|&k| (0..d).map(move |c| d * k + c)).collect();
+    let mut dof_inv = vec![0; dof_fwd.len()];
+    for (i, &p) in dof_fwd.iter().enumerate() {
+        dof_inv[p] = i;
+    }
+    (dof_fwd, dof_inv)
+}
+
+/// Nested dissection of the node graph by METIS (written by hand only as the unsafe call: the
+/// `metis` crate wraps partitioning but not NodeND), expanded to the unknowns.
+fn nested_dissection(pattern: &crate::fem::pattern::Pattern) -> Option<(Vec<usize>, Vec<usize>)> {
+    use metis_sys::idx_t;
+    let graph = pattern.node_graph();
+    let n = graph.len();
+    if n == 0 || n > idx_t::MAX as usize || graph.nodes.len() > idx_t::MAX as usize {
+        return None;
+    }
+    // METIS wants the adjacency without self loops.
+    let mut xadj: Vec<idx_t> = Vec::with_capacity(n + 1);
+    let mut adjncy: Vec<idx_t> = Vec::with_capacity(graph.nodes.len());
+    xadj.push(0);
+    for k in 0..n {
+        adjncy.extend(graph.coupled(k).iter().filter(|&&q| q != k).map(|&q| q as idx_t));
+        xadj.push(adjncy.len() as idx_t);
+    }
+    let mut nvtxs = n as idx_t;
+    let (mut perm, mut iperm) = (vec![0 as idx_t; n], vec![0 as idx_t; n]);
+    let mut options = [0 as idx_t; metis_sys::METIS_NOPTIONS as usize];
+    // SAFETY: every array has the length METIS reads or writes: options METIS_NOPTIONS, xadj
+    // n + 1, adjncy xadj[n], perm and iperm n; a null vwgt means unit weights.
+    let status = unsafe {
+        metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
+        metis_sys::METIS_NodeND(
+            &mut nvtxs,
+            xadj.as_mut_ptr(),
+            adjncy.as_mut_ptr(),
+            std::ptr::null_mut(),
+            options.as_mut_ptr(),
+            perm.as_mut_ptr(),
+            iperm.as_mut_ptr(),
+        )
+    };
+    if status != metis_sys::rstatus_et_METIS_OK as i32 {
+        return None;
+    }
+    // Row i of the permuted matrix is row perm[i] of the original: perm is faer's forward array.
+    let fwd: Vec<usize> = perm.iter().map(|&p| p as usize).collect();
+    Some(expand(&fwd, pattern.block))
+}
+
 /// AMD on the node graph of the pattern, expanded to the D unknowns of each node, kept
 /// together: a graph D² times smaller to order, and supernodes that never split a node.
-fn node_ordering(pattern: &crate::fem::pattern::Pattern) -> Option<(Vec<usize>, Vec<usize>)> {
+fn amd_ordering(pattern: &crate::fem::pattern::Pattern) -> Option<(Vec<usize>, Vec<usize>)> {
     let d = pattern.block;
     let n = pattern.n;
     let graph = pattern.node_graph();
@@ -278,10 +374,6 @@ fn node_ordering(pattern: &crate::fem::pattern::Pattern) -> Option<(Vec<usize>, 
         MemStack::new(&mut buffer),
     )
     .ok()?;
-    let dof_fwd: Vec<usize> = fwd.iter().flat_map(|&k| (0..d).map(move |c| d * k + c)).collect();
-    let mut dof_inv = vec![0; n];
-    for (i, &p) in dof_fwd.iter().enumerate() {
-        dof_inv[p] = i;
-    }
-    Some((dof_fwd, dof_inv))
+    let _ = n;
+    Some(expand(&fwd, d))
 }

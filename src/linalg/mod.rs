@@ -39,7 +39,7 @@ mod forward_columns;
 mod schedule;
 mod supernodes;
 
-pub use factor::{set_parallelism, Analysis, Counters, Factor, FactorError, Forward};
+pub use factor::{set_parallelism, Analysis, Counters, Factor, FactorError, Forward, NodeOrdering};
 pub use forward_columns::ForwardColumns;
 
 /// Solves with a fixed matrix K (docs/method.md §9): the seam a second linear-algebra backend
