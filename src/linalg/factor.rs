@@ -341,7 +341,7 @@ fn nested_dissection(pattern: &crate::fem::pattern::Pattern) -> Option<(Vec<usiz
             iperm.as_mut_ptr(),
         )
     };
-    if status != metis_sys::rstatus_et_METIS_OK as i32 {
+    if status != metis_sys::rstatus_et_METIS_OK {
         return None;
     }
     // Row i of the permuted matrix is row perm[i] of the original: perm is faer's forward array.
