@@ -17,7 +17,6 @@
 use crate::fem::DofMap;
 use crate::linalg::{Counters, Factor, Forward, ForwardColumns, LinearSolver};
 use crate::mesh::BoundaryPart;
-use faer::linalg::solvers::Solve;
 use faer::Mat;
 use std::sync::Arc;
 
@@ -138,7 +137,10 @@ impl DenseNormalStiffness {
         let llt = wm
             .llt(faer::Side::Lower)
             .map_err(|_| "the condensed contact operator W = C K⁻¹ Cᵀ is not positive definite (are two contact nodes sharing one position, or is a contact node's normal fully constrained?)".to_string())?;
-        let inv = llt.solve(Mat::<f64>::identity(m, m));
+        let inv = {
+            use faer::linalg::solvers::DenseSolveCore;
+            llt.inverse()
+        };
         let mut q = vec![0.0; m * m];
         for p in 0..m {
             for r in 0..m {
@@ -223,8 +225,20 @@ impl SplitSweeps {
         factor: Arc<Factor>,
         counters: &Counters,
     ) -> Result<Self, String> {
+        let t0 = std::time::Instant::now();
         let columns = ForwardColumns::new(&factor, nodes.rows(), counters);
-        let stiffness = DenseNormalStiffness::from_w(columns.gram(), nodes.len())?;
+        let t1 = std::time::Instant::now();
+        let gram = columns.gram();
+        let t2 = std::time::Instant::now();
+        let stiffness = DenseNormalStiffness::from_w(gram, nodes.len())?;
+        if std::env::var_os("HVI_PROFILE").is_some() {
+            eprintln!(
+                "G {:.3} s, GᵀG {:.3} s, W⁻¹ {:.3} s",
+                (t1 - t0).as_secs_f64(),
+                (t2 - t1).as_secs_f64(),
+                t2.elapsed().as_secs_f64()
+            );
+        }
         let y = Forward::zeros(factor.n());
         Ok(SplitSweeps {
             factor,

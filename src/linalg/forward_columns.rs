@@ -106,39 +106,57 @@ impl ForwardColumns {
         }
     }
 
-    /// Gᵀ G (row-major, symmetric) = B K⁻¹ Bᵀ. Two columns meet only on the supernodes their
-    /// paths share, found by merging the two sorted segment lists.
+    /// Gᵀ G (row-major, symmetric) = B K⁻¹ Bᵀ, supernode by supernode: the segments of the
+    /// k columns whose paths pass through a supernode of width w form a dense w × k block G_s,
+    /// and W = Σ_s G_sᵀ G_s, each term one matrix product (faer) scattered into W. Two threads
+    /// take alternate supernodes into their own W, summed at the end.
     pub fn gram(&self) -> Vec<f64> {
         let m = self.len();
-        let rows: Vec<Vec<f64>> = (0..m)
+        let n_supernodes = self.segments.iter().map(|s| s.supernode + 1).max().unwrap_or(0);
+        // (column, segment) pairs on each supernode, columns ascending
+        let mut on: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n_supernodes];
+        for c in 0..m {
+            for k in self.column_start[c]..self.column_start[c + 1] {
+                on[self.segments[k].supernode].push((c, k));
+            }
+        }
+        let threads = rayon::current_num_threads().clamp(1, 2);
+        let parts: Vec<Vec<f64>> = (0..threads)
             .into_par_iter()
-            .map(|p| (0..=p).map(|q| self.column_dot(p, q)).collect())
+            .map(|t| {
+                let mut w = vec![0.0; m * m];
+                for list in on.iter().skip(t).step_by(threads) {
+                    let Some(&(_, first)) = list.first() else { continue };
+                    let width = self.segments[first].len;
+                    let g = faer::Mat::<f64>::from_fn(width, list.len(), |r, c| {
+                        self.segment_values(&self.segments[list[c].1])[r]
+                    });
+                    let block = g.transpose() * &g;
+                    for (a, &(ca, _)) in list.iter().enumerate() {
+                        let row = &mut w[ca * m..(ca + 1) * m];
+                        for (b, &(cb, _)) in list.iter().enumerate() {
+                            row[cb] += block[(a, b)];
+                        }
+                    }
+                }
+                w
+            })
             .collect();
         let mut w = vec![0.0; m * m];
-        for (p, row) in rows.iter().enumerate() {
-            for (q, &v) in row.iter().enumerate() {
+        for part in &parts {
+            for (x, y) in w.iter_mut().zip(part) {
+                *x += y;
+            }
+        }
+        // exact symmetry
+        for p in 0..m {
+            for q in 0..p {
+                let v = 0.5 * (w[p * m + q] + w[q * m + p]);
                 w[p * m + q] = v;
                 w[q * m + p] = v;
             }
         }
         w
-    }
-
-    fn column_dot(&self, p: usize, q: usize) -> f64 {
-        let (a, b) = (self.column(p), self.column(q));
-        let (mut i, mut j, mut sum) = (0, 0, 0.0);
-        while i < a.len() && j < b.len() {
-            match a[i].supernode.cmp(&b[j].supernode) {
-                std::cmp::Ordering::Less => i += 1,
-                std::cmp::Ordering::Greater => j += 1,
-                std::cmp::Ordering::Equal => {
-                    sum += dot(self.segment_values(&a[i]), self.segment_values(&b[j]));
-                    i += 1;
-                    j += 1;
-                }
-            }
-        }
-        sum
     }
 }
 

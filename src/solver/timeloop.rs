@@ -584,7 +584,8 @@ impl<'s, const D: usize> Stepper<'s, D> {
         });
     }
 
-    /// Records u_n in the history and keeps m_n = h_n + (k/2) b(0) u_n for the stresses.
+    /// Records u_n in the history and keeps m_n = h_n + (k/2) b(0) u_n for the stresses (m_0 = 0:
+    /// the trapezoidal sum is empty at n = 0, docs/method.md §3).
     fn update_history(&mut self, n: usize) {
         let (Some(history), Some(c)) = (&mut self.history, self.memory_diagonal) else {
             return;
@@ -597,7 +598,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
             *memory_displacement = wanted.then(|| {
                 h.iter()
                     .zip(u)
-                    .map(|(hv, uv)| if n == 0 { c * uv } else { hv + c * uv })
+                    .map(|(hv, uv)| if n == 0 { 0.0 } else { hv + c * uv })
                     .collect()
             });
             history.push(u);

@@ -1,0 +1,721 @@
+//! hvi's sparse Cholesky (faer, with hvi's choice of ordering) against SuiteSparse CHOLMOD on the
+//! step matrix K = K_A + (k/2) b(0) K_B of the 3D slab (examples/slab.toml on the Q1 box
+//! 2 × 1 × 0.25 with 2n × n × n/4 cells), the same matrix (one MatrixMarket file) in the same run,
+//! interleaved (the issue's floor: nnz(L) within 1.2× of CHOLMOD's best ordering and a numeric
+//! factorisation no slower than CHOLMOD's).
+//!
+//! `cargo bench --bench factor_vs_cholmod_3d` — needs python3 with scikit-sparse
+//! (`pip install "scikit-sparse<0.5"`, Debian's libsuitesparse-dev); without it, prints hvi's
+//! numbers and says what is missing. CHOLMOD runs in one child process
+//! (benches/cholmod_server.py) that analyses once per ordering and refactorises on request.
+//!
+//! Settings (environment):
+//! - `HVI_BENCH_N` = sizes n (default `32,40`: 52 800 and 101 680 free unknowns);
+//! - `HVI_BENCH_REPEATS` = numeric factorisations per row, medians reported (default 5);
+//! - `HVI_BENCH_THREADS` = threads for both sides (default 1, hvi's default `threads`; CHOLMOD's
+//!   BLAS gets `OPENBLAS_NUM_THREADS` / `OMP_NUM_THREADS`);
+//! - `HVI_CHOLMOD_BLAS=system` keeps the BLAS the dynamic linker picks for libcholmod; by default
+//!   the child prefers Debian's OpenBLAS (`/usr/lib/x86_64-linux-gnu/openblas-pthread`, put first
+//!   on `LD_LIBRARY_PATH`) when it is installed, since CHOLMOD's supernodal kernels are BLAS calls
+//!   and the reference BLAS would make CHOLMOD several times slower than it is;
+//! - `HVI_PYTHON` = the interpreter (default `python3`); `HVI_KEEP_MTX=1` keeps the files.
+//!
+//! nnz(L) is counted three ways, and only like with like is compared:
+//! - "lower": the supernodes' lower trapezoids, relaxation zeros included — CHOLMOD's `L().nnz`
+//!   (scikit-sparse converts the supernodal factor to simplicial form keeping every stored
+//!   entry); for hvi, counted from the same supernodal structure as hvi's;
+//! - "storage": Σ rows × columns over supernodes (the diagonal blocks in full) — faer's `len_val`,
+//!   i.e. hvi's `Analysis::factor_entries()`, and CHOLMOD's `L->xsize` (recovered from `L()`'s
+//!   pattern, an upper bound);
+//! - "exact": the structural nnz(L) of the permutation, no relaxation (faer's simplicial analysis
+//!   of the permutation each side used) — what compares the orderings alone.
+//!
+//! hvi's `Analysis` does not expose its permutation or supernodes, so the bench recomputes hvi's
+//! node orderings the way `src/linalg/factor.rs` does (AMD and METIS NodeND on the node graph,
+//! expanded to the unknowns) and checks that faer's analysis of them has exactly
+//! `factor_entries()` entries. Diagnostic rows (not hvi's code path) time faer's numeric
+//! factorisation on CHOLMOD's best permutation and on hvi's ND permutation postordered like
+//! CHOLMOD's (children by increasing column count), to tell ordering from kernels.
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+};
+use faer::sparse::linalg::SupernodalThreshold;
+use faer::Side;
+use hvi::fem::assembly::assemble_stiffness;
+use hvi::fem::SymmetricMatrix;
+use hvi::linalg::{Analysis, Counters, Factor, NodeOrdering};
+use hvi::material::IDENTITY_TENSOR;
+use hvi::mesh::structured::{block, SolidShape};
+use hvi::scene::Scene;
+use hvi::solver::Simulation;
+use std::io::{BufRead, BufReader, BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
+use std::time::Instant;
+
+const NONE: usize = usize::MAX;
+const OPENBLAS_DIR: &str = "/usr/lib/x86_64-linux-gnu/openblas-pthread";
+const CHOLMOD_ORDERINGS: [&str; 4] = ["default", "amd", "metis", "nesdis"];
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
+    std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
+}
+
+/// A permutation of the unknowns: entry i of the permuted order is original unknown fwd[i].
+struct Perm {
+    fwd: Vec<usize>,
+    inv: Vec<usize>,
+}
+
+impl Perm {
+    fn from_fwd(fwd: Vec<usize>) -> Result<Perm, String> {
+        let mut inv = vec![NONE; fwd.len()];
+        for (i, &p) in fwd.iter().enumerate() {
+            if p >= fwd.len() || inv[p] != NONE {
+                return Err(format!("not a permutation (entry {i} = {p})"));
+            }
+            inv[p] = i;
+        }
+        Ok(Perm { fwd, inv })
+    }
+
+    fn as_faer(&self) -> PermRef<'_, usize> {
+        PermRef::new_checked(&self.fwd, &self.inv, self.fwd.len())
+    }
+}
+
+/// A node ordering expanded to the `d` unknowns of each node (as `factor.rs` does).
+fn expand(node_fwd: &[usize], d: usize) -> Perm {
+    Perm::from_fwd(node_fwd.iter().flat_map(|&k| (0..d).map(move |c| d * k + c)).collect()).unwrap()
+}
+
+/// hvi's AMD ordering: faer's AMD on the node graph.
+fn node_amd(matrix: &SymmetricMatrix) -> Perm {
+    let graph = matrix.pattern.node_graph();
+    let n = graph.len();
+    let nodes = faer::sparse::SymbolicSparseColMatRef::new_checked(n, n, &graph.ptr, None, &graph.nodes);
+    let (mut fwd, mut inv) = (vec![0usize; n], vec![0usize; n]);
+    let mut buffer = MemBuffer::new(faer::sparse::linalg::amd::order_scratch::<usize>(n, graph.nodes.len()));
+    faer::sparse::linalg::amd::order(
+        &mut fwd,
+        &mut inv,
+        nodes,
+        Default::default(),
+        MemStack::new(&mut buffer),
+    )
+    .expect("AMD");
+    expand(&fwd, matrix.pattern.block)
+}
+
+/// hvi's nested dissection: METIS_NodeND on the node graph (no self loops), default options.
+fn node_nd(matrix: &SymmetricMatrix) -> Perm {
+    use metis_sys::idx_t;
+    let graph = matrix.pattern.node_graph();
+    let n = graph.len();
+    let mut xadj: Vec<idx_t> = vec![0];
+    let mut adjncy: Vec<idx_t> = Vec::with_capacity(graph.nodes.len());
+    for k in 0..n {
+        adjncy.extend(graph.coupled(k).iter().filter(|&&q| q != k).map(|&q| q as idx_t));
+        xadj.push(adjncy.len() as idx_t);
+    }
+    let mut nvtxs = n as idx_t;
+    let (mut perm, mut iperm) = (vec![0 as idx_t; n], vec![0 as idx_t; n]);
+    let mut options = [0 as idx_t; metis_sys::METIS_NOPTIONS as usize];
+    // SAFETY: as in src/linalg/factor.rs: options METIS_NOPTIONS long, xadj n + 1, adjncy xadj[n],
+    // perm and iperm n; null vertex weights.
+    let status = unsafe {
+        metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
+        metis_sys::METIS_NodeND(
+            &mut nvtxs,
+            xadj.as_mut_ptr(),
+            adjncy.as_mut_ptr(),
+            std::ptr::null_mut(),
+            options.as_mut_ptr(),
+            perm.as_mut_ptr(),
+            iperm.as_mut_ptr(),
+        )
+    };
+    assert_eq!(status, metis_sys::rstatus_et_METIS_OK, "METIS_NodeND");
+    let fwd: Vec<usize> = perm.iter().map(|&p| p as usize).collect();
+    expand(&fwd, matrix.pattern.block)
+}
+
+/// faer's symbolic Cholesky of the matrix under `perm`, supernodal (hvi's parameters) or simplicial.
+fn symbolic(matrix: &SymmetricMatrix, perm: &Perm, supernodal: bool) -> SymbolicCholesky<usize> {
+    let params = CholeskySymbolicParams {
+        supernodal_flop_ratio_threshold: if supernodal {
+            SupernodalThreshold::FORCE_SUPERNODAL
+        } else {
+            SupernodalThreshold::FORCE_SIMPLICIAL
+        },
+        ..Default::default()
+    };
+    factorize_symbolic_cholesky(
+        matrix.pattern.symbolic(),
+        Side::Lower,
+        SymmetricOrdering::Custom(perm.as_faer()),
+        params,
+    )
+    .expect("faer symbolic analysis")
+}
+
+/// The three counts of nnz(L) (see the module notes) and the number of supernodes.
+#[derive(Clone, Copy, Default)]
+struct Counts {
+    lower: usize,
+    storage: usize,
+    exact: usize,
+    supernodes: usize,
+}
+
+/// faer's counts under `perm`, with the exact column counts (permuted order).
+fn faer_counts(matrix: &SymmetricMatrix, perm: &Perm) -> (Counts, Vec<usize>) {
+    let simplicial = symbolic(matrix, perm, false);
+    let col_counts: Vec<usize> = match simplicial.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => s.col_ptr().windows(2).map(|w| w[1] - w[0]).collect(),
+        SymbolicCholeskyRaw::Supernodal(_) => unreachable!("forced simplicial"),
+    };
+    let supernodal = symbolic(matrix, perm, true);
+    let SymbolicCholeskyRaw::Supernodal(sn) = supernodal.raw() else {
+        unreachable!("forced supernodal")
+    };
+    let mut lower = 0;
+    for s in 0..sn.n_supernodes() {
+        let ncols = sn.supernode_end()[s] - sn.supernode_begin()[s];
+        let below = sn.supernode(s).pattern().len();
+        lower += ncols * (ncols + 1) / 2 + below * ncols;
+    }
+    let counts = Counts {
+        lower,
+        storage: supernodal.len_val(),
+        exact: simplicial.len_val(),
+        supernodes: sn.n_supernodes(),
+    };
+    (counts, col_counts)
+}
+
+/// The elimination tree of the matrix under `perm` (parent in permuted order, NONE for roots).
+fn etree(matrix: &SymmetricMatrix, perm: &Perm) -> Vec<usize> {
+    let sym = matrix.pattern.symbolic();
+    let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+    let n = perm.fwd.len();
+    let (mut parent, mut ancestor) = (vec![NONE; n], vec![NONE; n]);
+    for k in 0..n {
+        let old = perm.fwd[k];
+        for &row in &ri[cp[old]..cp[old + 1]] {
+            let mut i = perm.inv[row];
+            while i < k {
+                let next = ancestor[i];
+                ancestor[i] = k;
+                if next == NONE {
+                    parent[i] = k;
+                    break;
+                }
+                i = next;
+            }
+        }
+    }
+    parent
+}
+
+/// `perm` followed by a postorder of its elimination tree with each node's children in increasing
+/// column count (the heaviest child next to its parent), as cholmod_analyze postorders.
+fn postordered(matrix: &SymmetricMatrix, perm: &Perm, col_counts: &[usize]) -> Perm {
+    let n = perm.fwd.len();
+    let parent = etree(matrix, perm);
+    let mut by_weight: Vec<usize> = (0..n).collect();
+    by_weight.sort_by_key(|&j| std::cmp::Reverse(col_counts[j]));
+    let (mut head, mut next) = (vec![NONE; n + 1], vec![NONE; n]);
+    for &j in &by_weight {
+        let p = if parent[j] == NONE { n } else { parent[j] };
+        next[j] = head[p];
+        head[p] = j;
+    }
+    let mut post = Vec::with_capacity(n);
+    let mut stack = vec![n];
+    while let Some(&top) = stack.last() {
+        let child = head[top];
+        if child == NONE {
+            stack.pop();
+            if top != n {
+                post.push(top);
+            }
+        } else {
+            head[top] = next[child];
+            stack.push(child);
+        }
+    }
+    Perm::from_fwd(post.iter().map(|&k| perm.fwd[k]).collect()).unwrap()
+}
+
+/// One numeric factorisation with faer's mid-level API, as `Factor::new` does it (values
+/// allocated and zeroed, workspace allocated, supernodal LLᵀ): seconds.
+fn faer_numeric(symbolic: &SymbolicCholesky<usize>, matrix: &SymmetricMatrix) -> f64 {
+    let t = Instant::now();
+    let mut values = Vec::new();
+    values.resize(symbolic.len_val(), 0.0f64);
+    let par = faer::get_global_parallelism();
+    let mut buffer = MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()));
+    symbolic
+        .factorize_numeric_llt::<f64>(
+            &mut values,
+            matrix.as_faer(),
+            Side::Lower,
+            Default::default(),
+            par,
+            MemStack::new(&mut buffer),
+            Default::default(),
+        )
+        .expect("positive definite");
+    let seconds = t.elapsed().as_secs_f64();
+    std::hint::black_box(&values);
+    seconds
+}
+
+/// The lower triangle of the matrix as MatrixMarket (shortest round-trip decimals: exact).
+fn write_matrix_market(matrix: &SymmetricMatrix, path: &Path) -> std::io::Result<usize> {
+    let sym = matrix.pattern.symbolic();
+    let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+    let entries = (0..matrix.n())
+        .map(|j| ri[cp[j]..cp[j + 1]].iter().filter(|&&i| i >= j).count())
+        .sum();
+    let mut file = BufWriter::new(std::fs::File::create(path)?);
+    writeln!(
+        file,
+        "%%MatrixMarket matrix coordinate real symmetric\n{} {} {entries}",
+        matrix.n(),
+        matrix.n()
+    )?;
+    for j in 0..matrix.n() {
+        for (&i, v) in ri[cp[j]..cp[j + 1]].iter().zip(&matrix.values[cp[j]..cp[j + 1]]) {
+            if i >= j {
+                writeln!(file, "{} {} {v:e}", i + 1, j + 1)?;
+            }
+        }
+    }
+    file.flush()?;
+    Ok(entries)
+}
+
+/// The CHOLMOD child process (benches/cholmod_server.py).
+struct Cholmod {
+    child: Child,
+    stdin: ChildStdin,
+    stdout: BufReader<ChildStdout>,
+    stderr: Option<std::thread::JoinHandle<String>>,
+}
+
+impl Cholmod {
+    fn start(mtx: &Path, dir: &Path, threads: usize) -> Result<(Cholmod, serde_json::Value), String> {
+        let script = concat!(env!("CARGO_MANIFEST_DIR"), "/benches/cholmod_server.py");
+        let python = std::env::var("HVI_PYTHON").unwrap_or_else(|_| "python3".into());
+        let mut cmd = Command::new(&python);
+        cmd.arg(script)
+            .arg(mtx)
+            .arg(dir)
+            .arg(CHOLMOD_ORDERINGS.join(","))
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped());
+        for var in ["OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"] {
+            cmd.env(var, threads.to_string());
+        }
+        let system_blas = std::env::var("HVI_CHOLMOD_BLAS").is_ok_and(|v| v == "system");
+        if !system_blas && Path::new(OPENBLAS_DIR).join("libblas.so.3").exists() {
+            let old = std::env::var("LD_LIBRARY_PATH").unwrap_or_default();
+            cmd.env(
+                "LD_LIBRARY_PATH",
+                if old.is_empty() {
+                    OPENBLAS_DIR.to_string()
+                } else {
+                    format!("{OPENBLAS_DIR}:{old}")
+                },
+            );
+        }
+        let mut child = cmd.spawn().map_err(|e| format!("{python} not runnable ({e})"))?;
+        let stdin = child.stdin.take().unwrap();
+        let stdout = BufReader::new(child.stdout.take().unwrap());
+        let mut err = child.stderr.take().unwrap();
+        let stderr = std::thread::spawn(move || {
+            let mut s = String::new();
+            let _ = err.read_to_string(&mut s);
+            s
+        });
+        let mut server = Cholmod {
+            child,
+            stdin,
+            stdout,
+            stderr: Some(stderr),
+        };
+        let ready = server.read()?;
+        Ok((server, ready))
+    }
+
+    fn read(&mut self) -> Result<serde_json::Value, String> {
+        let mut line = String::new();
+        match self.stdout.read_line(&mut line) {
+            Ok(n) if n > 0 => serde_json::from_str(line.trim()).map_err(|e| format!("bad reply {line:?}: {e}")),
+            _ => {
+                let _ = self.child.wait();
+                let err = self
+                    .stderr
+                    .take()
+                    .map(|h| h.join().unwrap_or_default())
+                    .unwrap_or_default();
+                Err(err.lines().last().unwrap_or("the CHOLMOD child exited").to_string())
+            }
+        }
+    }
+
+    fn request(&mut self, command: &str) -> Result<serde_json::Value, String> {
+        writeln!(self.stdin, "{command}").map_err(|e| e.to_string())?;
+        self.stdin.flush().map_err(|e| e.to_string())?;
+        self.read()
+    }
+}
+
+/// How a row's numeric factorisation is run.
+enum Method {
+    Hvi(Analysis),
+    Faer(SymbolicCholesky<usize>),
+    Cholmod(&'static str),
+}
+
+struct Row {
+    label: String,
+    method: Method,
+    counts: Option<Counts>,
+    symbolic: f64,
+    numeric: Vec<f64>,
+    error: Option<f64>,
+    diagnostic: bool,
+}
+
+fn row(label: impl Into<String>, method: Method, counts: Option<Counts>, symbolic: f64, diagnostic: bool) -> Row {
+    Row {
+        label: label.into(),
+        method,
+        counts,
+        symbolic,
+        numeric: Vec::new(),
+        error: None,
+        diagnostic,
+    }
+}
+
+fn millions(v: usize) -> String {
+    format!("{:.2} M", v as f64 / 1e6)
+}
+
+fn main() {
+    let sizes: Vec<usize> = std::env::var("HVI_BENCH_N")
+        .unwrap_or_else(|_| "32,40".into())
+        .split(',')
+        .filter_map(|s| s.trim().parse().ok())
+        .collect();
+    let repeats: usize = env_or("HVI_BENCH_REPEATS", 5).max(1);
+    let threads: usize = env_or("HVI_BENCH_THREADS", 1).max(1);
+    hvi::linalg::set_parallelism(threads);
+    let slab = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/slab.toml"));
+    let scene = Scene::load(Some(slab), &[]).expect("examples/slab.toml");
+    println!("factor_vs_cholmod_3d: {threads} thread(s) each side, medians of {repeats}, interleaved");
+    for n in sizes {
+        let bench_start = Instant::now();
+        let mesh = block([2.0, 1.0, 0.25], [2 * n, n, (n / 4).max(1)], SolidShape::Hex);
+        let sim = Simulation::new(&scene, mesh).expect("slab scene on the box");
+        let [k_a, k_b] = assemble_stiffness(
+            &sim.mesh.cells,
+            &sim.mesh.points,
+            &sim.dofs,
+            &[sim.elasticity.tensor(), IDENTITY_TENSOR],
+        );
+        let b0 = sim.kernel.as_ref().map_or(0.0, |b| b.value(0.0));
+        let matrix = k_a
+            .plus_scaled(0.5 * sim.time.step() * b0, &k_b)
+            .with_identity_rows(&sim.dofs);
+        drop((k_a, k_b));
+        println!(
+            "\nn = {n}: Q1 box {}x{}x{}, {} unknowns ({} free, {} identity rows), {} stored entries (both triangles)",
+            2 * n,
+            n,
+            (n / 4).max(1),
+            matrix.n(),
+            sim.dofs.n_free(),
+            matrix.n() - sim.dofs.n_free(),
+            matrix.values.len()
+        );
+        let counters = Counters::default();
+        let rhs: Vec<f64> = {
+            let mut y = vec![0.0; matrix.n()];
+            matrix.matvec(&vec![1.0; matrix.n()], &mut y);
+            y
+        };
+
+        // hvi: its own choice, and each ordering forced
+        let t = Instant::now();
+        let auto = Factor::analyse(&matrix).expect("analysis");
+        let auto_symbolic = t.elapsed().as_secs_f64();
+        let mut rows = Vec::new();
+        let mut nd_perm = None;
+        for (ordering, label) in [
+            (NodeOrdering::Amd, "hvi AMD (node graph)"),
+            (NodeOrdering::NestedDissection, "hvi ND (METIS, node graph)"),
+        ] {
+            let t = Instant::now();
+            let analysis = Factor::analyse_with(&matrix, ordering).expect("analysis");
+            let seconds = t.elapsed().as_secs_f64();
+            let perm = match ordering {
+                NodeOrdering::Amd => node_amd(&matrix),
+                NodeOrdering::NestedDissection => node_nd(&matrix),
+            };
+            let (counts, col_counts) = faer_counts(&matrix, &perm);
+            if counts.storage != analysis.factor_entries() {
+                println!(
+                    "  warning: the bench's copy of {label} gives {} entries, hvi {}: its lower/exact counts are not hvi's",
+                    counts.storage,
+                    analysis.factor_entries()
+                );
+            }
+            if ordering == NodeOrdering::NestedDissection {
+                nd_perm = Some((perm, col_counts));
+            }
+            rows.push(row(label, Method::Hvi(analysis), Some(counts), seconds, false));
+        }
+        let auto_row = rows
+            .iter()
+            .position(|r| matches!(&r.method, Method::Hvi(a) if a.ordering() == auto.ordering()))
+            .expect("hvi's choice is one of its orderings");
+        drop(auto);
+
+        // diagnostic: hvi's ND permutation postordered like CHOLMOD's
+        if let Some((perm, col_counts)) = &nd_perm {
+            let t = Instant::now();
+            let post = postordered(&matrix, perm, col_counts);
+            let sym = symbolic(&matrix, &post, true);
+            let seconds = t.elapsed().as_secs_f64();
+            let (counts, _) = faer_counts(&matrix, &post);
+            rows.push(row(
+                "faer, hvi ND postordered",
+                Method::Faer(sym),
+                Some(counts),
+                seconds,
+                true,
+            ));
+        }
+
+        // the same matrix for CHOLMOD
+        let dir = std::env::temp_dir().join(format!("hvi_factor3d_{}_{n}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let mtx: PathBuf = dir.join("K.mtx");
+        let entries = write_matrix_market(&matrix, &mtx).expect("writing the MatrixMarket file");
+        let mut cholmod = match Cholmod::start(&mtx, &dir, threads) {
+            Ok((server, ready)) => {
+                println!(
+                    "  CHOLMOD: {} unknowns, {} entries read (file: {entries} lower); BLAS {}",
+                    ready["n"], ready["nnz"], ready["blas"]
+                );
+                let mut cholmod_perms = Vec::new();
+                for name in CHOLMOD_ORDERINGS {
+                    let info = &ready["orderings"][name];
+                    let bytes = std::fs::read(info["perm"].as_str().unwrap()).expect("permutation file");
+                    let fwd: Vec<usize> = bytes
+                        .chunks_exact(8)
+                        .map(|c| i64::from_le_bytes(c.try_into().unwrap()) as usize)
+                        .collect();
+                    let perm = Perm::from_fwd(fwd).expect("CHOLMOD's P()");
+                    let (counts, _) = faer_counts(&matrix, &perm);
+                    // CHOLMOD's own lower/storage/supernodes come with "finish"; keep faer's exact count
+                    let own = Counts {
+                        exact: counts.exact,
+                        ..Default::default()
+                    };
+                    rows.push(row(
+                        format!("CHOLMOD {name}"),
+                        Method::Cholmod(name),
+                        Some(own),
+                        info["symbolic"].as_f64().unwrap(),
+                        false,
+                    ));
+                    cholmod_perms.push((name, perm, counts));
+                }
+                let same: Vec<&str> = CHOLMOD_ORDERINGS[1..]
+                    .iter()
+                    .zip(&cholmod_perms[1..])
+                    .filter(|(_, (_, p, _))| p.fwd == cholmod_perms[0].1.fwd)
+                    .map(|(name, _)| *name)
+                    .collect();
+                println!(
+                    "  CHOLMOD default = {}",
+                    if same.is_empty() {
+                        "none of the others".into()
+                    } else {
+                        same.join(", ")
+                    }
+                );
+                // diagnostic: faer's supernodes and kernels on CHOLMOD's best permutation (exact count)
+                let (name, perm, counts) = cholmod_perms.iter().min_by_key(|(_, _, c)| c.exact).unwrap();
+                let t = Instant::now();
+                let sym = symbolic(&matrix, perm, true);
+                let seconds = t.elapsed().as_secs_f64();
+                rows.push(row(
+                    format!("faer, CHOLMOD {name} permutation"),
+                    Method::Faer(sym),
+                    Some(*counts),
+                    seconds,
+                    true,
+                ));
+                Some(server)
+            }
+            Err(e) => {
+                println!("  CHOLMOD not measured: {e}");
+                None
+            }
+        };
+
+        // interleaved numeric factorisations, the starting row rotated each round
+        let timed_start = Instant::now();
+        for rep in 0..repeats {
+            let count = rows.len();
+            for k in 0..count {
+                let r = &mut rows[(k + rep) % count];
+                let seconds = match &r.method {
+                    Method::Hvi(analysis) => {
+                        let t = Instant::now();
+                        let f = Factor::new(analysis, &matrix, &counters).expect("factorisation");
+                        let seconds = t.elapsed().as_secs_f64();
+                        if r.error.is_none() {
+                            let mut x = rhs.clone();
+                            f.solve_in_place(&mut x, &counters);
+                            r.error = Some(x.iter().fold(0.0, |a, v| a.max((v - 1.0).abs())));
+                        }
+                        seconds
+                    }
+                    Method::Faer(sym) => faer_numeric(sym, &matrix),
+                    Method::Cholmod(name) => {
+                        let Some(server) = cholmod.as_mut() else { continue };
+                        match server.request(&format!("factor {name}")) {
+                            Ok(v) => v["numeric"].as_f64().unwrap_or(f64::NAN),
+                            Err(e) => {
+                                println!("  CHOLMOD failed: {e}");
+                                cholmod = None;
+                                continue;
+                            }
+                        }
+                    }
+                };
+                r.numeric.push(seconds);
+            }
+        }
+        let timed_seconds = timed_start.elapsed().as_secs_f64();
+        if let Some(mut server) = cholmod.take() {
+            match server.request("finish") {
+                Ok(v) => {
+                    for r in rows.iter_mut() {
+                        if let Method::Cholmod(name) = r.method {
+                            let c = &v[name];
+                            let counts = r.counts.get_or_insert_with(Counts::default);
+                            counts.lower = c["nnz_L"].as_u64().unwrap_or(0) as usize;
+                            counts.storage = c["storage"].as_u64().unwrap_or(0) as usize;
+                            counts.supernodes = c["supernodes"].as_u64().unwrap_or(0) as usize;
+                            r.error = c["max_abs_error"].as_f64();
+                        }
+                    }
+                }
+                Err(e) => println!("  CHOLMOD finish failed: {e}"),
+            }
+            let _ = server.child.wait();
+        }
+        if std::env::var_os("HVI_KEEP_MTX").is_none() {
+            let _ = std::fs::remove_dir_all(&dir);
+        } else {
+            println!("  kept {}", dir.display());
+        }
+
+        // the table
+        let cholmod_rows: Vec<&Row> = rows
+            .iter()
+            .filter(|r| matches!(r.method, Method::Cholmod(_)) && r.numeric.len() == repeats)
+            .collect();
+        let best_lower = cholmod_rows
+            .iter()
+            .filter_map(|r| r.counts.map(|c| c.lower))
+            .filter(|&v| v > 0)
+            .min();
+        let best_exact = cholmod_rows.iter().filter_map(|r| r.counts.map(|c| c.exact)).min();
+        let best_time = cholmod_rows
+            .iter()
+            .map(|r| median(r.numeric.clone()))
+            .min_by(|a, b| a.total_cmp(b));
+        println!(
+            "\n  {:<36} {:>10} {:>10} {:>10} {:>8} {:>9} {:>10} {:>8} {:>8} {:>8}",
+            "ordering", "lower", "storage", "exact", "supern.", "symb. s", "numeric s", "lower/b", "exact/b", "time/b"
+        );
+        let ratio = |a: usize, b: Option<usize>| b.map_or("-".into(), |b| format!("{:.3}", a as f64 / b as f64));
+        for (i, r) in rows.iter().enumerate() {
+            if r.diagnostic && !rows[..i].iter().any(|q| q.diagnostic) {
+                println!("  diagnostics (bench-only, faer numeric on other permutations):");
+            }
+            let c = r.counts.unwrap_or_default();
+            let t = if r.numeric.is_empty() {
+                f64::NAN
+            } else {
+                median(r.numeric.clone())
+            };
+            let chosen = if i == auto_row { " *" } else { "" };
+            println!(
+                "  {:<36} {:>10} {:>10} {:>10} {:>8} {:>9.3} {:>10.3} {:>8} {:>8} {:>8}",
+                format!("{}{chosen}", r.label),
+                millions(c.lower),
+                format!(
+                    "{}{}",
+                    millions(c.storage),
+                    if matches!(r.method, Method::Cholmod(_)) {
+                        "≤"
+                    } else {
+                        ""
+                    }
+                ),
+                millions(c.exact),
+                c.supernodes,
+                r.symbolic,
+                t,
+                ratio(c.lower, best_lower),
+                ratio(c.exact, best_exact),
+                best_time.map_or("-".into(), |b| format!("{:.3}", t / b)),
+            );
+        }
+        println!(
+            "  * = Factor::analyse's choice (symbolic {auto_symbolic:.3} s, both orderings tried). /b = over CHOLMOD's best \
+             ordering by that column (lower: L().nnz; exact: structural; time: fastest median)."
+        );
+        let errors: Vec<String> = rows
+            .iter()
+            .filter_map(|r| r.error.map(|e| format!("{} {e:.1e}", r.label)))
+            .collect();
+        println!("  max |x - 1| of one solve: {}", errors.join(", "));
+        if let (Some(bl), Some(bt)) = (best_lower, best_time) {
+            let h = &rows[auto_row];
+            let (hl, ht) = (
+                h.counts.unwrap().lower as f64 / bl as f64,
+                median(h.numeric.clone()) / bt,
+            );
+            println!(
+                "  floor (nnz(L) ≤ 1.2× CHOLMOD best, numeric ≤ CHOLMOD's): nnz {hl:.3} {}, time {ht:.3} {}",
+                if hl <= 1.2 { "met" } else { "NOT met" },
+                if ht <= 1.0 { "met" } else { "NOT met" }
+            );
+        }
+        println!(
+            "  (this size: {:.0} s in all, {timed_seconds:.0} s in the interleaved factorisations)",
+            bench_start.elapsed().as_secs_f64()
+        );
+    }
+}
