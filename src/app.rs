@@ -425,7 +425,8 @@ fn check_dim<const D: usize>(
     // The factor: symbolic analysis only (cheap), so its size is known before solving.
     let [k_a] =
         crate::fem::assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.tensor()]);
-    let analysis = crate::linalg::Factor::analyse(&k_a).map_err(|e| SolveError::Setup(e.to_string()))?;
+    let analysis = crate::linalg::Factor::analyse(&k_a.with_identity_rows(&sim.dofs))
+        .map_err(|e| SolveError::Setup(e.to_string()))?;
     let factor_bytes = 8 * analysis.factor_entries() as u64;
     let _ = writeln!(
         out,

@@ -209,22 +209,74 @@ impl SymmetricMatrix {
     }
 
     /// The matrix with the rows and columns of the prescribed unknowns replaced by those of the
-    /// identity (docs/method.md §7): symmetric positive definite when the free block is, and
-    /// the same pattern (the entries become explicit zeros).
+    /// identity (docs/method.md §7): symmetric positive definite when the free block is. A node
+    /// whose every component is prescribed is decoupled from the others in the pattern of the
+    /// result (its couplings would be explicit zeros, and would cost fill in the factor); a
+    /// partly prescribed node keeps its D × D blocks, with explicit zeros.
     pub fn with_identity_rows<const D: usize>(&self, dofs: &DofMap<D>) -> SymmetricMatrix {
-        let mut out = self.clone();
-        let sym = self.pattern.symbolic();
-        let (cp, ri) = (sym.col_ptr(), sym.row_idx());
-        for j in 0..self.n() {
-            let column_prescribed = dofs.is_prescribed(j);
-            for q in cp[j]..cp[j + 1] {
-                let i = ri[q];
-                if column_prescribed || dofs.is_prescribed(i) {
-                    out.values[q] = if i == j { 1.0 } else { 0.0 };
+        let d = self.pattern.block;
+        let old = self.pattern.node_graph();
+        let n_nodes = old.len();
+        let isolated: Vec<bool> = (0..n_nodes)
+            .map(|k| (0..d).all(|c| dofs.is_prescribed(d * k + c)))
+            .collect();
+        let mut graph = NodeGraph {
+            ptr: Vec::with_capacity(n_nodes + 1),
+            nodes: Vec::with_capacity(old.nodes.len()),
+        };
+        graph.ptr.push(0);
+        // position in the old adjacency of each kept coupling
+        let mut kept: Vec<usize> = Vec::with_capacity(old.nodes.len());
+        for k in 0..n_nodes {
+            for (p, &q) in old.coupled(k).iter().enumerate() {
+                if q == k || !(isolated[k] || isolated[q]) {
+                    graph.nodes.push(q);
+                    kept.push(p);
                 }
             }
+            graph.ptr.push(graph.nodes.len());
         }
-        out
+        let sym = self.pattern.symbolic();
+        let old_ptr = sym.col_ptr();
+        let n = self.n();
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        col_ptr.push(0);
+        let mut row_idx = Vec::with_capacity(d * d * graph.nodes.len());
+        let mut values = Vec::with_capacity(d * d * graph.nodes.len());
+        for k in 0..n_nodes {
+            for c in 0..d {
+                let j = d * k + c;
+                for e in graph.ptr[k]..graph.ptr[k + 1] {
+                    let (q, p) = (graph.nodes[e], kept[e]);
+                    for c2 in 0..d {
+                        let i = d * q + c2;
+                        row_idx.push(i);
+                        values.push(if dofs.is_prescribed(i) || dofs.is_prescribed(j) {
+                            if i == j {
+                                1.0
+                            } else {
+                                0.0
+                            }
+                        } else {
+                            self.values[old_ptr[j] + d * p + c2]
+                        });
+                    }
+                }
+                col_ptr.push(row_idx.len());
+            }
+        }
+        let pattern = Pattern {
+            n,
+            block: d,
+            symbolic: SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx),
+            nodes: graph,
+            scatter: Vec::new(),
+            scatter_offset: vec![0],
+        };
+        SymmetricMatrix {
+            pattern: Arc::new(pattern),
+            values,
+        }
     }
 
     /// faer's view of the matrix.

@@ -384,8 +384,11 @@ impl<'s, const D: usize> Stepper<'s, D> {
         });
         stats.matrix_nonzeros = k_a.values.len();
         let memory_diagonal = sim.kernel.as_ref().map(|b| 0.5 * k * b.value(0.0));
-        let symbolic = timed(&mut stats.phases.factorisation, || Factor::analyse(&k_a))
-            .map_err(|e| SolveError::Setup(e.to_string()))?;
+        // the pattern the factors have: identity rows, fully prescribed nodes decoupled
+        let symbolic = timed(&mut stats.phases.factorisation, || {
+            Factor::analyse(&k_a.with_identity_rows(&sim.dofs))
+        })
+        .map_err(|e| SolveError::Setup(e.to_string()))?;
         let main = match (&k_b, memory_diagonal) {
             (Some(kb), Some(c)) => {
                 let k_step = timed(&mut stats.phases.assembly, || k_a.plus_scaled(c, kb));
