@@ -425,8 +425,9 @@ fn check_dim<const D: usize>(
     // The factor: symbolic analysis only (cheap), so its size is known before solving.
     let [k_a] =
         crate::fem::assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.tensor()]);
-    let analysis = crate::linalg::Factor::analyse(&k_a.with_identity_rows(&sim.dofs))
-        .map_err(|e| SolveError::Setup(e.to_string()))?;
+    let analysis =
+        crate::linalg::Factor::analyse_with_last(&k_a.with_identity_rows(&sim.dofs), &sim.unknowns_ordered_last())
+            .map_err(|e| SolveError::Setup(e.to_string()))?;
     let factor_bytes = 8 * analysis.factor_entries() as u64;
     let _ = writeln!(
         out,
@@ -550,7 +551,9 @@ pub fn report(stats: &RunStats, out: &Path) -> String {
 
 /// `hvi plot RUN_DIR`: a picture of the last frame (deformed mesh coloured by von Mises,
 /// `deformed.png`) and the normal displacement along Γ₃ at up to eight output times
-/// (`gamma3.svg`, from `gamma3.csv`). Returns the files written.
+/// (`gamma3.svg`, from `gamma3.csv`); for a 3D run, maps of u_ν and of the contact pressure
+/// over Γ₃ at the last output time (`gamma3_map.png`, `gamma3_map.svg`; see [`plot_3d`]).
+/// Returns the files written.
 pub fn plot(run_dir: &Path, scale: f64) -> Result<Vec<PathBuf>, SolveError> {
     let fail = |what: String| SolveError::Setup(format!("{}: {what}", run_dir.display()));
     let pvd = std::fs::read_to_string(run_dir.join("solution.pvd")).map_err(|e| {
@@ -565,11 +568,11 @@ pub fn plot(run_dir: &Path, scale: f64) -> Result<Vec<PathBuf>, SolveError> {
         .last()
         .ok_or_else(|| fail("solution.pvd lists no frame".into()))?;
     let vtu = output::read_vtu_arrays(&run_dir.join(last))?;
-    if vtu.points.iter().any(|p| p[2] != 0.0) {
-        return Err(fail(format!(
-            "{last} is a 3D run; hvi plot draws 2D runs only: open solution.pvd in ParaView (Warp By Vector on \
-             displacement, colour by von_mises), or read gamma3.csv"
-        )));
+    let csv_3d = std::fs::read_to_string(run_dir.join("gamma3.csv"))
+        .ok()
+        .and_then(|csv| csv.lines().next().map(|h| h.split(',').any(|c| c.trim() == "z")));
+    if csv_3d == Some(true) || vtu.points.iter().any(|p| p[2] != 0.0) {
+        return plot_3d(run_dir, last);
     }
     let points: Vec<[f64; 2]> = vtu.points.iter().map(|p| [p[0], p[1]]).collect();
     let cells: Vec<crate::mesh::Cell> = vtu
@@ -627,4 +630,78 @@ pub fn plot(run_dir: &Path, scale: f64) -> Result<Vec<PathBuf>, SolveError> {
         }
     }
     Ok(written)
+}
+
+/// `hvi plot` of a 3D run: u_ν and the contact pressure over Γ₃ at the last time of
+/// `gamma3.csv`, as two colour maps of the nodes projected onto the plane of the two coordinates
+/// with the largest spread (Γ₃ is flat in the shipped examples), nodes on the bound outlined.
+fn plot_3d(run_dir: &Path, last: &str) -> Result<Vec<PathBuf>, SolveError> {
+    let fail = |what: String| SolveError::Setup(format!("{}: {what}", run_dir.display()));
+    let csv = std::fs::read_to_string(run_dir.join("gamma3.csv")).map_err(|e| {
+        fail(format!(
+            "{last} is a 3D run, drawn by hvi plot from gamma3.csv, which cannot be read ({e}; a run without \
+             contact output has none): open solution.pvd in ParaView (Warp By Vector on displacement, colour \
+             by von_mises)"
+        ))
+    })?;
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap_or("").split(',').map(str::trim).collect();
+    let column = |name: &str| {
+        header.iter().position(|c| *c == name).ok_or_else(|| {
+            fail(format!(
+                "gamma3.csv has no `{name}` column (header `{}`, a 3D run writes \
+                 `time,x,y,z,u_nu,force,pressure,status`)",
+                header.join(",")
+            ))
+        })
+    };
+    let cols = [
+        column("time")?,
+        column("x")?,
+        column("y")?,
+        column("z")?,
+        column("u_nu")?,
+        column("pressure")?,
+        column("status")?,
+    ];
+    // the rows of the last time (rows are written time by time)
+    let mut rows: Vec<[f64; 7]> = Vec::new();
+    for line in lines {
+        let v: Vec<f64> = line.split(',').filter_map(|s| s.trim().parse().ok()).collect();
+        if v.len() != header.len() {
+            continue;
+        }
+        let row = cols.map(|c| v[c]);
+        if rows.first().is_some_and(|r| r[0] != row[0]) {
+            rows.clear();
+        }
+        rows.push(row);
+    }
+    let Some(time) = rows.first().map(|r| r[0]) else {
+        return Err(fail("gamma3.csv has no row: nothing to draw".into()));
+    };
+    let points: Vec<[f64; 3]> = rows.iter().map(|r| [r[1], r[2], r[3]]).collect();
+    let (axes, projected) = crate::study::plot::project_surface(&points);
+    let t = crate::study::plot::sci(time);
+    let map = crate::study::plot::SurfaceMap {
+        axes: axes.map(|a| ["x", "y", "z"][a].to_string()),
+        points: projected,
+        marked: rows.iter().map(|r| r[6] == 2.0).collect(),
+        marked_meaning: "outlined: nodes on the bound".into(),
+        panels: vec![
+            crate::study::plot::MapPanel {
+                title: format!("Normal displacement u_ν on Γ₃ at t = {t}"),
+                name: format!("u_ν at t = {t}"),
+                values: rows.iter().map(|r| r[4]).collect(),
+            },
+            crate::study::plot::MapPanel {
+                title: format!("Contact pressure on Γ₃ at t = {t}"),
+                name: format!("pressure at t = {t}"),
+                values: rows.iter().map(|r| r[5]).collect(),
+            },
+        ],
+    };
+    let (png, svg) = (run_dir.join("gamma3_map.png"), run_dir.join("gamma3_map.svg"));
+    crate::study::plot::render_surface_map(&png, Some(&svg), &map).map_err(fail)?;
+    Ok(vec![png, svg])
 }

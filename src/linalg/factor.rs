@@ -116,13 +116,21 @@ impl Factor {
     /// (nested dissection gives no less fill there), and in 3D whichever of AMD and nested
     /// dissection gives the smaller factor (nested dissection, from a few thousand nodes on).
     pub fn analyse(matrix: &SymmetricMatrix) -> Result<Analysis, FactorError> {
+        Self::analyse_with_last(matrix, &[])
+    }
+
+    /// [`Self::analyse`] with the unknowns `last` ordered after all others (in the given order).
+    /// With the contact normals' unknowns last (docs/method.md §4.5), a column of G = L⁻¹PCᵀ is
+    /// non-zero only in the trailing block of the factor, so G and W = GᵀG cost O(m³) dense work
+    /// instead of m sparse sweeps through the whole elimination tree.
+    pub fn analyse_with_last(matrix: &SymmetricMatrix, last: &[usize]) -> Result<Analysis, FactorError> {
         let mut choices = vec![NodeOrdering::Amd];
         if matrix.pattern.block == 3 {
             choices.push(NodeOrdering::NestedDissection);
         }
         let mut best: Option<Analysis> = None;
         for ordering in choices {
-            let Ok(a) = Self::analyse_with(matrix, ordering) else {
+            let Ok(a) = Self::analyse_ordered(matrix, ordering, last) else {
                 continue;
             };
             if best.as_ref().is_none_or(|b| a.factor_entries() < b.factor_entries()) {
@@ -131,12 +139,20 @@ impl Factor {
         }
         match best {
             Some(a) => Ok(a),
-            None => Self::analyse_with(matrix, NodeOrdering::Amd),
+            None => Self::analyse_ordered(matrix, NodeOrdering::Amd, last),
         }
     }
 
     /// Symbolic analysis with a given ordering of the node graph.
     pub fn analyse_with(matrix: &SymmetricMatrix, ordering: NodeOrdering) -> Result<Analysis, FactorError> {
+        Self::analyse_ordered(matrix, ordering, &[])
+    }
+
+    fn analyse_ordered(
+        matrix: &SymmetricMatrix,
+        ordering: NodeOrdering,
+        last: &[usize],
+    ) -> Result<Analysis, FactorError> {
         let params = CholeskySymbolicParams {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
             ..Default::default()
@@ -147,6 +163,10 @@ impl Factor {
             NodeOrdering::NestedDissection => Some(
                 nested_dissection(&matrix.pattern).ok_or_else(|| FactorError::Other("METIS NodeND failed".into()))?,
             ),
+        };
+        let node_order = match (node_order, last.is_empty()) {
+            (Some((fwd, _)), false) => Some(move_last(&fwd, last)),
+            (order, _) => order,
         };
         let ordering_used = ordering;
         let ordering = match &node_order {
@@ -295,6 +315,21 @@ pub enum NodeOrdering {
     Amd,
     /// Nested dissection (METIS_NodeND, vendored METIS 5).
     NestedDissection,
+}
+
+/// The ordering `fwd` (new → old) with the unknowns of `last` moved to the end, in their order.
+fn move_last(fwd: &[usize], last: &[usize]) -> (Vec<usize>, Vec<usize>) {
+    let mut is_last = vec![false; fwd.len()];
+    for &i in last {
+        is_last[i] = true;
+    }
+    let mut out: Vec<usize> = fwd.iter().copied().filter(|&i| !is_last[i]).collect();
+    out.extend_from_slice(last);
+    let mut inv = vec![0; out.len()];
+    for (k, &i) in out.iter().enumerate() {
+        inv[i] = k;
+    }
+    (out, inv)
 }
 
 /// A node ordering (fwd: new → old node) expanded to the D unknowns of each node, kept together.

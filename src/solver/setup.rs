@@ -216,6 +216,20 @@ impl<const D: usize> Simulation<D> {
         })
     }
 
+    /// The unknowns the factor orders last: in 3D those of the contact normals (docs/method.md
+    /// §4.5: G and W then live in the factor's trailing block), else none.
+    pub fn unknowns_ordered_last(&self) -> Vec<usize> {
+        match &self.contact {
+            Some(c) if D == 3 => {
+                let mut dofs: Vec<usize> = c.nodes.rows().iter().flatten().map(|&(d, _)| d).collect();
+                dofs.sort_unstable();
+                dofs.dedup();
+                dofs
+            }
+            _ => Vec::new(),
+        }
+    }
+
     /// True if step n is written (every `output_every`-th step and always the last).
     pub fn is_output_step(&self, n: usize) -> bool {
         n % self.output_every == 0 || n == self.time.steps

@@ -62,6 +62,9 @@ pub struct RunStats {
     pub contact: Vec<ContactOutcome>,
     pub max_contact_residual: f64,
     pub smallness: Option<f64>,
+    /// The fill-reducing ordering of the factor and its number of stored entries nnz(L).
+    pub ordering: Option<String>,
+    pub factor_entries: usize,
     /// Which condensation of the contact normals ran (docs/method.md §9), if any.
     pub condensation: Option<String>,
     /// Reaction forces at every output step: one row per (time, group, component).
