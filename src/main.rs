@@ -52,7 +52,8 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         overrides: Vec<String>,
     },
-    /// Draw the last frame of a run (deformed.png) and u_ν along Γ₃ over time (gamma3.svg).
+    /// Draw a run: 2D, the last frame (deformed.png) and u_ν along Γ₃ over time (gamma3.svg);
+    /// 3D, colour maps of u_ν and the pressure over Γ₃ at the last time (gamma3_map.png, .svg).
     Plot {
         /// An output directory of `hvi solve`.
         run: PathBuf,

@@ -3,6 +3,8 @@
 //! prescribed homogeneous uniaxial strain under a Prony memory kernel against its closed form
 //! (order 2 in k, docs/method.md §2–3, §7.5).
 
+#![allow(clippy::needless_range_loop)] // component loops read like the formulas
+
 mod common;
 
 use common::scene;
