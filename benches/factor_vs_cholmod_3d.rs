@@ -92,62 +92,6 @@ impl Perm {
     }
 }
 
-/// A node ordering expanded to the `d` unknowns of each node (as `factor.rs` does).
-fn expand(node_fwd: &[usize], d: usize) -> Perm {
-    Perm::from_fwd(node_fwd.iter().flat_map(|&k| (0..d).map(move |c| d * k + c)).collect()).unwrap()
-}
-
-/// hvi's AMD ordering: faer's AMD on the node graph.
-fn node_amd(matrix: &SymmetricMatrix) -> Perm {
-    let graph = matrix.pattern.node_graph();
-    let n = graph.len();
-    let nodes = faer::sparse::SymbolicSparseColMatRef::new_checked(n, n, &graph.ptr, None, &graph.nodes);
-    let (mut fwd, mut inv) = (vec![0usize; n], vec![0usize; n]);
-    let mut buffer = MemBuffer::new(faer::sparse::linalg::amd::order_scratch::<usize>(n, graph.nodes.len()));
-    faer::sparse::linalg::amd::order(
-        &mut fwd,
-        &mut inv,
-        nodes,
-        Default::default(),
-        MemStack::new(&mut buffer),
-    )
-    .expect("AMD");
-    expand(&fwd, matrix.pattern.block)
-}
-
-/// hvi's nested dissection: METIS_NodeND on the node graph (no self loops), default options.
-fn node_nd(matrix: &SymmetricMatrix) -> Perm {
-    use metis_sys::idx_t;
-    let graph = matrix.pattern.node_graph();
-    let n = graph.len();
-    let mut xadj: Vec<idx_t> = vec![0];
-    let mut adjncy: Vec<idx_t> = Vec::with_capacity(graph.nodes.len());
-    for k in 0..n {
-        adjncy.extend(graph.coupled(k).iter().filter(|&&q| q != k).map(|&q| q as idx_t));
-        xadj.push(adjncy.len() as idx_t);
-    }
-    let mut nvtxs = n as idx_t;
-    let (mut perm, mut iperm) = (vec![0 as idx_t; n], vec![0 as idx_t; n]);
-    let mut options = [0 as idx_t; metis_sys::METIS_NOPTIONS as usize];
-    // SAFETY: as in src/linalg/factor.rs: options METIS_NOPTIONS long, xadj n + 1, adjncy xadj[n],
-    // perm and iperm n; null vertex weights.
-    let status = unsafe {
-        metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
-        metis_sys::METIS_NodeND(
-            &mut nvtxs,
-            xadj.as_mut_ptr(),
-            adjncy.as_mut_ptr(),
-            std::ptr::null_mut(),
-            options.as_mut_ptr(),
-            perm.as_mut_ptr(),
-            iperm.as_mut_ptr(),
-        )
-    };
-    assert_eq!(status, metis_sys::rstatus_et_METIS_OK, "METIS_NodeND");
-    let fwd: Vec<usize> = perm.iter().map(|&p| p as usize).collect();
-    expand(&fwd, matrix.pattern.block)
-}
-
 /// faer's symbolic Cholesky of the matrix under `perm`, supernodal (hvi's parameters) or simplicial.
 fn symbolic(matrix: &SymmetricMatrix, perm: &Perm, supernodal: bool) -> SymbolicCholesky<usize> {
     let params = CholeskySymbolicParams {
@@ -200,17 +144,6 @@ fn faer_counts(matrix: &SymmetricMatrix, perm: &Perm) -> (Counts, Vec<usize>) {
         supernodes: sn.n_supernodes(),
     };
     (counts, col_counts)
-}
-
-/// `perm` with the unknowns `last` moved to the end, in their order (as `factor.rs` moves them).
-fn moved_last(perm: &Perm, last: &[usize]) -> Perm {
-    let mut is_last = vec![false; perm.fwd.len()];
-    for &i in last {
-        is_last[i] = true;
-    }
-    let mut fwd: Vec<usize> = perm.fwd.iter().copied().filter(|&i| !is_last[i]).collect();
-    fwd.extend_from_slice(last);
-    Perm::from_fwd(fwd).unwrap()
 }
 
 /// The elimination tree of the matrix under `perm` (parent in permuted order, NONE for roots).
@@ -491,7 +424,6 @@ fn main() {
         let auto_symbolic = t.elapsed().as_secs_f64();
         let mut rows = Vec::new();
         let mut nd_perm = None;
-        let mut hvi_perms = Vec::new();
         for (ordering, label) in [
             (NodeOrdering::Amd, "hvi AMD (node graph)"),
             (NodeOrdering::NestedDissection, "hvi ND (METIS, node graph)"),
@@ -499,10 +431,7 @@ fn main() {
             let t = Instant::now();
             let analysis = Factor::analyse_with(&matrix, ordering).expect("analysis");
             let seconds = t.elapsed().as_secs_f64();
-            let perm = match ordering {
-                NodeOrdering::Amd => node_amd(&matrix),
-                NodeOrdering::NestedDissection => node_nd(&matrix),
-            };
+            let perm = Perm::from_fwd(analysis.permutation().0.to_vec()).unwrap();
             let (counts, col_counts) = faer_counts(&matrix, &perm);
             if counts.storage != analysis.factor_entries() {
                 println!(
@@ -514,7 +443,6 @@ fn main() {
             if ordering == NodeOrdering::NestedDissection {
                 nd_perm = Some((col_counts, perm.fwd.clone()));
             }
-            hvi_perms.push(perm);
             rows.push(row(label, Method::Hvi(analysis), Some(counts), seconds, false));
         }
         let auto_row = rows
@@ -530,10 +458,8 @@ fn main() {
             let t = Instant::now();
             let analysis = Factor::analyse_with_last(&matrix, &last).expect("analysis");
             let seconds = t.elapsed().as_secs_f64();
-            let counts = hvi_perms
-                .iter()
-                .map(|p| faer_counts(&matrix, &moved_last(p, &last)).0)
-                .find(|c| c.storage == analysis.factor_entries());
+            let counts = Some(faer_counts(&matrix, &Perm::from_fwd(analysis.permutation().0.to_vec()).unwrap()).0)
+                .filter(|c| c.storage == analysis.factor_entries());
             if counts.is_none() {
                 println!("  warning: the bench's copy of the solver's ordering does not give hvi's factor");
             }
@@ -546,7 +472,6 @@ fn main() {
             rows.push(row(label, Method::Hvi(analysis), counts, seconds, false));
             rows.len() - 1
         });
-        drop(hvi_perms);
 
         // diagnostic: hvi's ND permutation postordered like CHOLMOD's
         if let Some((col_counts, fwd)) = nd_perm {

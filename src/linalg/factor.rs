@@ -77,6 +77,12 @@ impl Analysis {
         self.inner.len_val()
     }
 
+    /// The fill-reducing permutation P as (forward, inverse): entry i of a permuted vector is
+    /// entry `forward[i]` of the original.
+    pub fn permutation(&self) -> (&[usize], &[usize]) {
+        self.inner.perm().expect("hvi always orders").arrays()
+    }
+
     /// The ordering used (for the plan and summary.json).
     pub fn ordering(&self) -> &'static str {
         match self.ordering {
