@@ -327,16 +327,7 @@ fn structured_block_matches_the_gmsh_slab() {
     use hvi::mesh::GroupSelector;
     for shape in [SolidShape::Hex, SolidShape::Tet] {
         let m = block([2.0, 1.0, 0.25], [8, 4, 2], shape);
-        let volume: f64 = m
-            .cells
-            .iter()
-            .map(|c| {
-                hvi::fem::element::stiffness_rule(c)
-                    .iter()
-                    .map(|q| q.weight * hvi::fem::element::shape_at(c, &m.points, q.xi).det_j)
-                    .sum::<f64>()
-            })
-            .sum();
+        let volume = m.measure();
         assert!((volume - 0.5).abs() < 1e-13, "{shape:?}: volume {volume}");
         for (name, area) in [("Gamma1", 0.25), ("Gamma2", 0.75), ("Gamma3", 0.5), ("Sides", 4.0)] {
             let part = m

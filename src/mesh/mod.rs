@@ -229,6 +229,20 @@ impl<const D: usize> Mesh<D> {
         Err(first_error.expect("D ≥ 1"))
     }
 
+    /// The measure of the body (area in 2D, volume in 3D), by the stiffness quadrature of each
+    /// cell (exact for straight-sided simplices, parallelograms and parallelepipeds).
+    pub fn measure(&self) -> f64 {
+        self.cells
+            .iter()
+            .map(|c| {
+                crate::fem::element::stiffness_rule(c)
+                    .iter()
+                    .map(|q| q.weight * crate::fem::element::shape_at(c, &self.points, q.xi).det_j)
+                    .sum::<f64>()
+            })
+            .sum()
+    }
+
     /// (min, max) over the cells of the longest cell edge: the mesh size h. (0, 0) if there
     /// are no cells.
     pub fn cell_size(&self) -> (f64, f64) {
