@@ -225,20 +225,8 @@ impl SplitSweeps {
         factor: Arc<Factor>,
         counters: &Counters,
     ) -> Result<Self, String> {
-        let t0 = std::time::Instant::now();
         let columns = ForwardColumns::new(&factor, nodes.rows(), counters);
-        let t1 = std::time::Instant::now();
-        let gram = columns.gram();
-        let t2 = std::time::Instant::now();
-        let stiffness = DenseNormalStiffness::from_w(gram, nodes.len())?;
-        if std::env::var_os("HVI_PROFILE").is_some() {
-            eprintln!(
-                "G {:.3} s, GᵀG {:.3} s, W⁻¹ {:.3} s",
-                (t1 - t0).as_secs_f64(),
-                (t2 - t1).as_secs_f64(),
-                t2.elapsed().as_secs_f64()
-            );
-        }
+        let stiffness = DenseNormalStiffness::from_w(columns.gram(), nodes.len())?;
         let y = Forward::zeros(factor.n());
         Ok(SplitSweeps {
             factor,
