@@ -903,12 +903,18 @@ fn build<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Result<Mesh<D>, MeshE
                 .into(),
         ));
     }
+    let places = CellPlaces {
+        path,
+        raw: &raw,
+        tags: &cell_tags,
+        elements: &cell_element,
+    };
     if D == 2 {
         let points2: Vec<[f64; 2]> = points.iter().map(|p| [p[0], p[1]]).collect();
-        orient_2d(path, &raw, &points2, &mut cells, &cell_tags, &cell_element)?;
+        orient_2d(&places, &points2, &mut cells)?;
     } else {
         let points3: Vec<[f64; 3]> = points.iter().map(|p| [p[0], p[1], p[2]]).collect();
-        orient_3d(path, &raw, &points3, &mut cells, &cell_tags, &cell_element)?;
+        orient_3d(&places, &points3, &mut cells)?;
     }
 
     // Every node must be in a cell, or the stiffness matrix is singular.
@@ -943,27 +949,36 @@ fn build<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Result<Mesh<D>, MeshE
     })
 }
 
+/// Where the cells of a file are, for the orientation checks' messages.
+struct CellPlaces<'a, 'b> {
+    path: &'a Path,
+    raw: &'a RawMesh<'b>,
+    /// gmsh element tag and file element index of each cell
+    tags: &'a [usize],
+    elements: &'a [usize],
+}
+
+impl CellPlaces<'_, '_> {
+    /// An invalid-mesh error at cell c.
+    fn invalid(&self, c: usize, detail: String) -> MeshError {
+        MeshError::Invalid {
+            path: self.path.to_path_buf(),
+            place: self.raw.element_place(self.elements[c]),
+            detail,
+        }
+    }
+}
+
 /// 2D orientation: all counter-clockwise, or all clockwise (then flipped), else an error; no
 /// zero-area cells; convex quadrangles.
-fn orient_2d(
-    path: &Path,
-    raw: &RawMesh<'_>,
-    points: &[[f64; 2]],
-    cells: &mut [Cell],
-    cell_tags: &[usize],
-    cell_element: &[usize],
-) -> Result<(), MeshError> {
-    let invalid = |place: String, detail: String| MeshError::Invalid {
-        path: path.to_path_buf(),
-        place,
-        detail,
-    };
+fn orient_2d(at: &CellPlaces<'_, '_>, points: &[[f64; 2]], cells: &mut [Cell]) -> Result<(), MeshError> {
+    let cell_tags = at.tags;
     let areas: Vec<f64> = cells.iter().map(|c| signed_area(points, c.nodes())).collect();
     for (c, &a) in areas.iter().enumerate() {
         let longest = longest_edge(points, &cells[c]);
         if a.abs() <= 1e-14 * longest * longest {
-            return Err(invalid(
-                raw.element_place(cell_element[c]),
+            return Err(at.invalid(
+                c,
                 format!("element {} has zero area (degenerate cell); re-mesh", cell_tags[c]),
             ));
         }
@@ -975,8 +990,8 @@ fn orient_2d(
         }
     } else if clockwise > 0 {
         let c = areas.iter().position(|&a| a < 0.0).unwrap_or(0);
-        return Err(invalid(
-            raw.element_place(cell_element[c]),
+        return Err(at.invalid(
+            c,
             format!(
                 "element {} is inverted (clockwise, signed area {:e}) while other cells are counter-clockwise; \
                  {clockwise} of {} cells are clockwise. Fix the mesh: re-mesh, or make all surfaces in the .geo \
@@ -993,8 +1008,8 @@ fn orient_2d(
                 let (p0, p1, p2) = (points[q[i]], points[q[(i + 1) % 4]], points[q[(i + 2) % 4]]);
                 let cross = (p1[0] - p0[0]) * (p2[1] - p1[1]) - (p1[1] - p0[1]) * (p2[0] - p1[0]);
                 if cross <= 1e-14 * areas[c].abs() {
-                    return Err(invalid(
-                        raw.element_place(cell_element[c]),
+                    return Err(at.invalid(
+                        c,
                         format!(
                             "quadrangle {} is not convex (or self-intersecting) at its corner {}: the bilinear map is \
                              not invertible there; re-mesh (e.g. Mesh.RecombinationAlgorithm, or triangles)",
@@ -1012,19 +1027,8 @@ fn orient_2d(
 /// 3D orientation: det J > 0 at every stiffness quadrature point (and hexahedron corner) of
 /// every cell, or < 0 everywhere in every cell (then all are flipped); else an error naming the
 /// element and the point.
-fn orient_3d(
-    path: &Path,
-    raw: &RawMesh<'_>,
-    points: &[[f64; 3]],
-    cells: &mut [Cell],
-    cell_tags: &[usize],
-    cell_element: &[usize],
-) -> Result<(), MeshError> {
-    let invalid = |place: String, detail: String| MeshError::Invalid {
-        path: path.to_path_buf(),
-        place,
-        detail,
-    };
+fn orient_3d(at: &CellPlaces<'_, '_>, points: &[[f64; 3]], cells: &mut [Cell]) -> Result<(), MeshError> {
+    let cell_tags = at.tags;
     let check = |cells: &[Cell]| -> Vec<(f64, [f64; 3], f64)> {
         cells
             .iter()
@@ -1046,8 +1050,8 @@ fn orient_3d(
     for (c, &(det, xi, h)) in dets.iter().enumerate() {
         if det <= 1e-12 * h * h * h {
             let s = crate::fem::element::shape_at(&cells[c], points, xi);
-            return Err(invalid(
-                raw.element_place(cell_element[c]),
+            return Err(at.invalid(
+                c,
                 format!(
                     "{} {} is {} (det J = {det:e} at {}); {} of {} cells are inverted. Re-mesh (check the \
                      orientation of extruded or transfinite volumes, or let gmsh mesh the volume with tetrahedra)",
