@@ -78,20 +78,46 @@ pub fn assemble_stiffness<const D: usize, const M: usize>(
     dofs: &DofMap<D>,
     cs: &[Isotropic; M],
 ) -> [SymmetricMatrix; M] {
-    let pattern = Arc::new(Pattern::new(cells, dofs.n_nodes(), D));
-    assemble_on(&pattern, cells, points, cs)
+    let mut pattern = Pattern::new(cells, dofs.n_nodes(), D);
+    let values = assemble_values(&pattern, cells, points, cs);
+    // The scatter map (D²·n² positions per cell: 255 MB for 55 k hexahedra) is not needed after
+    // assembly; the matrices keep the pattern without it.
+    pattern.release_scatter();
+    let pattern = Arc::new(pattern);
+    values.map(|values| SymmetricMatrix {
+        pattern: pattern.clone(),
+        values,
+    })
 }
 
-/// Assembles on an existing pattern (re-assembly reuses the scatter map). Cells are done in
-/// chunks, each chunk's local matrices computed in parallel into one buffer, so that the local
-/// matrices held at once stay bounded.
+/// Assembles on an existing pattern with its scatter map (re-assembly: build the pattern with
+/// [`Pattern::new`] and keep it).
 pub fn assemble_on<const D: usize, const M: usize>(
     pattern: &Arc<Pattern>,
     cells: &[Cell],
     points: &[[f64; D]],
     cs: &[Isotropic; M],
 ) -> [SymmetricMatrix; M] {
-    let mut out: [SymmetricMatrix; M] = std::array::from_fn(|_| SymmetricMatrix::zeros(pattern.clone()));
+    assemble_values(pattern, cells, points, cs).map(|values| SymmetricMatrix {
+        pattern: pattern.clone(),
+        values,
+    })
+}
+
+/// The values of the stiffness matrices on `pattern`. Cells are done in chunks, each chunk's
+/// local matrices computed in parallel into one buffer, so that the local matrices held at once
+/// stay bounded.
+fn assemble_values<const D: usize, const M: usize>(
+    pattern: &Pattern,
+    cells: &[Cell],
+    points: &[[f64; D]],
+    cs: &[Isotropic; M],
+) -> [Vec<f64>; M] {
+    assert!(
+        pattern.has_scatter(),
+        "assembly needs the pattern's scatter map (a pattern from assemble_stiffness has released it)"
+    );
+    let mut out: [Vec<f64>; M] = std::array::from_fn(|_| vec![0.0; pattern.nnz()]);
     let nl_max = D * cells.iter().map(|c| c.nodes().len()).max().unwrap_or(0);
     let stride = nl_max * nl_max;
     const CHUNK: usize = 4096;
@@ -111,7 +137,7 @@ pub fn assemble_on<const D: usize, const M: usize>(
             for (m, mat) in out.iter_mut().enumerate() {
                 let km = &local[m * stride..m * stride + nl * nl];
                 for (p, v) in pos.iter().zip(km) {
-                    mat.values[*p] += v;
+                    mat[*p] += v;
                 }
             }
         }

@@ -103,6 +103,17 @@ impl Pattern {
         self.symbolic.row_idx().len()
     }
 
+    /// True while the pattern holds its scatter map (see [`Pattern::release_scatter`]).
+    pub fn has_scatter(&self) -> bool {
+        !self.scatter_offset.is_empty()
+    }
+
+    /// Frees the scatter map once assembly is done.
+    pub fn release_scatter(&mut self) {
+        self.scatter = Vec::new();
+        self.scatter_offset = Vec::new();
+    }
+
     /// The scatter positions of cell `e` (row-major over its local dofs).
     pub fn cell_scatter(&self, e: usize) -> &[usize] {
         &self.scatter[self.scatter_offset[e]..self.scatter_offset[e + 1]]
@@ -271,7 +282,7 @@ impl SymmetricMatrix {
             symbolic: SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx),
             nodes: graph,
             scatter: Vec::new(),
-            scatter_offset: vec![0],
+            scatter_offset: Vec::new(),
         };
         SymmetricMatrix {
             pattern: Arc::new(pattern),
