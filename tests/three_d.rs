@@ -352,3 +352,33 @@ fn structured_block_matches_the_gmsh_slab() {
     b.sort();
     assert_eq!(a, b);
 }
+
+/// The conjugate-gradient Newton direction (used above `solver.dense_newton_limit` free contact
+/// nodes) gives the same steps as the dense Cholesky one, on the 3D slab with every direction
+/// forced through CG.
+#[test]
+fn conjugate_gradient_newton_directions_equal_the_dense_ones() {
+    let run = |limit: usize| {
+        let scene = slab_scene(&["time.steps=8", &format!("solver.dense_newton_limit={limit}")]);
+        solve_in_memory(&scene, mesh::<3>("slab_q1_h8_z3.msh")).unwrap()
+    };
+    let (_, dense_stats, dense) = run(100_000);
+    let (_, cg_stats, cg) = run(0);
+    let iterative: usize = cg_stats.contact.iter().map(|o| o.iterative).sum();
+    assert!(iterative > 0, "CG was used");
+    assert_eq!(dense_stats.contact.iter().map(|o| o.iterative).sum::<usize>(), 0);
+    let max_u = dense
+        .steps
+        .iter()
+        .flat_map(|s| s.displacement.iter())
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    for (a, b) in dense.steps.iter().zip(&cg.steps) {
+        let diff = a
+            .displacement
+            .iter()
+            .zip(&b.displacement)
+            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+        assert!(diff <= 1e-9 * max_u, "step {}: {diff:e}", a.step);
+    }
+    assert!(cg_stats.max_contact_residual <= 1e-10);
+}

@@ -35,6 +35,10 @@ pub struct ContactSettings {
     pub tolerance: f64,
     /// Newton iterations per step before giving up.
     pub max_iterations: usize,
+    /// Above this many free (inactive) contact nodes the Newton system is solved by Jacobi-
+    /// preconditioned conjugate gradients with products by Q instead of a dense Cholesky
+    /// factorisation of its inactive block (docs/method.md §9.2).
+    pub dense_limit: usize,
 }
 
 /// Where a contact node ends a step.
@@ -97,6 +101,8 @@ pub struct ContactOutcome {
     pub line_search_cuts: usize,
     /// Iterations whose Hessian was indefinite and was convexified.
     pub convexified: usize,
+    /// Newton directions computed by conjugate gradients (more free nodes than `dense_limit`).
+    pub iterative: usize,
     /// Nodes on the bound at the end.
     pub active: usize,
 }
@@ -365,6 +371,12 @@ impl ActiveSetSolver<'_> {
         if nf == 0 {
             return Vec::new();
         }
+        if nf > self.settings.dense_limit {
+            if let Some(x) = self.conjugate_gradients(free, curvature, grad, outcome) {
+                outcome.iterative += 1;
+                return x;
+            }
+        }
         let rhs = Mat::<f64>::from_fn(nf, 1, |i, _| grad[free[i]]);
         let build = |diag: &dyn Fn(usize) -> f64| {
             Mat::<f64>::from_fn(nf, nf, |i, j| {
@@ -389,6 +401,72 @@ impl ActiveSetSolver<'_> {
                 shift * 10.0
             };
         }
+    }
+
+    /// (Q_ℐℐ + diag(curvature)) x = G_ℐ by Jacobi-preconditioned conjugate gradients, each product
+    /// one m × m product by Q, to a relative residual of 1e-13. None if a direction of
+    /// non-positive curvature turns up or it does not converge in 4·n_free iterations: then the
+    /// dense path (with its convexification) decides, so both paths give the same direction.
+    fn conjugate_gradients(
+        &self,
+        free: &[usize],
+        curvature: &[f64],
+        grad: &[f64],
+        outcome: &mut ContactOutcome,
+    ) -> Option<Vec<f64>> {
+        let _ = outcome;
+        let (m, nf) = (self.m(), free.len());
+        let diag: Vec<f64> = curvature[..nf].to_vec();
+        let (mut full, mut product) = (vec![0.0; m], vec![0.0; m]);
+        let mut apply = |x: &[f64], y: &mut [f64]| {
+            full.fill(0.0);
+            for (i, &p) in free.iter().enumerate() {
+                full[p] = x[i];
+            }
+            self.operator.apply_q(&full, &mut product);
+            for (i, &p) in free.iter().enumerate() {
+                y[i] = product[p] + diag[i] * x[i];
+            }
+        };
+        let precondition: Vec<f64> = (0..nf)
+            .map(|i| 1.0 / (self.c(free[i]) + diag[i]).max(f64::MIN_POSITIVE))
+            .collect();
+        let b: Vec<f64> = free.iter().map(|&p| grad[p]).collect();
+        let norm_b = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let mut x = vec![0.0; nf];
+        if norm_b == 0.0 {
+            return Some(x);
+        }
+        let mut r = b.clone();
+        let mut z: Vec<f64> = r.iter().zip(&precondition).map(|(a, p)| a * p).collect();
+        let mut dir = z.clone();
+        let mut rz: f64 = r.iter().zip(&z).map(|(a, b)| a * b).sum();
+        let mut ad = vec![0.0; nf];
+        for _ in 0..4 * nf {
+            apply(&dir, &mut ad);
+            let curvature_along: f64 = dir.iter().zip(&ad).map(|(a, b)| a * b).sum();
+            if curvature_along <= 0.0 {
+                return None;
+            }
+            let alpha = rz / curvature_along;
+            for i in 0..nf {
+                x[i] += alpha * dir[i];
+                r[i] -= alpha * ad[i];
+            }
+            if r.iter().map(|v| v * v).sum::<f64>().sqrt() <= 1e-13 * norm_b {
+                return Some(x);
+            }
+            for i in 0..nf {
+                z[i] = r[i] * precondition[i];
+            }
+            let next: f64 = r.iter().zip(&z).map(|(a, b)| a * b).sum();
+            let beta = next / rz;
+            rz = next;
+            for i in 0..nf {
+                dir[i] = z[i] + beta * dir[i];
+            }
+        }
+        None
     }
 
     /// Forces and statuses at the converged r: λ = Q(d − r), ξ = w j_ε'(r), η = λ − ξ on the

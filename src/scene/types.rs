@@ -192,6 +192,14 @@ pub struct SolverSpec {
     /// How a step is condensed onto the contact normals (docs/method.md §9).
     #[serde(default)]
     pub condensation: CondensationKind,
+    /// Free contact nodes above which the Newton system is solved by conjugate gradients.
+    #[serde(default = "default_dense_newton_limit")]
+    pub dense_newton_limit: usize,
+}
+
+fn default_dense_newton_limit() -> usize {
+    // measured at m = 4 096 (docs/method.md §9.2): Jacobi-CG 21 s against the dense 7 s
+    8000
 }
 
 /// The implementations of the contact condensation.
@@ -218,6 +226,7 @@ impl Default for SolverSpec {
             tolerance: default_tolerance(),
             max_iterations: default_max_iterations(),
             condensation: CondensationKind::default(),
+            dense_newton_limit: default_dense_newton_limit(),
         }
     }
 }

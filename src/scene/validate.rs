@@ -47,7 +47,7 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
             });
             keys
         }
-        "solver" => vec!["tolerance", "max_iterations", "condensation"],
+        "solver" => vec!["tolerance", "max_iterations", "condensation", "dense_newton_limit"],
         "output" => vec!["every", "fields"],
         _ => return None,
     })
