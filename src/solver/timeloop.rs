@@ -98,19 +98,28 @@ struct StepOperator {
     lifting: Option<PrescribedColumns>,
 }
 
+/// The matrix a factor is built from (identity rows at the prescribed unknowns, docs/method.md
+/// §7) and, when some prescribed value is non-zero, the unmodified columns that lift them.
+fn system_matrix<const D: usize>(
+    sim: &Simulation<D>,
+    matrix: &SymmetricMatrix,
+) -> (SymmetricMatrix, Option<PrescribedColumns>) {
+    let lifting = sim
+        .dirichlet
+        .is_nonzero()
+        .then(|| PrescribedColumns::new(matrix, &sim.dofs));
+    (matrix.with_identity_rows(&sim.dofs), lifting)
+}
+
 impl StepOperator {
+    /// Factors `matrix` (from [`system_matrix`]) and condenses the contact normals.
     fn new<const D: usize>(
         sim: &Simulation<D>,
         symbolic: &Analysis,
-        matrix: &SymmetricMatrix,
+        (matrix, lifting): (SymmetricMatrix, Option<PrescribedColumns>),
         counters: &Counters,
         stats: &mut RunStats,
     ) -> Result<Self, SolveError> {
-        let lifting = sim
-            .dirichlet
-            .is_nonzero()
-            .then(|| PrescribedColumns::new(matrix, &sim.dofs));
-        let matrix = matrix.with_identity_rows(&sim.dofs);
         let factor = timed(&mut stats.phases.factorisation, || {
             Factor::new(symbolic, &matrix, counters)
         })
@@ -388,19 +397,20 @@ impl<'s, const D: usize> Stepper<'s, D> {
         // contact normals' unknowns go last (docs/method.md §4.5): G and W then live in the
         // factor's trailing block (measured: box 96x48x12, m = 1248, condensation 12.4 s before).
         let last = sim.unknowns_ordered_last();
+        let system = match (&k_b, memory_diagonal) {
+            (Some(kb), Some(c)) => {
+                let k_step = timed(&mut stats.phases.assembly, || k_a.plus_scaled(c, kb));
+                system_matrix(sim, &k_step)
+            }
+            _ => system_matrix(sim, &k_a),
+        };
         let symbolic = timed(&mut stats.phases.factorisation, || {
-            Factor::analyse_with_last(&k_a.with_identity_rows(&sim.dofs), &last)
+            Factor::analyse_with_last(&system.0, &last)
         })
         .map_err(|e| SolveError::Setup(e.to_string()))?;
         stats.ordering = Some(symbolic.ordering().to_string());
         stats.factor_entries = symbolic.factor_entries();
-        let main = match (&k_b, memory_diagonal) {
-            (Some(kb), Some(c)) => {
-                let k_step = timed(&mut stats.phases.assembly, || k_a.plus_scaled(c, kb));
-                StepOperator::new(sim, &symbolic, &k_step, &counters, &mut stats)?
-            }
-            _ => StepOperator::new(sim, &symbolic, &k_a, &counters, &mut stats)?,
-        };
+        let main = StepOperator::new(sim, &symbolic, system, &counters, &mut stats)?;
         if let (Some(op), Some(c)) = (&main.condensed, &sim.contact) {
             if let Some(law) = &c.law {
                 stats.smallness = Some(law.relaxed_monotonicity() * op.stiffness().trace_constant(&c.nodes.weights));
@@ -563,7 +573,13 @@ impl<'s, const D: usize> Stepper<'s, D> {
             self.displacement.fill(0.0);
             return Ok(outcome);
         }
-        let mut op = StepOperator::new(sim, &self.symbolic, &self.k_a, &self.counters, &mut self.stats)?;
+        let mut op = StepOperator::new(
+            sim,
+            &self.symbolic,
+            system_matrix(sim, &self.k_a),
+            &self.counters,
+            &mut self.stats,
+        )?;
         lift(&op, sim, self.prescribed.as_deref(), rhs);
         op.solve(
             sim,
