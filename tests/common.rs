@@ -76,3 +76,48 @@ pub fn manufactured_exact(x: [f64; 2]) -> ([f64; 2], [[f64; 2]; 2]) {
         [[cx * cy, -sx * sy], [2.0 * x[0] * sy, x[0] * x[0] * cy]],
     )
 }
+
+/// The reaction force of (group, component) at time t in a run's statistics.
+pub fn reaction(stats: &hvi::solver::RunStats, group: &str, component: &str, t: f64) -> f64 {
+    stats
+        .reactions
+        .iter()
+        .find(|r| r.group == group && r.component == component && (r.time - t).abs() < 1e-12)
+        .unwrap_or_else(|| panic!("no reaction {group} {component} at t = {t}"))
+        .force
+}
+
+/// max over the nodes of max_c |u_c − exact(x)_c|.
+pub fn nodal_error<const D: usize>(points: &[[f64; D]], u: &[[f64; D]], exact: impl Fn(&[f64; D]) -> [f64; D]) -> f64 {
+    points
+        .iter()
+        .zip(u)
+        .map(|(x, u)| {
+            let e = exact(x);
+            (0..D).map(|c| (u[c] - e[c]).abs()).fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max)
+}
+
+/// Per output step of two runs: (step, max |u_a − u_b| / max over all steps of |u_a|).
+pub fn step_differences(a: &hvi::app::MemorySink, b: &hvi::app::MemorySink) -> Vec<(usize, f64)> {
+    let max_u = a
+        .steps
+        .iter()
+        .flat_map(|s| s.displacement.iter())
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(max_u > 0.0, "the runs compared have zero displacement");
+    assert_eq!(a.steps.len(), b.steps.len());
+    a.steps
+        .iter()
+        .zip(&b.steps)
+        .map(|(x, y)| {
+            let d = x
+                .displacement
+                .iter()
+                .zip(&y.displacement)
+                .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+            (x.step, d / max_u)
+        })
+        .collect()
+}

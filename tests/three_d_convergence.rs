@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::scene;
+use common::{nodal_error, reaction, scene};
 use hvi::app::solve_in_memory;
 use hvi::fem::norms::{errors, fitted_order};
 use hvi::mesh::structured::{block, SolidShape};
@@ -278,16 +278,6 @@ fn relaxation_scene(steps: usize, memory: bool) -> hvi::scene::Scene {
     scene(&toml)
 }
 
-/// Reaction of (group, component) at time t.
-fn reaction(stats: &hvi::solver::RunStats, group: &str, component: &str, t: f64) -> f64 {
-    stats
-        .reactions
-        .iter()
-        .find(|r| r.group == group && r.component == component && (r.time - t).abs() < 1e-12)
-        .unwrap_or_else(|| panic!("no reaction {group} {component} at t = {t}"))
-        .force
-}
-
 /// u = (ε₀ x, 0, 0), ε₀ = 0.01, prescribed on every face of the unit cube and held from t = 0:
 /// the displacement is exact for every t and the stress is homogeneous,
 /// σ_xx(t) = (λ + 2μ) ε₀ + ε₀ ∫₀ᵗ b(s) ds (B₀ = I), shear stresses zero.
@@ -316,13 +306,7 @@ fn relaxation_with_a_prescribed_displacement_matches_its_closed_form() {
         let (sim, stats, sink) =
             solve_in_memory(&relaxation_scene(1, false), block([1.0; 3], [2, 2, 2], shape)).unwrap();
         let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
-        let err = sim
-            .mesh
-            .points
-            .iter()
-            .zip(&u)
-            .map(|(x, u)| (u[0] - EPS0 * x[0]).abs().max(u[1].abs()).max(u[2].abs()))
-            .fold(0.0, f64::max);
+        let err = nodal_error(&sim.mesh.points, &u, |x| [EPS0 * x[0], 0.0, 0.0]);
         assert!(err < 1e-15, "{shape:?}: field error {err:e}");
         let rx = reaction(&stats, "Gamma1", "x", 0.0);
         eprintln!(
@@ -358,13 +342,7 @@ fn relaxation_with_a_prescribed_displacement_matches_its_closed_form() {
         // the field stays exact at every step
         for s in &sink.steps {
             let u = sim.dofs.to_nodal(&s.displacement);
-            let err = sim
-                .mesh
-                .points
-                .iter()
-                .zip(&u)
-                .map(|(x, u)| (u[0] - EPS0 * x[0]).abs().max(u[1].abs()).max(u[2].abs()))
-                .fold(0.0, f64::max);
+            let err = nodal_error(&sim.mesh.points, &u, |x| [EPS0 * x[0], 0.0, 0.0]);
             assert!(err < 1e-15, "step {}: field error {err:e}", s.step);
         }
         // the discrete value: the trapezoidal rule of ∫₀ᵀ b
