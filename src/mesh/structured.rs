@@ -63,27 +63,15 @@ pub fn rectangle(lx: f64, ly: f64, nx: usize, ny: usize, kind: CellShape) -> Mes
     let right: Vec<[usize; 2]> = (0..ny).map(|j| [id(nx, j), id(nx, j + 1)]).collect();
     let top: Vec<[usize; 2]> = (0..nx).rev().map(|i| [id(i + 1, ny), id(i, ny)]).collect();
     let left: Vec<[usize; 2]> = (0..ny).rev().map(|j| [id(0, j + 1), id(0, j)]).collect();
-    let curve = |tag: i32, name: &str, facets: Vec<[usize; 2]>| PhysicalGroup {
-        dim: 1,
-        tag,
-        name: Some(name.to_string()),
-        facets: facets.into_iter().map(Facet::from).collect(),
-        cells: Vec::new(),
-        nodes: Vec::new(),
+    let curve = |tag: i32, name: &str, facets: Vec<[usize; 2]>| {
+        boundary_group(1, tag, name, facets.into_iter().map(Facet::from).collect())
     };
     let groups = vec![
         curve(1, "Gamma1", left),
         curve(2, "Gamma2", right.iter().chain(&top).copied().collect()),
         curve(3, "Gamma3", bottom),
         curve(4, "Gamma2_top", top),
-        PhysicalGroup {
-            dim: 2,
-            tag: 5,
-            name: Some("Omega".to_string()),
-            facets: Vec::new(),
-            cells: (0..cells.len()).collect(),
-            nodes: Vec::new(),
-        },
+        body_group(2, cells.len()),
     ];
     Mesh {
         path: PathBuf::from(format!("<rectangle {nx}x{ny}>")),
@@ -209,27 +197,13 @@ pub fn block(l: [f64; 3], n: [usize; 3], kind: SolidShape) -> Mesh<3> {
         faces(2, false),
         faces(2, true),
     );
-    let surface = |tag: i32, name: &str, facets: Vec<Facet>| PhysicalGroup {
-        dim: 2,
-        tag,
-        name: Some(name.to_string()),
-        facets,
-        cells: Vec::new(),
-        nodes: Vec::new(),
-    };
+    let surface = |tag: i32, name: &str, facets: Vec<Facet>| boundary_group(2, tag, name, facets);
     let groups = vec![
         surface(1, "Gamma1", x0),
         surface(2, "Gamma2", x1.iter().chain(&y1).copied().collect()),
         surface(3, "Gamma3", y0),
         surface(4, "Gamma2_top", y1),
-        PhysicalGroup {
-            dim: 3,
-            tag: 5,
-            name: Some("Omega".to_string()),
-            facets: Vec::new(),
-            cells: (0..cells.len()).collect(),
-            nodes: Vec::new(),
-        },
+        body_group(3, cells.len()),
         surface(6, "Sides", z0.into_iter().chain(z1).collect()),
     ];
     Mesh {
@@ -238,5 +212,29 @@ pub fn block(l: [f64; 3], n: [usize; 3], kind: SolidShape) -> Mesh<3> {
         cells,
         cell_tags,
         groups,
+    }
+}
+
+/// A named boundary group of dimension `dim` (tags as in the `.geo` files).
+fn boundary_group(dim: u8, tag: i32, name: &str, facets: Vec<Facet>) -> PhysicalGroup {
+    PhysicalGroup {
+        dim,
+        tag,
+        name: Some(name.to_string()),
+        facets,
+        cells: Vec::new(),
+        nodes: Vec::new(),
+    }
+}
+
+/// `Omega` (tag 5): every cell.
+fn body_group(dim: u8, cells: usize) -> PhysicalGroup {
+    PhysicalGroup {
+        dim,
+        tag: 5,
+        name: Some("Omega".to_string()),
+        facets: Vec::new(),
+        cells: (0..cells).collect(),
+        nodes: Vec::new(),
     }
 }
