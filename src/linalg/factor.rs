@@ -249,11 +249,7 @@ impl Factor {
     /// P: entry i of a permuted vector is entry `permutation().0[i]` of the original, and
     /// original entry j sits at `permutation().1[j]`.
     fn permutation(&self) -> (&[usize], &[usize]) {
-        self.analysis
-            .inner
-            .perm()
-            .expect("AMD ordering gives a permutation")
-            .arrays()
+        self.analysis.permutation()
     }
 
     /// The factor's position of original unknown `i` (the inverse permutation).

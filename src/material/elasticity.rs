@@ -37,22 +37,6 @@ impl Isotropic {
         let (l, m) = (self.lambda, self.mu);
         [[l + 2.0 * m, l, 0.0], [l, l + 2.0 * m, 0.0], [0.0, 0.0, m]]
     }
-
-    /// `self + c·other` (tensors are linear in (λ, μ)).
-    pub fn plus_scaled(&self, c: f64, other: &Isotropic) -> Isotropic {
-        Isotropic {
-            lambda: self.lambda + c * other.lambda,
-            mu: self.mu + c * other.mu,
-        }
-    }
-
-    /// The tensor scaled by c.
-    pub fn scaled(&self, c: f64) -> Isotropic {
-        Isotropic {
-            lambda: c * self.lambda,
-            mu: c * self.mu,
-        }
-    }
 }
 
 /// Which 2D reduction of 3D elasticity; `None` in 3D.
