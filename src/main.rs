@@ -104,19 +104,17 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Study { study, out, overrides } => {
-            match hvi::study::spec::run_file(&study, &out, &overrides) {
-                Ok(report) => {
-                    println!("{report}");
-                    println!("wrote study.md, study.csv, error_vs_h.svg, error_vs_k.svg, work_precision.svg, gamma3.svg to {}", out.display());
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::FAILURE
-                }
+        Command::Study { study, out, overrides } => match hvi::study::spec::run_file(&study, &out, &overrides) {
+            Ok(written) => {
+                println!("{}", written.report);
+                println!("wrote {} to {}", written.files.join(", "), out.display());
+                ExitCode::SUCCESS
             }
-        }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        },
         Command::Plot { run, scale } => match hvi::app::plot(&run, scale) {
             Ok(files) => {
                 for f in files {

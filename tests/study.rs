@@ -340,3 +340,94 @@ fn reduced_paper_study_shows_first_order_in_h_and_second_order_in_k() {
     let png = std::fs::read(dir.path().join("d.png")).unwrap();
     assert_eq!(&png[1..4], b"PNG");
 }
+
+/// Runs a study file written from `text` (the scene: examples/paper.toml) into a tempdir;
+/// returns the output and the directory.
+fn study_from_text(text: &str) -> (study::spec::StudyOutput, tempfile::TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    let text = format!(
+        "scene = \"{}\"\n{text}",
+        concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper.toml")
+    );
+    let spec: study::spec::StudySpec = toml::from_str(&text).unwrap();
+    let written = study::spec::run_spec(&spec, dir.path(), &dir.path().join("out"), &[], "test").unwrap();
+    (written, dir)
+}
+
+/// The CSV rows (after the header) of a study, as (path, h, k, h1_error, order).
+fn csv_rows(dir: &std::path::Path) -> Vec<(String, f64, f64, f64, Option<f64>)> {
+    let csv = std::fs::read_to_string(dir.join("study.csv")).unwrap();
+    csv.lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            let num = |i: usize| c[i].parse::<f64>().unwrap();
+            (c[0].to_string(), num(1), num(2), num(6), c[9].parse().ok())
+        })
+        .collect()
+}
+
+/// A study with only an h path writes its tables and the plots it can draw (error against h,
+/// work–precision, Γ₃), and no error-against-k plot (there is no k line to draw); its rows
+/// are the h path's, with first-order convergence (the reduced study above shows ≥ 0.8 at
+/// these sizes).
+#[test]
+fn an_h_only_study_writes_its_tables() {
+    let (written, dir) =
+        study_from_text("reference = { n = 32, steps = 16 }\n[[h_paths]]\nsteps = 16\nn = [4, 8, 16]\n");
+    let out = dir.path().join("out");
+    assert_eq!(
+        written.files,
+        [
+            "study.md",
+            "study.csv",
+            "gamma3.svg",
+            "error_vs_h.svg",
+            "work_precision.svg"
+        ]
+    );
+    for f in &written.files {
+        assert!(out.join(f).metadata().unwrap().len() > 0, "{f}");
+    }
+    assert!(!out.join("error_vs_k.svg").exists());
+    let rows = csv_rows(&out);
+    assert_eq!(rows.len(), 3);
+    for (i, (path, h, k, e, order)) in rows.iter().enumerate() {
+        assert!(path.starts_with("h (k=1/16)"), "{path}");
+        assert!((h - 1.0 / [4.0, 8.0, 16.0][i]).abs() < 1e-12 && (k - 1.0 / 16.0).abs() < 1e-12);
+        assert!(*e > 0.0);
+        if i > 0 {
+            assert!(order.unwrap() >= 0.8, "order in h {order:?}");
+        }
+    }
+    let md = std::fs::read_to_string(out.join("study.md")).unwrap();
+    assert!(
+        md.contains("## h refined at k = T/16") && !md.contains("## k refined"),
+        "{md}"
+    );
+}
+
+/// A study with only a k path writes its tables, error against k and work–precision, no
+/// error-against-h plot; second order in k (≥ 1.7 as in the reduced study).
+#[test]
+fn a_k_only_study_writes_its_tables() {
+    let (written, dir) = study_from_text("reference = { n = 16, steps = 32 }\n[[k_paths]]\nn = 16\nsteps = [4, 8]\n");
+    let out = dir.path().join("out");
+    assert_eq!(
+        written.files,
+        [
+            "study.md",
+            "study.csv",
+            "gamma3.svg",
+            "error_vs_k.svg",
+            "work_precision.svg"
+        ]
+    );
+    assert!(!out.join("error_vs_h.svg").exists());
+    let rows = csv_rows(&out);
+    assert_eq!(rows.len(), 2);
+    assert!(rows
+        .iter()
+        .all(|r| r.0 == "k (h=1/16)" && (r.1 - 1.0 / 16.0).abs() < 1e-12));
+    assert!(rows[1].4.unwrap() >= 1.7, "order in k {:?}", rows[1].4);
+}

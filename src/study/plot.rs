@@ -257,7 +257,8 @@ fn group_by(rows: &[Row], key: impl Fn(&Row) -> f64, along: impl Fn(&Row) -> f64
 }
 
 /// H¹-seminorm error at T against h, one line per k (groups of ≥ 2 runs), with an O(h) guide.
-pub fn plot_error_vs_h(path: &Path, rows: &[Row]) -> Result<(), String> {
+/// Returns false (and writes nothing) when no two runs share a k: nothing to draw.
+pub fn plot_error_vs_h(path: &Path, rows: &[Row]) -> Result<bool, String> {
     plot_error_against(
         path,
         rows,
@@ -268,8 +269,9 @@ pub fn plot_error_vs_h(path: &Path, rows: &[Row]) -> Result<(), String> {
     )
 }
 
-/// H¹-seminorm error at T against k, one line per h, with an O(k²) guide.
-pub fn plot_error_vs_k(path: &Path, rows: &[Row]) -> Result<(), String> {
+/// H¹-seminorm error at T against k, one line per h, with an O(k²) guide; false (nothing
+/// written) when no two runs share an h.
+pub fn plot_error_vs_k(path: &Path, rows: &[Row]) -> Result<bool, String> {
     plot_error_against(
         path,
         rows,
@@ -288,8 +290,11 @@ fn plot_error_against(
     (x_name, line_name): (&str, &str),
     (guide_name, guide_order): (&str, f64),
     what: &str,
-) -> Result<(), String> {
+) -> Result<bool, String> {
     let groups = group_by(rows, |r| param(r).1, |r| param(r).0);
+    if groups.is_empty() {
+        return Ok(false);
+    }
     let series: Vec<Series> = groups
         .iter()
         .map(|(fixed, v)| Series {
@@ -308,12 +313,17 @@ fn plot_error_against(
         "|u_ref − u_hk|₁ at T",
         &series,
         &guides,
-    )
+    )?;
+    Ok(true)
 }
 
 /// Work–precision: H¹ error at T against wall time, one line per refinement path, each point
-/// labelled with its h and k, with a guide of slope −1/2 (error ∝ h ∝ work^(−1/2) in 2D).
-pub fn plot_work_precision(path: &Path, rows: &[Row]) -> Result<(), String> {
+/// labelled with its h and k, with a guide of slope −1/2 (error ∝ h ∝ work^(−1/2) in 2D);
+/// false (nothing written) without a row.
+pub fn plot_work_precision(path: &Path, rows: &[Row]) -> Result<bool, String> {
+    if rows.is_empty() {
+        return Ok(false);
+    }
     let mut names: Vec<&str> = Vec::new();
     for r in rows {
         if !names.contains(&r.path.as_str()) {
@@ -356,7 +366,8 @@ pub fn plot_work_precision(path: &Path, rows: &[Row]) -> Result<(), String> {
         "|u_ref − u_hk|₁ at T",
         &series,
         &guides,
-    )
+    )?;
+    Ok(true)
 }
 
 fn guide_at_finest(series: &[Series], name: &str, slope: f64) -> Option<Guide> {

@@ -99,15 +99,24 @@ pub fn read(path: &Path) -> Result<StudySpec, String> {
     toml::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))
 }
 
-/// Runs a study file, writing its tables and plots to `out`; returns the Markdown report.
-pub fn run_file(path: &Path, out: &Path, extra_overrides: &[String]) -> Result<String, String> {
+/// What a study wrote: its Markdown report and the files (names in the output directory).
+#[derive(Clone, Debug)]
+pub struct StudyOutput {
+    pub report: String,
+    /// study.md, study.csv, then the plots that had something to draw.
+    pub files: Vec<String>,
+}
+
+/// Runs a study file, writing its tables and the plots it can draw to `out` (a study with only
+/// an h path has no error-against-k plot, and the reverse).
+pub fn run_file(path: &Path, out: &Path, extra_overrides: &[String]) -> Result<StudyOutput, String> {
     let spec = read(path)?;
     let dir = path.parent().unwrap_or(Path::new("."));
     run_spec(&spec, dir, out, extra_overrides, &path.display().to_string())
 }
 
 /// Runs a study spec (paths relative to `dir`).
-pub fn run_spec(spec: &StudySpec, dir: &Path, out: &Path, extra: &[String], name: &str) -> Result<String, String> {
+pub fn run_spec(spec: &StudySpec, dir: &Path, out: &Path, extra: &[String], name: &str) -> Result<StudyOutput, String> {
     let started = Instant::now();
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}; choose another --out", out.display()))?;
     let scene_path = spec.scene.as_ref().map(|p| dir.join(p));
@@ -171,6 +180,7 @@ pub fn run_spec(spec: &StudySpec, dir: &Path, out: &Path, extra: &[String], name
     };
     let study = run_plan(&plan, &make_mesh, &make_scene, &mut progress)?;
     let rows = study.rows();
+    let mut written: Vec<String> = Vec::new();
 
     let mut md = String::new();
     let _ = writeln!(md, "# Convergence study `{name}`\n");
@@ -270,15 +280,35 @@ pub fn run_spec(spec: &StudySpec, dir: &Path, out: &Path, extra: &[String], name
                 })
                 .collect();
             plot::plot_gamma3(&out.join("gamma3.svg"), &series)?;
+            written.push("gamma3.svg".to_string());
         }
     }
-    plot::plot_error_vs_h(&out.join("error_vs_h.svg"), &rows)?;
-    plot::plot_error_vs_k(&out.join("error_vs_k.svg"), &rows)?;
-    plot::plot_work_precision(&out.join("work_precision.svg"), &rows)?;
+    for (file, drawn) in [
+        (
+            "error_vs_h.svg",
+            plot::plot_error_vs_h(&out.join("error_vs_h.svg"), &rows)?,
+        ),
+        (
+            "error_vs_k.svg",
+            plot::plot_error_vs_k(&out.join("error_vs_k.svg"), &rows)?,
+        ),
+        (
+            "work_precision.svg",
+            plot::plot_work_precision(&out.join("work_precision.svg"), &rows)?,
+        ),
+    ] {
+        if drawn {
+            written.push(file.to_string());
+        }
+    }
     let write = |file: &str, text: &str| {
         crate::output::write_atomic(&out.join(file), text.as_bytes()).map_err(|e| e.to_string())
     };
     write("study.csv", &report::csv(&rows))?;
     write("study.md", &md)?;
-    Ok(md)
+    written.splice(0..0, ["study.md".to_string(), "study.csv".to_string()]);
+    Ok(StudyOutput {
+        report: md,
+        files: written,
+    })
 }
