@@ -771,8 +771,17 @@ fn wrong_types_name_the_line_and_the_key() {
         ),
         (
             "bound = 0.2",
-            "bound = \"0.2\"",
-            vec!["line 44", "bound = \"0.2\"", "expected f64"],
+            "bound = true",
+            vec![
+                "line 44",
+                "bound = true",
+                "expected contact.bound: a number g ≥ 0 (bound = 0.2) or an expression of x, y, z in quotes",
+            ],
+        ),
+        (
+            "bound = 0.2",
+            "bound = [0.2]",
+            vec!["line 44", "bound = [0.2]", "contact.bound: a number g ≥ 0"],
         ),
         (
             "\"von_mises\",",
@@ -888,6 +897,17 @@ fn bad_expressions_name_the_key() {
         "kind = \"expression\"\nexpression = \"log(s-1)\"",
     );
     assert_contains(&msg, &["`memory.expression` = \"log(s-1)\"", "evaluates to NaN at s"]);
+    // a bound expression: compiled when the scene is read (its values are checked at the nodes)
+    for (expr, parts) in [
+        ("0.2 + 0.02*sin(6*PI*w)", vec!["unknown variable `w`", "`x`, `y`, `z`"]),
+        ("0.2 + (x", vec!["cannot parse"]),
+        ("-x^2 + 1", vec!["column 1", "ambiguous"]),
+        ("", vec!["the expression is empty"]),
+    ] {
+        let (msg, _) = scene_error("bound = 0.2", &format!("bound = \"{expr}\""));
+        assert_contains(&msg, &[&format!("`contact.bound` = \"{expr}\"")]);
+        assert_contains(&msg, &parts);
+    }
     let msg = override_error(&["body_force.value=[\"0\", \"-x^2\"]"]);
     assert_contains(&msg, &["`body_force.value[1]` = \"-x^2\"", "ambiguous"]);
 }
@@ -926,6 +946,32 @@ fn expression_that_is_nan_on_the_body_stops_the_run() {
                 .all(|f| !f.ends_with(".vtu") && !hvi::output::is_temporary_name(f)),
             "{files:?}"
         );
+    }
+}
+
+/// A bound expression that is negative (or NaN) at a contact node: the run does not start, and
+/// the message names the mesh, the key, the expression and the node's coordinates.
+#[test]
+fn a_bound_negative_at_a_node_names_the_node() {
+    let case = Case::new("rect.msh", mesh_text("rect_q1_h8.msh").as_bytes());
+    // Γ₃ is the bottom side y = 0, x ∈ [0, 2]: x − 1.5 < 0 first at the node (0, 0) or beyond
+    for (set, parts) in [
+        (
+            "contact.bound=x - 1.5",
+            vec![
+                "contact.bound = \"x - 1.5\"",
+                "at the contact node",
+                "(x, y) = (",
+                ", 0)",
+                "≥ 0",
+            ],
+        ),
+        ("contact.bound=sqrt(1 - x)", vec!["g = NaN", "(x, y) = (", "≥ 0"]),
+    ] {
+        let msg = case.message(&[set]);
+        assert_contains(&msg, &parts);
+        let cli = case.cli_message(&[set]);
+        assert_contains(&cli, &parts);
     }
 }
 
@@ -1211,6 +1257,7 @@ const TOKENS: &[&str] = &[
     "{}",
     "[[traction]]",
     "kind = \"power\"",
+    "bound = \"x - 1\"",
     "#",
     "é",
     "\r\n",
@@ -1259,6 +1306,7 @@ fn scene_bases() -> Vec<String> {
             &DEFAULT_SCENE_TOML[time..]
         ),
         "[material]\nplane = \"strain\"\nyoungs_modulus = 2e11\npoisson_ratio = 0.25\n[time]\nfinal_time = 2.0\nsteps = 4\n[body_force]\nvalue = [\"0\", \"-(x^2)*exp(-t)\"]\n[contact]\nbound = 0.0\n".to_string(),
+        DEFAULT_SCENE_TOML.replacen("bound = 0.2", "bound = \"0.2 + 0.02*sin(6*PI*x) - sqrt(0.5 - y)\"", 1),
     ]
 }
 
@@ -1299,7 +1347,7 @@ proptest! {
     /// be built from on a small mesh (without solving), never a panic.
     #[test]
     fn mutated_scenes_never_panic(
-        base in 0usize..4,
+        base in 0usize..5,
         edits in proptest::collection::vec(edit_strategy(), 1..6),
     ) {
         let bases = scene_bases();

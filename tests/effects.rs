@@ -348,7 +348,7 @@ fn neutralised(full: &Scene, off: Off) -> Scene {
     }
     let c = s.contact.as_mut().expect("full scene has contact");
     if off.bound {
-        c.bound = Some(NEUTRAL_BOUND);
+        c.bound = Some(NEUTRAL_BOUND.into());
     }
     if off.law {
         c.law = Some(law_with_zero_scale(c.law.as_ref().expect("full scene has a law")));
@@ -361,7 +361,7 @@ fn with_neutral_effects(scene: &Scene) -> Scene {
     let mut s = scene.clone();
     s.memory.get_or_insert_with(neutral_kernel);
     let c = s.contact.get_or_insert(ContactSpec { bound: None, law: None });
-    c.bound.get_or_insert(NEUTRAL_BOUND);
+    c.bound.get_or_insert(NEUTRAL_BOUND.into());
     c.law.get_or_insert_with(neutral_law);
     s
 }

@@ -30,7 +30,7 @@ fn paper_toml_is_the_embedded_default_and_reads_as_the_paper() {
         matches!(&s.memory, Some(MemoryKernelSpec::Polynomial { coefficients }) if coefficients == &[0.25, 1.0, 1.0])
     );
     let c = s.contact.as_ref().unwrap();
-    assert_eq!(c.bound, Some(0.2));
+    assert_eq!(c.bound, Some(0.2.into()));
     let law = c.law.as_ref().unwrap();
     assert!(
         matches!(law.kind, LawKind::Paper { scale, a, b, alpha } if (scale, a, b, alpha) == (0.1, 0.04, 0.02, 100.0))
@@ -115,6 +115,10 @@ fn wrong_types_and_bad_values_name_the_key() {
         ("time.steps=0", "time.steps"),
         ("time.steps=-3", "steps"),
         ("contact.bound=-0.1", "contact.bound"),
+        ("contact.bound=true", "contact.bound: a number g ≥ 0"),
+        ("contact.bound=[0.2]", "contact.bound: a number g ≥ 0"),
+        ("contact.bound=\"0.2 + w\"", "contact.bound"),
+        ("contact.bound=0.2 + sin(", "contact.bound"),
         ("contact.law.regularisation=0", "contact.law.regularisation"),
         ("contact.law.alpha=0", "contact.law.alpha"),
         ("contact.law.a=-1", "contact.law.a"),
@@ -152,10 +156,25 @@ fn overrides_set_values_and_create_sections() {
     let path = dir.path().join("e.toml");
     std::fs::write(&path, elastic).unwrap();
     let s = Scene::load(Some(&path), &["contact.bound=0.3".into()]).unwrap();
-    assert_eq!(s.contact.unwrap().bound, Some(0.3));
+    assert_eq!(s.contact.unwrap().bound, Some(0.3.into()));
     for bad in ["time.steps", "=3", "time..steps=3", "traction.7.group=G"] {
         assert!(with(&[bad]).unwrap_err().contains("--set"), "{bad}");
     }
+}
+
+#[test]
+fn a_bound_is_a_number_or_an_expression_and_round_trips() {
+    use hvi::scene::BoundSpec;
+    let s = with(&["contact.bound=0.2 + 0.02*sin(6*PI*x)"]).unwrap();
+    let want = Some(BoundSpec::Expression("0.2 + 0.02*sin(6*PI*x)".into()));
+    assert_eq!(s.contact.as_ref().unwrap().bound, want);
+    let again = Scene::from_toml_str(&s.to_toml_string(), "round trip").unwrap();
+    assert_eq!(again.contact.unwrap().bound, want);
+    // an integer is a number
+    assert_eq!(
+        with(&["contact.bound=1"]).unwrap().contact.unwrap().bound,
+        Some(1.0.into())
+    );
 }
 
 #[test]

@@ -147,9 +147,65 @@ pub struct BodyForceSpec {
 #[serde(deny_unknown_fields)]
 pub struct ContactSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub bound: Option<f64>,
+    pub bound: Option<BoundSpec>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub law: Option<ContactLawSpec>,
+}
+
+/// The variables of a bound expression g(x, y, z): the reference position of the contact node
+/// (z = 0 in 2D).
+pub const BOUND_VARIABLES: [&str; 3] = ["x", "y", "z"];
+
+/// The bound g of u_ν ≤ g (the paper's layer thickness, docs/method.md §10): one number for all
+/// of Γ₃, or an expression g(x, y, z) ≥ 0 evaluated at each contact node (the constraint is
+/// imposed at the nodes: the paper's external approximation).
+#[derive(Clone, Debug, PartialEq)]
+pub enum BoundSpec {
+    Number(f64),
+    Expression(String),
+}
+
+impl From<f64> for BoundSpec {
+    fn from(g: f64) -> Self {
+        BoundSpec::Number(g)
+    }
+}
+
+impl Serialize for BoundSpec {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            BoundSpec::Number(g) => s.serialize_f64(*g),
+            BoundSpec::Expression(e) => s.serialize_str(e),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for BoundSpec {
+    fn deserialize<De: serde::Deserializer<'de>>(d: De) -> Result<Self, De::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = BoundSpec;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(
+                    "contact.bound: a number g ≥ 0 (bound = 0.2) or an expression of x, y, z in quotes \
+                     (bound = \"0.2 + 0.02*sin(6*PI*x)\")",
+                )
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<BoundSpec, E> {
+                Ok(BoundSpec::Number(v))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<BoundSpec, E> {
+                Ok(BoundSpec::Number(v as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<BoundSpec, E> {
+                Ok(BoundSpec::Number(v as f64))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<BoundSpec, E> {
+                Ok(BoundSpec::Expression(v.to_string()))
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
 }
 
 /// A normal-compliance law j_ν = S ∫ μ and its regularisation.

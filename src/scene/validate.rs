@@ -3,7 +3,7 @@
 
 use super::error::SceneError;
 use super::expr::Expr;
-use super::types::{ContactLawSpec, LawKind, MemoryKernelSpec, Scene};
+use super::types::{BoundSpec, ContactLawSpec, LawKind, MemoryKernelSpec, Scene, BOUND_VARIABLES};
 use toml::Value;
 
 /// The keys allowed in a table, given its path and contents.
@@ -269,15 +269,26 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
         }
     }
     if let Some(c) = &scene.contact {
-        if let Some(g) = c.bound {
-            if !(g.is_finite() && g >= 0.0) {
+        match &c.bound {
+            Some(BoundSpec::Number(g)) if !(g.is_finite() && *g >= 0.0) => {
                 return Err(invalid(
                     origin,
                     "contact.bound",
                     g,
-                    "the bound g must be ≥ 0 (omit it for no bound)",
+                    "the bound g must be ≥ 0 (omit it for no bound), or an expression g(x, y, z) ≥ 0 in quotes such as \"0.2 + 0.02*sin(6*PI*x)\"",
                 ));
             }
+            // compiled here, evaluated (and checked ≥ 0) at the contact nodes by the solver's
+            // set-up: a probe point need not lie where g is defined
+            Some(BoundSpec::Expression(e)) => {
+                Expr::parse(e, &BOUND_VARIABLES).map_err(|message| SceneError::Expression {
+                    origin: origin.into(),
+                    key: "contact.bound".into(),
+                    expression: e.clone(),
+                    message,
+                })?;
+            }
+            _ => {}
         }
         if let Some(law) = &c.law {
             check_law(law, origin)?;

@@ -101,7 +101,14 @@ impl Plan {
             let m = c.nodes.len();
             let mut parts = Vec::new();
             if let Some(g) = &c.bound {
-                parts.push(format!("bound u_ν ≤ g (g = {})", g.first().copied().unwrap_or(0.0)));
+                let (lo, hi) = g
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
+                if lo == hi || g.is_empty() {
+                    parts.push(format!("bound u_ν ≤ g (g = {})", g.first().copied().unwrap_or(0.0)));
+                } else {
+                    parts.push(format!("bound u_ν ≤ g (g from {lo} to {hi} at the nodes)"));
+                }
             }
             if let Some(l) = &c.law {
                 parts.push(format!(

@@ -186,7 +186,16 @@ impl<const D: usize> Simulation<D> {
                         })
                     }
                 };
-                let bound = spec.bound.map(|g| vec![g; nodes.len()]);
+                let bound = match &spec.bound {
+                    None => None,
+                    Some(b) => Some(super::bound::nodal_bound(
+                        b,
+                        &nodes.nodes,
+                        &mesh.points,
+                        &origin,
+                        "contact.bound",
+                    )?),
+                };
                 Some(ContactSetup {
                     nodes,
                     law,
