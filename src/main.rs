@@ -51,6 +51,13 @@ enum Command {
         /// Override a scene key for every run (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         overrides: Vec<String>,
+        /// After the study, recommend the cheapest (h, k) whose predicted H¹ error at T is at
+        /// most E, from error and cost models fitted to the study's runs (repeatable).
+        #[arg(long = "target", value_name = "E")]
+        targets: Vec<f64>,
+        /// Run each recommendation and print its measured error and time beside the prediction.
+        #[arg(long)]
+        verify: bool,
     },
     /// Draw a run: 2D, the last frame (deformed.png) and u_ν along Γ₃ over time (gamma3.svg);
     /// 3D, colour maps of u_ν and the pressure over Γ₃ at the last time (gamma3_map.png, .svg).
@@ -104,17 +111,29 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Study { study, out, overrides } => match hvi::study::spec::run_file(&study, &out, &overrides) {
-            Ok(written) => {
-                println!("{}", written.report);
-                println!("wrote {} to {}", written.files.join(", "), out.display());
-                ExitCode::SUCCESS
+        Command::Study {
+            study,
+            out,
+            overrides,
+            targets,
+            verify,
+        } => {
+            let targets = hvi::study::spec::Targets {
+                errors: targets,
+                verify,
+            };
+            match hvi::study::spec::run_file_with(&study, &out, &overrides, &targets) {
+                Ok(written) => {
+                    println!("{}", written.report);
+                    println!("wrote {} to {}", written.files.join(", "), out.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
             }
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::FAILURE
-            }
-        },
+        }
         Command::Plot { run, scale } => match hvi::app::plot(&run, scale) {
             Ok(files) => {
                 for f in files {

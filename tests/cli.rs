@@ -174,3 +174,66 @@ fn study_writes_tables_and_plots() {
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("h_path"));
 }
+
+/// `hvi study --target E --verify` on a small study: a recommendation and its check are
+/// printed, the measured error (against the study's reference, like the table's rows) is within
+/// a factor 2 of the prediction (the acceptance of issue 11; errors are deterministic, unlike
+/// the times, which are printed but not asserted) and at most 1.5 E.
+#[test]
+fn study_target_recommends_and_verifies_a_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("small.toml");
+    std::fs::write(
+        &study,
+        format!(
+            "scene = \"{}\"\nreference = {{ n = 32, steps = 32 }}\n[[h_paths]]\nsteps = 32\nn = [4, 8, 16]\n[[k_paths]]\nn = 32\nsteps = [2, 4, 8]\n",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper.toml")
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let run = hvi()
+        .args(["study", study.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .args(["--target", "4e-3", "--verify"])
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    let md = std::fs::read_to_string(out.join("study.md")).unwrap();
+    assert!(
+        md.contains("### Target: H¹ error at T ≤ 4.000e-3") && stdout.contains("Recommended"),
+        "{stdout}"
+    );
+    assert!(
+        md.contains("C_h = ") && md.contains(", p = ") && md.contains("q = "),
+        "{md}"
+    );
+    // "Verified: measured error **X** against predicted Y (measured/predicted R; …"
+    let verified = md.lines().find(|l| l.starts_with("* Verified")).expect(&md);
+    let number_after = |key: &str| -> f64 {
+        let rest = &verified[verified.find(key).unwrap_or_else(|| panic!("{key} in {verified}")) + key.len()..];
+        rest.trim_start_matches(['*', ' '])
+            .split([' ', '*', ';', ')'])
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap_or_else(|e| panic!("{key}: {e} in {verified}"))
+    };
+    let measured = number_after("measured error");
+    let predicted = number_after("against predicted");
+    assert!(measured / predicted >= 0.5 && measured / predicted <= 2.0, "{verified}");
+    assert!(measured <= 1.5 * 4e-3, "{verified}");
+    // bad targets are errors naming the flag
+    let bad = hvi()
+        .args([
+            "study",
+            study.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--target=0",
+        ])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--target 0: the target error must be a positive number"));
+}

@@ -431,3 +431,123 @@ fn a_k_only_study_writes_its_tables() {
         .all(|r| r.0 == "k (h=1/16)" && (r.1 - 1.0 / 16.0).abs() < 1e-12));
     assert!(rows[1].4.unwrap() >= 1.7, "order in k {:?}", rows[1].4);
 }
+
+// ---- the target planner (docs/method.md, "Planning a run for a target error") ----
+
+use hvi::study::target::{self, Candidate, CostModel, CostSample, ErrorModel, ErrorSample};
+
+/// A manufactured study: the runs of an h path at k = k_r and a k path at h = h_r (the paper's
+/// design) plus one run off both paths, with errors from the model with known constants.
+fn synthetic_samples(truth: &ErrorModel) -> Vec<ErrorSample> {
+    let mut hk: Vec<(f64, f64)> = [8.0, 16.0, 32.0, 64.0].iter().map(|n| (1.0 / n, 1.0 / 256.0)).collect();
+    hk.extend([4.0, 8.0, 12.0, 16.0].iter().map(|s| (1.0 / 256.0, 1.0 / s)));
+    hk.push((1.0 / 16.0, 1.0 / 8.0));
+    hk.iter()
+        .map(|&(h, k)| ErrorSample {
+            h,
+            k,
+            error: truth.predict(h, k),
+        })
+        .collect()
+}
+
+/// The paper's rectangle with square Q1 cells: 2(2n + 1)(n + 1) nodal unknowns less the
+/// clamped side's 2(n + 1).
+fn unknowns(n: usize) -> f64 {
+    (4 * n * (n + 1)) as f64
+}
+
+/// The planner recovers the constants and orders of a manufactured error model, against an
+/// exact solution (h_r = k_r = 0: e = C_h h^p + C_k k^q) and against a reference run, and
+/// the cost model's; its recommendation meets the target and is the cheapest candidate that
+/// does under the true models.
+#[test]
+fn the_target_planner_recovers_a_manufactured_model_and_meets_the_target() {
+    for (h_ref, k_ref) in [(0.0, 0.0), (1.0 / 256.0, 1.0 / 256.0)] {
+        // orders off the search grids (steps 0.01 and 0.0005), so that recovery is not luck
+        let truth = ErrorModel {
+            c_h: 0.1234,
+            p: 1.1234,
+            c_k: 0.0876,
+            q: 1.9567,
+            h_ref,
+            k_ref,
+            rms_relative_residual: 0.0,
+            samples: 0,
+        };
+        let fitted = ErrorModel::fit(&synthetic_samples(&truth), h_ref, k_ref).unwrap();
+        // the fine grid's half step is 2.5e-4; over h in [1/64, 1/8] a change δ of p moves h^p by
+        // a factor within e^{±δ ln 64} ≈ 1 ± 1e-3, which C_h absorbs: 1 % on the constants is safe
+        assert!(
+            (fitted.p - truth.p).abs() <= 5e-4,
+            "p = {} (true {})",
+            fitted.p,
+            truth.p
+        );
+        assert!(
+            (fitted.q - truth.q).abs() <= 5e-4,
+            "q = {} (true {})",
+            fitted.q,
+            truth.q
+        );
+        assert!((fitted.c_h / truth.c_h - 1.0).abs() <= 0.01, "C_h = {}", fitted.c_h);
+        assert!((fitted.c_k / truth.c_k - 1.0).abs() <= 0.01, "C_k = {}", fitted.c_k);
+        assert!(fitted.rms_relative_residual <= 2e-3, "{}", fitted.rms_relative_residual);
+
+        // cost: setup 2e-6·N^1.2 s, steps 3e-8·N^1.25 s each, at the runs' sizes
+        let true_cost = CostModel {
+            c_setup: 2e-6,
+            b: 1.2,
+            c_step: 3e-8,
+            a: 1.25,
+        };
+        let cost_samples: Vec<CostSample> = [(8, 256), (16, 256), (32, 256), (64, 256), (256, 4), (256, 16)]
+            .iter()
+            .map(|&(n, steps)| {
+                let (nu, s) = (unknowns(n), steps as f64);
+                CostSample {
+                    unknowns: nu,
+                    steps: s,
+                    setup_seconds: true_cost.c_setup * nu.powf(true_cost.b),
+                    steps_seconds: true_cost.c_step * nu.powf(true_cost.a) * s,
+                }
+            })
+            .collect();
+        let cost = CostModel::fit(&cost_samples).unwrap();
+        // noise-free power laws: recovered to round-off
+        assert!((cost.b - 1.2).abs() < 1e-9 && (cost.a - 1.25).abs() < 1e-9, "{cost:?}");
+        assert!((cost.c_setup / 2e-6 - 1.0).abs() < 1e-7 && (cost.c_step / 3e-8 - 1.0).abs() < 1e-7);
+
+        let candidates: Vec<Candidate> = (8..=256)
+            .flat_map(|n| {
+                (4..=256).map(move |steps| Candidate {
+                    n,
+                    steps,
+                    h: 1.0 / n as f64,
+                    k: 1.0 / steps as f64,
+                    unknowns: unknowns(n),
+                })
+            })
+            .collect();
+        for target_error in [3e-3, 1e-3, 3e-4] {
+            let plan = target::plan(&fitted, &cost, candidates.iter().copied(), target_error).unwrap();
+            let true_error = truth.predict(plan.run.h, plan.run.k);
+            // the fitted model is within 1 % of the truth, so the truth at the plan is ≤ 1.01 E
+            assert!(
+                true_error <= 1.01 * target_error,
+                "E = {target_error:e}: {plan:?} has true error {true_error:e}"
+            );
+            // the cheapest candidate meeting E under the true models costs at most 1 % less
+            let best = target::plan(&truth, &true_cost, candidates.iter().copied(), target_error).unwrap();
+            assert!(
+                true_cost.predict(plan.run.unknowns, plan.run.steps as f64) <= 1.01 * best.wall,
+                "E = {target_error:e}: planned {plan:?}, best {best:?}"
+            );
+            // and every candidate strictly cheaper than the plan misses E under the fitted model
+            assert!(candidates
+                .iter()
+                .filter(|c| cost.predict(c.unknowns, c.steps as f64) < plan.wall)
+                .all(|c| fitted.predict(c.h, c.k) > target_error));
+        }
+    }
+}

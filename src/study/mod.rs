@@ -5,7 +5,8 @@
 //! * [`interpolate`]: point location and interpolation of P1/Q1 fields between meshes;
 //! * [`runner`]: one run ([`run`]) and a [`Study`] that evaluates runs as they are added;
 //! * [`report`]: Markdown and CSV tables;
-//! * [`plot`]: log–log error plots, the Γ₃ normal displacement, the deformed mesh.
+//! * [`plot`]: log–log error plots, the Γ₃ normal displacement, the deformed mesh;
+//! * [`target`]: the error and cost models of a study and the cheapest run for a target error.
 //!
 //! ```no_run
 //! use hvi::mesh::structured::{rectangle, CellShape};
@@ -29,6 +30,7 @@ pub mod plot;
 pub mod report;
 pub mod runner;
 pub mod spec;
+pub mod target;
 
 pub use interpolate::{interpolate_nodal, Locator, Transfer};
 pub use runner::run_plan;
