@@ -873,8 +873,16 @@ fn values_out_of_range_name_the_key_and_the_fix() {
 fn bad_expressions_name_the_key() {
     let traction = "value = [\"0\", \"-0.1*(1 - exp(-2*t))*x*ny\"]";
     for (expr, parts) in [
-        ("-0.1*(1 - exp(-2*t)*x", vec!["cannot parse", "parentheses"]),
-        ("2*/x", vec!["cannot parse"]),
+        (
+            "-0.1*(1 - exp(-2*t)*x",
+            vec!["column 22", "expected `)` to close the `(` of column 6"],
+        ),
+        ("2*/x", vec!["column 3", "expected a number, a variable"]),
+        (
+            "y > 0.99 ? 1 : 0",
+            vec!["column 10", "`?` is not part of the language", "a if c else b"],
+        ),
+        ("1 if y > 0.99", vec!["column 14", "`if` needs an `else`"]),
         (
             "-0.1*(1 - exp(-2*t))*w",
             vec!["unknown variable `w`", "`x`, `y`, `z`, `t`, `nx`, `ny`, `nz`"],

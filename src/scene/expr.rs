@@ -1,130 +1,527 @@
-//! Expressions in a scene (loads in x, y, t; kernels in s), compiled once with exmex and
-//! evaluated many times. exmex orders variables alphabetically; [`Expr`] maps them to the
-//! order the caller declares.
+//! Expressions in a scene (loads in x, y, z, t and the facet normal; kernels in s; README
+//! "Expression language", docs/method.md §11.1), compiled once and evaluated many times.
 //!
-//! Two exmex conventions would surprise a user, so they are handled here:
-//! * its default literals have no exponent: `1e-3` is accepted through [`SciNumber`];
-//! * its unary minus binds tighter than `^` (`-x^2` would be (−x)²): such an expression is
-//!   rejected with a message asking for `-(x^2)` or `(-x)^2` ([`check_unary_minus_power`]);
-//! * its `^` associates to the left (`2^3^2` would be 64): chained powers must be bracketed
-//!   ([`check_chained_powers`]).
+//! hvi parses an expression itself, with the grammar README documents, so that every error
+//! names its column (with a caret under it) and says what is valid there; the checked tree is
+//! then written out fully parenthesised for exmex, which evaluates it. Writing it out fully
+//! parenthesised means exmex's own precedence never decides anything (its binary functions
+//! `min(a, min(b, c))` also fail to nest, and its `+` binds looser than `-`).
+//!
+//! Precedence, loosest first: `a if c else b`, `||`, `&&`, comparisons `< <= > >= == !=`,
+//! `+ -`, `* /`, unary `- + !`, `^`, then numbers, variables, constants, `f(…)` and `(…)`.
+//! Comparisons and logical operators give 1 (true) or 0 (false); any non-zero value is true.
+//! Three readings differ between tools, so hvi refuses them and asks for parentheses:
+//! * a sign in front of a power (`-x^2`: −(x²) or (−x)²?);
+//! * chained powers (`2^3^2`: 2⁹ or 8²?);
+//! * chained comparisons (`0 < x < 1`: write `0 < x && x < 1`).
+//!
+//! exmex's default literals have no exponent: `1e-3` is accepted through [`SciNumber`].
 
 use exmex::prelude::*;
-use exmex::{literal_matcher_from_pattern, FlatEx, FloatOpsFactory, MatchLiteral};
+use exmex::{literal_matcher_from_pattern, BinOp, FlatEx, FloatOpsFactory, MakeOperators, MatchLiteral, Operator};
 
 literal_matcher_from_pattern!(SciNumber, r"^(([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?)");
 
-type Flat = FlatEx<f64, FloatOpsFactory<f64>, SciNumber>;
+/// exmex's float operators, the comparisons, the logical operators and the conditional.
+#[derive(Clone, Debug)]
+pub struct HviOps;
+
+/// What `a if c` gives when c is false: a NaN with a payload of its own, which `else` replaces.
+/// The grammar pairs every `if` with an `else`, so the marker never leaves an expression.
+const NOT_TAKEN: u64 = 0x7ff8_5eed_0000_0001;
+
+fn truth(a: f64) -> bool {
+    a != 0.0
+}
+
+fn bool_value(b: bool) -> f64 {
+    if b {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+impl MakeOperators<f64> for HviOps {
+    fn make<'a>() -> Vec<Operator<'a, f64>> {
+        let bin = |repr: &'a str, prio: i64, apply: fn(f64, f64) -> f64| {
+            Operator::make_bin(
+                repr,
+                BinOp {
+                    apply,
+                    prio,
+                    is_commutative: false,
+                },
+            )
+        };
+        let mut ops = FloatOpsFactory::<f64>::make();
+        ops.extend([
+            bin("<", -1, |a, b| bool_value(a < b)),
+            bin("<=", -1, |a, b| bool_value(a <= b)),
+            bin(">", -1, |a, b| bool_value(a > b)),
+            bin(">=", -1, |a, b| bool_value(a >= b)),
+            bin("==", -1, |a, b| bool_value(a == b)),
+            bin("!=", -1, |a, b| bool_value(a != b)),
+            bin("&&", -2, |a, b| bool_value(truth(a) && truth(b))),
+            bin("||", -3, |a, b| bool_value(truth(a) || truth(b))),
+            bin("if", -4, |a, c| if truth(c) { a } else { f64::from_bits(NOT_TAKEN) }),
+            bin("else", -5, |a, b| if a.to_bits() == NOT_TAKEN { b } else { a }),
+            Operator::make_unary("!", |a| bool_value(!truth(a))),
+        ]);
+        ops
+    }
+}
+
+type Flat = FlatEx<f64, HviOps, SciNumber>;
 
 /// The variables of a traction density: the point (x, y, z), the time t and the facet's outward
 /// unit normal (nx, ny, nz). In 2D, z = nz = 0. A load on a group that has several sides can use
 /// the normal to tell them apart: the paper's Γ₂ load is `-0.1*(1 - exp(-2*t))*x*ny`, zero on the
-/// right side (ny = 0) and the paper's load on the top (ny = 1).
+/// right side (ny = 0) and the paper's load on the top (ny = 1). A pressure has the same ones.
 pub const TRACTION_VARIABLES: [&str; 7] = ["x", "y", "z", "t", "nx", "ny", "nz"];
 
 /// The variables of a body force density: the point (x, y, z) and the time t (z = 0 in 2D).
+/// Prescribed displacements have the same ones.
 pub const BODY_FORCE_VARIABLES: [&str; 4] = ["x", "y", "z", "t"];
 
-/// Rejects a unary minus whose operand is raised to a power (`-x^2`, `2*-(a+b)^3`), which exmex
-/// would read as (−x)², unlike the usual convention. Returns the column (1-based) of the minus.
-fn check_unary_minus_power(source: &str) -> Result<(), String> {
+/// The variable of a relaxation kernel b(s): the time lag s ≥ 0.
+pub const KERNEL_VARIABLES: [&str; 1] = ["s"];
+
+/// The functions of one argument (exmex's names; `log` and `ln` are both the natural logarithm).
+pub const FUNCTIONS: [&str; 26] = [
+    "abs", "signum", "sin", "cos", "tan", "asin", "acos", "atan", "sinh", "cosh", "tanh", "asinh", "acosh", "atanh",
+    "floor", "round", "ceil", "trunc", "fract", "exp", "sqrt", "cbrt", "ln", "log", "log2", "log10",
+];
+
+/// The functions of two arguments: atan2(y, x), min(a, b), max(a, b).
+pub const BINARY_FUNCTIONS: [&str; 3] = ["atan2", "min", "max"];
+
+/// The named constants: π (also `PI`), e (also `E`), τ = 2π (also `TAU`).
+pub const CONSTANTS: [&str; 6] = ["PI", "π", "E", "e", "TAU", "τ"];
+
+/// A token and the column (1-based, in characters) where it starts.
+#[derive(Clone, Debug, PartialEq)]
+enum Tok {
+    Num(String),
+    Name(String),
+    Op(&'static str),
+    Open,
+    Close,
+    Comma,
+    End,
+}
+
+const OPERATORS: [&str; 14] = [
+    "<=", ">=", "==", "!=", "&&", "||", "<", ">", "!", "+", "-", "*", "/", "^",
+];
+
+/// An error at `col` of `source`: the message, the source and a caret under the column.
+fn at(source: &str, col: usize, message: impl std::fmt::Display) -> String {
+    let line: String = source
+        .chars()
+        .map(|c| if c.is_whitespace() { ' ' } else { c })
+        .collect();
+    format!(
+        "column {col}: {message}\n    {line}\n    {}^",
+        " ".repeat(col.saturating_sub(1))
+    )
+}
+
+fn tokenize(source: &str) -> Result<Vec<(Tok, usize)>, String> {
     let chars: Vec<char> = source.chars().collect();
-    let skip_ws = |mut i: usize| {
-        while i < chars.len() && chars[i].is_whitespace() {
-            i += 1;
-        }
-        i
-    };
-    let mut expect_operand = true;
+    let mut out = Vec::new();
     let mut i = 0;
     while i < chars.len() {
         let c = chars[i];
+        let col = i + 1;
         if c.is_whitespace() {
             i += 1;
             continue;
         }
-        if expect_operand && c == '-' {
-            // find the end of the operand that follows
-            let mut j = skip_ws(i + 1);
-            while j < chars.len() && (chars[j] == '-' || chars[j] == '+') {
-                j = skip_ws(j + 1);
+        if c.is_ascii_digit() || (c == '.' && chars.get(i + 1).is_some_and(|d| d.is_ascii_digit())) {
+            let start = i;
+            while i < chars.len() && chars[i].is_ascii_digit() {
+                i += 1;
             }
-            while j < chars.len() && (chars[j].is_alphanumeric() || chars[j] == '_' || chars[j] == '.') {
-                // a literal like 1e-3 carries its own sign
-                if (chars[j] == 'e' || chars[j] == 'E')
-                    && j + 1 < chars.len()
-                    && (chars[j + 1] == '-' || chars[j + 1] == '+')
-                    && j > 0
-                    && chars[j - 1].is_ascii_digit()
-                {
+            if i < chars.len() && chars[i] == '.' {
+                i += 1;
+                while i < chars.len() && chars[i].is_ascii_digit() {
+                    i += 1;
+                }
+            }
+            if i < chars.len() && (chars[i] == 'e' || chars[i] == 'E') {
+                let mut j = i + 1;
+                if j < chars.len() && (chars[j] == '+' || chars[j] == '-') {
                     j += 1;
                 }
-                j += 1;
-            }
-            j = skip_ws(j);
-            if j < chars.len() && chars[j] == '(' {
-                let mut depth = 0;
-                while j < chars.len() {
-                    match chars[j] {
-                        '(' => depth += 1,
-                        ')' => {
-                            depth -= 1;
-                            if depth == 0 {
-                                break;
-                            }
-                        }
-                        _ => {}
+                if j < chars.len() && chars[j].is_ascii_digit() {
+                    while j < chars.len() && chars[j].is_ascii_digit() {
+                        j += 1;
                     }
-                    j += 1;
+                    i = j;
                 }
-                j = skip_ws(j + 1);
             }
-            if j < chars.len() && chars[j] == '^' {
-                return Err(format!(
-                    "column {}: a minus sign in front of a power is ambiguous here (it would be applied before the power); write -({}) for the negative of the power, or put the sign inside parentheses",
-                    i + 1,
-                    chars[i + 1..].iter().collect::<String>().trim()
-                ));
-            }
-            i += 1;
+            out.push((Tok::Num(chars[start..i].iter().collect()), col));
             continue;
         }
-        expect_operand = matches!(c, '(' | ',' | '+' | '-' | '*' | '/' | '^');
+        if c.is_alphabetic() || c == '_' {
+            let start = i;
+            while i < chars.len() && (chars[i].is_alphanumeric() || chars[i] == '_') {
+                i += 1;
+            }
+            out.push((Tok::Name(chars[start..i].iter().collect()), col));
+            continue;
+        }
+        match c {
+            '(' => out.push((Tok::Open, col)),
+            ')' => out.push((Tok::Close, col)),
+            ',' => out.push((Tok::Comma, col)),
+            _ => {
+                let two: String = chars[i..(i + 2).min(chars.len())].iter().collect();
+                if let Some(op) = OPERATORS.iter().find(|op| two.starts_with(*op)) {
+                    out.push((Tok::Op(op), col));
+                    i += op.chars().count();
+                    continue;
+                }
+                let hint = match c {
+                    '=' => "`=` alone is not an operator: write `==` for equality".to_string(),
+                    '&' => "write `&&` for a logical and".to_string(),
+                    '|' => "write `||` for a logical or".to_string(),
+                    _ => format!(
+                        "`{c}` is not part of the language; the operators are {}, and the conditional `a if c else b`",
+                        OPERATORS.map(|o| format!("`{o}`")).join(" ")
+                    ),
+                };
+                return Err(at(source, col, hint));
+            }
+        }
         i += 1;
     }
-    Ok(())
+    out.push((Tok::End, chars.len() + 1));
+    Ok(out)
 }
 
-/// Rejects chained powers `a^b^c` without parentheses, which exmex evaluates left to right
-/// ((a^b)^c) unlike the usual right-to-left convention.
-fn check_chained_powers(source: &str) -> Result<(), String> {
-    // per parenthesis depth: was the last binary operator at this depth a power?
-    let mut last_was_power = vec![false];
-    for (i, c) in source.chars().enumerate() {
-        match c {
-            '(' => last_was_power.push(false),
-            ')' if last_was_power.len() > 1 => {
-                last_was_power.pop();
+/// A checked expression tree.
+#[derive(Clone, Debug)]
+enum Node {
+    Leaf(String),
+    Unary(&'static str, Box<Node>),
+    Binary(&'static str, Box<Node>, Box<Node>),
+    Call(String, Vec<Node>),
+    Group(Box<Node>),
+    /// then, condition, otherwise
+    Cond(Box<Node>, Box<Node>, Box<Node>),
+}
+
+impl Node {
+    /// Fully parenthesised text for exmex (binary functions written infix, as exmex reads them).
+    fn emit(&self, out: &mut String) {
+        match self {
+            Node::Leaf(s) => out.push_str(s),
+            Node::Unary(op, a) => {
+                out.push_str(op);
+                out.push('(');
+                a.emit(out);
+                out.push(')');
             }
-            '+' | '-' | '*' | '/' | ',' => {
-                if let Some(top) = last_was_power.last_mut() {
-                    *top = false;
-                }
+            Node::Binary(op, a, b) => {
+                out.push_str("((");
+                a.emit(out);
+                out.push_str(") ");
+                out.push_str(op);
+                out.push_str(" (");
+                b.emit(out);
+                out.push_str("))");
             }
-            '^' => {
-                let top = last_was_power.last_mut().expect("depth 0 is never popped");
-                if *top {
-                    return Err(format!(
-                        "column {}: chained powers a^b^c are ambiguous here (they would be read as (a^b)^c); write (a^b)^c or a^(b^c)",
-                        i + 1
-                    ));
-                }
-                *top = true;
+            Node::Call(f, args) if args.len() == 2 => {
+                out.push_str("((");
+                args[0].emit(out);
+                out.push_str(") ");
+                out.push_str(f);
+                out.push_str(" (");
+                args[1].emit(out);
+                out.push_str("))");
             }
-            _ => {}
+            Node::Group(a) => {
+                out.push('(');
+                a.emit(out);
+                out.push(')');
+            }
+            Node::Call(f, args) => {
+                out.push_str(f);
+                out.push('(');
+                args[0].emit(out);
+                out.push(')');
+            }
+            Node::Cond(a, c, b) => {
+                out.push_str("(((");
+                a.emit(out);
+                out.push_str(") if (");
+                c.emit(out);
+                out.push_str(")) else (");
+                b.emit(out);
+                out.push_str("))");
+            }
         }
     }
-    Ok(())
+}
+
+struct Parser<'a> {
+    source: &'a str,
+    toks: Vec<(Tok, usize)>,
+    pos: usize,
+    vars: &'a [&'a str],
+}
+
+const OPERAND: &str = "a number, a variable, a constant, a function call such as exp(…) or a `(`";
+
+impl Parser<'_> {
+    fn peek(&self) -> &Tok {
+        &self.toks[self.pos].0
+    }
+    fn col(&self) -> usize {
+        self.toks[self.pos].1
+    }
+    fn err(&self, message: impl std::fmt::Display) -> String {
+        at(self.source, self.col(), message)
+    }
+    fn is_op(&self, op: &str) -> bool {
+        matches!(self.peek(), Tok::Op(o) if *o == op)
+    }
+    fn is_name(&self, name: &str) -> bool {
+        matches!(self.peek(), Tok::Name(n) if n == name)
+    }
+    fn variables(&self) -> String {
+        self.vars
+            .iter()
+            .map(|v| format!("`{v}`"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// cond := or [ `if` or `else` cond ]
+    fn cond(&mut self) -> Result<Node, String> {
+        let then = self.or()?;
+        if !self.is_name("if") {
+            return Ok(then);
+        }
+        self.pos += 1;
+        let c = self.or()?;
+        if !self.is_name("else") {
+            return Err(self.err(format!(
+                "`if` needs an `else` here: write `a if c else b`; found {}",
+                self.describe()
+            )));
+        }
+        self.pos += 1;
+        let otherwise = self.cond()?;
+        Ok(Node::Cond(Box::new(then), Box::new(c), Box::new(otherwise)))
+    }
+
+    fn or(&mut self) -> Result<Node, String> {
+        let mut a = self.and()?;
+        while self.is_op("||") {
+            self.pos += 1;
+            a = Node::Binary("||", Box::new(a), Box::new(self.and()?));
+        }
+        Ok(a)
+    }
+
+    fn and(&mut self) -> Result<Node, String> {
+        let mut a = self.cmp()?;
+        while self.is_op("&&") {
+            self.pos += 1;
+            a = Node::Binary("&&", Box::new(a), Box::new(self.cmp()?));
+        }
+        Ok(a)
+    }
+
+    fn comparison(&self) -> Option<&'static str> {
+        match self.peek() {
+            Tok::Op(o) if matches!(*o, "<" | "<=" | ">" | ">=" | "==" | "!=") => Some(o),
+            _ => None,
+        }
+    }
+
+    fn cmp(&mut self) -> Result<Node, String> {
+        let a = self.add()?;
+        let Some(op) = self.comparison() else {
+            return Ok(a);
+        };
+        self.pos += 1;
+        let b = self.add()?;
+        if self.comparison().is_some() {
+            return Err(self.err(
+                "chained comparisons such as 0 < x < 1 are ambiguous here (they would compare the 1/0 of the first with the third); write 0 < x && x < 1",
+            ));
+        }
+        Ok(Node::Binary(op, Box::new(a), Box::new(b)))
+    }
+
+    fn add(&mut self) -> Result<Node, String> {
+        let mut a = self.mul()?;
+        while let Tok::Op(op @ ("+" | "-")) = self.peek() {
+            let op = *op;
+            self.pos += 1;
+            a = Node::Binary(op, Box::new(a), Box::new(self.mul()?));
+        }
+        Ok(a)
+    }
+
+    fn mul(&mut self) -> Result<Node, String> {
+        let mut a = self.unary()?.0;
+        while let Tok::Op(op @ ("*" | "/")) = self.peek() {
+            let op = *op;
+            self.pos += 1;
+            a = Node::Binary(op, Box::new(a), Box::new(self.unary()?.0));
+        }
+        Ok(a)
+    }
+
+    /// unary := (`-` | `+` | `!`) unary | power. Also returns whether the operand is a power.
+    fn unary(&mut self) -> Result<(Node, bool), String> {
+        if let Tok::Op(op @ ("-" | "+" | "!")) = self.peek() {
+            let (op, col) = (*op, self.col());
+            self.pos += 1;
+            let (a, is_power) = self.unary()?;
+            if is_power {
+                let sign = match op {
+                    "-" => "a minus sign",
+                    "+" => "a plus sign",
+                    _ => "a `!`",
+                };
+                return Err(at(
+                    self.source,
+                    col,
+                    format!(
+                        "{sign} in front of a power is ambiguous here (is -x^2 the negative of x², or (−x)²?); write -(x^2) for the negative of the power, or (-x)^2"
+                    ),
+                ));
+            }
+            return Ok((Node::Unary(op, Box::new(a)), false));
+        }
+        self.power()
+    }
+
+    /// power := primary [ `^` (`-` | `+`)* primary ]
+    fn power(&mut self) -> Result<(Node, bool), String> {
+        let base = self.primary()?;
+        if !self.is_op("^") {
+            return Ok((base, false));
+        }
+        self.pos += 1;
+        let mut signs = Vec::new();
+        while let Tok::Op(op @ ("-" | "+")) = self.peek() {
+            signs.push(*op);
+            self.pos += 1;
+        }
+        let mut exponent = self.primary()?;
+        for op in signs.into_iter().rev() {
+            exponent = Node::Unary(op, Box::new(exponent));
+        }
+        if self.is_op("^") {
+            return Err(self.err(
+                "chained powers a^b^c are ambiguous here (read as (a^b)^c by some tools, a^(b^c) by others); write (a^b)^c or a^(b^c)",
+            ));
+        }
+        Ok((Node::Binary("^", Box::new(base), Box::new(exponent)), true))
+    }
+
+    fn describe(&self) -> String {
+        match self.peek() {
+            Tok::Num(n) => format!("the number `{n}`"),
+            Tok::Name(n) => format!("`{n}`"),
+            Tok::Op(o) => format!("`{o}`"),
+            Tok::Open => "`(`".into(),
+            Tok::Close => "`)`".into(),
+            Tok::Comma => "`,`".into(),
+            Tok::End => "the end of the expression".into(),
+        }
+    }
+
+    fn primary(&mut self) -> Result<Node, String> {
+        let col = self.col();
+        match self.peek().clone() {
+            Tok::Num(n) => {
+                self.pos += 1;
+                Ok(Node::Leaf(n))
+            }
+            Tok::Open => {
+                self.pos += 1;
+                let inner = self.cond()?;
+                if *self.peek() != Tok::Close {
+                    return Err(self.err(format!("expected `)` to close the `(` of column {col}; found {}", self.describe())));
+                }
+                self.pos += 1;
+                // a parenthesised power is an operand of its own: -(x^2) is fine
+                Ok(Node::Group(Box::new(inner)))
+            }
+            Tok::Name(name) if name == "if" || name == "else" => Err(self.err(format!(
+                "`{name}` needs a value before it here: the conditional is written `a if c else b`"
+            ))),
+            Tok::Name(name) if self.vars.contains(&name.as_str()) || CONSTANTS.contains(&name.as_str()) => {
+                self.pos += 1;
+                Ok(Node::Leaf(name))
+            }
+            Tok::Name(name) if FUNCTIONS.contains(&name.as_str()) || BINARY_FUNCTIONS.contains(&name.as_str()) => {
+                let arity = if FUNCTIONS.contains(&name.as_str()) { 1 } else { 2 };
+                let usage = if arity == 1 {
+                    format!("{name}(x)")
+                } else {
+                    format!("{name}(a, b)")
+                };
+                self.pos += 1;
+                if *self.peek() != Tok::Open {
+                    return Err(self.err(format!("the function `{name}` takes its argument in parentheses: {usage}")));
+                }
+                self.pos += 1;
+                let mut args = vec![self.cond()?];
+                while *self.peek() == Tok::Comma && args.len() < arity {
+                    self.pos += 1;
+                    args.push(self.cond()?);
+                }
+                if *self.peek() == Tok::Comma || (args.len() < arity && *self.peek() == Tok::Close) {
+                    return Err(self.err(format!(
+                        "`{name}` takes {arity} argument{}: {usage}",
+                        if arity == 1 { "" } else { "s" }
+                    )));
+                }
+                if *self.peek() != Tok::Close {
+                    return Err(self.err(format!("expected `)` to close `{name}(`; found {}", self.describe())));
+                }
+                self.pos += 1;
+                Ok(Node::Call(name, args))
+            }
+            Tok::Name(name) => Err(at(
+                self.source,
+                col,
+                format!(
+                    "unknown variable `{name}`; the variables here are {}; the functions are {}, {}; the constants are {}",
+                    self.variables(),
+                    FUNCTIONS.join(", "),
+                    BINARY_FUNCTIONS.map(|f| format!("{f}(a, b)")).join(", "),
+                    CONSTANTS.join(", ")
+                ),
+            )),
+            _ => Err(self.err(format!("expected {OPERAND} here; found {}", self.describe()))),
+        }
+    }
+
+    fn parse(mut self) -> Result<Node, String> {
+        let node = self.cond()?;
+        match self.peek() {
+            Tok::End => Ok(node),
+            Tok::Close => Err(self.err("this `)` closes no `(`")),
+            Tok::Name(n) if n == "else" => {
+                Err(self.err("`else` without `if`: the conditional is written `a if c else b`"))
+            }
+            Tok::Comma => Err(self.err("a `,` separates the arguments of min(a, b), max(a, b) and atan2(y, x) only")),
+            _ => Err(self.err(format!(
+                "expected an operator (+ - * / ^, a comparison, && or ||) before {}",
+                self.describe()
+            ))),
+        }
+    }
 }
 
 /// A compiled scalar expression over a declared list of variables.
@@ -138,30 +535,31 @@ pub struct Expr {
 }
 
 impl Expr {
-    /// Compiles `source`; every variable must be one of `allowed_vars`.
+    /// Compiles `source`; every variable must be one of `allowed_vars`. An error names the
+    /// column, shows the source with a caret under it and says what is valid there.
     pub fn parse(source: &str, allowed_vars: &[&str]) -> Result<Expr, String> {
         if source.trim().is_empty() {
-            return Err("the expression is empty".into());
+            return Err(format!("the expression is empty; write {OPERAND}"));
         }
-        check_unary_minus_power(source)?;
-        check_chained_powers(source)?;
-        let flat = Flat::parse(source).map_err(|e| format!("cannot parse: {}", e.msg()))?;
+        let toks = tokenize(source)?;
+        let tree = Parser {
+            source,
+            toks,
+            pos: 0,
+            vars: allowed_vars,
+        }
+        .parse()?;
+        let mut text = String::new();
+        tree.emit(&mut text);
+        let flat = Flat::parse(&text).map_err(|e| format!("cannot parse: {}", e.msg()))?;
         let mut order = Vec::new();
         let mut used = Vec::new();
         for name in flat.var_names() {
-            match allowed_vars.iter().position(|v| v == name) {
-                Some(i) => order.push(i),
-                None => {
-                    return Err(format!(
-                        "unknown variable `{name}`; the variables here are {}",
-                        allowed_vars
-                            .iter()
-                            .map(|v| format!("`{v}`"))
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ))
-                }
-            }
+            let i = allowed_vars
+                .iter()
+                .position(|v| v == name)
+                .ok_or_else(|| format!("unknown variable `{name}`"))?;
+            order.push(i);
             used.push(name.clone());
         }
         Ok(Expr {
@@ -196,6 +594,12 @@ impl Expr {
 mod tests {
     use super::*;
 
+    fn eval(source: &str, x: f64) -> f64 {
+        Expr::parse(source, &["x"])
+            .unwrap_or_else(|e| panic!("{source}: {e}"))
+            .eval(&[x])
+    }
+
     #[test]
     fn variables_follow_the_declared_order() {
         let e = Expr::parse("-0.1*(1 - exp(-2*t))*x + y^2", &["x", "y", "t"]).unwrap();
@@ -206,28 +610,103 @@ mod tests {
         assert!(Expr::parse("sin(", &["x"]).is_err());
         assert_eq!(Expr::parse("2", &["x", "y", "t"]).unwrap().eval(&[0.0, 0.0, 0.0]), 2.0);
         // scientific literals
-        assert_eq!(
-            Expr::parse("1.5e-3*x + 2E2", &["x"]).unwrap().eval(&[2.0]),
-            3e-3 + 200.0
-        );
-        assert_eq!(
-            Expr::parse("-1.0989010989010988e-2", &["x"]).unwrap().eval(&[0.0]),
-            -1.0989010989010988e-2
-        );
+        assert_eq!(eval("1.5e-3*x + 2E2", 2.0), 3e-3 + 200.0);
+        assert_eq!(eval("-1.0989010989010988e-2", 0.0), -1.0989010989010988e-2);
         // a minus before a power is rejected, not silently read as (−x)²
-        for bad in ["-x^2", "2*-x^2", "-(x+1)^2", "exp(-x^2)", "- 2 ^ 2"] {
+        for bad in ["-x^2", "2*-x^2", "-(x+1)^2", "exp(-x^2)", "- 2 ^ 2", "-sin(x)^2"] {
             assert!(Expr::parse(bad, &["x"]).unwrap_err().contains("minus"), "{bad}");
         }
-        assert_eq!(Expr::parse("-(x^2)", &["x"]).unwrap().eval(&[3.0]), -9.0);
+        assert_eq!(eval("-(x^2)", 3.0), -9.0);
+        assert_eq!(eval("(-x)^2", 3.0), 9.0);
         assert!(Expr::parse("2^3^2", &["x"]).unwrap_err().contains("chained"));
-        assert_eq!(Expr::parse("2^(3^2)", &["x"]).unwrap().eval(&[0.0]), 512.0);
-        assert_eq!(Expr::parse("(2^3)^2 + x^2*x^2", &["x"]).unwrap().eval(&[1.0]), 65.0);
+        assert_eq!(eval("2^(3^2)", 0.0), 512.0);
+        assert_eq!(eval("(2^3)^2 + x^2*x^2", 1.0), 65.0);
         assert_eq!(
             Expr::parse("exp(x^2) + y^2", &["x", "y"]).unwrap().eval(&[0.0, 2.0]),
             5.0
         );
-        assert_eq!(Expr::parse("x-2^2", &["x"]).unwrap().eval(&[3.0]), -1.0);
-        assert_eq!(Expr::parse("x^-2", &["x"]).unwrap().eval(&[2.0]), 0.25);
-        assert_eq!(Expr::parse("exp(-2*x)", &["x"]).unwrap().eval(&[0.0]), 1.0);
+        assert_eq!(eval("x-2^2", 3.0), -1.0);
+        assert_eq!(eval("x^-2", 2.0), 0.25);
+        assert_eq!(eval("exp(-2*x)", 0.0), 1.0);
+        assert_eq!(eval("sin(x)^2", 0.5), 0.5f64.sin().powi(2));
+    }
+
+    #[test]
+    fn arithmetic_is_left_associative() {
+        // exmex alone gives + a looser binding than -; hvi writes the tree out parenthesised
+        assert_eq!(eval("1 - 2 + 3", 0.0), 2.0);
+        assert_eq!(eval("8 / 4 * 2", 0.0), 4.0);
+        assert_eq!(eval("8 / 4 / 2", 0.0), 1.0);
+        assert_eq!(eval("1 - x - 1", 5.0), -5.0);
+        // nested binary functions (exmex alone reports a parenthesis mismatch)
+        assert_eq!(eval("min(1, max(x, 3))", 2.0), 1.0);
+        assert_eq!(eval("max(min(1, 2), min(3, x))", 4.0), 3.0);
+        assert_eq!(eval("atan2(1, min(1, x))*4", 1.0), std::f64::consts::PI);
+    }
+
+    #[test]
+    fn comparisons_logic_and_conditionals() {
+        for (source, x, want) in [
+            ("x > 0.5", 0.7, 1.0),
+            ("x > 0.5", 0.5, 0.0),
+            ("x >= 0.5", 0.5, 1.0),
+            ("x < 0.5", 0.2, 1.0),
+            ("x <= 0.5", 0.6, 0.0),
+            ("x == 2", 2.0, 1.0),
+            ("x != 2", 2.0, 0.0),
+            ("x > 0 && x < 1", 0.5, 1.0),
+            ("x > 0 && x < 1", 1.5, 0.0),
+            ("x < 0 || x > 1", 1.5, 1.0),
+            ("!(x > 1)", 1.5, 0.0),
+            ("!x", 0.0, 1.0),
+            ("(x > 0.5) * 2", 0.7, 2.0),
+            ("x > 0.5 * 2", 0.7, 0.0),
+            ("1 + x > 2", 1.5, 1.0),
+            ("x^2 if x > 0 else -x", 3.0, 9.0),
+            ("x^2 if x > 0 else -x", -3.0, 3.0),
+            ("1 if x < 0 else 2 if x < 1 else 3", -1.0, 1.0),
+            ("1 if x < 0 else 2 if x < 1 else 3", 0.5, 2.0),
+            ("1 if x < 0 else 2 if x < 1 else 3", 5.0, 3.0),
+            ("(1 if x > 0 else 2) + 10", 1.0, 11.0),
+            ("10 + 1 if x > 0 else 2", -1.0, 2.0),
+            // the branch not taken may be undefined there
+            ("ln(x) if x > 0 else 0", -1.0, 0.0),
+            ("x > 0 && x < 1 || x > 2", 3.0, 1.0),
+            ("x > 0 || x < -1 && x > -2", 5.0, 1.0),
+        ] {
+            assert_eq!(eval(source, x), want, "{source} at x = {x}");
+        }
+    }
+
+    #[test]
+    fn errors_point_at_the_column() {
+        let cases = [
+            ("x >> 0.99", 4, "expected"),
+            ("x = 1", 3, "`==`"),
+            ("x & 1", 3, "`&&`"),
+            ("0 < x < 1", 7, "chained comparisons"),
+            ("2 * foo", 5, "unknown variable `foo`"),
+            ("1 if x > 0", 11, "`else`"),
+            ("1 else 2", 3, "`else` without `if`"),
+            ("sin x", 5, "in parentheses"),
+            ("min(1)", 6, "2 arguments"),
+            ("sin(1, 2)", 6, "1 argument"),
+            ("(x + 1", 7, "`)`"),
+            ("x + 1)", 6, "closes no"),
+            ("2 x", 3, "expected an operator"),
+            ("x + * 2", 5, "expected a number"),
+            ("x % 2", 3, "not part of the language"),
+            ("3 * -x^2", 5, "minus"),
+            ("x^2^3", 4, "chained powers"),
+        ];
+        for (source, col, says) in cases {
+            let e = Expr::parse(source, &["x"]).unwrap_err();
+            assert!(e.starts_with(&format!("column {col}:")), "{source}: {e}");
+            assert!(e.contains(says), "{source}: {e}");
+            // the caret sits under the column
+            let caret = e.lines().last().unwrap();
+            assert_eq!(caret.find('^'), Some(4 + col - 1), "{source}:\n{e}");
+        }
+        assert!(Expr::parse("  ", &["x"]).unwrap_err().contains("empty"));
     }
 }

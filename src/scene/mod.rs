@@ -8,7 +8,9 @@ mod types;
 mod validate;
 
 pub use error::SceneError;
-pub use expr::{Expr, BODY_FORCE_VARIABLES, TRACTION_VARIABLES};
+pub use expr::{
+    Expr, BINARY_FUNCTIONS, BODY_FORCE_VARIABLES, CONSTANTS, FUNCTIONS, KERNEL_VARIABLES, TRACTION_VARIABLES,
+};
 pub use types::*;
 
 use std::path::Path;

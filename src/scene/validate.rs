@@ -198,7 +198,13 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
             }
         }
         Some(MemoryKernelSpec::Expression { expression }) => {
-            compile(origin, "memory.expression", expression, &["s"], &[0.0])?;
+            compile(
+                origin,
+                "memory.expression",
+                expression,
+                &super::KERNEL_VARIABLES,
+                &[0.0],
+            )?;
         }
         Some(MemoryKernelSpec::Polynomial { .. }) | None => {}
     }

@@ -123,7 +123,7 @@ impl<const D: usize> Simulation<D> {
             }),
             Some(scene::MemoryKernelSpec::Expression { expression }) => Some(RelaxationKernel::General {
                 expression: Box::new(
-                    Expr::parse(expression, &["s"])
+                    Expr::parse(expression, &scene::KERNEL_VARIABLES)
                         .map_err(|e| SolveError::Setup(format!("memory.expression = \"{expression}\": {e}")))?,
                 ),
             }),
