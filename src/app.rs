@@ -2,9 +2,9 @@
 //! that turn steps into files (VTK series, Γ₃ CSV, summary) or keep them in memory (tests).
 
 use crate::contact::active_set::{ContactOutcome, ContactState};
-use crate::fem::stress::cell_stresses;
-use crate::mesh::{self, AnyMesh, Mesh};
-use crate::output::{self, CsvTable, Field, Frame, SeriesWriter};
+use crate::fem::stress::{cell_measures, cell_stresses, nodal_stresses};
+use crate::mesh::{self, AnyMesh, GroupSelector, Mesh};
+use crate::output::{self, ContactBoundary, CsvTable, Field, Frame, SeriesWriter, SurfaceFrame};
 use crate::scene::{OutputField, Scene};
 use crate::solver::stats::timed;
 use crate::solver::{timeloop, FrameSink, Plan, RunStats, Simulation, SolveError, StepView};
@@ -45,9 +45,21 @@ impl<const D: usize> FrameSink<D> for MemorySink {
     }
 }
 
-/// Writes the VTK series, `gamma3.csv`, and shows progress.
-pub struct FileSink {
+/// The contact dataset of a run: its points and facets, and its series (`contact.pvd`).
+struct ContactSeries<const D: usize> {
+    boundary: ContactBoundary<D>,
     series: SeriesWriter,
+}
+
+/// Writes the VTK series (the body's `solution.pvd`, Γ₃'s `contact.pvd`), `gamma3.csv`, and
+/// shows progress.
+pub struct FileSink<const D: usize = 2> {
+    series: SeriesWriter,
+    contact: Option<ContactSeries<D>>,
+    /// The physical tag of each cell's group (-1 for a cell in none).
+    cell_groups: Vec<i32>,
+    /// Areas or volumes of the cells, for the nodal stresses.
+    cell_measures: Vec<f64>,
     gamma3: Option<CsvTable>,
     reactions: Option<CsvTable>,
     fields: Vec<OutputField>,
@@ -55,15 +67,45 @@ pub struct FileSink {
     pub stress_seconds: f64,
 }
 
-impl FileSink {
-    /// Prepares the output directory (checked writable before any solving).
-    pub fn create<const D: usize>(
+impl<const D: usize> FileSink<D> {
+    /// Prepares the output directory (checked writable before any solving). `contact_groups`
+    /// are the groups of Γ₃ (their facets make the contact dataset); `compression` the zlib
+    /// level of the `.vtu`/`.vtp` files (0: none).
+    pub fn create(
         dir: &Path,
         sim: &Simulation<D>,
         fields: &[OutputField],
+        contact_groups: &[GroupSelector],
+        compression: u32,
         progress: bool,
     ) -> Result<Self, SolveError> {
-        let series = SeriesWriter::create(dir, "solution")?;
+        let series = SeriesWriter::create(dir, "solution")?.with_compression(compression);
+        let contact = match &sim.contact {
+            Some(_) if fields.contains(&OutputField::Contact) => {
+                let mut parts = Vec::new();
+                for g in contact_groups {
+                    let tag = sim.mesh.group(g, (D - 1) as u8)?.tag;
+                    parts.push((tag, sim.mesh.boundary(g)?));
+                }
+                let parts: Vec<(i32, &crate::mesh::BoundaryPart<D>)> = parts.iter().map(|(t, p)| (*t, p)).collect();
+                Some(ContactSeries {
+                    boundary: ContactBoundary::new(&sim.mesh.points, &parts),
+                    series: SeriesWriter::create_surface(dir, "contact")?.with_compression(compression),
+                })
+            }
+            _ => None,
+        };
+        let mut cell_groups = vec![-1; sim.mesh.cells.len()];
+        for g in sim.mesh.groups.iter().filter(|g| g.dim as usize == D).rev() {
+            for &c in &g.cells {
+                cell_groups[c] = g.tag;
+            }
+        }
+        let cell_measures = if fields.contains(&OutputField::Stress) || fields.contains(&OutputField::VonMises) {
+            cell_measures(&sim.mesh.cells, &sim.mesh.points)
+        } else {
+            Vec::new()
+        };
         let gamma3 = match &sim.contact {
             Some(_) if fields.contains(&OutputField::Contact) => {
                 let mut columns = vec!["time", "x", "y", "z"];
@@ -94,6 +136,9 @@ impl FileSink {
         });
         Ok(FileSink {
             series,
+            contact,
+            cell_groups,
+            cell_measures,
             gamma3,
             reactions,
             fields: fields.to_vec(),
@@ -114,7 +159,7 @@ impl FileSink {
     }
 }
 
-impl<const D: usize> FrameSink<D> for FileSink {
+impl<const D: usize> FrameSink<D> for FileSink<D> {
     fn step_done(&mut self, _sim: &Simulation<D>, view: &StepView) {
         if let Some(bar) = &self.progress {
             bar.set_position(view.step as u64 + 1);
@@ -131,53 +176,31 @@ impl<const D: usize> FrameSink<D> for FileSink {
             .iter()
             .flat_map(|u| [u[0], u[1], u.get(2).copied().unwrap_or(0.0)])
             .collect();
-        let mut point_fields = Vec::new();
-        let mut cell_fields = Vec::new();
-        if self.wants(OutputField::Displacement) {
-            point_fields.push(Field::f64("displacement", 3, &displacement));
-        }
         let stresses = (self.wants(OutputField::Stress) || self.wants(OutputField::VonMises)).then(|| {
             timed(&mut self.stress_seconds, || {
                 let memory = view.memory_displacement.map(|m| sim.dofs.to_nodal(m));
-                cell_stresses(&mesh.cells, &mesh.points, &sim.elasticity, &nodal, memory.as_deref())
+                let cell = cell_stresses(&mesh.cells, &mesh.points, &sim.elasticity, &nodal, memory.as_deref());
+                let node = nodal_stresses(&mesh.cells, &self.cell_measures, &cell.tensor, mesh.points.len());
+                (cell, node)
             })
         });
-        if let Some(s) = &stresses {
-            if self.wants(OutputField::Stress) {
-                cell_fields.push(Field::f64("stress", 9, &s.tensor));
-            }
+        // The first scalar of each list is the active one, which ParaView colours by: von Mises.
+        let mut point_fields = Vec::new();
+        let mut cell_fields = Vec::new();
+        if let Some((cell, node)) = &stresses {
             if self.wants(OutputField::VonMises) {
-                cell_fields.push(Field::f64("von_mises", 1, &s.von_mises));
+                point_fields.push(Field::f64("von_mises", 1, &node.von_mises));
+                cell_fields.push(Field::f64("von_mises", 1, &cell.von_mises));
+            }
+            if self.wants(OutputField::Stress) {
+                point_fields.push(Field::f64("stress", 9, &node.tensor));
+                cell_fields.push(Field::f64("stress", 9, &cell.tensor));
             }
         }
-        let n_points = mesh.points.len();
-        let (mut u_nu, mut force, mut pressure, mut status) = (
-            vec![0.0; n_points],
-            vec![0.0; n_points],
-            vec![0.0; n_points],
-            vec![-1i32; n_points],
-        );
-        let mut rows = Vec::new();
-        if let (Some(c), Some(state)) = (&sim.contact, view.contact) {
-            let mut normal = vec![0.0; c.nodes.len()];
-            c.nodes.normal_displacements(view.displacement, &mut normal);
-            for (k, &p) in c.nodes.nodes.iter().enumerate() {
-                u_nu[p] = normal[k];
-                force[p] = state.force[k];
-                pressure[p] = state.force[k] / c.nodes.weights[k];
-                status[p] = state.status[k].code();
-                let mut row = vec![view.time];
-                row.extend_from_slice(&mesh.points[p]);
-                row.extend([normal[k], force[p], pressure[p], status[p] as f64]);
-                rows.push(row);
-            }
-            if self.wants(OutputField::Contact) {
-                point_fields.push(Field::f64("u_nu", 1, &u_nu));
-                point_fields.push(Field::f64("contact_force", 1, &force));
-                point_fields.push(Field::f64("contact_pressure", 1, &pressure));
-                point_fields.push(Field::i32("contact_status", 1, &status));
-            }
+        if self.wants(OutputField::Displacement) {
+            point_fields.insert(0, Field::f64("displacement", 3, &displacement));
         }
+        cell_fields.push(Field::i32("group", 1, &self.cell_groups));
         let frame = Frame {
             step: view.step,
             time: view.time,
@@ -187,8 +210,23 @@ impl<const D: usize> FrameSink<D> for FileSink {
             cell_fields,
         };
         self.series.write_frame(&frame)?;
-        if let Some(csv) = &mut self.gamma3 {
-            csv.append(&rows)?;
+        if let (Some(c), Some(state)) = (&sim.contact, view.contact) {
+            let mut normal = vec![0.0; c.nodes.len()];
+            c.nodes.normal_displacements(view.displacement, &mut normal);
+            let mut rows = Vec::with_capacity(c.nodes.len());
+            for (k, &p) in c.nodes.nodes.iter().enumerate() {
+                let pressure = state.force[k] / c.nodes.weights[k];
+                let mut row = vec![view.time];
+                row.extend_from_slice(&mesh.points[p]);
+                row.extend([normal[k], state.force[k], pressure, f64::from(state.status[k].code())]);
+                rows.push(row);
+            }
+            if let Some(csv) = &mut self.gamma3 {
+                csv.append(&rows)?;
+            }
+            if let Some(cs) = &mut self.contact {
+                write_contact_frame(cs, c, state, &normal, &nodal, view)?;
+            }
         }
         if let (Some(csv), Some(values)) = (&mut self.reactions, view.reactions) {
             let rows: Vec<Vec<String>> = sim
@@ -209,6 +247,66 @@ impl<const D: usize> FrameSink<D> for FileSink {
         }
         Ok(())
     }
+}
+
+/// Writes one frame of the contact dataset (docs/method.md §12): u_ν, gap, force, pressure and
+/// status at every Γ₃ node, the nodal normal, and the group ids. A Γ₃ node that is no contact
+/// unknown (its normal displacement is prescribed) has its u_ν = ν·u, force and pressure 0 and
+/// status −1.
+fn write_contact_frame<const D: usize>(
+    cs: &mut ContactSeries<D>,
+    c: &crate::solver::ContactSetup<D>,
+    state: &ContactState,
+    normal: &[f64],
+    nodal: &[[f64; D]],
+    view: &StepView,
+) -> Result<(), SolveError> {
+    let b = &cs.boundary;
+    let n = b.nodes.len();
+    let mut u_nu: Vec<f64> = (0..n)
+        .map(|i| (0..D).map(|d| b.normals[3 * i + d] * nodal[b.nodes[i]][d]).sum())
+        .collect();
+    let (mut force, mut pressure, mut status) = (vec![0.0; n], vec![0.0; n], vec![-1i32; n]);
+    let mut gap = c.bound.as_ref().map(|_| vec![0.0; n]);
+    let mut bound_at = vec![f64::NAN; n];
+    for (k, &p) in c.nodes.nodes.iter().enumerate() {
+        if let Some(i) = b.local(p) {
+            u_nu[i] = normal[k];
+            force[i] = state.force[k];
+            pressure[i] = state.force[k] / c.nodes.weights[k];
+            status[i] = state.status[k].code();
+            if let Some(g) = &c.bound {
+                bound_at[i] = g[k];
+            }
+        }
+    }
+    if let Some(gap) = &mut gap {
+        for i in 0..n {
+            // g − u_ν; NaN at a node that is no contact unknown (its normal is prescribed)
+            gap[i] = bound_at[i] - u_nu[i];
+        }
+    }
+    let mut point_fields = vec![Field::f64("u_nu", 1, &u_nu)];
+    if let Some(gap) = &gap {
+        point_fields.push(Field::f64("gap", 1, gap));
+    }
+    point_fields.extend([
+        Field::f64("force", 1, &force),
+        Field::f64("pressure", 1, &pressure),
+        Field::i32("status", 1, &status),
+        Field::f64("normal", 3, &b.normals),
+        Field::i32("group", 1, &b.node_groups),
+    ]);
+    let frame = SurfaceFrame {
+        step: view.step,
+        time: view.time,
+        points: &b.points,
+        facets: &b.facets,
+        point_fields,
+        cell_fields: vec![Field::i32("group", 1, &b.facet_groups)],
+    };
+    cs.series.write_surface_frame(&frame)?;
+    Ok(())
 }
 
 /// What `summary.json` holds.
@@ -311,7 +409,14 @@ fn solve_dim<const D: usize>(
     stop: Option<&AtomicBool>,
 ) -> Result<RunStats, SolveError> {
     let sim = Simulation::new(scene, mesh)?;
-    let mut sink = FileSink::create(&opts.out, &sim, &scene.output.fields, opts.progress)?;
+    let mut sink = FileSink::create(
+        &opts.out,
+        &sim,
+        &scene.output.fields,
+        std::slice::from_ref(&scene.groups.contact),
+        0,
+        opts.progress,
+    )?;
     output::write_atomic(&opts.out.join("scene.toml"), scene.to_toml_string().as_bytes())?;
     let result = timeloop::run(&sim, &mut sink, stop);
     sink.finish();
@@ -542,7 +647,7 @@ pub fn report(stats: &RunStats, out: &Path) -> String {
     );
     let _ = write!(
         s,
-        "  wrote {} frames to {} (solution.pvd, gamma3.csv, summary.json)",
+        "  wrote {} frames to {} (solution.pvd, contact.pvd, gamma3.csv, summary.json)",
         stats.frames_written,
         out.display()
     );

@@ -42,15 +42,20 @@ fn solve_writes_a_readable_series() {
     let n = vtu.points.len();
     assert_eq!(vtu.point_data["displacement"].0, 3);
     assert_eq!(vtu.point_data["displacement"].1.len(), 3 * n);
-    for name in ["u_nu", "contact_force", "contact_pressure", "contact_status"] {
-        assert_eq!(vtu.point_data[name].1.len(), n, "{name}");
-    }
     assert_eq!(vtu.cell_data["stress"].0, 9);
     assert_eq!(vtu.cell_data["von_mises"].1.len(), vtu.connectivity.len());
+    assert_eq!(vtu.point_data["von_mises"].1.len(), n);
+    assert_eq!(vtu.field_data["TimeValue"], (1, vec![1.0]));
+    // the contact arrays are on the contact dataset, not on the body
+    assert!(!vtu.point_data.contains_key("u_nu"));
+    let vtp = hvi::output::read_vtu_arrays(&out.join("contact_00004.vtp")).unwrap();
+    for name in ["u_nu", "gap", "force", "pressure", "status", "group"] {
+        assert_eq!(vtp.point_data[name].1.len(), vtp.points.len(), "{name}");
+    }
     // u_ν ≤ g = 0.2 on Γ₃, and some node sits on the bound at T
-    let status = &vtu.point_data["contact_status"].1;
+    let status = &vtp.point_data["status"].1;
     assert!(status.contains(&2.0));
-    assert!(vtu.point_data["u_nu"].1.iter().all(|u| *u <= 0.2 + 1e-12));
+    assert!(vtp.point_data["u_nu"].1.iter().all(|u| *u <= 0.2 + 1e-12));
 
     // gamma3.csv: header and one row per Γ₃ node per frame
     let csv = std::fs::read_to_string(out.join("gamma3.csv")).unwrap();

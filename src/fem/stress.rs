@@ -65,3 +65,44 @@ pub fn cell_stresses<const D: usize>(
         von_mises: per_cell.iter().map(|(_, v)| *v).collect(),
     }
 }
+
+/// Nodal (recovered) stresses: at each node the volume-weighted mean of the stress tensors of
+/// the cells around it, σ_p = Σ_c |c| σ_c / Σ_c |c| (docs/method.md §12), and the von Mises
+/// stress of that mean tensor. `tensor` is [`CellStresses::tensor`]; `measures` the cells'
+/// areas or volumes ([`cell_measures`]). A node of no cell gets 0.
+pub fn nodal_stresses(cells: &[Cell], measures: &[f64], tensor: &[f64], n_points: usize) -> CellStresses {
+    let mut sum = vec![0.0; 9 * n_points];
+    let mut weight = vec![0.0; n_points];
+    for ((cell, &m), s) in cells.iter().zip(measures).zip(tensor.chunks_exact(9)) {
+        for &p in cell.nodes() {
+            weight[p] += m;
+            for (a, b) in sum[9 * p..9 * p + 9].iter_mut().zip(s) {
+                *a += m * b;
+            }
+        }
+    }
+    let mut von = vec![0.0; n_points];
+    for (p, (s, w)) in sum.chunks_exact_mut(9).zip(&weight).enumerate() {
+        if *w > 0.0 {
+            s.iter_mut().for_each(|x| *x /= w);
+        }
+        von[p] = von_mises(&std::array::from_fn(|i| std::array::from_fn(|j| s[3 * i + j])));
+    }
+    CellStresses {
+        tensor: sum,
+        von_mises: von,
+    }
+}
+
+/// The area (2D) or volume (3D) of every cell, by the stiffness quadrature.
+pub fn cell_measures<const D: usize>(cells: &[Cell], points: &[[f64; D]]) -> Vec<f64> {
+    cells
+        .iter()
+        .map(|c| {
+            super::element::stiffness_rule(c)
+                .iter()
+                .map(|q| q.weight * shape_at(c, points, q.xi).det_j)
+                .sum()
+        })
+        .collect()
+}

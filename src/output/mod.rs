@@ -1,11 +1,13 @@
-//! Output files: the ParaView time series of 2D solutions, CSV tables, atomic file writes.
+//! Output files: the ParaView time series of 2D and 3D solutions, CSV tables, atomic file writes.
 //!
 //! A run writes, into one directory:
 //! - `<basename>_<step:05>.vtu` per output step: a VTK XML UnstructuredGrid (raw appended
-//!   binary, or inline base64 zlib-compressed if [`SeriesWriter::with_compression`] asks for it)
-//!   with the 2D points as 3D points (z = 0), the cells, and the point and cell fields of the
-//!   [`Frame`];
-//! - `<basename>.pvd` and `<basename>.vtu.series`: the two index files ParaView opens as one
+//!   binary, zlib-compressed if [`SeriesWriter::with_compression`] asks for it) with the frame's
+//!   time and step as FieldData (`TimeValue`, `step`), the points (z = 0 in 2D), the cells, and
+//!   the point and cell fields of the [`Frame`]; or, for a boundary series
+//!   ([`SeriesWriter::create_surface`]), `<basename>_<step:05>.vtp`, a PolyData of a
+//!   [`SurfaceFrame`];
+//! - `<basename>.pvd` and `<basename>.vtu.series` (`.vtp.series`): the two index files ParaView opens as one
 //!   time series, rewritten atomically after every frame so that they list exactly the frames
 //!   written so far with their real times, even when the run is interrupted;
 //! - any [`CsvTable`] and JSON/other files written with [`write_json_atomic`]/[`write_atomic`].
@@ -33,16 +35,21 @@
 //! ```
 
 mod atomic;
+mod boundary;
 mod csv;
 mod error;
 mod pvd;
 mod vtu;
 
 pub use atomic::{is_temporary_name, write_atomic, write_json_atomic};
+pub use boundary::ContactBoundary;
 pub use csv::CsvTable;
 pub use error::OutputError;
 pub use pvd::pvd_text;
 pub use vtu::{read_vtu_arrays, VtuContents};
+
+/// The largest zlib level of [`SeriesWriter::with_compression`].
+pub const MAX_COMPRESSION_LEVEL: u32 = 9;
 
 use std::fs::{self, OpenOptions};
 use std::io::{self, Write};
@@ -103,6 +110,22 @@ pub struct Frame<'a, const D: usize = 2> {
     pub cell_fields: Vec<Field<'a>>,
 }
 
+/// One output step of a boundary part (e.g. Γ₃), written as a PolyData `.vtp`: its points are
+/// the part's nodes only, its cells the part's facets (lines in 2D, triangles or quadrilaterals
+/// in 3D), indexing into `points`.
+#[derive(Clone, Debug)]
+pub struct SurfaceFrame<'a, const D: usize = 2> {
+    /// Names the file: `<basename>_<step:05>.vtp`.
+    pub step: usize,
+    /// The physical time; must be finite.
+    pub time: f64,
+    pub points: &'a [[f64; D]],
+    /// All edges (2D) or all faces (3D).
+    pub facets: &'a [crate::mesh::Facet],
+    pub point_fields: Vec<Field<'a>>,
+    pub cell_fields: Vec<Field<'a>>,
+}
+
 /// Formats a number so that parsing it gives back the same `f64`: the shortest round-trip
 /// decimal, plain (`0.25`, `1`, `-3.5e-3` → `-0.0035`) for magnitudes in [1e-5, 1e16) and zero,
 /// in scientific notation (`1e-7`, `2.5e20`) otherwise; `NaN`, `inf`, `-inf` for the rest.
@@ -114,16 +137,9 @@ pub fn format_number(x: f64) -> String {
     }
 }
 
-/// The default zlib level of the `.vtu` files: 0, uncompressed (raw appended binary, written by
-/// hand; levels > 0 go through vtkio as inline base64).
-///
-/// Measured here (vtkio 0.7.0-rc2, flate2's default miniz_oxide backend, 160k points and 183k
-/// cells with a 3-vector, an int, a 9-tensor and a scalar): uncompressed through vtkio (base64,
-/// hvi's earlier default) 0.34 s and 40 MB per frame; level 1 0.94 s and 17–20 MB; level 6 1.7 s
-/// and 17–19 MB. Both read back identically in
-/// VTK 9.7 and meshio. Compressed, vtkio also appends an empty zlib block to arrays whose size
-/// is a multiple of 32 KiB (announced as a full block; VTK and meshio tolerate it), which the
-/// uncompressed layout avoids.
+/// The default zlib level of the `.vtu` files: 0, uncompressed (levels 1–9: zlib blocks of
+/// 32 KiB, VTK's `vtkZLibDataCompressor` layout; the scene's `output.compress`). Measured sizes
+/// and times: README, "Output files".
 pub const DEFAULT_COMPRESSION_LEVEL: u32 = 0;
 
 /// Writes a ParaView time series: one `.vtu` per frame and the `.pvd`/`.vtu.series` indexes.
@@ -133,6 +149,8 @@ pub struct SeriesWriter {
     basename: String,
     pvd: PathBuf,
     series: PathBuf,
+    /// `vtu` or `vtp`.
+    extension: &'static str,
     frames: Vec<(f64, PathBuf)>,
     compression_level: u32,
     /// The bytes of the last uncompressed frame, reused for the next one.
@@ -146,6 +164,16 @@ impl SeriesWriter {
     /// earlier run in `dir` stay until this writer's first frame replaces them (they then list
     /// only this writer's frames; earlier `.vtu` files are left alone).
     pub fn create(dir: &Path, basename: &str) -> Result<Self, OutputError> {
+        Self::create_with(dir, basename, "vtu")
+    }
+
+    /// As [`SeriesWriter::create`], for a series of boundary frames (`.vtp`,
+    /// `<basename>.vtp.series`) written by [`SeriesWriter::write_surface_frame`].
+    pub fn create_surface(dir: &Path, basename: &str) -> Result<Self, OutputError> {
+        Self::create_with(dir, basename, "vtp")
+    }
+
+    fn create_with(dir: &Path, basename: &str, extension: &'static str) -> Result<Self, OutputError> {
         if basename.is_empty()
             || basename.starts_with('.')
             || basename.contains(['/', '\\'])
@@ -170,7 +198,8 @@ impl SeriesWriter {
             dir: dir.to_path_buf(),
             basename: basename.to_string(),
             pvd: dir.join(format!("{basename}.pvd")),
-            series: dir.join(format!("{basename}.vtu.series")),
+            series: dir.join(format!("{basename}.{extension}.series")),
+            extension,
             frames: Vec::new(),
             compression_level: DEFAULT_COMPRESSION_LEVEL,
             buffer: vtu::VtuBuffer::default(),
@@ -180,7 +209,7 @@ impl SeriesWriter {
     /// Sets the zlib level of the `.vtu` files (0: uncompressed, the default; 1 fastest … 9
     /// smallest). See [`DEFAULT_COMPRESSION_LEVEL`] for the costs.
     pub fn with_compression(mut self, level: u32) -> Self {
-        self.compression_level = level.min(9);
+        self.compression_level = level.min(MAX_COMPRESSION_LEVEL);
         self
     }
 
@@ -190,12 +219,31 @@ impl SeriesWriter {
     /// `<basename>.vtu.series` atomically, listing every frame written so far with its time.
     /// Writing a step again replaces its file and its entry. Returns the `.vtu` path.
     pub fn write_frame<const D: usize>(&mut self, frame: &Frame<D>) -> Result<PathBuf, OutputError> {
-        let path = self.dir.join(format!("{}_{:05}.vtu", self.basename, frame.step));
-        vtu::write_vtu(&path, frame, self.compression_level, &mut self.buffer)?;
+        self.write_view(&frame.view(), "vtu")
+    }
+
+    /// As [`SeriesWriter::write_frame`], for a writer made by [`SeriesWriter::create_surface`]:
+    /// `<basename>_<step:05>.vtp`.
+    pub fn write_surface_frame<const D: usize>(&mut self, frame: &SurfaceFrame<D>) -> Result<PathBuf, OutputError> {
+        self.write_view(&frame.view(), "vtp")
+    }
+
+    fn write_view<const D: usize>(&mut self, view: &vtu::View<D>, extension: &str) -> Result<PathBuf, OutputError> {
+        let path = self.dir.join(format!("{}_{:05}.{extension}", self.basename, view.step));
+        if extension != self.extension {
+            return Err(OutputError::InvalidArgument {
+                path,
+                detail: format!(
+                    "this series writes .{} files; a .{extension} frame belongs to another series",
+                    self.extension
+                ),
+            });
+        }
+        vtu::write_vtu(&path, view, self.compression_level, &mut self.buffer)?;
         let mut frames = self.frames.clone();
         match frames.iter_mut().find(|(_, p)| *p == path) {
-            Some(entry) => entry.0 = frame.time,
-            None => frames.push((frame.time, path.clone())),
+            Some(entry) => entry.0 = view.time,
+            None => frames.push((view.time, path.clone())),
         }
         pvd::write_index(&self.pvd, &self.series, &frames)?;
         self.frames = frames;
@@ -217,7 +265,7 @@ impl SeriesWriter {
         &self.pvd
     }
 
-    /// The `.vtu.series` file.
+    /// The `.vtu.series` (`.vtp.series`) file.
     pub fn series_path(&self) -> &Path {
         &self.series
     }

@@ -1,35 +1,109 @@
-//! One frame as a VTK XML UnstructuredGrid (`.vtu`), and reading it back.
+//! One frame as a VTK XML file — an UnstructuredGrid (`.vtu`, the body) or a PolyData (`.vtp`,
+//! a boundary part: lines in 2D, faces in 3D) — and reading it back.
 //!
-//! Layout: `Float64` points (x, y, 0), `UInt64` connectivity and offsets, `UInt8` types
-//! (5 triangle, 9 quad), each field a `Float64` or `Int32` array with its number of components;
-//! little-endian, header type `UInt64`. The first 3-component array of the point (cell) data is
+//! Layout: FieldData `TimeValue` (`Float64`, the frame's time, which ParaView's XML readers
+//! report as the time of the file) and `step` (`Int32`); `Float64` points (x, y, 0 in 2D);
+//! `UInt64` connectivity and offsets, and for a grid `UInt8` types (5 triangle, 9 quad, 10
+//! tetrahedron, 12 hexahedron); each field a `Float64` or `Int32` array with its number of
+//! components and their names (`ComponentName0`…: x y z for 3, xx xy xz yx yy yz zx zy zz for
+//! a row-major 9-tensor); little-endian, header type `UInt64`, every array in one raw appended
+//! block, zlib-compressed if asked. The first 3-component array of the point (cell) data is
 //! marked as the active vectors (so ParaView's Warp By Vector picks `displacement`), the first
-//! 9-component one as the active tensors, the first scalar as the active scalars.
+//! 9-component one as the active tensors, the first scalar as the active scalars (the caller
+//! orders its fields so that this is the one to colour by: `von_mises` for hvi's body).
 //!
-//! - this file: the checks of a [`Frame`] before anything is written ([`validate_frame`]), the
-//!   buffer kept across frames ([`VtuBuffer`]), and [`write_vtu`], which picks the writer and
-//!   writes its bytes atomically;
-//! - [`raw`]: the uncompressed layout (the default), raw appended binary written by hand, and
-//!   why it is not written through vtkio;
-//! - [`vtkio_writer`]: the zlib-compressed layout, inline base64 through vtkio, and why its
-//!   bytes are serialised into memory rather than written by vtkio's file writer;
-//! - [`read`]: [`read_vtu_arrays`] and [`VtuContents`]; inline files through vtkio, raw appended
-//!   ones by a small parser of exactly the layout [`raw`] writes.
+//! - this file: the checks of a frame before anything is written ([`validate_view`]), the
+//!   buffers kept across frames ([`VtuBuffer`]), and [`write_vtu`], which encodes and writes the
+//!   bytes atomically;
+//! - [`raw`]: the layout, written by hand, and why it is not written through vtkio;
+//! - [`read`]: [`read_vtu_arrays`] and [`VtuContents`]; raw appended files (compressed or not)
+//!   by a small parser of exactly the layout [`raw`] writes, inline ones (hvi's earlier layout)
+//!   through vtkio.
 
 mod raw;
 mod read;
+#[cfg(test)]
 mod vtkio_writer;
 
 pub use read::{read_vtu_arrays, VtuContents};
 
-use super::atomic::write_atomic;
-use super::{Field, FieldValues, Frame, OutputError};
-#[cfg(test)]
-use crate::mesh::Cell;
-use raw::encode_vtu_raw;
+use super::atomic::write_atomic_with;
+use super::{Field, FieldValues, Frame, OutputError, SurfaceFrame};
+use crate::mesh::{Cell, Facet};
 use std::collections::BTreeSet;
+use std::io::Write as _;
 use std::path::Path;
-use vtkio_writer::encode_vtu_vtkio;
+
+/// The cells of a frame: volume (or area) cells of a grid, or the facets of a boundary part.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Topology<'a> {
+    Cells(&'a [Cell]),
+    Facets(&'a [Facet]),
+}
+
+impl Topology<'_> {
+    pub(crate) fn len(&self) -> usize {
+        match self {
+            Topology::Cells(c) => c.len(),
+            Topology::Facets(f) => f.len(),
+        }
+    }
+
+    pub(crate) fn nodes(&self, i: usize) -> &[usize] {
+        match self {
+            Topology::Cells(c) => c[i].nodes(),
+            Topology::Facets(f) => f[i].nodes(),
+        }
+    }
+}
+
+/// What the encoder needs of a [`Frame`] or a [`SurfaceFrame`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct View<'a, const D: usize> {
+    pub step: usize,
+    pub time: f64,
+    pub points: &'a [[f64; D]],
+    pub topology: Topology<'a>,
+    pub point_fields: &'a [Field<'a>],
+    pub cell_fields: &'a [Field<'a>],
+}
+
+impl<'a, const D: usize> Frame<'a, D> {
+    pub(crate) fn view(&'a self) -> View<'a, D> {
+        View {
+            step: self.step,
+            time: self.time,
+            points: self.points,
+            topology: Topology::Cells(self.cells),
+            point_fields: &self.point_fields,
+            cell_fields: &self.cell_fields,
+        }
+    }
+}
+
+impl<'a, const D: usize> SurfaceFrame<'a, D> {
+    pub(crate) fn view(&'a self) -> View<'a, D> {
+        View {
+            step: self.step,
+            time: self.time,
+            points: self.points,
+            topology: Topology::Facets(self.facets),
+            point_fields: &self.point_fields,
+            cell_fields: &self.cell_fields,
+        }
+    }
+}
+
+/// The names of the components of an array of `components` values per entity, as written
+/// (`ComponentName0`…): a 3-vector x y z, a row-major 3×3 tensor xx xy xz yx yy yz zx zy zz;
+/// none for other counts (ParaView numbers them).
+pub(crate) fn component_names(components: usize) -> &'static [&'static str] {
+    match components {
+        3 => &["x", "y", "z"],
+        9 => &["xx", "xy", "xz", "yx", "yy", "yz", "zx", "zy", "zz"],
+        _ => &[],
+    }
+}
 
 impl FieldValues<'_> {
     /// The number of values (components × entities).
@@ -47,7 +121,7 @@ impl FieldValues<'_> {
 }
 
 /// Checks everything that would make a broken or misleading file, before anything is written.
-pub(crate) fn validate_frame<const D: usize>(path: &Path, frame: &Frame<D>) -> Result<(), OutputError> {
+pub(crate) fn validate_view<const D: usize>(path: &Path, frame: &View<D>) -> Result<(), OutputError> {
     if !frame.time.is_finite() {
         return Err(OutputError::invalid_frame(
             path,
@@ -57,6 +131,12 @@ pub(crate) fn validate_frame<const D: usize>(path: &Path, frame: &Frame<D>) -> R
             ),
         ));
     }
+    if i32::try_from(frame.step).is_err() {
+        return Err(OutputError::invalid_frame(
+            path,
+            format!("step {} does not fit the Int32 `step` field data", frame.step),
+        ));
+    }
     let n_points = frame.points.len();
     if let Some(p) = frame.points.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
         return Err(OutputError::invalid_frame(
@@ -64,16 +144,25 @@ pub(crate) fn validate_frame<const D: usize>(path: &Path, frame: &Frame<D>) -> R
             format!("point {p} has a non-finite coordinate {:?}", frame.points[p]),
         ));
     }
-    for (c, cell) in frame.cells.iter().enumerate() {
-        if let Some(&bad) = cell.nodes().iter().find(|&&i| i >= n_points) {
+    let n_cells = frame.topology.len();
+    for c in 0..n_cells {
+        if let Some(&bad) = frame.topology.nodes(c).iter().find(|&&i| i >= n_points) {
             return Err(OutputError::invalid_frame(
                 path,
                 format!("cell {c} refers to node {bad}, but the frame has only {n_points} points"),
             ));
         }
     }
-    check_fields(path, "point", &frame.point_fields, n_points)?;
-    check_fields(path, "cell", &frame.cell_fields, frame.cells.len())
+    if let Topology::Facets(f) = frame.topology {
+        if f.iter().any(|x| x.len() == 2) && f.iter().any(|x| x.len() > 2) {
+            return Err(OutputError::invalid_frame(
+                path,
+                "a boundary frame mixes edges and faces; its facets must all be edges (2D) or all faces (3D)",
+            ));
+        }
+    }
+    check_fields(path, "point", frame.point_fields, n_points)?;
+    check_fields(path, "cell", frame.cell_fields, n_cells)
 }
 
 fn check_fields(path: &Path, location: &'static str, fields: &[Field], count: usize) -> Result<(), OutputError> {
@@ -113,32 +202,43 @@ fn check_fields(path: &Path, location: &'static str, fields: &[Field], count: us
     Ok(())
 }
 
-/// The byte buffer a [`super::SeriesWriter`] keeps across frames, so that every frame after the
-/// first is built in memory that is already allocated and mapped.
+/// The byte buffers a [`super::SeriesWriter`] keeps across frames, so that every frame after
+/// the first is built in memory that is already allocated and mapped: the appended block, and
+/// (compressed) each array's uncompressed bytes before they are compressed.
 #[derive(Default)]
-pub(crate) struct VtuBuffer(Vec<u8>);
+pub(crate) struct VtuBuffer {
+    data: Vec<u8>,
+    scratch: Vec<u8>,
+}
 
 impl std::fmt::Debug for VtuBuffer {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "VtuBuffer({} bytes reserved)", self.0.capacity())
+        write!(
+            f,
+            "VtuBuffer({} + {} bytes reserved)",
+            self.data.capacity(),
+            self.scratch.capacity()
+        )
     }
 }
 
-/// Validates `frame` and writes it to `path` atomically: raw appended binary built in `buffer`
-/// if `compression_level` is 0, else through vtkio (zlib, inline base64).
+/// Validates `frame` and writes it to `path` atomically (raw appended binary, zlib-compressed
+/// at `compression_level` if > 0): the XML header and the appended block built in `buffer`,
+/// written one after the other.
 pub(crate) fn write_vtu<const D: usize>(
     path: &Path,
-    frame: &Frame<D>,
+    frame: &View<D>,
     compression_level: u32,
     buffer: &mut VtuBuffer,
 ) -> Result<(), OutputError> {
-    validate_frame(path, frame)?;
-    if compression_level > 0 {
-        let bytes = encode_vtu_vtkio(path, frame, compression_level)?;
-        return write_atomic(path, &bytes);
-    }
-    encode_vtu_raw(frame, &mut buffer.0);
-    write_atomic(path, &buffer.0)
+    validate_view(path, frame)?;
+    let header = raw::encode(frame, compression_level, buffer);
+    write_atomic_with(path, |w| {
+        w.write_all(header.as_bytes())
+            .and_then(|()| w.write_all(&buffer.data))
+            .and_then(|()| w.write_all(raw::RAW_FOOTER.as_bytes()))
+            .map_err(|e| OutputError::write(path, e))
+    })
 }
 
 /// The arrays of a small two-cell frame, for the tests of the submodules.

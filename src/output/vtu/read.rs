@@ -19,7 +19,8 @@ use vtkio::xml::VTKFile;
 pub struct VtuContents {
     /// Point coordinates (z = 0 for files written by hvi).
     pub points: Vec<[f64; 3]>,
-    /// VTK cell type of each cell (5 triangle, 9 quad).
+    /// VTK cell type of each cell (5 triangle, 9 quad, 10 tetrahedron, 12 hexahedron; in a
+    /// PolyData `.vtp`, 3 for a line and 7 for a polygon).
     pub cell_types: Vec<u8>,
     /// Node indices of each cell.
     pub connectivity: Vec<Vec<usize>>,
@@ -27,6 +28,8 @@ pub struct VtuContents {
     pub point_data: BTreeMap<String, (usize, Vec<f64>)>,
     /// Cell data: name → (number of components, values cell-major).
     pub cell_data: BTreeMap<String, (usize, Vec<f64>)>,
+    /// Field data (hvi writes `TimeValue` and `step`): name → (number of components, values).
+    pub field_data: BTreeMap<String, (usize, Vec<f64>)>,
 }
 
 /// Reads back a `.vtu` written by [`crate::output`] (one piece: raw appended binary as written
@@ -119,6 +122,7 @@ fn read_vtkio(path: &Path, bytes: &[u8]) -> Result<VtuContents, OutputError> {
         connectivity,
         point_data,
         cell_data,
+        field_data: BTreeMap::new(),
     })
 }
 
@@ -384,10 +388,13 @@ fn parse_tags(text: &str) -> Result<Vec<Tag<'_>>, String> {
 /// Where a `DataArray` of the header belongs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Section {
+    FieldData,
     PointData,
     CellData,
     Points,
     Cells,
+    Lines,
+    Polys,
 }
 
 /// A `DataArray` declared in the header of a raw-appended file.
@@ -398,6 +405,51 @@ struct AppendedArray {
     components: usize,
     /// Offset of the array's byte count in the appended block.
     offset: usize,
+    /// `NumberOfTuples` (field data).
+    tuples: Option<usize>,
+}
+
+/// The bytes of one array of the appended block `data` at `offset`: a byte count and the bytes,
+/// or (zlib) VTK's block header and the compressed blocks; `None` if the block is too short.
+fn appended_bytes(data: &[u8], offset: usize, zlib: bool) -> Result<(Vec<u8>, usize), String> {
+    let word = |at: usize| -> Result<usize, String> {
+        let b = data.get(at..at + 8).ok_or("truncated")?;
+        usize::try_from(u64::from_le_bytes(b.try_into().expect("8 bytes"))).map_err(|_| "truncated".to_string())
+    };
+    if !zlib {
+        let len = word(offset)?;
+        let start = offset + 8;
+        let end = start.checked_add(len).filter(|&e| e <= data.len()).ok_or("truncated")?;
+        return Ok((data[start..end].to_vec(), end));
+    }
+    let (blocks, block_size, last) = (word(offset)?, word(offset + 8)?, word(offset + 16)?);
+    if blocks > data.len() / 8 || block_size == 0 || last >= block_size.max(1) {
+        return Err(format!(
+            "a compressed array header with {blocks} blocks of {block_size} bytes (last {last}) is not valid"
+        ));
+    }
+    let mut at = offset + 24 + 8 * blocks;
+    if at > data.len() {
+        return Err("truncated".into());
+    }
+    let mut out = Vec::with_capacity(blocks * block_size);
+    for b in 0..blocks {
+        let size = word(offset + 24 + 8 * b)?;
+        let end = at.checked_add(size).filter(|&e| e <= data.len()).ok_or("truncated")?;
+        let want = if b + 1 == blocks && last > 0 { last } else { block_size };
+        let before = out.len();
+        let decoder = flate2::read::ZlibDecoder::new(&data[at..end]);
+        std::io::Read::read_to_end(&mut std::io::Read::take(decoder, want as u64 + 1), &mut out)
+            .map_err(|e| format!("a compressed block does not decompress ({e})"))?;
+        if out.len() - before != want {
+            return Err(format!(
+                "a compressed block holds {} bytes, its header announces {want}",
+                out.len() - before
+            ));
+        }
+        at = end;
+    }
+    Ok((out, at))
 }
 
 /// Reads a `.vtu` whose arrays are in a raw `<AppendedData>` block (the layout written by
@@ -436,24 +488,33 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
 
     // The header: one UnstructuredGrid piece and its arrays.
     let mut grid = false;
+    let mut poly = false;
+    let mut zlib = false;
     let mut piece: Option<(usize, usize)> = None;
     let mut section = None;
     let mut arrays = Vec::new();
     for tag in &tags {
         if tag.closing {
-            if matches!(tag.name, "PointData" | "CellData" | "Points" | "Cells") {
+            if matches!(
+                tag.name,
+                "FieldData" | "PointData" | "CellData" | "Points" | "Cells" | "Lines" | "Polys"
+            ) {
                 section = None;
             }
             continue;
         }
         match tag.name {
             "VTKFile" => {
-                if tag.attr("type") != Some("UnstructuredGrid") {
-                    return Err(fail(format!(
-                        "a VTKFile of type {:?}, not an UnstructuredGrid",
-                        tag.attr("type").unwrap_or("(none)")
-                    )));
-                }
+                poly = match tag.attr("type") {
+                    Some("UnstructuredGrid") => false,
+                    Some("PolyData") => true,
+                    other => {
+                        return Err(fail(format!(
+                            "a VTKFile of type {:?}, not an UnstructuredGrid or a PolyData",
+                            other.unwrap_or("(none)")
+                        )))
+                    }
+                };
                 for (key, want) in [("byte_order", "LittleEndian"), ("header_type", "UInt64")] {
                     if tag.attr(key) != Some(want) {
                         return Err(fail(format!(
@@ -462,11 +523,13 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
                         )));
                     }
                 }
-                if let Some(c) = tag.attr("compressor") {
-                    return Err(fail(format!("compressed ({c}) raw appended data is not supported")));
+                match tag.attr("compressor") {
+                    None => {}
+                    Some("vtkZLibDataCompressor") => zlib = true,
+                    Some(c) => return Err(fail(format!("raw appended data compressed by {c} is not supported"))),
                 }
             }
-            "UnstructuredGrid" => grid = true,
+            "UnstructuredGrid" | "PolyData" => grid = true,
             "Piece" => {
                 if piece.is_some() {
                     return Err(fail("expected exactly one piece, found more".into()));
@@ -476,8 +539,26 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
                         .and_then(|v| v.trim().parse::<usize>().ok())
                         .ok_or_else(|| fail(format!("the Piece has no valid {key}")))
                 };
-                piece = Some((count("NumberOfPoints")?, count("NumberOfCells")?));
+                piece = Some(if poly {
+                    for key in ["NumberOfVerts", "NumberOfStrips"] {
+                        if tag.attr(key).is_some_and(|v| v.trim() != "0") {
+                            return Err(fail(format!(
+                                "a PolyData with {key} is not supported (hvi writes lines or polygons)"
+                            )));
+                        }
+                    }
+                    let (lines, polys) = (count("NumberOfLines")?, count("NumberOfPolys")?);
+                    if lines > 0 && polys > 0 {
+                        return Err(fail("a PolyData with both lines and polygons is not supported".into()));
+                    }
+                    (count("NumberOfPoints")?, lines + polys)
+                } else {
+                    (count("NumberOfPoints")?, count("NumberOfCells")?)
+                });
             }
+            "FieldData" if !tag.self_closing => section = Some(Section::FieldData),
+            "Lines" if !tag.self_closing => section = Some(Section::Lines),
+            "Polys" if !tag.self_closing => section = Some(Section::Polys),
             "PointData" if !tag.self_closing => section = Some(Section::PointData),
             "CellData" if !tag.self_closing => section = Some(Section::CellData),
             "Points" if !tag.self_closing => section = Some(Section::Points),
@@ -508,12 +589,21 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
                     .attr("offset")
                     .and_then(|o| o.trim().parse::<usize>().ok())
                     .ok_or_else(|| fail(format!("the DataArray \"{name}\" has no valid offset")))?;
+                let tuples = match tag.attr("NumberOfTuples") {
+                    None => None,
+                    Some(t) => Some(
+                        t.trim()
+                            .parse::<usize>()
+                            .map_err(|_| fail(format!("the DataArray \"{name}\" has {t:?} tuples")))?,
+                    ),
+                };
                 arrays.push(AppendedArray {
                     section,
                     name,
                     scalar,
                     components,
                     offset,
+                    tuples,
                 });
             }
             _ => {}
@@ -524,20 +614,17 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
     }
     let (n_points, n_cells) = piece.ok_or_else(|| fail("no piece".into()))?;
 
-    // The bytes of each array: its UInt64 byte count, then that many bytes, all inside `data`.
+    // The bytes of each array (decompressed), all inside `data`.
     let mut data_end = 0;
-    let mut array_bytes = |a: &AppendedArray, count: Option<usize>| -> Result<&[u8], OutputError> {
-        let start = a
-            .offset
-            .checked_add(8)
-            .filter(|&s| s <= data.len())
-            .ok_or_else(truncated)?;
-        let len = u64::from_le_bytes(data[a.offset..start].try_into().expect("8 bytes"));
-        let len = usize::try_from(len).map_err(|_| truncated())?;
-        let end = start
-            .checked_add(len)
-            .filter(|&e| e <= data.len())
-            .ok_or_else(truncated)?;
+    let mut array_bytes = |a: &AppendedArray, count: Option<usize>| -> Result<Vec<u8>, OutputError> {
+        let (bytes, end) = appended_bytes(data, a.offset, zlib).map_err(|e| {
+            if e == "truncated" {
+                truncated()
+            } else {
+                fail(format!("the array \"{}\": {e}", a.name))
+            }
+        })?;
+        let len = bytes.len();
         let expected = count.map(|n| n.saturating_mul(a.components).saturating_mul(a.scalar.size()));
         if expected.is_some_and(|e| e != len) || len % (a.components * a.scalar.size()) != 0 {
             return Err(fail(format!(
@@ -549,7 +636,7 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
             )));
         }
         data_end = data_end.max(end);
-        Ok(&data[start..end])
+        Ok(bytes)
     };
     let find = |section: Section, name: &str| {
         arrays
@@ -565,7 +652,7 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
             points_array.components
         )));
     }
-    let coords = points_array.scalar.to_f64(array_bytes(points_array, Some(n_points))?);
+    let coords = points_array.scalar.to_f64(&array_bytes(points_array, Some(n_points))?);
     let points: Vec<[f64; 3]> = coords.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
 
     let integers = |a: &AppendedArray, bytes: &[u8]| {
@@ -576,15 +663,26 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
             ))
         })
     };
-    let types_array = find(Section::Cells, "types")?;
-    let cell_types = integers(types_array, array_bytes(types_array, Some(n_cells))?)?
-        .into_iter()
-        .map(|t| u8::try_from(t).map_err(|_| fail(format!("the cell type {t} is not a VTK cell type"))))
-        .collect::<Result<Vec<u8>, _>>()?;
-    let offsets_array = find(Section::Cells, "offsets")?;
-    let offsets = integers(offsets_array, array_bytes(offsets_array, Some(n_cells))?)?;
-    let conn_array = find(Section::Cells, "connectivity")?;
-    let conn = integers(conn_array, array_bytes(conn_array, None)?)?;
+    let cells_section = if !poly {
+        Section::Cells
+    } else if arrays.iter().any(|a| a.section == Section::Lines) {
+        Section::Lines
+    } else {
+        Section::Polys
+    };
+    let cell_types = if poly {
+        vec![if cells_section == Section::Lines { 3 } else { 7 }; n_cells]
+    } else {
+        let types_array = find(Section::Cells, "types")?;
+        integers(types_array, &array_bytes(types_array, Some(n_cells))?)?
+            .into_iter()
+            .map(|t| u8::try_from(t).map_err(|_| fail(format!("the cell type {t} is not a VTK cell type"))))
+            .collect::<Result<Vec<u8>, _>>()?
+    };
+    let offsets_array = find(cells_section, "offsets")?;
+    let offsets = integers(offsets_array, &array_bytes(offsets_array, Some(n_cells))?)?;
+    let conn_array = find(cells_section, "connectivity")?;
+    let conn = integers(conn_array, &array_bytes(conn_array, None)?)?;
     if offsets.last().is_some_and(|&end| end != conn.len() as u64) {
         return Err(fail(format!(
             "the cell offsets end at {} but there are {} connectivity entries",
@@ -596,13 +694,15 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
 
     let mut point_data = BTreeMap::new();
     let mut cell_data = BTreeMap::new();
+    let mut field_data = BTreeMap::new();
     for a in &arrays {
         let (map, count, location) = match a.section {
             Section::PointData => (&mut point_data, n_points, "point"),
             Section::CellData => (&mut cell_data, n_cells, "cell"),
-            Section::Points | Section::Cells => continue,
+            Section::FieldData => (&mut field_data, a.tuples.unwrap_or(1), "field"),
+            Section::Points | Section::Cells | Section::Lines | Section::Polys => continue,
         };
-        let values = a.scalar.to_f64(array_bytes(a, Some(count))?);
+        let values = a.scalar.to_f64(&array_bytes(a, Some(count))?);
         if map.insert(a.name.clone(), (a.components, values)).is_some() {
             return Err(fail(format!("two {location} arrays are named \"{}\"", a.name)));
         }
@@ -624,6 +724,7 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
         connectivity,
         point_data,
         cell_data,
+        field_data,
     })
 }
 
@@ -655,8 +756,11 @@ mod tests {
         let bytes = encode_vtu_vtkio(&old, &frame, 0).unwrap();
         assert!(String::from_utf8_lossy(&bytes).contains("format=\"binary\""));
         std::fs::write(&old, bytes).unwrap();
-        write_vtu(&new, &frame, 0, &mut VtuBuffer::default()).unwrap();
-        let (a, b) = (read_vtu_arrays(&old).unwrap(), read_vtu_arrays(&new).unwrap());
+        write_vtu(&new, &frame.view(), 0, &mut VtuBuffer::default()).unwrap();
+        let (a, mut b) = (read_vtu_arrays(&old).unwrap(), read_vtu_arrays(&new).unwrap());
+        // the earlier layout had no field data
+        assert_eq!(b.field_data["TimeValue"], (1, vec![0.0]));
+        b.field_data.clear();
         assert_eq!(a, b);
         assert_eq!(
             b.point_data["contact_status"],

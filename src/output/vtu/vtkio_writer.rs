@@ -1,14 +1,5 @@
-//! The zlib-compressed `.vtu` layout, through vtkio.
-//!
-//! With zlib compression (level > 0, [`SeriesWriter::with_compression`]; no hvi command
-//! asks for it) the frame still goes through vtkio as inline base64 binary, compressed.
-//! vtkio's own file writer (`VTKFile::export`/`write`) wraps the destination in a `BufWriter`
-//! that it drops without checking the final flush, and writes with `write` rather than
-//! `write_all`, so a full disk could produce a silently truncated file. We therefore serialise
-//! into memory (which cannot fail that way) and write the bytes ourselves, atomically; the
-//! hand-written layout is written the same way.
-//!
-//! [`SeriesWriter::with_compression`]: crate::output::SeriesWriter::with_compression
+//! hvi's earlier `.vtu` layout, inline base64 through vtkio (compressed or not), kept only for
+//! the test that checks such files still read.
 
 use crate::mesh::Cell;
 use crate::output::{Field, FieldValues, Frame, OutputError};

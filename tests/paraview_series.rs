@@ -1,0 +1,221 @@
+//! A run's ParaView series read back: every frame carries the time its `.pvd` lists, the
+//! contact dataset holds exactly Γ₃'s nodes and facets, the group ids are the mesh's, the
+//! nodal stresses are the recovered ones, and ParaView's first view colours by von Mises.
+
+use hvi::app::{solve, SolveOptions};
+use hvi::fem::stress::{cell_measures, cell_stresses, nodal_stresses};
+use hvi::material::Elasticity;
+use hvi::mesh::{read_msh, AnyMesh, GroupSelector, Mesh};
+use hvi::output::read_vtu_arrays;
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+fn root(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
+}
+
+/// Solves `mesh` (with `scene`, or the paper's default) for `steps` steps into `out`.
+fn run(mesh: &str, scene: Option<&str>, steps: usize, out: &Path) {
+    let opts = SolveOptions {
+        mesh: root(mesh),
+        scene: scene.map(root),
+        out: out.to_path_buf(),
+        overrides: vec![format!("time.steps={steps}")],
+        progress: false,
+    };
+    solve(&opts, None).unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// The (time, file) entries of a `.pvd`.
+fn pvd_entries(path: &Path) -> Vec<(f64, String)> {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines()
+        .filter(|l| l.contains("<DataSet"))
+        .map(|l| {
+            let attr = |key: &str| {
+                let start = l.find(&format!("{key}=\"")).unwrap() + key.len() + 2;
+                l[start..].split('"').next().unwrap().to_string()
+            };
+            (attr("timestep").parse().unwrap(), attr("file"))
+        })
+        .collect()
+}
+
+/// Every frame of both series carries as FieldData the time and step its `.pvd` lists.
+fn assert_times_match(out: &Path, steps: usize) {
+    for pvd in ["solution.pvd", "contact.pvd"] {
+        let entries = pvd_entries(&out.join(pvd));
+        assert_eq!(entries.len(), steps + 1, "{pvd}");
+        for (n, (t, file)) in entries.iter().enumerate() {
+            let f = read_vtu_arrays(&out.join(file)).unwrap();
+            // exact: both are the same f64, written in shortest round-trip form and as bits
+            assert_eq!(f.field_data["TimeValue"], (1, vec![*t]), "{file}");
+            assert_eq!(f.field_data["step"], (1, vec![n as f64]), "{file}");
+        }
+    }
+}
+
+/// The contact dataset's points are exactly Γ₃'s nodes, its cells exactly Γ₃'s facets, and the
+/// group ids on the body's cells and the contact facets are the mesh's physical tags.
+fn assert_datasets_match_mesh<const D: usize>(mesh: &Mesh<D>, out: &Path, last: usize) {
+    let gamma3 = mesh.boundary(&GroupSelector::Name("Gamma3".into())).unwrap();
+    let tag = mesh
+        .group(&GroupSelector::Name("Gamma3".into()), (D - 1) as u8)
+        .unwrap()
+        .tag;
+    let vtp = read_vtu_arrays(&out.join(format!("contact_{last:05}.vtp"))).unwrap();
+    let xyz = |p: &[f64; D]| std::array::from_fn::<f64, 3, _>(|i| p.get(i).copied().unwrap_or(0.0));
+    let expected: Vec<[f64; 3]> = gamma3.nodes.iter().map(|&p| xyz(&mesh.points[p])).collect();
+    assert_eq!(vtp.points, expected);
+    // the facets as sets of mesh nodes (the dataset indexes its own points)
+    let as_mesh = |c: &[usize]| -> BTreeSet<usize> { c.iter().map(|&i| gamma3.nodes[i]).collect() };
+    let got: BTreeSet<BTreeSet<usize>> = vtp.connectivity.iter().map(|c| as_mesh(c)).collect();
+    let want: BTreeSet<BTreeSet<usize>> = gamma3
+        .facets
+        .iter()
+        .map(|f| f.nodes().iter().copied().collect())
+        .collect();
+    assert_eq!(got, want);
+    assert_eq!(vtp.connectivity.len(), gamma3.facets.len());
+    let line_or_polygon = if D == 2 { 3.0 } else { 7.0 };
+    assert!(vtp.cell_types.iter().all(|&t| f64::from(t) == line_or_polygon));
+    assert!(vtp.cell_data["group"].1.iter().all(|&g| g == f64::from(tag)));
+    assert!(vtp.point_data["group"].1.iter().all(|&g| g == f64::from(tag)));
+    // the nodal normals are the part's, as 3-vectors
+    let normals: Vec<f64> = gamma3.normals.iter().flat_map(xyz).collect();
+    assert_eq!(vtp.point_data["normal"], (3, normals));
+
+    let vtu = read_vtu_arrays(&out.join(format!("solution_{last:05}.vtu"))).unwrap();
+    let mut groups = vec![-1.0; mesh.cells.len()];
+    for g in mesh.groups.iter().filter(|g| g.dim as usize == D) {
+        for &c in &g.cells {
+            if groups[c] == -1.0 {
+                groups[c] = f64::from(g.tag);
+            }
+        }
+    }
+    assert!(
+        groups.iter().all(|&g| g >= 0.0),
+        "every cell of the shipped mesh is in a group"
+    );
+    assert_eq!(vtu.cell_data["group"], (1, groups));
+    // the body no longer carries the contact arrays (0 on interior nodes)
+    for name in ["u_nu", "contact_force", "contact_pressure", "contact_status"] {
+        assert!(!vtu.point_data.contains_key(name), "{name}");
+    }
+}
+
+/// The header of a written file up to its appended data.
+fn header(path: &Path) -> String {
+    let bytes = std::fs::read(path).unwrap();
+    let end = bytes.windows(13).position(|w| w == b"<AppendedData").unwrap();
+    String::from_utf8(bytes[..end].to_vec()).unwrap()
+}
+
+#[test]
+fn series_2d_reads_back_with_times_contact_dataset_and_groups() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    run("meshes/rect_q1_h8.msh", None, 4, &out);
+    assert_times_match(&out, 4);
+    let AnyMesh::Two(mesh) = read_msh(&root("meshes/rect_q1_h8.msh")).unwrap() else {
+        panic!("a 2D mesh")
+    };
+    assert_datasets_match_mesh(&mesh, &out, 4);
+
+    // the contact dataset agrees with gamma3.csv at T (the same nodes where both have them)
+    let vtp = read_vtu_arrays(&out.join("contact_00004.vtp")).unwrap();
+    let csv = std::fs::read_to_string(out.join("gamma3.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .filter(|r: &Vec<f64>| r[0] == 1.0)
+        .collect();
+    assert!(!rows.is_empty());
+    for r in &rows {
+        let i = vtp.points.iter().position(|p| p[0] == r[1] && p[1] == r[2]).unwrap();
+        assert_eq!(vtp.point_data["u_nu"].1[i], r[3]);
+        assert_eq!(vtp.point_data["force"].1[i], r[4]);
+        assert_eq!(vtp.point_data["pressure"].1[i], r[5]);
+        assert_eq!(vtp.point_data["status"].1[i], r[6]);
+        // gap = g − u_ν with the paper's bound g = 0.2
+        assert_eq!(vtp.point_data["gap"].1[i], 0.2 - r[3]);
+    }
+
+    // ParaView's first view: von Mises (point data) is the active scalar, displacement the
+    // active vector, and the arrays name their components
+    let h = header(&out.join("solution_00004.vtu"));
+    assert!(
+        h.contains("<PointData Scalars=\"von_mises\" Vectors=\"displacement\" Tensors=\"stress\">"),
+        "{h}"
+    );
+    assert!(h.contains("<CellData Scalars=\"von_mises\" Tensors=\"stress\">"), "{h}");
+    assert!(h.contains("Name=\"stress\" NumberOfComponents=\"9\" ComponentName0=\"xx\" ComponentName1=\"xy\""));
+    assert!(h.contains("Name=\"displacement\" NumberOfComponents=\"3\" ComponentName0=\"x\""));
+}
+
+#[test]
+fn series_3d_contact_dataset_is_gamma3_faces() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("slab");
+    run("meshes/slab_q1_h8_z1.msh", Some("examples/slab.toml"), 2, &out);
+    assert_times_match(&out, 2);
+    let AnyMesh::Three(mesh) = read_msh(&root("meshes/slab_q1_h8_z1.msh")).unwrap() else {
+        panic!("a 3D mesh")
+    };
+    assert_datasets_match_mesh(&mesh, &out, 2);
+}
+
+/// The recovered nodal stress of a displacement with constant strain is that constant stress at
+/// every node (each cell has it, and a weighted mean of equal tensors is the tensor); its von
+/// Mises value is the tensor's. On a non-uniform field every nodal value lies between the
+/// smallest and largest value of its cells (a convex combination).
+#[test]
+fn nodal_stress_is_the_volume_weighted_mean() {
+    let mesh = hvi::mesh::structured::rectangle(2.0, 1.0, 6, 4, hvi::mesh::structured::CellShape::Tri);
+    let e = Elasticity {
+        youngs_modulus: 3.0,
+        poisson_ratio: 0.3,
+        plane: Some(hvi::material::PlaneModel::Strain),
+    };
+    let linear: Vec<[f64; 2]> = mesh
+        .points
+        .iter()
+        .map(|p| [0.1 * p[0] + 0.3 * p[1], -0.2 * p[0] + 0.05 * p[1]])
+        .collect();
+    let cell = cell_stresses(&mesh.cells, &mesh.points, &e, &linear, None);
+    let m = cell_measures(&mesh.cells, &mesh.points);
+    // the measures add up to the rectangle's area
+    assert!((m.iter().sum::<f64>() - 2.0).abs() < 1e-12);
+    let node = nodal_stresses(&mesh.cells, &m, &cell.tensor, mesh.points.len());
+    for p in 0..mesh.points.len() {
+        for k in 0..9 {
+            // round-off of a weighted mean of equal values: a few ulps of |σ| ~ 1
+            assert!((node.tensor[9 * p + k] - cell.tensor[k]).abs() < 1e-12);
+        }
+        assert!((node.von_mises[p] - cell.von_mises[0]).abs() < 1e-12);
+    }
+    let wavy: Vec<[f64; 2]> = mesh
+        .points
+        .iter()
+        .map(|p| [(3.0 * p[0]).sin() * p[1], p[0] * p[0]])
+        .collect();
+    let cell = cell_stresses(&mesh.cells, &mesh.points, &e, &wavy, None);
+    let node = nodal_stresses(&mesh.cells, &m, &cell.tensor, mesh.points.len());
+    for p in 0..mesh.points.len() {
+        let around: Vec<usize> = (0..mesh.cells.len())
+            .filter(|&c| mesh.cells[c].nodes().contains(&p))
+            .collect();
+        for k in 0..9 {
+            let (lo, hi) = around.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &c| {
+                (lo.min(cell.tensor[9 * c + k]), hi.max(cell.tensor[9 * c + k]))
+            });
+            let v = node.tensor[9 * p + k];
+            assert!(
+                v >= lo - 1e-12 && v <= hi + 1e-12,
+                "node {p} component {k}: {v} outside [{lo}, {hi}]"
+            );
+        }
+    }
+}
