@@ -83,3 +83,17 @@ mesh3 bracket.geo bracket_p1.msh -setnumber lc 0.03
 # Orientation, boundary groups and the slabs' (x, y) grids of every MSH 4.1 ASCII file here: one
 # line per file (OK or FAILED) and any ERROR lines; fails the script if any check fails.
 python3 check_orientation.py | grep -E '^[^ ]|ERROR'
+
+# The gallery's Hertz meshes (examples/gallery/hertz_2d, hertz_3d; README "Problems you can pose"):
+# 2D with element size hf = 0.005, 0.0025, 0.00125 on the contact, 3D with its default hf.
+(
+    cd ../examples/gallery/hertz_2d
+    for k in 1 2 3; do
+        hf=$(python3 -c "print(0.005 / 2 ** ($k - 1))")
+        gmsh -2 hertz_2d.geo -setnumber hf "$hf" -format msh41 -o "hertz_2d_h$k.msh" >/dev/null
+        echo "wrote hertz_2d_h$k.msh ($(wc -c <"hertz_2d_h$k.msh") bytes)"
+    done
+    cd ../hertz_3d
+    gmsh -3 hertz_3d.geo -format msh41 -o hertz_3d.msh >/dev/null
+    echo "wrote hertz_3d.msh ($(wc -c <hertz_3d.msh) bytes)"
+)

@@ -908,7 +908,10 @@ fn bad_expressions_name_the_key() {
     // a bound expression: compiled when the scene is read (its values are checked at the nodes)
     for (expr, parts) in [
         ("0.2 + 0.02*sin(6*PI*w)", vec!["unknown variable `w`", "`x`, `y`, `z`"]),
-        ("0.2 + (x", vec!["column 9", "expected `)` to close the `(` of column 7"]),
+        (
+            "0.2 + (x",
+            vec!["column 9", "expected `)` to close the `(` of column 7"],
+        ),
         ("-x^2 + 1", vec!["column 1", "ambiguous"]),
         ("", vec!["the expression is empty"]),
     ] {

@@ -1,0 +1,154 @@
+//! Hertz contact against the closed forms (docs/method.md §10.3): a rigid cylinder (2D, plane
+//! strain) and a rigid sphere (3D) pressed into a block by a prescribed displacement,
+//! frictionless. The rigid body is the bound g = R − sqrt(R² − r²) of u_ν ≤ g on the block's
+//! flat top (the gap to the cylinder or sphere along the top's normal); meshes and scenes are
+//! the gallery's (examples/gallery/hertz_2d, hertz_3d).
+
+mod common;
+
+use hvi::app::solve_in_memory;
+use hvi::contact::NodeStatus;
+use hvi::mesh::read_mesh;
+use hvi::scene::Scene;
+use std::path::{Path, PathBuf};
+
+fn gallery(entry: &str, file: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples/gallery")
+        .join(entry)
+        .join(file)
+}
+
+fn scene(entry: &str) -> Scene {
+    Scene::load(Some(&gallery(entry, &format!("{entry}.toml"))), &[]).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// What a run gives: the total force P on the contact group (the symmetry part's contact force
+/// scaled to the whole body), the reaction on the pushed group (same scaling), and per contact
+/// node on the obstacle its distance r from the axis and its pressure λ_p / w_p.
+struct Contact {
+    force: f64,
+    reaction: f64,
+    pressures: Vec<(f64, f64)>,
+}
+
+fn run<const D: usize>(entry: &str, mesh: &str, symmetry_factor: f64) -> Contact {
+    let mesh = read_mesh::<D>(&gallery(entry, mesh)).unwrap_or_else(|e| panic!("{e}"));
+    let (sim, stats, sink) = solve_in_memory(&scene(entry), mesh).unwrap_or_else(|e| panic!("{e}"));
+    let c = sim.contact.as_ref().unwrap();
+    let last = sink.steps.last().unwrap();
+    let state = last.contact.as_ref().unwrap();
+    let mut pressures = Vec::new();
+    for (k, &p) in c.nodes.nodes.iter().enumerate() {
+        if state.status[k] == NodeStatus::OnBound {
+            let x = sim.mesh.points[p];
+            let r = x[..D - 1].iter().map(|v| v * v).sum::<f64>().sqrt();
+            pressures.push((r, state.force[k] / c.nodes.weights[k]));
+        }
+    }
+    let axis = ["x", "y", "z"][D - 1];
+    Contact {
+        force: symmetry_factor * state.force.iter().sum::<f64>(),
+        reaction: symmetry_factor * common::reaction(&stats, "Base", axis, last.time),
+        pressures,
+    }
+}
+
+/// Least squares of p² = p₀² (1 − r²/a²) over the nodes in contact: a straight line in r² whose
+/// intercept is p₀² and whose root is a². Every node in contact contributes, so a is located to a
+/// fraction of the node spacing, unlike the last node in contact (which only brackets a within
+/// one element) or an interpolated edge of the active set (which depends on the nodal pressure of
+/// the two nodes around the edge, the least accurate ones: the pressure is ∝ sqrt(a − r) there).
+fn fit(pressures: &[(f64, f64)]) -> (f64, f64) {
+    let n = pressures.len() as f64;
+    let xs: Vec<f64> = pressures.iter().map(|(r, _)| r * r).collect();
+    let ys: Vec<f64> = pressures.iter().map(|(_, p)| p * p).collect();
+    let (mx, my) = (xs.iter().sum::<f64>() / n, ys.iter().sum::<f64>() / n);
+    let sxy: f64 = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum();
+    let sxx: f64 = xs.iter().map(|x| (x - mx) * (x - mx)).sum();
+    let slope = sxy / sxx; // −p₀²/a²
+    let intercept = my - slope * mx; // p₀²
+    ((intercept / -slope).sqrt(), intercept.sqrt())
+}
+
+/// Plane strain, E = 1, ν = 0.3, R = 1: a² = 4PR/(πE*), p₀ = 2P/(πa), with P the force per unit
+/// length. Three meshes, element size on the contact a/8, a/16, a/33 (hf = 0.005, 0.0025,
+/// 0.00125; a ≈ 0.041).
+///
+/// Tolerances: 1 % on a and p₀ (the issue's). The block is 2 × 2 = 49a × 49a, so the
+/// half-plane formula's error from the finite body is far below that (the measured a is within
+/// 0.1 % on the finest mesh); what remains is the discretisation, and the error in a must shrink
+/// from mesh to mesh. The reaction of the pushed base equals the contact force to 1e-9
+/// (equilibrium of the body: both are the same linear functional of one solution).
+#[test]
+fn hertz_2d_cylinder_half_width_and_peak_pressure_within_one_percent() {
+    let e_star = 1.0 / (1.0 - 0.3f64 * 0.3);
+    let radius = 1.0;
+    let mut errors = Vec::new();
+    eprintln!("| mesh | nodes in contact | P | a (fit) | a (Hertz) | error | p₀ (fit) | p₀ (Hertz) | error |");
+    for mesh in ["hertz_2d_h1.msh", "hertz_2d_h2.msh", "hertz_2d_h3.msh"] {
+        // the half model carries half of the force per unit length
+        let c = run::<2>("hertz_2d", mesh, 2.0);
+        assert!(
+            (c.reaction - c.force).abs() <= 1e-9 * c.force,
+            "{mesh}: reaction {} against the contact force {}",
+            c.reaction,
+            c.force
+        );
+        let p = c.force;
+        let a_hertz = (4.0 * p * radius / (std::f64::consts::PI * e_star)).sqrt();
+        let p0_hertz = 2.0 * p / (std::f64::consts::PI * a_hertz);
+        let (a, p0) = fit(&c.pressures);
+        let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
+        eprintln!(
+            "| {mesh} | {} | {p:.5e} | {a:.5} | {a_hertz:.5} | {:+.2} % | {p0:.5} | {p0_hertz:.5} | {:+.2} % |",
+            c.pressures.len(),
+            100.0 * ea,
+            100.0 * ep
+        );
+        assert!(c.pressures.len() >= 8, "{mesh}: a is resolved by too few nodes");
+        assert!(ea.abs() < 0.01, "{mesh}: a = {a} against Hertz {a_hertz}");
+        assert!(ep.abs() < 0.01, "{mesh}: p₀ = {p0} against Hertz {p0_hertz}");
+        errors.push(ea.abs());
+    }
+    assert!(
+        errors.windows(2).all(|w| w[1] < w[0]),
+        "the error in a does not shrink with h: {errors:?}"
+    );
+}
+
+/// E = 1, ν = 0.3, R = 1: a³ = 3PR/(4E*), p₀ = 3P/(2πa²), with P the total force. One mesh of
+/// tetrahedra (examples/gallery/hertz_3d/hertz_3d.msh, element size a/14 on the contact patch).
+///
+/// Tolerances: 3 % on a and 5 % on p₀ (the issue's). On this mesh a is found within 0.4 % and
+/// p₀ within 1.5 % (P1 tetrahedra overestimate the peak: the nodal pressure at the centre is
+/// the least accurate, with the fewest nodes near it); the block is 15a on each side, so the
+/// half-space formula's own error is well below both. The reaction of the pushed base equals
+/// the contact force to 1e-9.
+#[test]
+fn hertz_3d_sphere_contact_radius_within_3_percent_and_peak_pressure_within_5() {
+    let e_star = 1.0 / (1.0 - 0.3f64 * 0.3);
+    let radius = 1.0;
+    // the quarter model carries a quarter of the force
+    let c = run::<3>("hertz_3d", "hertz_3d.msh", 4.0);
+    assert!(
+        (c.reaction - c.force).abs() <= 1e-9 * c.force,
+        "reaction {} against the contact force {}",
+        c.reaction,
+        c.force
+    );
+    let p = c.force;
+    let a_hertz = (3.0 * p * radius / (4.0 * e_star)).cbrt();
+    let p0_hertz = 3.0 * p / (2.0 * std::f64::consts::PI * a_hertz * a_hertz);
+    let (a, p0) = fit(&c.pressures);
+    let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
+    eprintln!(
+        "3D: {} nodes in contact, P = {p:.5e}, a = {a:.5} (Hertz {a_hertz:.5}, {:+.2} %), p₀ = {p0:.5} (Hertz {p0_hertz:.5}, {:+.2} %)",
+        c.pressures.len(),
+        100.0 * ea,
+        100.0 * ep
+    );
+    assert!(c.pressures.len() >= 30, "a is resolved by too few nodes");
+    assert!(ea.abs() < 0.03, "a = {a} against Hertz {a_hertz}");
+    assert!(ep.abs() < 0.05, "p₀ = {p0} against Hertz {p0_hertz}");
+}
