@@ -31,6 +31,8 @@ pub mod linalg;
 pub mod material;
 pub mod mesh;
 pub mod output;
+#[cfg(feature = "petsc")]
+pub mod petsc;
 pub mod scene;
 pub mod solver;
 pub mod study;

@@ -40,6 +40,13 @@ enum Command {
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
+        /// The linear algebra: faer (one machine), or petsc (PETSc over MPI, launched with
+        /// mpirun; needs a build with `--features petsc`, README "Running on a cluster").
+        #[arg(long, value_enum, default_value_t = BackendArg::Faer)]
+        backend: BackendArg,
+        /// With --backend petsc: mumps (a Cholesky factor, the default) or gamg (CG + GAMG).
+        #[arg(long, value_enum)]
+        solver: Option<SolverArg>,
     },
     /// Run a convergence study described by a study file (see examples/paper_study.toml).
     Study {
@@ -78,6 +85,55 @@ enum Command {
     },
 }
 
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum BackendArg {
+    Faer,
+    Petsc,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum SolverArg {
+    Mumps,
+    Gamg,
+}
+
+/// `hvi solve --backend petsc`: every rank runs; rank 0 prints the report or the error.
+#[cfg(feature = "petsc")]
+fn solve_petsc(opts: &hvi::app::SolveOptions, solver: Option<SolverArg>) -> ExitCode {
+    let choice = match solver {
+        Some(SolverArg::Gamg) => hvi::petsc::SolverChoice::Gamg,
+        _ => hvi::petsc::SolverChoice::Mumps,
+    };
+    match hvi::petsc::solve(opts, choice) {
+        Ok(run) => match run.result {
+            Ok(stats) => {
+                if run.rank == 0 {
+                    println!("{}", hvi::app::report(&stats, &opts.out));
+                }
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                if run.rank == 0 {
+                    eprintln!("error: {e}");
+                }
+                ExitCode::FAILURE
+            }
+        },
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+#[cfg(not(feature = "petsc"))]
+fn solve_petsc(_opts: &hvi::app::SolveOptions, _solver: Option<SolverArg>) -> ExitCode {
+    eprintln!(
+        "error: --backend petsc: this hvi was built without the PETSc backend; build it with `cargo build --release --features petsc` (needs PETSc ≥ 3.18 and MPI, see README \"Running on a cluster\") and launch it with mpirun"
+    );
+    ExitCode::FAILURE
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
@@ -87,6 +143,8 @@ fn main() -> ExitCode {
             out,
             overrides,
             quiet,
+            backend,
+            solver,
         } => {
             let opts = hvi::app::SolveOptions {
                 mesh,
@@ -95,6 +153,13 @@ fn main() -> ExitCode {
                 overrides,
                 progress: !quiet && std::io::stderr().is_terminal(),
             };
+            if backend == BackendArg::Petsc {
+                return solve_petsc(&opts, solver);
+            }
+            if solver.is_some() {
+                eprintln!("error: --solver chooses the PETSc solver: use it with --backend petsc");
+                return ExitCode::FAILURE;
+            }
             let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::Relaxed));
             match hvi::app::solve(&opts, Some(&STOP)) {
                 Ok(stats) => {

@@ -14,4 +14,4 @@ pub use error::SolveError;
 pub use plan::Plan;
 pub use setup::{ContactSetup, Simulation, TimeGrid};
 pub use stats::{PhaseTimes, Reaction, RunStats};
-pub use timeloop::{FrameSink, StepView};
+pub use timeloop::{Backend, FrameSink, StepView};

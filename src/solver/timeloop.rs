@@ -90,9 +90,38 @@ impl PrescribedColumns {
     }
 }
 
+/// A linear-algebra backend other than the cached faer factor (docs/method.md §13): it builds
+/// the solver and the condensation of each distinct step matrix, and may run the contact solve
+/// on one process only and share its forces with the others. The time loop, the history, the
+/// loads and the contact law stay the same.
+pub trait Backend<const D: usize>: Sync {
+    /// A solver (and, with contact nodes, a condensation) for the step matrix
+    /// K = K_A + c K_B with identity rows at the prescribed unknowns, c = `memory` (None: K_A).
+    #[allow(clippy::type_complexity)]
+    fn operator(
+        &self,
+        sim: &Simulation<D>,
+        memory: Option<f64>,
+        counters: &Counters,
+    ) -> Result<(Arc<dyn LinearSolver>, Option<Box<dyn Condensation>>), SolveError>;
+    /// True if this process runs the active-set solve of a step (the others receive its result).
+    fn solves_contact(&self) -> bool {
+        true
+    }
+    /// Gives every process the result of the process that solved the contact problem: on that
+    /// one, `local` is its result and `state` its state; on the others both are overwritten.
+    fn share_contact(
+        &self,
+        _state: &mut ContactState,
+        local: Result<ContactOutcome, SolveError>,
+    ) -> Result<ContactOutcome, SolveError> {
+        local
+    }
+}
+
 /// A factor of a step matrix and, with contact, its condensation.
 struct StepOperator {
-    solver: Arc<Factor>,
+    solver: Arc<dyn LinearSolver>,
     condensed: Option<Box<dyn Condensation>>,
     /// The unmodified columns of the prescribed unknowns (for lifting).
     lifting: Option<PrescribedColumns>,
@@ -164,6 +193,29 @@ impl StepOperator {
         })
     }
 
+    /// The operator of a [`Backend`] for K = K_A + c K_B (c = `memory`); `lifting` from the
+    /// unmodified matrix as in [`system_matrix`].
+    fn with_backend<const D: usize>(
+        sim: &Simulation<D>,
+        backend: &dyn Backend<D>,
+        memory: Option<f64>,
+        lifting: Option<PrescribedColumns>,
+        counters: &Counters,
+        stats: &mut RunStats,
+    ) -> Result<Self, SolveError> {
+        let (solver, condensed) = timed(&mut stats.phases.factorisation, || {
+            backend.operator(sim, memory, counters)
+        })?;
+        if let Some(c) = &condensed {
+            stats.condensation = Some(c.name().to_string());
+        }
+        Ok(StepOperator {
+            solver,
+            condensed,
+            lifting,
+        })
+    }
+
     /// Solves one step: d = C K⁻¹ rhs, contact → λ, u_n = K⁻¹ (rhs − Cᵀ λ). `offset` is the
     /// prescribed part of u_ν (None when it is zero); `u` receives u_n.
     #[allow(clippy::too_many_arguments)]
@@ -175,6 +227,7 @@ impl StepOperator {
         offset: Option<&[f64]>,
         u: &mut [f64],
         state: Option<&mut ContactState>,
+        backend: Option<&dyn Backend<D>>,
         counters: &Counters,
         stats: &mut RunStats,
     ) -> Result<Option<ContactOutcome>, SolveError> {
@@ -187,8 +240,16 @@ impl StepOperator {
                 if let Some(g) = offset {
                     setup.nodes.prescribed_offset(g, &mut d);
                 }
-                let outcome = timed(&mut stats.phases.contact, || {
-                    contact_solve(sim, setup, op.as_ref(), step, &d, state)
+                let outcome = timed(&mut stats.phases.contact, || match backend {
+                    None => contact_solve(sim, setup, op.as_ref(), step, &d, state),
+                    Some(b) => {
+                        let local = if b.solves_contact() {
+                            contact_solve(sim, setup, op.as_ref(), step, &d, state)
+                        } else {
+                            Ok(ContactOutcome::default())
+                        };
+                        b.share_contact(state, local)
+                    }
                 })?;
                 stats.contact_solves += 1;
                 timed(&mut stats.phases.backward_sweep, || {
@@ -218,6 +279,11 @@ fn probe_singularity(factor: &Factor, matrix: &SymmetricMatrix) -> Result<(), St
     factor.solve_in_place(&mut x, &Counters::default());
     let scale = v.iter().fold(0.0f64, |a, b| a.max(b.abs()));
     let error = x.iter().zip(&v).fold(0.0f64, |a, (p, q)| a.max((p - q).abs())) / scale;
+    singularity_verdict(error)
+}
+
+/// The verdict of a probe solve whose relative error is `error` (any backend's probe).
+pub fn singularity_verdict(error: f64) -> Result<(), String> {
     if error.is_finite() && error <= 1e-6 {
         Ok(())
     } else {
@@ -336,7 +402,9 @@ pub struct Stepper<'s, const D: usize> {
     k_a: SymmetricMatrix,
     /// K_B for the memory load K_B h_n of every step.
     k_b: Option<MemoryStiffness<D>>,
-    symbolic: Analysis,
+    /// The faer factor's symbolic analysis (None with a [`Backend`]).
+    symbolic: Option<Analysis>,
+    backend: Option<&'s dyn Backend<D>>,
     main: StepOperator,
     /// (k/2) b(0), the memory term's share of K.
     memory_diagonal: Option<f64>,
@@ -364,6 +432,11 @@ impl<'s, const D: usize> Stepper<'s, D> {
     /// Assembles K_A (and K_B with memory), factorises K = K_A + (k/2) b(0) K_B once, and
     /// condenses the contact normals.
     pub fn prepare(sim: &'s Simulation<D>) -> Result<Self, SolveError> {
+        Self::prepare_with(sim, None)
+    }
+
+    /// [`Stepper::prepare`] with the step matrices solved by `backend` (None: the faer factor).
+    pub fn prepare_with(sim: &'s Simulation<D>, backend: Option<&'s dyn Backend<D>>) -> Result<Self, SolveError> {
         crate::linalg::set_parallelism(sim.threads);
         let counters = Counters::default();
         let mut stats = RunStats {
@@ -396,21 +469,36 @@ impl<'s, const D: usize> Stepper<'s, D> {
         // The pattern the factors have: identity rows, fully prescribed nodes decoupled. In 3D the
         // contact normals' unknowns go last (docs/method.md §4.5): G and W then live in the
         // factor's trailing block (measured: box 96x48x12, m = 1248, condensation 12.4 s before).
-        let last = sim.unknowns_ordered_last();
-        let system = match (&k_b, memory_diagonal) {
-            (Some(kb), Some(c)) => {
-                let k_step = timed(&mut stats.phases.assembly, || k_a.plus_scaled(c, kb));
-                system_matrix(sim, &k_step)
+        let (symbolic, main) = match backend {
+            None => {
+                let last = sim.unknowns_ordered_last();
+                let system = match (&k_b, memory_diagonal) {
+                    (Some(kb), Some(c)) => {
+                        let k_step = timed(&mut stats.phases.assembly, || k_a.plus_scaled(c, kb));
+                        system_matrix(sim, &k_step)
+                    }
+                    _ => system_matrix(sim, &k_a),
+                };
+                let symbolic = timed(&mut stats.phases.factorisation, || {
+                    Factor::analyse_with_last(&system.0, &last)
+                })
+                .map_err(|e| SolveError::Setup(e.to_string()))?;
+                stats.ordering = Some(symbolic.ordering().to_string());
+                stats.factor_entries = symbolic.factor_entries();
+                let main = StepOperator::new(sim, &symbolic, system, &counters, &mut stats)?;
+                (Some(symbolic), main)
             }
-            _ => system_matrix(sim, &k_a),
+            Some(b) => {
+                // The backend assembles its own matrix; here only the columns that lift
+                // non-zero prescribed values are needed.
+                let lifting = sim.dirichlet.is_nonzero().then(|| match (&k_b, memory_diagonal) {
+                    (Some(kb), Some(c)) => PrescribedColumns::new(&k_a.plus_scaled(c, kb), &sim.dofs),
+                    _ => PrescribedColumns::new(&k_a, &sim.dofs),
+                });
+                let main = StepOperator::with_backend(sim, b, memory_diagonal, lifting, &counters, &mut stats)?;
+                (None, main)
+            }
         };
-        let symbolic = timed(&mut stats.phases.factorisation, || {
-            Factor::analyse_with_last(&system.0, &last)
-        })
-        .map_err(|e| SolveError::Setup(e.to_string()))?;
-        stats.ordering = Some(symbolic.ordering().to_string());
-        stats.factor_entries = symbolic.factor_entries();
-        let main = StepOperator::new(sim, &symbolic, system, &counters, &mut stats)?;
         if let (Some(op), Some(c)) = (&main.condensed, &sim.contact) {
             if let Some(law) = &c.law {
                 stats.smallness = Some(law.relaxed_monotonicity() * op.stiffness().trace_constant(&c.nodes.weights));
@@ -431,6 +519,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
             k_a,
             k_b,
             symbolic,
+            backend,
             main,
             memory_diagonal,
             single_solve: history.is_none() && !time_dependent_loads && !sim.dirichlet.is_time_dependent(),
@@ -501,6 +590,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
                     self.prescribed.as_deref(),
                     &mut self.displacement,
                     self.contact.as_mut(),
+                    self.backend,
                     &self.counters,
                     &mut self.stats,
                 )?
@@ -573,13 +663,23 @@ impl<'s, const D: usize> Stepper<'s, D> {
             self.displacement.fill(0.0);
             return Ok(outcome);
         }
-        let mut op = StepOperator::new(
-            sim,
-            &self.symbolic,
-            system_matrix(sim, &self.k_a),
-            &self.counters,
-            &mut self.stats,
-        )?;
+        let mut op = match (&self.symbolic, self.backend) {
+            (Some(symbolic), _) => StepOperator::new(
+                sim,
+                symbolic,
+                system_matrix(sim, &self.k_a),
+                &self.counters,
+                &mut self.stats,
+            )?,
+            (None, Some(b)) => {
+                let lifting = sim
+                    .dirichlet
+                    .is_nonzero()
+                    .then(|| PrescribedColumns::new(&self.k_a, &sim.dofs));
+                StepOperator::with_backend(sim, b, None, lifting, &self.counters, &mut self.stats)?
+            }
+            (None, None) => unreachable!("a Stepper has a symbolic analysis or a backend"),
+        };
         lift(&op, sim, self.prescribed.as_deref(), rhs);
         op.solve(
             sim,
@@ -588,6 +688,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
             self.prescribed.as_deref(),
             &mut self.displacement,
             self.contact.as_mut(),
+            self.backend,
             &self.counters,
             &mut self.stats,
         )
@@ -659,8 +760,18 @@ pub fn run<const D: usize>(
     sink: &mut dyn FrameSink<D>,
     stop: Option<&AtomicBool>,
 ) -> Result<RunStats, SolveError> {
+    run_with(sim, sink, stop, None)
+}
+
+/// [`run`] with the step matrices solved by `backend` (None: the faer factor).
+pub fn run_with<const D: usize>(
+    sim: &Simulation<D>,
+    sink: &mut dyn FrameSink<D>,
+    stop: Option<&AtomicBool>,
+    backend: Option<&dyn Backend<D>>,
+) -> Result<RunStats, SolveError> {
     let started = Instant::now();
-    let mut stepper = Stepper::prepare(sim)?;
+    let mut stepper = Stepper::prepare_with(sim, backend)?;
     let mut output_seconds = 0.0;
     let mut frames = 0;
     let mut last_written = None;
