@@ -694,12 +694,12 @@ fn fingerprint<const D: usize>(mesh: &Mesh<D>) -> [u64; 3] {
 }
 
 /// Rank 0 writes the frames; every rank learns whether it could.
-struct CollectiveSink<'a> {
+struct CollectiveSink<'a, const D: usize> {
     world: &'a SimpleCommunicator,
-    inner: Option<&'a mut FileSink>,
+    inner: Option<&'a mut FileSink<D>>,
 }
 
-impl<const D: usize> FrameSink<D> for CollectiveSink<'_> {
+impl<const D: usize> FrameSink<D> for CollectiveSink<'_, D> {
     fn step_done(&mut self, sim: &Simulation<D>, view: &StepView) {
         if let Some(s) = self.inner.as_mut() {
             s.step_done(sim, view);
@@ -821,13 +821,21 @@ fn run_dim<const D: usize>(
     // Rank 0 prepares the output directory (checked writable before any solving).
     let mut file_sink = None;
     let prepared = if rank == 0 {
-        FileSink::create(&opts.out, &sim, &scene.output.fields, opts.progress)
-            .and_then(|s| {
-                output::write_atomic(&opts.out.join("scene.toml"), scene.to_toml_string().as_bytes())?;
-                file_sink = Some(s);
-                Ok(())
-            })
-            .map_err(|e| e.to_string())
+        // as app::solve does
+        FileSink::create(
+            &opts.out,
+            &sim,
+            &scene.output.fields,
+            std::slice::from_ref(&scene.groups.contact),
+            0,
+            opts.progress,
+        )
+        .and_then(|s| {
+            output::write_atomic(&opts.out.join("scene.toml"), scene.to_toml_string().as_bytes())?;
+            file_sink = Some(s);
+            Ok(())
+        })
+        .map_err(|e| e.to_string())
     } else {
         Ok(())
     };
