@@ -80,6 +80,14 @@ mesh3 block.geo block_q1_h8.msh -setnumber hexes 1 -setnumber n 8
 # The L bracket (OpenCASCADE), tetrahedra.
 mesh3 bracket.geo bracket_p1.msh -setnumber lc 0.03
 
+# The quarter ring 1 <= r <= 2 (Lamé under internal pressure: tests/pressure.rs, examples/ring.toml):
+# nested structured grids, n cells across the wall, Q1 and P1.
+for n in 4 8 16; do
+    gmsh -2 ring.geo -setnumber n "$n" -setnumber quads 1 -format msh41 -o "ring_q1_n$n.msh" >/dev/null
+    gmsh -2 ring.geo -setnumber n "$n" -setnumber quads 0 -format msh41 -o "ring_p1_n$n.msh" >/dev/null
+    echo "wrote ring_q1_n$n.msh, ring_p1_n$n.msh"
+done
+
 # Orientation, boundary groups and the slabs' (x, y) grids of every MSH 4.1 ASCII file here: one
 # line per file (OK or FAILED) and any ERROR lines; fails the script if any check fails.
 python3 check_orientation.py | grep -E '^[^ ]|ERROR'

@@ -1,6 +1,7 @@
 //! Load vectors F(t) = ∫_Ω f₀·v dx + Σ_groups ∫_Γ f₂·v ds (docs/method.md §1), from expressions
 //! in (x, y, z, t) and, for tractions, the facet's outward normal (nx, ny, nz) (the variables
-//! of [`crate::scene::TRACTION_VARIABLES`]). Quadrature points and shape values are computed
+//! of [`crate::scene::TRACTION_VARIABLES`]). A pressure p is the traction f₂ = −p ν
+//! (docs/method.md §11.2). Quadrature points and shape values are computed
 //! once; each time step only evaluates the expressions, and a load that does not depend on t is
 //! assembled once.
 
@@ -22,12 +23,28 @@ struct LoadPoint<const D: usize> {
     shape: Vec<(usize, f64)>,
 }
 
+/// A load density: its D components, or a pressure p (the traction −p ν).
+#[derive(Clone, Debug)]
+enum Density<const D: usize> {
+    Vector([Expr; D]),
+    Pressure(Box<Expr>),
+}
+
+impl<const D: usize> Density<D> {
+    fn expressions(&self) -> &[Expr] {
+        match self {
+            Density::Vector(v) => v,
+            Density::Pressure(p) => std::slice::from_ref(p.as_ref()),
+        }
+    }
+}
+
 /// A vector-valued load density f (D components) integrated over a set of points.
 #[derive(Clone, Debug)]
 struct LoadTerm<const D: usize> {
     /// Where the load comes from, for messages (e.g. the scene key).
     label: String,
-    value: [Expr; D],
+    value: Density<D>,
     points: Vec<LoadPoint<D>>,
 }
 
@@ -108,6 +125,15 @@ impl<const D: usize> Loads<D> {
 
     /// Adds a traction density on a boundary part.
     pub fn add_traction(&mut self, part: &BoundaryPart<D>, points: &[[f64; D]], value: [Expr; D], label: &str) {
+        self.add_boundary_term(part, points, Density::Vector(value), label);
+    }
+
+    /// Adds a pressure p on a boundary part: the traction −p ν, ν the facet's outward unit normal.
+    pub fn add_pressure(&mut self, part: &BoundaryPart<D>, points: &[[f64; D]], pressure: Expr, label: &str) {
+        self.add_boundary_term(part, points, Density::Pressure(Box::new(pressure)), label);
+    }
+
+    fn add_boundary_term(&mut self, part: &BoundaryPart<D>, points: &[[f64; D]], value: Density<D>, label: &str) {
         let mut qp = Vec::with_capacity(part.facets.len() * 4);
         for f in &part.facets {
             for (x, normal, weight, shape) in facet_points(points, f) {
@@ -142,14 +168,16 @@ impl<const D: usize> Loads<D> {
         }
         self.terms.push(LoadTerm {
             label: label.to_string(),
-            value,
+            value: Density::Vector(value),
             points: qp,
         });
     }
 
     /// True if any load density depends on t.
     pub fn is_time_dependent(&self) -> bool {
-        self.terms.iter().any(|t| t.value.iter().any(|e| e.depends_on("t")))
+        self.terms
+            .iter()
+            .any(|t| t.value.expressions().iter().any(|e| e.depends_on("t")))
     }
 
     /// True if there are no loads at all.
@@ -170,14 +198,26 @@ impl<const D: usize> Loads<D> {
                 vars[..D].copy_from_slice(&p.x);
                 vars[4..4 + D].copy_from_slice(&p.normal);
                 vars[3] = t;
-                let f: [f64; D] = std::array::from_fn(|c| term.value[c].eval(&vars));
-                if let Some(c) = f.iter().position(|v| !v.is_finite()) {
+                let (f, bad): ([f64; D], Option<(String, &Expr, f64)>) = match &term.value {
+                    Density::Vector(value) => {
+                        let f: [f64; D] = std::array::from_fn(|c| value[c].eval(&vars));
+                        let bad = f
+                            .iter()
+                            .position(|v| !v.is_finite())
+                            .map(|c| (format!("{}[{c}]", term.label), &value[c], f[c]));
+                        (f, bad)
+                    }
+                    Density::Pressure(pressure) => {
+                        let pv = pressure.eval(&vars);
+                        let bad = (!pv.is_finite()).then(|| (term.label.clone(), pressure.as_ref(), pv));
+                        (std::array::from_fn(|c| -pv * p.normal[c]), bad)
+                    }
+                };
+                if let Some((key, e, v)) = bad {
                     let at: Vec<String> = p.x.iter().map(|v| v.to_string()).collect();
                     return Err(format!(
-                        "{}[{c}] = \"{}\" is {} at (x, y{}) = ({}), t = {t}; make the expression finite on the whole group",
-                        term.label,
-                        term.value[c].source(),
-                        f[c],
+                        "{key} = \"{}\" is {v} at (x, y{}) = ({}), t = {t}; make the expression finite on the whole group",
+                        e.source(),
                         if D == 3 { ", z" } else { "" },
                         at.join(", ")
                     ));

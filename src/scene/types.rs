@@ -125,13 +125,18 @@ pub struct TimeSpec {
     pub steps: usize,
 }
 
-/// A traction density on a boundary group.
+/// A traction density on a boundary group: either its components (`value`) or a pressure p,
+/// the traction −p ν with ν the facet's outward unit normal (docs/method.md §11.2). Exactly one.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TractionSpec {
     pub group: GroupSelector,
-    /// One expression per component (2 in 2D, 3 in 3D).
+    /// One expression per component (2 in 2D, 3 in 3D); empty when `pressure` is given.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub value: Vec<String>,
+    /// p(x, y, z, t, nx, ny, nz): positive pushes into the body.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pressure: Option<String>,
 }
 
 /// A body force density.

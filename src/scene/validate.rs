@@ -32,7 +32,7 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
         },
         "memory.terms" => vec!["coefficient", "relaxation_time"],
         "time" => vec!["final_time", "steps"],
-        "traction" => vec!["group", "value"],
+        "traction" => vec!["group", "value", "pressure"],
         "dirichlet" => vec!["group", "components", "value"],
         "body_force" => vec!["value"],
         "contact" => vec!["bound", "law"],
@@ -251,6 +251,35 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
         }
     }
     for (i, tr) in scene.traction.iter().enumerate() {
+        match (&tr.pressure, tr.value.is_empty()) {
+            (Some(p), true) => {
+                compile(
+                    origin,
+                    &format!("traction[{i}].pressure"),
+                    p,
+                    &super::TRACTION_VARIABLES,
+                    &[0.0; 7],
+                )?;
+                continue;
+            }
+            (Some(p), false) => {
+                return Err(invalid(
+                    origin,
+                    &format!("traction[{i}].pressure"),
+                    format!("\"{p}\" beside value = {:?}", tr.value),
+                    "a [[traction]] section gives either value (the traction's components) or pressure (the traction −p·ν), not both",
+                ))
+            }
+            (None, true) => {
+                return Err(invalid(
+                    origin,
+                    &format!("traction[{i}].value"),
+                    "(absent)",
+                    "give value = [\"fx\", \"fy\"] (3D: three) or pressure = \"p\" (the traction −p·ν, ν the outward normal)",
+                ))
+            }
+            (None, false) => {}
+        }
         check_components(origin, &format!("traction[{i}].value"), &tr.value)?;
         for c in 0..tr.value.len() {
             compile(

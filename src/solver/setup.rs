@@ -131,6 +131,13 @@ impl<const D: usize> Simulation<D> {
         let mut loads = Loads::new();
         for (i, t) in scene.traction.iter().enumerate() {
             let part = mesh.boundary(&t.group)?;
+            if let Some(p) = &t.pressure {
+                let key = format!("traction[{i}].pressure");
+                let p = Expr::parse(p, &scene::TRACTION_VARIABLES)
+                    .map_err(|e| SolveError::Setup(format!("{origin}: {key} = \"{p}\": {e}")))?;
+                loads.add_pressure(&part, &mesh.points, p, &key);
+                continue;
+            }
             let key = format!("traction[{i}].value");
             loads.add_traction(
                 &part,
