@@ -33,6 +33,7 @@ pub mod mesh;
 pub mod output;
 #[cfg(feature = "petsc")]
 pub mod petsc;
+pub mod plot;
 pub mod scene;
 pub mod solver;
 pub mod study;

@@ -66,14 +66,21 @@ enum Command {
         #[arg(long)]
         verify: bool,
     },
-    /// Draw a run: 2D, the last frame (deformed.png) and u_ν along Γ₃ over time (gamma3.svg);
-    /// 3D, colour maps of u_ν and the pressure over Γ₃ at the last time (gamma3_map.png, .svg).
+    /// Draw a run (PNG and SVG each): 2D, the last frame deformed and coloured by von Mises
+    /// (deformed.*) and u_ν and the contact pressure along Γ₃ against arc length (gamma3.*);
+    /// 3D, colour maps of u_ν and the pressure over Γ₃ at the last time (gamma3_map.*).
     Plot {
         /// An output directory of `hvi solve`.
         run: PathBuf,
-        /// Displacement magnification of the picture.
-        #[arg(long, default_value_t = 1.0)]
-        scale: f64,
+        /// Displacement magnification; default: true scale if the largest displacement is at
+        /// least 5 % of the body's diagonal, else a round factor drawing it as 2–5 %.
+        #[arg(long)]
+        scale: Option<f64>,
+        /// Times of the Γ₃ plot, comma-separated (the nearest output times are drawn); default:
+        /// the paper's Fig. 2 times t = j/8 for the paper's scene, else up to six evenly spaced
+        /// output times.
+        #[arg(long, value_delimiter = ',', value_name = "T1,T2,…")]
+        times: Option<Vec<f64>>,
     },
     /// Validate a mesh and a scene and print what would be computed.
     Check {
@@ -199,18 +206,20 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Plot { run, scale } => match hvi::app::plot(&run, scale) {
-            Ok(files) => {
-                for f in files {
-                    println!("wrote {}", f.display());
+        Command::Plot { run, scale, times } => {
+            match hvi::plot::plot_run(&run, &hvi::plot::PlotOptions { scale, times }) {
+                Ok(files) => {
+                    for f in files {
+                        println!("wrote {}", f.display());
+                    }
+                    ExitCode::SUCCESS
                 }
-                ExitCode::SUCCESS
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
             }
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::FAILURE
-            }
-        },
+        }
         Command::Check { mesh, scene, overrides } => match hvi::app::check(&mesh, scene.as_deref(), &overrides) {
             Ok(report) => {
                 print!("{report}");

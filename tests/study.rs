@@ -323,14 +323,21 @@ fn reduced_paper_study_shows_first_order_in_h_and_second_order_in_k() {
             )
         })
         .collect();
-    plot::plot_gamma3(&dir.path().join("g.svg"), &series).unwrap();
+    plot::plot_gamma3(&dir.path().join("g.svg"), "u_ν along the bottom", &series).unwrap();
     let values: Vec<f64> = (0..reference.mesh.cells.len()).map(|c| c as f64).collect();
-    plot::render_deformed_png(
+    hvi::plot::render_deformed(
         &dir.path().join("d.png"),
-        &reference.mesh,
-        &reference.final_displacement,
-        &values,
-        1.0,
+        None,
+        &hvi::plot::DeformedPicture {
+            title: "reference".into(),
+            field: "cell index".into(),
+            mesh: &reference.mesh,
+            displacement: &reference.final_displacement,
+            cell_values: &values,
+            scale: 1.0,
+            scale_text: "true scale".into(),
+            foundation: None,
+        },
     )
     .unwrap();
     for f in ["h.svg", "k.svg", "w.svg", "g.svg"] {

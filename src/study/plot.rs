@@ -4,17 +4,16 @@
 
 use super::report::fraction;
 use super::runner::{Refinement, Row};
-use crate::mesh::Mesh;
 use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::Path;
 
-const FONT: &str = "sans-serif";
+pub(crate) const FONT: &str = "sans-serif";
 const SIZE: (u32, u32) = (820, 600);
 
-fn err<E: std::fmt::Display>(e: E) -> String {
+pub(crate) fn err<E: std::fmt::Display>(e: E) -> String {
     e.to_string()
 }
 
@@ -384,8 +383,9 @@ fn guide_at_finest(series: &[Series], name: &str, slope: f64) -> Option<Guide> {
     })
 }
 
-/// The normal displacement u_ν along Γ₃ at several times: `series` holds (t, [(x, u_ν)]).
-pub fn plot_gamma3(path: &Path, series: &[(f64, Vec<(f64, f64)>)]) -> Result<(), String> {
+/// The normal displacement u_ν along Γ₃ at several times: `series` holds (t, [(s, u_ν)]), s the
+/// arc length along Γ₃ (see [`crate::plot::arc_length`]).
+pub fn plot_gamma3(path: &Path, title: &str, series: &[(f64, Vec<(f64, f64)>)]) -> Result<(), String> {
     let root = SVGBackend::new(path, SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
     let pts = || series.iter().flat_map(|(_, v)| v.iter().copied());
@@ -394,12 +394,10 @@ pub fn plot_gamma3(path: &Path, series: &[(f64, Vec<(f64, f64)>)]) -> Result<(),
     if !x0.is_finite() {
         return Err("Γ₃ plot: nothing to plot".into());
     }
+    let x1 = if x1 > x0 { x1 } else { x0 + 1.0 };
     let pad = 0.06 * (y1 - y0).max(1e-12);
     let mut chart = ChartBuilder::on(&root)
-        .caption(
-            "Normal displacement u_ν on Γ₃ (the paper's Fig. 2 plots u₂ = −u_ν)",
-            (FONT, 18),
-        )
+        .caption(title, (FONT, 18))
         .margin(16)
         .x_label_area_size(44)
         .y_label_area_size(64)
@@ -407,7 +405,7 @@ pub fn plot_gamma3(path: &Path, series: &[(f64, Vec<(f64, f64)>)]) -> Result<(),
         .map_err(err)?;
     chart
         .configure_mesh()
-        .x_desc("x")
+        .x_desc("arc length s along Γ₃")
         .y_desc("u_ν")
         .light_line_style(RGBColor(235, 235, 235))
         .draw()
@@ -453,97 +451,6 @@ pub fn colour_map(s: f64) -> RGBColor {
     let mix = |a: u8, b: u8| (a as f64 + w * (b as f64 - a as f64)).round() as u8;
     let (a, b) = (STOPS[i], STOPS[i + 1]);
     RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
-}
-
-/// Draws the mesh deformed by `scale × nodal_u`, each cell filled by the colour map of its
-/// value (scaled between the 2 % and 98 % quantiles of the values), the undeformed outline in grey, and
-/// cell edges when cells are large enough to see. PNG, no text.
-pub fn render_deformed_png(
-    path: &Path,
-    mesh: &Mesh,
-    nodal_u: &[[f64; 2]],
-    cell_values: &[f64],
-    scale: f64,
-) -> Result<(), String> {
-    if nodal_u.len() != mesh.points.len() || cell_values.len() != mesh.cells.len() {
-        return Err(format!(
-            "deformed-mesh picture: {} nodal values for {} nodes, {} cell values for {} cells",
-            nodal_u.len(),
-            mesh.points.len(),
-            cell_values.len(),
-            mesh.cells.len()
-        ));
-    }
-    let moved: Vec<[f64; 2]> = mesh
-        .points
-        .iter()
-        .zip(nodal_u)
-        .map(|(p, u)| [p[0] + scale * u[0], p[1] + scale * u[1]])
-        .collect();
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in mesh.points.iter().chain(&moved) {
-        for d in 0..2 {
-            lo[d] = lo[d].min(p[d]);
-            hi[d] = hi[d].max(p[d]);
-        }
-    }
-    let (w, margin) = (1200u32, 20.0);
-    let span = [(hi[0] - lo[0]).max(1e-300), (hi[1] - lo[1]).max(1e-300)];
-    let px = (w as f64 - 2.0 * margin) / span[0];
-    let h = ((span[1] * px + 2.0 * margin).ceil() as u32).clamp(40, 4000);
-    let to_px = |p: [f64; 2]| {
-        (
-            (margin + (p[0] - lo[0]) * px).round() as i32,
-            (h as f64 - margin - (p[1] - lo[1]) * px).round() as i32,
-        )
-    };
-    // colour range: the 2 % and 98 % quantiles, so that a few singular corner cells do not
-    // wash out the rest
-    let mut sorted: Vec<f64> = cell_values.iter().copied().filter(|v| v.is_finite()).collect();
-    sorted.sort_by(f64::total_cmp);
-    let quantile = |q: f64| {
-        sorted
-            .get(((sorted.len().max(1) - 1) as f64 * q).round() as usize)
-            .copied()
-            .unwrap_or(0.0)
-    };
-    let (vmin, vmax) = (quantile(0.02), quantile(0.98));
-    let range = if vmax > vmin { vmax - vmin } else { 1.0 };
-    let root = BitMapBackend::new(path, (w, h)).into_drawing_area();
-    root.fill(&WHITE).map_err(err)?;
-    // undeformed outline (boundary edges: those used by one cell only)
-    let mut edges: std::collections::HashMap<[usize; 2], usize> = std::collections::HashMap::new();
-    for c in &mesh.cells {
-        for [a, b] in c.edges() {
-            *edges.entry([a.min(b), a.max(b)]).or_default() += 1;
-        }
-    }
-    let grey = RGBColor(170, 170, 170);
-    for (&[a, b], _) in edges.iter().filter(|(_, &n)| n == 1) {
-        root.draw(&PathElement::new(
-            vec![to_px(mesh.points[a]), to_px(mesh.points[b])],
-            grey.stroke_width(2),
-        ))
-        .map_err(err)?;
-    }
-    let cell_px = mesh.cells.first().map_or(0.0, |c| {
-        let n = c.nodes();
-        let (a, b) = (mesh.points[n[0]], mesh.points[n[1]]);
-        ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt() * px
-    });
-    let edge_colour = RGBColor(30, 30, 30).mix(0.35);
-    for (c, v) in mesh.cells.iter().zip(cell_values) {
-        let poly: Vec<(i32, i32)> = c.nodes().iter().map(|&p| to_px(moved[p])).collect();
-        let colour = colour_map((v - vmin) / range);
-        root.draw(&Polygon::new(poly.clone(), colour.filled())).map_err(err)?;
-        if cell_px >= 8.0 {
-            let mut closed = poly;
-            closed.push(closed[0]);
-            root.draw(&PathElement::new(closed, edge_colour.stroke_width(1)))
-                .map_err(err)?;
-        }
-    }
-    root.present().map_err(err)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -689,7 +596,7 @@ pub fn node_tiles(points: &[[f64; 2]]) -> Vec<Vec<[f64; 2]>> {
 }
 
 /// Ticks at 1, 2 or 5 × 10^k covering [lo, hi] with at most about `count` intervals.
-fn linear_ticks(lo: f64, hi: f64, count: usize) -> (Vec<f64>, f64) {
+pub(crate) fn linear_ticks(lo: f64, hi: f64, count: usize) -> (Vec<f64>, f64) {
     let span = hi - lo;
     if !(span > 0.0 && span.is_finite()) {
         return (vec![lo], 1.0);
@@ -707,7 +614,7 @@ fn linear_ticks(lo: f64, hi: f64, count: usize) -> (Vec<f64>, f64) {
 }
 
 /// A tick label for a multiple of `step`: as many decimals as the step needs, no trailing zeros.
-fn tick_label(v: f64, step: f64) -> String {
+pub(crate) fn tick_label(v: f64, step: f64) -> String {
     let decimals = (-step.log10().floor()).max(0.0) as usize;
     let s = format!("{v:.decimals$}");
     let s = if s.contains('.') {
@@ -719,7 +626,7 @@ fn tick_label(v: f64, step: f64) -> String {
 }
 
 /// `-` as the minus sign −.
-fn minus_sign(s: String) -> String {
+pub(crate) fn minus_sign(s: String) -> String {
     s.replace('-', "−")
 }
 
@@ -817,23 +724,26 @@ const GLYPHS: &[(char, &str)] = &[
     ('₃', "..... ..... ..... ..... .###. ...#. ..##. ...#. .###."),
     ('≤', "...#. ..#.. .#... ..#.. ...#. ..... .####"),
     ('·', "..... ..... ..... ..#.. ..... ..... ....."),
+    ('×', "..... #...# .#.#. ..#.. .#.#. #...# ....."),
+    ('|', "..#.. ..#.. ..#.. ..#.. ..#.. ..#.. ..#.."),
+    ('≈', "..... .#..# #.##. ..... .#..# #.##. ....."),
 ];
 
 /// How text is drawn: with the pixel glyphs (bitmap) or as the backend's text (SVG).
 #[derive(Clone, Copy, PartialEq)]
-enum Lettering {
+pub(crate) enum Lettering {
     Pixels,
     Native,
 }
 
 /// Width in pixels of `text` in the pixel glyphs at `scale` (6 columns a character).
-fn text_width(text: &str, scale: i32) -> i32 {
+pub(crate) fn text_width(text: &str, scale: i32) -> i32 {
     (text.chars().count() as i32 * 6 - 1).max(0) * scale
 }
 
 /// Draws `text` with its top (the top of a capital) at `y`, anchored at `x` by `h`; the
 /// glyph cell is 5×7 `scale`-pixel squares (about 12·scale-point text in SVG).
-fn draw_text<DB: DrawingBackend>(
+pub(crate) fn draw_text<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     lettering: Lettering,
     text: &str,
@@ -930,7 +840,7 @@ fn map_layout(tiles: &[Vec<[f64; 2]>], panels: usize, legend: &str) -> MapLayout
 
 /// The colour range of a field: its min and max, values within 1e-9 of the largest magnitude
 /// of 0 counted as 0 (round-off such as a pressure of −1e-17 where there is no contact).
-fn field_range(values: &[f64]) -> (f64, f64) {
+pub(crate) fn field_range(values: &[f64]) -> (f64, f64) {
     let big = values
         .iter()
         .filter(|v| v.is_finite())

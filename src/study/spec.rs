@@ -304,24 +304,30 @@ pub fn run_spec_with(
                 .peak_rss_bytes
                 .map_or("unknown".into(), |b| format!("{:.0} MB", b as f64 / 1048576.0))
         );
-        // u_ν on Γ₃ of the reference at the compared times
+        // u_ν on Γ₃ of the reference at the compared times, against arc length
         if let Ok(gamma3) = reference.mesh.boundary(&base.groups.contact) {
+            let (arc, order, _) = crate::plot::arc_length(&reference.mesh, &gamma3.nodes);
             let series: Vec<(f64, Vec<(f64, f64)>)> = reference
                 .displacement_at
                 .iter()
                 .filter(|(s, _)| *s > 0.0)
                 .step_by(2)
                 .map(|(s, u)| {
-                    let pts = gamma3
-                        .nodes
+                    let pts = order
                         .iter()
-                        .zip(&gamma3.normals)
-                        .map(|(&p, nu)| (reference.mesh.points[p][0], u[p][0] * nu[0] + u[p][1] * nu[1]))
+                        .map(|&k| {
+                            let (p, nu) = (gamma3.nodes[k], gamma3.normals[k]);
+                            (arc[k], u[p][0] * nu[0] + u[p][1] * nu[1])
+                        })
                         .collect();
                     (*s, pts)
                 })
                 .collect();
-            plot::plot_gamma3(&out.join("gamma3.svg"), &series)?;
+            let title = format!(
+                "u_ν along Γ₃ ({}) of the reference run, h = 1/{}, k = T/{}",
+                base.groups.contact, plan.reference.0, plan.reference.1
+            );
+            plot::plot_gamma3(&out.join("gamma3.svg"), &title, &series)?;
             written.push("gamma3.svg".to_string());
         }
     }

@@ -1,0 +1,176 @@
+//! `hvi plot` on 2D runs (docs of src/plot.rs): PNG and SVG of the deformed mesh and of Γ₃, the
+//! text drawn on them (colour bar, field, time, magnification), the default magnification, the
+//! foundation, the Γ₃ plot against arc length (a vertical Γ₃ too) at chosen times.
+
+use hvi::mesh::structured::{rectangle, CellShape};
+use hvi::output::{CsvTable, Field, Frame, SeriesWriter};
+use hvi::plot::{arc_length, default_scale, plot_run, PlotOptions};
+use std::process::{Command, Output};
+
+fn hvi(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_hvi")).args(args).output().unwrap()
+}
+
+fn ok(args: &[&str]) -> Output {
+    let out = hvi(args);
+    assert!(
+        out.status.success(),
+        "hvi {}: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// The paper's scene on rect:16x8 with 8 steps (t = j/8: the Fig. 2 times are output times);
+/// Γ₃ starts at the first node off the clamped corner, x = h = 1/8.
+#[test]
+fn a_paper_run_gives_png_and_svg_with_colour_bar_time_scale_and_foundation() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("paper16");
+    let o = out.to_str().unwrap();
+    ok(&["solve", "rect:16x8", "--set", "time.steps=8", "--out", o, "--quiet"]);
+    let plot = ok(&["plot", o]);
+    let stdout = String::from_utf8_lossy(&plot.stdout);
+    for f in ["deformed.png", "deformed.svg", "gamma3.png", "gamma3.svg"] {
+        assert!(stdout.contains(&format!("wrote {}", out.join(f).display())), "{stdout}");
+        assert!(out.join(f).metadata().unwrap().len() > 1000, "{f}");
+    }
+    for f in ["deformed.png", "gamma3.png"] {
+        assert_eq!(&std::fs::read(out.join(f)).unwrap()[..8], b"\x89PNG\r\n\x1a\n");
+    }
+    let deformed = std::fs::read_to_string(out.join("deformed.svg")).unwrap();
+    // the paper's largest displacement (≈ 0.3) is more than 5 % of the diagonal √5: true scale
+    for text in [
+        "run paper16 (mesh rect:16x8): von Mises stress at t = 1",
+        "von Mises stress (colours span",
+        "displacement at true scale (largest |u| = 0.3",
+        "red: the foundation u_ν = g",
+    ] {
+        assert!(deformed.contains(text), "no {text:?} in deformed.svg");
+    }
+    // the foundation: a polyline of the Γ₃ nodes moved by g = 0.2 along −y (the outward normal)
+    assert!(deformed.contains("stroke=\"#962828\""), "no foundation line");
+    let gamma3 = std::fs::read_to_string(out.join("gamma3.svg")).unwrap();
+    for text in [
+        "u_ν and pressure on Γ₃ (the paper&apos;s Fig. 2 times)",
+        "normal displacement u_ν",
+        "contact pressure",
+        "arc length s along Γ₃ from (0.125, 0)",
+        "bound g",
+        "t = 0.125",
+        "t = 0.875",
+        "t = 1",
+    ] {
+        assert!(gamma3.contains(text), "no {text:?} in gamma3.svg");
+    }
+    // chosen times: only those are drawn
+    ok(&["plot", o, "--times", "0.5,1"]);
+    let gamma3 = std::fs::read_to_string(out.join("gamma3.svg")).unwrap();
+    assert!(gamma3.contains("t = 0.5") && gamma3.contains("(chosen times)") && !gamma3.contains("t = 0.125"));
+    // a magnification the user gives is said
+    ok(&["plot", o, "--scale", "3"]);
+    let deformed = std::fs::read_to_string(out.join("deformed.svg")).unwrap();
+    assert!(
+        deformed.contains("displacement magnified ×3 (largest |u| = 0.3"),
+        "{deformed}"
+    );
+    let bad = hvi(&["plot", o, "--scale", "0"]);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--scale 0: the magnification must be a positive number"));
+}
+
+/// The default magnification draws the largest displacement as 2–5 % of the diagonal (a round
+/// factor 1, 2 or 5 × 10^j), and is 1 when it is already visible.
+#[test]
+fn the_default_scale_makes_small_displacements_visible() {
+    let diagonal = 5f64.sqrt();
+    for max_u in [3e-7, 1e-6, 4.4e-5, 1e-4, 2.5e-3, 0.01, 0.1] {
+        let s = default_scale(max_u, diagonal);
+        let drawn = s * max_u / diagonal;
+        if max_u >= 0.05 * diagonal {
+            assert_eq!(s, 1.0);
+        } else {
+            assert!((0.02..=0.05 + 1e-12).contains(&drawn), "{max_u:e}: ×{s} draws {drawn}");
+            let mantissa = s / 10f64.powf(s.log10().floor());
+            assert!([1.0, 2.0, 5.0].iter().any(|m| (mantissa - m).abs() < 1e-9), "×{s}");
+        }
+    }
+    assert_eq!(default_scale(0.3, diagonal), 1.0);
+    assert_eq!(default_scale(0.0, diagonal), 1.0);
+}
+
+/// A vertical Γ₃ (the side x = 1 of a 1 × 4 strip): arc length runs from 0 to the side's
+/// length 4 in y order, the normals are outward (+x); `hvi plot`'s Γ₃ figure of a run written
+/// by hand with that Γ₃ spans it.
+#[test]
+fn a_vertical_gamma3_is_plotted_against_its_arc_length() {
+    let mesh = rectangle(1.0, 4.0, 2, 8, CellShape::Quad);
+    let side: Vec<usize> = (0..mesh.points.len()).filter(|&i| mesh.points[i][0] == 1.0).collect();
+    assert_eq!(side.len(), 9);
+    let (arc, order, normals) = arc_length(&mesh, &side);
+    let max = arc.iter().copied().fold(0.0, f64::max);
+    assert!((max - 4.0).abs() < 1e-12, "arc length spans {max}");
+    for (k, &p) in side.iter().enumerate() {
+        // arc length from the lowest end is y; the normal is +x
+        assert!((arc[k] - mesh.points[p][1]).abs() < 1e-12);
+        assert!(
+            (normals[k][0] - 1.0).abs() < 1e-12 && normals[k][1].abs() < 1e-12,
+            "{:?}",
+            normals[k]
+        );
+    }
+    assert!(order.windows(2).all(|w| arc[w[0]] < arc[w[1]]));
+
+    // a run directory with that Γ₃: u = (0.01 y, 0), u_ν = 0.01 y, pressure y/4 at t = 0.5, 1
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("strip");
+    let mut series = SeriesWriter::create(&run, "solution").unwrap();
+    let mut csv = CsvTable::create(
+        &run.join("gamma3.csv"),
+        &["time", "x", "y", "u_nu", "force", "pressure", "status"],
+    )
+    .unwrap();
+    for (step, t) in [(1usize, 0.5f64), (2, 1.0)] {
+        let u: Vec<f64> = mesh.points.iter().flat_map(|p| [0.01 * t * p[1], 0.0, 0.0]).collect();
+        series
+            .write_frame(&Frame {
+                step,
+                time: t,
+                points: &mesh.points,
+                cells: &mesh.cells,
+                point_fields: vec![Field::f64("displacement", 3, &u)],
+                cell_fields: vec![],
+            })
+            .unwrap();
+        let rows: Vec<Vec<f64>> = side
+            .iter()
+            .map(|&p| {
+                let y = mesh.points[p][1];
+                vec![t, 1.0, y, 0.01 * t * y, 0.0, t * y / 4.0, 0.0]
+            })
+            .collect();
+        csv.append(&rows).unwrap();
+    }
+    drop(csv);
+    let written = plot_run(&run, &PlotOptions::default()).unwrap();
+    assert_eq!(written.len(), 4, "{written:?}");
+    let svg = std::fs::read_to_string(run.join("gamma3.svg")).unwrap();
+    // the axis starts at the lowest node and its ticks reach the length 4; both times drawn
+    for text in [
+        "arc length s along Γ₃ from (1, 0)",
+        ">\n4\n<",
+        "t = 0.5",
+        "t = 1",
+        "(evenly spaced output times)",
+    ] {
+        assert!(svg.contains(text), "no {text:?} in gamma3.svg");
+    }
+    // the strip moves by at most 0.04, 1 % of its diagonal √17: magnified ×5 (4.9 %), and said so
+    let deformed = std::fs::read_to_string(run.join("deformed.svg")).unwrap();
+    assert!(
+        deformed.contains("displacement magnified ×5 (largest |u| = 0.04"),
+        "{deformed}"
+    );
+    assert!(deformed.contains("|u| (no von_mises in the run)"));
+}
