@@ -1269,6 +1269,14 @@ const TOKENS: &[&str] = &[
     "[[traction]]",
     "kind = \"power\"",
     "bound = \"x - 1\"",
+    "pressure = \"1\"",
+    "value = [\"0\", \"0\"]",
+    " if ",
+    " else ",
+    "&&",
+    "<=",
+    "!",
+    "min(1, ",
     "#",
     "é",
     "\r\n",
@@ -1318,6 +1326,10 @@ fn scene_bases() -> Vec<String> {
         ),
         "[material]\nplane = \"strain\"\nyoungs_modulus = 2e11\npoisson_ratio = 0.25\n[time]\nfinal_time = 2.0\nsteps = 4\n[body_force]\nvalue = [\"0\", \"-(x^2)*exp(-t)\"]\n[contact]\nbound = 0.0\n".to_string(),
         DEFAULT_SCENE_TOML.replacen("bound = 0.2", "bound = \"0.2 + 0.02*sin(6*PI*x) - sqrt(0.5 - y)\"", 1),
+        // a pressure with a conditional, comparisons and logic (README "Expression language")
+        "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n[time]\nfinal_time = 1.0\nsteps = 2\n\
+         [[traction]]\ngroup = \"Gamma2\"\npressure = \"0.1*t if x > 1.5 && !(y < 0.5) || nx == 1 else min(1, max(x, 0.5))*ny\"\n\
+         [[traction]]\ngroup = \"Gamma3\"\nvalue = [\"(y <= 0.5) * 2\", \"0\"]\n".to_string(),
     ]
 }
 
@@ -1358,7 +1370,7 @@ proptest! {
     /// be built from on a small mesh (without solving), never a panic.
     #[test]
     fn mutated_scenes_never_panic(
-        base in 0usize..5,
+        base in 0usize..6,
         edits in proptest::collection::vec(edit_strategy(), 1..6),
     ) {
         let bases = scene_bases();

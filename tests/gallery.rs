@@ -103,3 +103,27 @@ fn hertz_entries_run_as_readme_says() {
     );
     assert!(out.join("solution.pvd").exists());
 }
+
+/// A pressure-loaded body: examples/gallery/ring/ring.toml on meshes/ring_q1_n16.msh, run through
+/// files as README says. The displacement at T is the Lamé solution to the mesh's accuracy (the
+/// nodal error on this mesh is 1.0e-3 of u_r(a), tests/pressure.rs; 2e-3 allows for nothing but
+/// a wrong load or normal), and the frames are written.
+#[test]
+fn pressure_loaded_ring() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mesh, scene_file) = ("meshes/ring_q1_n16.msh", "examples/gallery/ring/ring.toml");
+    run_files(mesh, Some(scene_file), &dir.path().join("ring"));
+    assert!(dir.path().join("ring/solution.pvd").exists());
+    let scene = Scene::load(Some(&root().join(scene_file)), &[]).unwrap();
+    let (sim, _, sink) = solve_in_memory(&scene, read_mesh::<2>(&root().join(mesh)).unwrap()).unwrap();
+    let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
+    let (e, nu, p, a, b) = (1.0, 0.3, 0.01, 1.0, 2.0);
+    let ur = |r: f64| p * a * a / (e * (b * b - a * a)) * ((1.0 + nu) * (1.0 - 2.0 * nu) * r + (1.0 + nu) * b * b / r);
+    let mut worst = 0.0f64;
+    for (x, v) in sim.mesh.points.iter().zip(&u) {
+        let r = (x[0] * x[0] + x[1] * x[1]).sqrt();
+        let exact = [ur(r) * x[0] / r, ur(r) * x[1] / r];
+        worst = worst.max((v[0] - exact[0]).abs().max((v[1] - exact[1]).abs()));
+    }
+    assert!(worst < 2e-3 * ur(a), "nodal error {worst:e} of u_r(a) = {:e}", ur(a));
+}
