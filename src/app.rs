@@ -54,6 +54,11 @@ struct ContactSeries<const D: usize> {
 /// Writes the VTK series (the body's `solution.pvd`, Γ₃'s `contact.pvd`), `gamma3.csv`, and
 /// shows progress.
 pub struct FileSink<const D: usize = 2> {
+    /// Every file this run writes, listed before it is created (`.hvi-run`).
+    pub manifest: output::RunManifest,
+    /// Steps computed so far, and the last step written.
+    pub steps_done: usize,
+    pub last_written: Option<usize>,
     series: SeriesWriter,
     contact: Option<ContactSeries<D>>,
     /// The physical tag of each cell's group (-1 for a cell in none).
@@ -73,6 +78,7 @@ impl<const D: usize> FileSink<D> {
     /// level of the `.vtu`/`.vtp` files (0: none).
     pub fn create(
         dir: &Path,
+        mut manifest: output::RunManifest,
         sim: &Simulation<D>,
         fields: &[OutputField],
         contact_groups: &[GroupSelector],
@@ -80,6 +86,9 @@ impl<const D: usize> FileSink<D> {
         progress: bool,
     ) -> Result<Self, SolveError> {
         let series = SeriesWriter::create(dir, "solution")?.with_compression(compression);
+        for name in series.index_names() {
+            manifest.add(&name)?;
+        }
         let contact = match &sim.contact {
             Some(_) if fields.contains(&OutputField::Contact) => {
                 let mut parts = Vec::new();
@@ -88,9 +97,13 @@ impl<const D: usize> FileSink<D> {
                     parts.push((tag, sim.mesh.boundary(g)?));
                 }
                 let parts: Vec<(i32, &crate::mesh::BoundaryPart<D>)> = parts.iter().map(|(t, p)| (*t, p)).collect();
+                let series = SeriesWriter::create_surface(dir, "contact")?.with_compression(compression);
+                for name in series.index_names() {
+                    manifest.add(&name)?;
+                }
                 Some(ContactSeries {
                     boundary: ContactBoundary::new(&sim.mesh.points, &parts),
-                    series: SeriesWriter::create_surface(dir, "contact")?.with_compression(compression),
+                    series,
                 })
             }
             _ => None,
@@ -111,6 +124,7 @@ impl<const D: usize> FileSink<D> {
                 let mut columns = vec!["time", "x", "y", "z"];
                 columns.truncate(1 + D);
                 columns.extend(["u_nu", "force", "pressure", "status"]);
+                manifest.add("gamma3.csv")?;
                 Some(CsvTable::create(&dir.join("gamma3.csv"), &columns)?)
             }
             _ => None,
@@ -118,6 +132,7 @@ impl<const D: usize> FileSink<D> {
         let reactions = if sim.dirichlet.reaction_groups.is_empty() {
             None
         } else {
+            manifest.add("reactions.csv")?;
             Some(CsvTable::create(
                 &dir.join("reactions.csv"),
                 &["time", "group", "component", "force"],
@@ -135,6 +150,9 @@ impl<const D: usize> FileSink<D> {
             bar
         });
         Ok(FileSink {
+            manifest,
+            steps_done: 0,
+            last_written: None,
             series,
             contact,
             cell_groups,
@@ -161,6 +179,7 @@ impl<const D: usize> FileSink<D> {
 
 impl<const D: usize> FrameSink<D> for FileSink<D> {
     fn step_done(&mut self, _sim: &Simulation<D>, view: &StepView) {
+        self.steps_done = view.step + 1;
         if let Some(bar) = &self.progress {
             bar.set_position(view.step as u64 + 1);
             if let Some(o) = view.outcome {
@@ -209,7 +228,9 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
             point_fields,
             cell_fields,
         };
+        self.manifest.add(&self.series.frame_name(view.step))?;
         self.series.write_frame(&frame)?;
+        self.last_written = Some(view.step);
         if let (Some(c), Some(state)) = (&sim.contact, view.contact) {
             let mut normal = vec![0.0; c.nodes.len()];
             c.nodes.normal_displacements(view.displacement, &mut normal);
@@ -225,6 +246,7 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
                 csv.append(&rows)?;
             }
             if let Some(cs) = &mut self.contact {
+                self.manifest.add(&cs.series.frame_name(view.step))?;
                 write_contact_frame(cs, c, state, &normal, &nodal, view)?;
             }
         }
@@ -286,6 +308,11 @@ fn write_contact_frame<const D: usize>(
             gap[i] = bound_at[i] - u_nu[i];
         }
     }
+    let displacement: Vec<f64> = b
+        .nodes
+        .iter()
+        .flat_map(|&p| std::array::from_fn::<f64, 3, _>(|d| if d < D { nodal[p][d] } else { 0.0 }))
+        .collect();
     let mut point_fields = vec![Field::f64("u_nu", 1, &u_nu)];
     if let Some(gap) = &gap {
         point_fields.push(Field::f64("gap", 1, gap));
@@ -294,6 +321,7 @@ fn write_contact_frame<const D: usize>(
         Field::f64("force", 1, &force),
         Field::f64("pressure", 1, &pressure),
         Field::i32("status", 1, &status),
+        Field::f64("displacement", 3, &displacement),
         Field::f64("normal", 3, &b.normals),
         Field::i32("group", 1, &b.node_groups),
     ]);
@@ -309,15 +337,22 @@ fn write_contact_frame<const D: usize>(
     Ok(())
 }
 
-/// What `summary.json` holds.
+/// What `summary.json` holds: written when a run completes and also when it stops early
+/// (interrupted, or an error after the output directory was prepared), then without the run's
+/// statistics.
 #[derive(Serialize)]
 pub struct Summary<'a> {
     pub hvi_version: &'static str,
     pub mesh: String,
     pub scene: String,
     pub output: String,
+    /// "completed", "interrupted", or "failed: <the error>".
+    pub status: String,
+    /// Steps computed (of `time.steps + 1`, step 0 included), and the last step written.
+    pub steps_done: usize,
+    pub last_step_written: Option<usize>,
     #[serde(flatten)]
-    pub stats: &'a RunStats,
+    pub stats: Option<&'a RunStats>,
 }
 
 /// Reads a mesh file, or builds the paper's rectangle (0,2)×(0,1) for a spec `rect:NXxNY`
@@ -386,6 +421,9 @@ pub struct SolveOptions {
     pub out: PathBuf,
     pub overrides: Vec<String>,
     pub progress: bool,
+    /// Replace an earlier run in `out` (remove exactly the files its manifest lists) instead
+    /// of refusing to write there.
+    pub overwrite: bool,
 }
 
 /// Reads mesh and scene, runs, writes the series, `gamma3.csv`, `scene.toml` and `summary.json`.
@@ -409,23 +447,23 @@ fn solve_dim<const D: usize>(
     stop: Option<&AtomicBool>,
 ) -> Result<RunStats, SolveError> {
     let sim = Simulation::new(scene, mesh)?;
+    let manifest = output::RunManifest::start(&opts.out, opts.overwrite)?;
     let mut sink = FileSink::create(
         &opts.out,
+        manifest,
         &sim,
         &scene.output.fields,
         std::slice::from_ref(&scene.groups.contact),
-        0,
+        scene.output.compression_level(),
         opts.progress,
     )?;
-    output::write_atomic(&opts.out.join("scene.toml"), scene.to_toml_string().as_bytes())?;
-    let result = timeloop::run(&sim, &mut sink, stop);
+    sink.manifest.add("scene.toml")?;
+    sink.manifest.add("summary.json")?;
+    let result = output::write_atomic(&opts.out.join("scene.toml"), scene.to_toml_string().as_bytes())
+        .map_err(SolveError::from)
+        .and_then(|()| timeloop::run(&sim, &mut sink, stop));
     sink.finish();
-    let mut stats = result?;
-    stats.phases.mesh = mesh_seconds;
-    stats.phases.stress = sink.stress_seconds;
-    stats.peak_memory_bytes = crate::solver::stats::peak_memory_bytes();
-    stats.phases.total += mesh_seconds;
-    let summary = Summary {
+    let mut summary = Summary {
         hvi_version: env!("CARGO_PKG_VERSION"),
         mesh: opts.mesh.display().to_string(),
         scene: opts
@@ -435,8 +473,29 @@ fn solve_dim<const D: usize>(
                 p.display().to_string()
             }),
         output: opts.out.display().to_string(),
-        stats: &stats,
+        status: "completed".into(),
+        steps_done: sink.steps_done,
+        last_step_written: sink.last_written,
+        stats: None,
     };
+    let mut stats = match result {
+        Ok(stats) => stats,
+        Err(e) => {
+            summary.status = match &e {
+                SolveError::Interrupted { .. } => "interrupted".into(),
+                e => format!("failed: {e}"),
+            };
+            // The run's own error is the one to report; a summary that cannot be written adds
+            // nothing to it.
+            let _ = output::write_json_atomic(&opts.out.join("summary.json"), &summary);
+            return Err(e);
+        }
+    };
+    stats.phases.mesh = mesh_seconds;
+    stats.phases.stress = sink.stress_seconds;
+    stats.peak_memory_bytes = crate::solver::stats::peak_memory_bytes();
+    stats.phases.total += mesh_seconds;
+    summary.stats = Some(&stats);
     output::write_json_atomic(&opts.out.join("summary.json"), &summary)?;
     Ok(stats)
 }

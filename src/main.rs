@@ -47,6 +47,10 @@ enum Command {
         /// With --backend petsc: mumps (a Cholesky factor, the default) or gamg (CG + GAMG).
         #[arg(long, value_enum)]
         solver: Option<SolverArg>,
+        /// Replace an earlier run in --out: remove exactly the files it wrote (listed in its
+        /// manifest .hvi-run) first. Without it, an --out holding a run is refused.
+        #[arg(long)]
+        overwrite: bool,
     },
     /// Run a convergence study described by a study file (see examples/paper_study.toml).
     Study {
@@ -152,6 +156,7 @@ fn main() -> ExitCode {
             quiet,
             backend,
             solver,
+            overwrite,
         } => {
             let opts = hvi::app::SolveOptions {
                 mesh,
@@ -159,6 +164,7 @@ fn main() -> ExitCode {
                 out: out.clone(),
                 overrides,
                 progress: !quiet && std::io::stderr().is_terminal(),
+                overwrite,
             };
             if backend == BackendArg::Petsc {
                 return solve_petsc(&opts, solver);

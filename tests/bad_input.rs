@@ -120,6 +120,8 @@ impl Case {
             out: self.out(),
             overrides: overrides.iter().map(|s| s.to_string()).collect(),
             progress: false,
+            // each case replaces the run of the one before
+            overwrite: true,
         };
         match solve(&opts, None) {
             Ok(_) => panic!("{}: expected an error", self.mesh.display()),
@@ -501,6 +503,7 @@ fn missing_or_misnamed_groups_list_the_existing_ones() {
         .map(String::from)
         .to_vec(),
         progress: false,
+        overwrite: false,
     };
     solve(&opts, None).unwrap_or_else(|e| panic!("{e}"));
 
@@ -1029,6 +1032,7 @@ fn unwritable_out_is_reported_before_solving() {
         // a run that would take minutes: the error must come before it
         overrides: vec!["time.steps=10000000".into()],
         progress: false,
+        overwrite: false,
     };
     let t0 = Instant::now();
     let e = solve(&opts, None).expect_err("an error");
@@ -1079,6 +1083,7 @@ fn failure_at_step_n_leaves_frames_before_it() {
         out: out.clone(),
         overrides: sets.map(String::from).to_vec(),
         progress: false,
+        overwrite: false,
     };
     let e = solve(&opts, None).expect_err("the contact solve should fail");
     let SolveError::ContactFailed { step, iterations, .. } = e else {
@@ -1116,7 +1121,17 @@ fn failure_at_step_n_leaves_frames_before_it() {
         .map(|l| l.split(',').next().unwrap().to_string())
         .collect();
     assert_eq!(times.len(), step);
-    assert!(!out.join("summary.json").exists());
+    // the summary of the stopped run says why and how far it got
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(
+        summary["status"]
+            .as_str()
+            .unwrap()
+            .starts_with("failed: contact solve failed"),
+        "{summary}"
+    );
+    assert_eq!(summary["steps_done"], step);
 
     // the binary: exit code 1, the same message
     let out2 = dir.path().join("run2");
@@ -1324,7 +1339,7 @@ fn scene_bases() -> Vec<String> {
             &DEFAULT_SCENE_TOML[..memory],
             &DEFAULT_SCENE_TOML[time..]
         ),
-        "[material]\nplane = \"strain\"\nyoungs_modulus = 2e11\npoisson_ratio = 0.25\n[time]\nfinal_time = 2.0\nsteps = 4\n[body_force]\nvalue = [\"0\", \"-(x^2)*exp(-t)\"]\n[contact]\nbound = 0.0\n".to_string(),
+        "[material]\nplane = \"strain\"\nyoungs_modulus = 2e11\npoisson_ratio = 0.25\n[time]\nfinal_time = 2.0\nsteps = 4\n[body_force]\nvalue = [\"0\", \"-(x^2)*exp(-t)\"]\n[contact]\nbound = 0.0\n[output]\ncompress = 3\n".to_string(),
         DEFAULT_SCENE_TOML.replacen("bound = 0.2", "bound = \"0.2 + 0.02*sin(6*PI*x) - sqrt(0.5 - y)\"", 1),
         // a pressure with a conditional, comparisons and logic (README "Expression language")
         "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n[time]\nfinal_time = 1.0\nsteps = 2\n\

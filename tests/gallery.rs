@@ -18,6 +18,7 @@ fn run_files(mesh: &str, scene: Option<&str>, out: &Path) -> hvi::solver::RunSta
         out: out.to_path_buf(),
         overrides: vec![],
         progress: false,
+        overwrite: false,
     };
     solve(&opts, None).unwrap_or_else(|e| panic!("{e}"))
 }

@@ -22,6 +22,7 @@ fn run(mesh: &str, scene: Option<&str>, steps: usize, out: &Path) {
         out: out.to_path_buf(),
         overrides: vec![format!("time.steps={steps}")],
         progress: false,
+        overwrite: false,
     };
     solve(&opts, None).unwrap_or_else(|e| panic!("{e}"));
 }
@@ -218,4 +219,121 @@ fn nodal_stress_is_the_volume_weighted_mean() {
             );
         }
     }
+}
+
+fn opts(out: &Path, steps: usize, extra: &[&str], overwrite: bool) -> SolveOptions {
+    let mut overrides = vec![format!("time.steps={steps}")];
+    overrides.extend(extra.iter().map(|s| s.to_string()));
+    SolveOptions {
+        mesh: root("meshes/rect_q1_h8.msh"),
+        scene: None,
+        out: out.to_path_buf(),
+        overrides,
+        progress: false,
+        overwrite,
+    }
+}
+
+fn names(dir: &Path) -> BTreeSet<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect()
+}
+
+fn summary(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+/// A 40-step run, then a 4-step run into the same directory: refused without --overwrite (and
+/// nothing touched); with it, the directory holds exactly the new run's files (4 + 1 frames of
+/// each series, no stale frame of the first run) and the user's own file.
+#[test]
+fn reruns_are_refused_or_replace_exactly_the_earlier_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    solve(&opts(&out, 40, &[], false), None).unwrap();
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    std::fs::write(out.join("solution_00099.vtu"), "a user's file with an hvi-like name").unwrap();
+    let first = names(&out);
+    assert!(first.contains("solution_00040.vtu") && first.contains("contact_00040.vtp"));
+
+    let e = solve(&opts(&out, 4, &[], false), None).unwrap_err().to_string();
+    assert!(e.contains(out.to_str().unwrap()) && e.contains("--overwrite"), "{e}");
+    assert_eq!(names(&out), first, "a refused run touches nothing");
+
+    solve(&opts(&out, 4, &[], true), None).unwrap();
+    let mut want: BTreeSet<String> = (0..=4)
+        .flat_map(|n| [format!("solution_{n:05}.vtu"), format!("contact_{n:05}.vtp")])
+        .collect();
+    for f in [
+        "solution.pvd",
+        "solution.vtu.series",
+        "contact.pvd",
+        "contact.vtp.series",
+        "gamma3.csv",
+        "reactions.csv",
+        "scene.toml",
+        "summary.json",
+        ".hvi-run",
+        "notes.txt",
+        "solution_00099.vtu",
+    ] {
+        want.insert(f.to_string());
+    }
+    assert_eq!(names(&out), want);
+    assert_eq!(std::fs::read_to_string(out.join("notes.txt")).unwrap(), "mine");
+    // the manifest lists exactly the run's files (all but the user's two)
+    let listed: BTreeSet<String> = hvi::output::read_manifest(&out.join(".hvi-run"))
+        .unwrap()
+        .into_iter()
+        .collect();
+    let mut run_files = want.clone();
+    for f in [".hvi-run", "notes.txt", "solution_00099.vtu"] {
+        run_files.remove(f);
+    }
+    assert_eq!(listed, run_files);
+    assert_eq!(pvd_entries(&out.join("solution.pvd")).len(), 5);
+    assert_eq!(summary(&out)["status"], "completed");
+}
+
+/// A run whose contact solve fails (one Newton iteration at a tolerance it cannot meet) still
+/// writes summary.json, with the failure, the steps done, and the frames before it listed.
+#[test]
+fn a_failed_run_writes_its_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let e = solve(
+        &opts(&out, 8, &["solver.max_iterations=1", "solver.tolerance=1e-15"], false),
+        None,
+    )
+    .unwrap_err();
+    assert!(matches!(e, hvi::solver::SolveError::ContactFailed { .. }), "{e}");
+    let s = summary(&out);
+    let status = s["status"].as_str().unwrap();
+    assert!(status.starts_with("failed: contact solve failed at step"), "{status}");
+    let failed_at = match e {
+        hvi::solver::SolveError::ContactFailed { step, .. } => step,
+        _ => unreachable!(),
+    };
+    // steps before the failing one were computed and written (every step is an output step)
+    assert_eq!(s["steps_done"], failed_at);
+    assert_eq!(pvd_entries(&out.join("solution.pvd")).len(), failed_at);
+    if failed_at > 0 {
+        assert_eq!(s["last_step_written"], failed_at - 1);
+    }
+}
+
+/// A run stopped by the stop flag (Ctrl-C) writes summary.json with status "interrupted".
+#[test]
+fn an_interrupted_run_writes_its_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let stop = std::sync::atomic::AtomicBool::new(true);
+    let e = solve(&opts(&out, 4, &[], false), Some(&stop)).unwrap_err();
+    assert!(matches!(e, hvi::solver::SolveError::Interrupted { .. }), "{e}");
+    let s = summary(&out);
+    assert_eq!(s["status"], "interrupted");
+    assert_eq!(s["steps_done"], 0);
+    assert!(s["last_step_written"].is_null());
 }

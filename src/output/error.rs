@@ -77,6 +77,9 @@ pub enum OutputError {
         #[source]
         source: serde_json::Error,
     },
+    /// The output directory holds an earlier run that may not (or cannot) be replaced.
+    #[error("cannot write into {}: {detail}", dir.display())]
+    EarlierRun { dir: PathBuf, detail: String },
     /// A `.vtu` file that was read back does not have the expected structure.
     #[error("{}: not a .vtu written by hvi: {detail}", path.display())]
     Format { path: PathBuf, detail: String },

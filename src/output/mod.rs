@@ -38,6 +38,7 @@ mod atomic;
 mod boundary;
 mod csv;
 mod error;
+mod manifest;
 mod pvd;
 mod vtu;
 
@@ -45,6 +46,7 @@ pub use atomic::{is_temporary_name, write_atomic, write_json_atomic};
 pub use boundary::ContactBoundary;
 pub use csv::CsvTable;
 pub use error::OutputError;
+pub use manifest::{read_manifest, RunManifest, MANIFEST_NAME};
 pub use pvd::pvd_text;
 pub use vtu::{read_vtu_arrays, VtuContents};
 
@@ -228,6 +230,11 @@ impl SeriesWriter {
         self.write_view(&frame.view(), "vtp")
     }
 
+    /// The file name of step `step`'s frame: `<basename>_<step:05>.vtu` (`.vtp`).
+    pub fn frame_name(&self, step: usize) -> String {
+        format!("{}_{step:05}.{}", self.basename, self.extension)
+    }
+
     fn write_view<const D: usize>(&mut self, view: &vtu::View<D>, extension: &str) -> Result<PathBuf, OutputError> {
         let path = self.dir.join(format!("{}_{:05}.{extension}", self.basename, view.step));
         if extension != self.extension {
@@ -263,6 +270,14 @@ impl SeriesWriter {
     /// The `.pvd` file.
     pub fn pvd_path(&self) -> &Path {
         &self.pvd
+    }
+
+    /// The file names of the two index files (`.pvd`, `.series`).
+    pub fn index_names(&self) -> [String; 2] {
+        [&self.pvd, &self.series].map(|p| {
+            p.file_name()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+        })
     }
 
     /// The `.vtu.series` (`.vtp.series`) file.

@@ -822,20 +822,27 @@ fn run_dim<const D: usize>(
     let mut file_sink = None;
     let prepared = if rank == 0 {
         // as app::solve does
-        FileSink::create(
-            &opts.out,
-            &sim,
-            &scene.output.fields,
-            std::slice::from_ref(&scene.groups.contact),
-            0,
-            opts.progress,
-        )
-        .and_then(|s| {
-            output::write_atomic(&opts.out.join("scene.toml"), scene.to_toml_string().as_bytes())?;
-            file_sink = Some(s);
-            Ok(())
-        })
-        .map_err(|e| e.to_string())
+        output::RunManifest::start(&opts.out, opts.overwrite)
+            .map_err(SolveError::from)
+            .and_then(|manifest| {
+                FileSink::create(
+                    &opts.out,
+                    manifest,
+                    &sim,
+                    &scene.output.fields,
+                    std::slice::from_ref(&scene.groups.contact),
+                    scene.output.compression_level(),
+                    opts.progress,
+                )
+            })
+            .and_then(|mut s| {
+                s.manifest.add("scene.toml")?;
+                s.manifest.add("summary.json")?;
+                output::write_atomic(&opts.out.join("scene.toml"), scene.to_toml_string().as_bytes())?;
+                file_sink = Some(s);
+                Ok(())
+            })
+            .map_err(|e| e.to_string())
     } else {
         Ok(())
     };
@@ -886,7 +893,10 @@ fn run_dim<const D: usize>(
                         p.display().to_string()
                     }),
                 output: opts.out.display().to_string(),
-                stats: &stats,
+                status: "completed".into(),
+                steps_done: s.steps_done,
+                last_step_written: s.last_written,
+                stats: Some(&stats),
             },
             backend: "petsc",
             ranks,

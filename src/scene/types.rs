@@ -310,6 +310,25 @@ pub struct OutputSpec {
     pub every: usize,
     #[serde(default = "default_fields")]
     pub fields: Vec<OutputField>,
+    /// zlib compression of the `.vtu`/`.vtp` files: `false` (default), `true` (level
+    /// [`DEFAULT_COMPRESS_LEVEL`]) or a level 0–9; checked by `validate::check_values`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub compress: Option<toml::Value>,
+}
+
+/// The zlib level of `output.compress = true` (measured in README, "Outputs").
+pub const DEFAULT_COMPRESS_LEVEL: u32 = 1;
+
+impl OutputSpec {
+    /// The zlib level `output.compress` asks for (0: uncompressed); a value that
+    /// `validate::check_values` rejects counts as 0.
+    pub fn compression_level(&self) -> u32 {
+        match &self.compress {
+            Some(toml::Value::Boolean(true)) => DEFAULT_COMPRESS_LEVEL,
+            Some(toml::Value::Integer(l)) if (0..=9).contains(l) => *l as u32,
+            _ => 0,
+        }
+    }
 }
 
 fn default_every() -> usize {
@@ -329,6 +348,7 @@ impl Default for OutputSpec {
         OutputSpec {
             every: default_every(),
             fields: default_fields(),
+            compress: None,
         }
     }
 }

@@ -48,7 +48,7 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
             keys
         }
         "solver" => vec!["tolerance", "max_iterations", "condensation", "dense_newton_limit"],
-        "output" => vec!["every", "fields"],
+        "output" => vec!["every", "fields", "compress"],
         _ => return None,
     })
 }
@@ -347,6 +347,18 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
     }
     if scene.output.every == 0 {
         return Err(invalid(origin, "output.every", 0, "write every n-th step with n ≥ 1"));
+    }
+    match &scene.output.compress {
+        None | Some(toml::Value::Boolean(_)) => {}
+        Some(toml::Value::Integer(l)) if (0..=9).contains(l) => {}
+        Some(v) => {
+            return Err(invalid(
+                origin,
+                "output.compress",
+                v,
+                "give true, false or a zlib level from 0 (none) to 9 (smallest); 1 is fastest, true means 1",
+            ))
+        }
     }
     Ok(())
 }
