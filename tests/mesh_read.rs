@@ -256,7 +256,7 @@ fn every_committed_mesh_reads_with_the_expected_groups() {
     files.sort();
     for f in &files {
         assert!(
-            MESHES.iter().any(|m| m.0 == f) || MESHES_3D.iter().any(|m| m.0 == f),
+            MESHES.iter().any(|m| m.0 == f) || MESHES_3D.iter().any(|m| m.0 == f) || RINGS.iter().any(|m| m.0 == f),
             "meshes/{f} has no expectations in MESHES or MESHES_3D: add it"
         );
     }
@@ -278,7 +278,39 @@ fn every_committed_mesh_reads_with_the_expected_groups() {
         assert_eq!(m.path, meshes_dir().join(file));
         check_rectangle(&m, nx, ny, kind);
     }
+    // The quarter rings 1 <= r <= 2 of ring.geo: (n + 1)(2n + 1) nodes, 2n² quadrangles or 4n²
+    // triangles, the area of the polygon through the boundary nodes, n (2n) facets per straight
+    // (curved) side.
+    for &(file, n, quads) in RINGS {
+        let m = read(file);
+        assert_eq!(m.points.len(), (n + 1) * (2 * n + 1), "{file}: nodes");
+        assert_eq!(
+            m.cells.len(),
+            if quads { 2 * n * n } else { 4 * n * n },
+            "{file}: cells"
+        );
+        let area = n as f64 * 3.0 * (std::f64::consts::PI / (4 * n) as f64).sin();
+        assert!(
+            (m.measure() - area).abs() <= 1e-12 * area,
+            "{file}: area {}",
+            m.measure()
+        );
+        for (name, facets) in [("Inner", 2 * n), ("Outer", 2 * n), ("SymX", n), ("SymY", n)] {
+            let g = m.group(&sel(name), 1).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(g.facets.len(), facets, "{file}: {name}");
+        }
+    }
 }
+
+/// The quarter rings of ring.geo: file, cells across the wall, quadrangles?
+const RINGS: &[(&str, usize, bool)] = &[
+    ("ring_q1_n4.msh", 4, true),
+    ("ring_q1_n8.msh", 8, true),
+    ("ring_q1_n16.msh", 16, true),
+    ("ring_p1_n4.msh", 4, false),
+    ("ring_p1_n8.msh", 8, false),
+    ("ring_p1_n16.msh", 16, false),
+];
 
 #[test]
 fn ascii_binary_and_v22_give_the_same_mesh() {
