@@ -67,6 +67,7 @@ pub struct FileSink<const D: usize = 2> {
     cell_measures: Vec<f64>,
     gamma3: Option<CsvTable>,
     reactions: Option<CsvTable>,
+    contact_forces: Option<CsvTable>,
     fields: Vec<OutputField>,
     progress: Option<indicatif::ProgressBar>,
     pub stress_seconds: f64,
@@ -138,6 +139,16 @@ impl<const D: usize> FileSink<D> {
                 &["time", "group", "component", "force"],
             )?)
         };
+        let contact_forces = match &sim.contact {
+            Some(_) => Some({
+                manifest.add("contact_forces.csv")?;
+                CsvTable::create(
+                    &dir.join("contact_forces.csv"),
+                    &["time", "group", "component", "force"],
+                )?
+            }),
+            None => None,
+        };
         let progress = progress.then(|| {
             let bar = indicatif::ProgressBar::new(sim.time.steps as u64 + 1);
             bar.set_style(
@@ -159,6 +170,7 @@ impl<const D: usize> FileSink<D> {
             cell_measures,
             gamma3,
             reactions,
+            contact_forces,
             fields: fields.to_vec(),
             progress,
             stress_seconds: 0.0,
@@ -265,6 +277,20 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
                     ]
                 })
                 .collect();
+            csv.append_text(&rows)?;
+        }
+        if let (Some(csv), Some(values), Some(c)) = (&mut self.contact_forces, view.contact_forces, &sim.contact) {
+            let mut rows = Vec::new();
+            for (group, f) in c.groups.iter().zip(values.chunks(D)) {
+                for (k, v) in f.iter().enumerate() {
+                    rows.push(vec![
+                        output::format_number(view.time),
+                        group.clone(),
+                        ["x", "y", "z"][k].to_string(),
+                        output::format_number(*v),
+                    ]);
+                }
+            }
             csv.append_text(&rows)?;
         }
         Ok(())
@@ -448,12 +474,13 @@ fn solve_dim<const D: usize>(
 ) -> Result<RunStats, SolveError> {
     let sim = Simulation::new(scene, mesh)?;
     let manifest = output::RunManifest::start(&opts.out, opts.overwrite)?;
+    let contact_groups: Vec<GroupSelector> = (0..scene.contact.len()).map(|i| scene.contact_group(i)).collect();
     let mut sink = FileSink::create(
         &opts.out,
         manifest,
         &sim,
         &scene.output.fields,
-        std::slice::from_ref(&scene.groups.contact),
+        &contact_groups,
         scene.output.compression_level(),
         opts.progress,
     )?;
@@ -614,8 +641,8 @@ fn check_dim<const D: usize>(
     }
     if let Some(c) = &sim.contact {
         let _ = writeln!(out, "contact: {} nodes on {}", c.nodes.len(), scene.groups.contact);
-        if let Some(law) = &c.law {
-            let ratio = smallness_ratio(&sim, law)?;
+        if !c.laws.is_empty() {
+            let ratio = smallness_ratio(&sim)?;
             let _ = writeln!(
                 out,
                 "  smallness condition (discrete, energy norm of A): α_j·c² = {:.3} ({})",
@@ -641,10 +668,7 @@ fn available_memory_bytes() -> Option<u64> {
 
 /// α_j λ_max(D^{1/2} C K_A⁻¹ Cᵀ D^{1/2}) (see
 /// [`crate::contact::DenseNormalStiffness::trace_constant`]).
-pub fn smallness_ratio<const D: usize>(
-    sim: &Simulation<D>,
-    law: &crate::contact::ContactLaw,
-) -> Result<f64, SolveError> {
+pub fn smallness_ratio<const D: usize>(sim: &Simulation<D>) -> Result<f64, SolveError> {
     let c = sim
         .contact
         .as_ref()
@@ -661,7 +685,9 @@ pub fn smallness_ratio<const D: usize>(
     let op = crate::contact::SplitSweeps::new(&c.nodes, std::sync::Arc::new(factor), &counters)
         .map_err(SolveError::Setup)?;
     use crate::contact::Condensation;
-    Ok(law.relaxed_monotonicity() * op.stiffness().trace_constant(&c.nodes.weights))
+    Ok(op
+        .stiffness()
+        .trace_constant(&c.laws.monotonicity_weights(c.nodes.len())))
 }
 
 /// The one-screen summary printed at the end of `hvi solve`.

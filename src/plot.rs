@@ -155,7 +155,7 @@ pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, S
         .transpose()
         .map_err(fail)?;
     let bound = match (&scene, &gamma3) {
-        (Some(scene), Some(g3)) => match scene.contact.as_ref().and_then(|c| c.bound.as_ref()) {
+        (Some(scene), Some(g3)) => match scene.contact.first().and_then(|c| c.bound.as_ref()) {
             Some(spec) => Some(crate::solver::bound::nodal_bound(
                 spec,
                 &g3.nodes,

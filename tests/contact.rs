@@ -117,7 +117,7 @@ fn paper_example_satisfies_the_contact_law_at_every_node_and_step() {
     let (sim, stats, sink) = solve_in_memory(&sc, mesh).unwrap();
     assert_eq!(sink.steps.len(), 17);
     let c = sim.contact.as_ref().unwrap();
-    let law = c.law.as_ref().unwrap();
+    let law = c.law().unwrap();
     let g = c.bound.as_ref().unwrap();
     for s in &sink.steps {
         let st = s.contact.as_ref().unwrap();

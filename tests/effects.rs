@@ -327,7 +327,7 @@ fn switched_off(full: &Scene, off: Off) -> Scene {
     if off.memory {
         s.memory = None;
     }
-    let c = s.contact.as_mut().expect("full scene has contact");
+    let c = s.contact.first_mut().expect("full scene has contact");
     if off.bound {
         c.bound = None;
     }
@@ -335,7 +335,7 @@ fn switched_off(full: &Scene, off: Off) -> Scene {
         c.law = None;
     }
     if off.bound && off.law {
-        s.contact = None;
+        s.contact.clear();
     }
     s
 }
@@ -346,7 +346,7 @@ fn neutralised(full: &Scene, off: Off) -> Scene {
     if off.memory {
         s.memory = Some(neutral_kernel());
     }
-    let c = s.contact.as_mut().expect("full scene has contact");
+    let c = s.contact.first_mut().expect("full scene has contact");
     if off.bound {
         c.bound = Some(NEUTRAL_BOUND.into());
     }
@@ -360,7 +360,10 @@ fn neutralised(full: &Scene, off: Off) -> Scene {
 fn with_neutral_effects(scene: &Scene) -> Scene {
     let mut s = scene.clone();
     s.memory.get_or_insert_with(neutral_kernel);
-    let c = s.contact.get_or_insert(ContactSpec { bound: None, law: None });
+    if s.contact.is_empty() {
+        s.contact.push(ContactSpec::default());
+    }
+    let c = &mut s.contact[0];
     c.bound.get_or_insert(NEUTRAL_BOUND.into());
     c.law.get_or_insert_with(neutral_law);
     s
@@ -607,7 +610,7 @@ fn the_plan_lists_exactly_the_effects_in_force() {
         };
         if let Some(c) = &sim.contact {
             assert_eq!(c.bound.is_some(), want.bound, "{name}: bound");
-            assert_eq!(c.law.is_some(), want.law, "{name}: law");
+            assert_eq!(c.law().is_some(), want.law, "{name}: law");
             assert_eq!(
                 detail("contact").contains("bound"),
                 want.bound,

@@ -171,7 +171,7 @@ fn check(run: &Run, cap: usize) -> Report {
             c.settings.tolerance
         );
     }
-    let law = c.law.as_ref();
+    let law = c.law();
     let wmax = c.nodes.weights.iter().fold(0.0f64, |a, b| a.max(*b));
     for s in &run.sink.steps {
         let n = s.step;
@@ -964,11 +964,11 @@ fn case8_several_local_minima() {
         let d: Vec<f64> = (0..m)
             .map(|p| last.normal_displacement[p] + (0..m).map(|q| op.w[p * m + q] * last.force[q]).sum::<f64>())
             .collect();
-        let (law, g, w) = (c.law.as_ref().unwrap(), c.bound.as_ref().unwrap(), &c.nodes.weights);
+        let (law, g, w) = (c.law().unwrap(), c.bound.as_ref().unwrap(), &c.nodes.weights);
         let solver = ActiveSetSolver {
             operator: op,
-            weights: w,
-            law: Some(law),
+            laws: &c.laws,
+            offset: None,
             bound: Some(g),
             settings: c.settings,
         };

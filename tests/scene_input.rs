@@ -29,7 +29,7 @@ fn paper_toml_is_the_embedded_default_and_reads_as_the_paper() {
     assert!(
         matches!(&s.memory, Some(MemoryKernelSpec::Polynomial { coefficients }) if coefficients == &[0.25, 1.0, 1.0])
     );
-    let c = s.contact.as_ref().unwrap();
+    let c = s.contact.first().unwrap();
     assert_eq!(c.bound, Some(0.2.into()));
     let law = c.law.as_ref().unwrap();
     assert!(
@@ -153,14 +153,14 @@ fn overrides_set_values_and_create_sections() {
     .unwrap();
     assert_eq!(s.time.steps, 64);
     assert_eq!(s.material.plane, Some(hvi::scene::Plane::Strain));
-    assert!(s.contact.as_ref().unwrap().law.as_ref().unwrap().one_sided);
+    assert!(s.contact.first().unwrap().law.as_ref().unwrap().one_sided);
     // a section the scene does not have
     let elastic = "[material]\nplane = \"stress\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n[time]\nfinal_time = 1.0\nsteps = 2\n";
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("e.toml");
     std::fs::write(&path, elastic).unwrap();
     let s = Scene::load(Some(&path), &["contact.bound=0.3".into()]).unwrap();
-    assert_eq!(s.contact.unwrap().bound, Some(0.3.into()));
+    assert_eq!(s.contact[0].bound, Some(0.3.into()));
     for bad in ["time.steps", "=3", "time..steps=3", "traction.7.group=G"] {
         assert!(with(&[bad]).unwrap_err().contains("--set"), "{bad}");
     }
@@ -171,14 +171,11 @@ fn a_bound_is_a_number_or_an_expression_and_round_trips() {
     use hvi::scene::BoundSpec;
     let s = with(&["contact.bound=0.2 + 0.02*sin(6*PI*x)"]).unwrap();
     let want = Some(BoundSpec::Expression("0.2 + 0.02*sin(6*PI*x)".into()));
-    assert_eq!(s.contact.as_ref().unwrap().bound, want);
+    assert_eq!(s.contact.first().unwrap().bound, want);
     let again = Scene::from_toml_str(&s.to_toml_string(), "round trip").unwrap();
-    assert_eq!(again.contact.unwrap().bound, want);
+    assert_eq!(again.contact[0].bound, want);
     // an integer is a number
-    assert_eq!(
-        with(&["contact.bound=1"]).unwrap().contact.unwrap().bound,
-        Some(1.0.into())
-    );
+    assert_eq!(with(&["contact.bound=1"]).unwrap().contact[0].bound, Some(1.0.into()));
 }
 
 #[test]

@@ -113,7 +113,7 @@ fn contact_law_holds_in_3d_and_both_backends_agree() {
     assert!(stats.condensation.as_deref().unwrap().starts_with("split"));
     assert!(stats_z.condensation.as_deref().unwrap().starts_with("stored"));
     let c = sim.contact.as_ref().unwrap();
-    let (g, law, w) = (c.bound.as_ref().unwrap(), c.law.as_ref().unwrap(), &c.nodes.weights);
+    let (g, law, w) = (c.bound.as_ref().unwrap(), c.law().unwrap(), &c.nodes.weights);
     let scale = w.iter().fold(0.0f64, |m, v| m.max(*v)) * law.force_scale();
     let mut on_bound = 0;
     for s in &split.steps {

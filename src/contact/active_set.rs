@@ -24,7 +24,7 @@
 //! of iterations reports failure instead of looping.
 
 use super::condensed::NormalStiffness;
-use super::law::ContactLaw;
+use super::nodal::NodalLaws;
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 
@@ -114,12 +114,16 @@ pub struct ContactFailure {
     pub reason: String,
 }
 
-/// The contact problem data of a run: condensed operator, nodal weights, law and bound.
+/// The contact problem data of a step: condensed operator, the rows' laws (with their nodal
+/// weights), the laws' origins and the bound (docs/method.md §14).
 pub struct ActiveSetSolver<'a> {
     pub operator: &'a dyn NormalStiffness,
-    pub weights: &'a [f64],
-    pub law: Option<&'a ContactLaw>,
-    /// g_p per node, or `None` for no bound.
+    /// Σ_t w_t j_t per row (empty: no law).
+    pub laws: &'a NodalLaws,
+    /// o_p: the laws act on the penetration r_p − o_p (the initial gap to an obstacle);
+    /// `None` for o = 0.
+    pub offset: Option<&'a [f64]>,
+    /// g_p per row (∞ where a row has none), or `None` for no bound.
     pub bound: Option<&'a [f64]>,
     pub settings: ContactSettings,
 }
@@ -136,8 +140,14 @@ impl ActiveSetSolver<'_> {
         self.bound.map_or(f64::INFINITY, |g| g[p])
     }
 
-    fn law_derivative(&self, r: f64) -> f64 {
-        self.law.map_or(0.0, |l| l.derivative(r))
+    #[inline]
+    fn origin(&self, p: usize) -> f64 {
+        self.offset.map_or(0.0, |o| o[p])
+    }
+
+    #[inline]
+    fn law_derivative(&self, p: usize, r: f64) -> f64 {
+        self.laws.force(p, r - self.origin(p))
     }
 
     /// Q(r − d) and the gradient G of E at r.
@@ -145,7 +155,7 @@ impl ActiveSetSolver<'_> {
         let diff: Vec<f64> = r.iter().zip(d).map(|(a, b)| a - b).collect();
         self.operator.apply_q(&diff, qrd);
         for p in 0..self.m() {
-            grad[p] = qrd[p] + self.weights[p] * self.law_derivative(r[p]);
+            grad[p] = qrd[p] + self.law_derivative(p, r[p]);
         }
     }
 
@@ -178,14 +188,8 @@ impl ActiveSetSolver<'_> {
         let mut change = 0.0;
         for p in 0..m {
             change += delta[p] * (grad[p] + 0.5 * qdelta[p]);
-            if let Some(law) = self.law {
-                let (rp, dp) = (r[p], delta[p]);
-                let rest = if dp.abs() <= 1e-4 * rp.abs().max(law.epsilon) {
-                    0.5 * law.second_derivative(rp) * dp * dp
-                } else {
-                    law.potential(rp + dp) - law.potential(rp) - law.derivative(rp) * dp
-                };
-                change += self.weights[p] * rest;
+            if !self.laws.is_empty() {
+                change += self.laws.energy_increment(p, r[p] - self.origin(p), delta[p]);
             }
         }
         change
@@ -205,7 +209,7 @@ impl ActiveSetSolver<'_> {
         let mut qd = vec![0.0; self.m()];
         self.operator.apply_q(d, &mut qd);
         let load = qd.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-        let law = self.law.map_or(0.0, |l| l.force_scale()) * self.weights.iter().fold(0.0f64, |a, b| a.max(*b));
+        let law = self.laws.force_scale(self.m());
         load.max(law).max(f64::MIN_POSITIVE)
     }
 
@@ -226,10 +230,7 @@ impl ActiveSetSolver<'_> {
         // within ~ε of 0, which a Newton model taken farther out cannot see. The path stops
         // a node at 0 instead of carrying it across (it may cross at the next iteration, from
         // inside the smoothing zone); otherwise it zig-zags across the kink without converging.
-        let kink = match self.law {
-            Some(l) if l.clarke_interval(0.0).1 > l.clarke_interval(0.0).0 => l.epsilon,
-            _ => f64::INFINITY,
-        };
+        let kink: Vec<f64> = (0..m).map(|p| self.laws.kink_width(p)).collect();
         // The smallest residual so far: a full step that raises the energy is accepted only if
         // it halves this (a watchdog: such steps cannot cycle).
         let mut best_residual = f64::INFINITY;
@@ -259,7 +260,7 @@ impl ActiveSetSolver<'_> {
                             r[p],
                             g - r[p],
                             grad[p],
-                            self.law.map_or(0.0, |l| l.second_derivative(r[p])),
+                            self.laws.stiffness(p, r[p] - self.origin(p)),
                             self.c(p)
                         );
                     }
@@ -281,9 +282,12 @@ impl ActiveSetSolver<'_> {
                 .map(|p| (r[p] - (r[p] - grad[p] / self.c(p)).min(self.g(p))).abs())
                 .fold(0.0, f64::max);
             let delta = projected_step.min(
-                1e-3 * self
-                    .bound
-                    .map_or(1.0, |g| g.iter().fold(0.0f64, |a, b| a.max(*b)).max(1e-3)),
+                1e-3 * self.bound.map_or(1.0, |g| {
+                    g.iter()
+                        .filter(|v| v.is_finite())
+                        .fold(0.0f64, |a, b| a.max(b.abs()))
+                        .max(1e-3)
+                }),
             );
             let active: Vec<bool> = (0..m)
                 .map(|p| {
@@ -296,7 +300,7 @@ impl ActiveSetSolver<'_> {
             // 3. Newton direction on the inactive set, diagonal scaling on the active set
             let curvature: Vec<f64> = free
                 .iter()
-                .map(|&p| self.weights[p] * self.law.map_or(0.0, |l| l.second_derivative(r[p])))
+                .map(|&p| self.laws.stiffness(p, r[p] - self.origin(p)))
                 .collect();
             let free_dir = self.newton_direction(&free, &curvature, &grad, &mut outcome);
             let mut predicted_slope = 0.0;
@@ -314,10 +318,11 @@ impl ActiveSetSolver<'_> {
                 let mut decrease_bound = alpha * predicted_slope;
                 for p in 0..m {
                     let mut moved = (r[p] - alpha * direction[p]).min(self.g(p));
-                    if !active[p] && r[p].abs() > kink && moved * r[p] < 0.0 {
+                    let o = self.origin(p);
+                    if !active[p] && (r[p] - o).abs() > kink[p] && (moved - o) * (r[p] - o) < 0.0 {
                         // stop at the kink: the first-order decrease is that of the shorter move
-                        decrease_bound += grad[p] * (r[p] - alpha * direction[p]);
-                        moved = 0.0;
+                        decrease_bound += grad[p] * (r[p] - o - alpha * direction[p]);
+                        moved = o;
                     }
                     trial[p] = moved - r[p];
                     if active[p] {
@@ -481,7 +486,7 @@ impl ActiveSetSolver<'_> {
         for p in 0..m {
             let r = state.normal_displacement[p];
             let lambda = -qrd_final[p];
-            let xi = self.weights[p] * self.law_derivative(r);
+            let xi = self.law_derivative(p, r);
             let on_bound = r >= self.g(p);
             state.force[p] = lambda;
             state.compliance_force[p] = xi;
@@ -489,7 +494,7 @@ impl ActiveSetSolver<'_> {
             state.status[p] = if on_bound {
                 outcome.active += 1;
                 NodeStatus::OnBound
-            } else if r > 0.0 {
+            } else if r > self.origin(p) {
                 NodeStatus::InLayer
             } else {
                 NodeStatus::Separated

@@ -42,6 +42,19 @@ impl<const D: usize> ContactNodes<D> {
     /// The contact nodes of a boundary part; nodes whose normal displacement is fully
     /// prescribed are set aside (they would make W singular).
     pub fn new(part: &BoundaryPart<D>, dofs: &DofMap<D>) -> Self {
+        Self::from_rows(&part.nodes, &part.weights, &part.normals, dofs).0
+    }
+
+    /// The contact rows u_ν = d_p·u at `nodes` (a node may carry several rows, docs/method.md
+    /// §14) with their weights and directions; rows whose direction is fully prescribed are set
+    /// aside. Also returns the indices of the rows kept.
+    pub fn from_rows(
+        nodes: &[usize],
+        weights: &[f64],
+        directions: &[[f64; D]],
+        dofs: &DofMap<D>,
+    ) -> (Self, Vec<usize>) {
+        let mut kept = Vec::with_capacity(nodes.len());
         let mut out = ContactNodes {
             nodes: Vec::new(),
             weights: Vec::new(),
@@ -50,8 +63,8 @@ impl<const D: usize> ContactNodes<D> {
             prescribed: Vec::new(),
             clamped_nodes: Vec::new(),
         };
-        for (k, &p) in part.nodes.iter().enumerate() {
-            let nu = part.normals[k];
+        for (k, &p) in nodes.iter().enumerate() {
+            let nu = directions[k];
             let row: Vec<(usize, f64)> = (0..D).filter_map(|c| dofs.get(p, c).map(|d| (d, nu[c]))).collect();
             if row.iter().all(|(_, v)| v.abs() < 1e-12) {
                 out.clamped_nodes.push(p);
@@ -62,12 +75,13 @@ impl<const D: usize> ContactNodes<D> {
                 .map(|c| (dofs.index(p, c), nu[c]))
                 .collect();
             out.nodes.push(p);
-            out.weights.push(part.weights[k]);
+            out.weights.push(weights[k]);
             out.normals.push(nu);
             out.rows.push(row);
             out.prescribed.push(fixed);
+            kept.push(k);
         }
-        out
+        (out, kept)
     }
 
     /// m, the number of contact nodes.

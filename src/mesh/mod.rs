@@ -33,6 +33,7 @@ mod topology;
 pub use cell::{Cell, Facet};
 pub use error::MeshError;
 pub use group::GroupSelector;
+pub(crate) use topology::facet_integrals;
 pub use topology::BoundaryPart;
 
 use std::collections::{BTreeMap, HashMap};

@@ -83,16 +83,28 @@ impl Scene {
     /// Reads a tabulated law's CSV (`s,mu` rows, `#` comments, an optional header) into a
     /// piecewise-linear table, relative to the scene's directory.
     fn read_tables(&mut self, origin: &str, dir: Option<&Path>) -> Result<(), SceneError> {
-        let Some(law) = self.contact.as_mut().and_then(|c| c.law.as_mut()) else {
-            return Ok(());
-        };
+        let many = self.contact.len() > 1 || self.contact.iter().any(|c| c.group.is_some());
+        for (i, c) in self.contact.iter_mut().enumerate() {
+            if let Some(law) = c.law.as_mut() {
+                let at = if many {
+                    format!("contact[{i}]")
+                } else {
+                    "contact".to_string()
+                };
+                Self::read_table(law, origin, dir, &at)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn read_table(law: &mut ContactLawSpec, origin: &str, dir: Option<&Path>, at: &str) -> Result<(), SceneError> {
         let LawKind::Tabulated { scale, file } = &law.kind else {
             return Ok(());
         };
         let path = dir.map_or(file.clone(), |d| d.join(file));
         let bad = |message: String| SceneError::Invalid {
             origin: origin.into(),
-            key: "contact.law.file".into(),
+            key: format!("{at}.law.file"),
             value: path.display().to_string(),
             fix: message,
         };

@@ -21,8 +21,15 @@ pub struct Scene {
     pub traction: Vec<TractionSpec>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub body_force: Option<BodyForceSpec>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub contact: Option<ContactSpec>,
+    /// `[contact]` (one group: `groups.contact`) or `[[contact]]` sections, each with its
+    /// `group` (docs/method.md §14).
+    #[serde(
+        default,
+        skip_serializing_if = "Vec::is_empty",
+        deserialize_with = "contact_sections",
+        serialize_with = "write_contact_sections"
+    )]
+    pub contact: Vec<ContactSpec>,
     #[serde(default)]
     pub solver: SolverSpec,
     #[serde(default)]
@@ -55,6 +62,23 @@ impl Default for Groups {
 }
 
 impl Scene {
+    /// The group of contact section `i`: its `group`, or `groups.contact` for the `[contact]` table.
+    pub fn contact_group(&self, i: usize) -> GroupSelector {
+        self.contact[i]
+            .group
+            .clone()
+            .unwrap_or_else(|| self.groups.contact.clone())
+    }
+
+    /// How messages name contact section `i`: `contact` for the one table, else `contact[i]`.
+    pub fn contact_key(&self, i: usize) -> String {
+        if self.contact.len() > 1 || self.contact.iter().any(|c| c.group.is_some()) {
+            format!("contact[{i}]")
+        } else {
+            "contact".into()
+        }
+    }
+
     /// The group clamped in every component: `groups.clamped`, or "Gamma1" when the scene says
     /// neither that nor any `[[dirichlet]]` section.
     pub fn clamped_group(&self) -> Option<GroupSelector> {
@@ -147,14 +171,100 @@ pub struct BodyForceSpec {
     pub value: Vec<String>,
 }
 
-/// Contact on Γ₃: the bound u_ν ≤ g and/or a normal-compliance law.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+/// Contact on a group: the bound u_ν ≤ g and/or a normal-compliance law, against the layer of
+/// the paper or a rigid obstacle (docs/method.md §14).
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSpec {
+    /// The contact group: required in `[[contact]]`; in the `[contact]` table `groups.contact`
+    /// (default "Gamma3") names it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub group: Option<GroupSelector>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bound: Option<BoundSpec>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub law: Option<ContactLawSpec>,
+    /// A rigid obstacle: the surface the body first touches (its initial gap is computed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub obstacle: Option<ObstacleSpec>,
+    /// The direction of u_ν: the obstacle's normal (default with an obstacle) or the body's
+    /// nodal normal (the paper; the only one without an obstacle).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direction: Option<ContactDirection>,
+}
+
+/// The direction in which a contact constraint and its law act.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactDirection {
+    /// The body's nodal normal ν_p (the paper).
+    Body,
+    /// The obstacle's normal at the point closest to the node.
+    Obstacle,
+}
+
+/// A rigid obstacle; `normal`/the sign of `sdf` point out of the obstacle, toward the body.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ObstacleSpec {
+    /// The half-space {(x − point)·normal < 0}.
+    Plane {
+        point: Vec<f64>,
+        normal: Vec<f64>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        motion: Option<Vec<String>>,
+    },
+    /// A rigid disc (2D) or ball (3D); the body is outside it.
+    #[serde(alias = "sphere")]
+    Circle {
+        centre: Vec<f64>,
+        radius: f64,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        motion: Option<Vec<String>>,
+    },
+    /// {φ(x, y, z) < 0}: φ > 0 where the body is, its zero level set the obstacle's surface.
+    Sdf {
+        sdf: String,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        motion: Option<Vec<String>>,
+    },
+}
+
+impl ObstacleSpec {
+    /// The rigid displacement a(t) of the obstacle, one expression of t per component.
+    pub fn motion(&self) -> Option<&[String]> {
+        match self {
+            ObstacleSpec::Plane { motion, .. }
+            | ObstacleSpec::Circle { motion, .. }
+            | ObstacleSpec::Sdf { motion, .. } => motion.as_deref(),
+        }
+    }
+}
+
+fn contact_sections<'de, De: serde::Deserializer<'de>>(d: De) -> Result<Vec<ContactSpec>, De::Error> {
+    struct Sections;
+    impl<'de> serde::de::Visitor<'de> for Sections {
+        type Value = Vec<ContactSpec>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a [contact] table or [[contact]] sections")
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
+            Ok(vec![ContactSpec::deserialize(
+                serde::de::value::MapAccessDeserializer::new(map),
+            )?])
+        }
+        fn visit_seq<A: serde::de::SeqAccess<'de>>(self, seq: A) -> Result<Self::Value, A::Error> {
+            Vec::<ContactSpec>::deserialize(serde::de::value::SeqAccessDeserializer::new(seq))
+        }
+    }
+    d.deserialize_any(Sections)
+}
+
+fn write_contact_sections<S: serde::Serializer>(specs: &[ContactSpec], s: S) -> Result<S::Ok, S::Error> {
+    match specs {
+        [one] if one.group.is_none() => one.serialize(s),
+        _ => specs.serialize(s),
+    }
 }
 
 /// The variables of a bound expression g(x, y, z): the reference position of the contact node

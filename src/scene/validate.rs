@@ -3,7 +3,9 @@
 
 use super::error::SceneError;
 use super::expr::Expr;
-use super::types::{BoundSpec, ContactLawSpec, LawKind, MemoryKernelSpec, Scene, BOUND_VARIABLES};
+use super::types::{
+    BoundSpec, ContactDirection, ContactLawSpec, LawKind, MemoryKernelSpec, ObstacleSpec, Scene, BOUND_VARIABLES,
+};
 use toml::Value;
 
 /// The keys allowed in a table, given its path and contents.
@@ -35,7 +37,13 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
         "traction" => vec!["group", "value", "pressure"],
         "dirichlet" => vec!["group", "components", "value"],
         "body_force" => vec!["value"],
-        "contact" => vec!["bound", "law"],
+        "contact" => vec!["group", "bound", "law", "obstacle", "direction"],
+        "contact.obstacle" => match kind {
+            Some("plane") => vec!["kind", "point", "normal", "motion"],
+            Some("circle") | Some("sphere") => vec!["kind", "centre", "radius", "motion"],
+            Some("sdf") => vec!["kind", "sdf", "motion"],
+            _ => vec!["kind", "point", "normal", "centre", "radius", "sdf", "motion"],
+        },
         "contact.law" => {
             let mut keys = vec!["kind", "one_sided", "regularisation", "scale"];
             keys.extend(match kind {
@@ -69,7 +77,43 @@ fn distance(a: &str, b: &str) -> usize {
 
 /// Rejects unknown keys anywhere in the tree, naming the nearest valid one.
 pub fn check_keys(value: &Value, origin: &str) -> Result<(), SceneError> {
-    walk(value, "", origin)
+    walk(value, "", origin)?;
+    // `[[contact]]` sections name their groups; `groups.contact` belongs to the one-table form.
+    let sections = value.get("contact").and_then(|c| c.as_array());
+    let shorthand = value.get("groups").and_then(|g| g.get("contact"));
+    if let (Some(sections), Some(group)) = (sections, shorthand) {
+        return Err(invalid(
+            origin,
+            "groups.contact",
+            group,
+            &format!(
+                "the scene has {} [[contact]] section(s), each naming its own `group`; groups.contact belongs to the \
+                 one-group [contact] table: remove groups.contact, or write one [contact] table",
+                sections.len()
+            ),
+        ));
+    }
+    if let Some(sections) = sections {
+        for (i, s) in sections.iter().enumerate() {
+            if s.get("group").is_none() {
+                return Err(invalid(
+                    origin,
+                    &format!("contact[{i}].group"),
+                    "(missing)",
+                    "each [[contact]] section names its group, e.g. group = \"Gamma3\"",
+                ));
+            }
+        }
+    }
+    if let (Some(group), Some(inner)) = (shorthand, value.get("contact").and_then(|c| c.get("group"))) {
+        return Err(invalid(
+            origin,
+            "contact.group",
+            inner,
+            &format!("groups.contact = {group} names the contact group too: give it in one place only"),
+        ));
+    }
+    Ok(())
 }
 
 fn walk(value: &Value, path: &str, origin: &str) -> Result<(), SceneError> {
@@ -303,12 +347,18 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
             )?;
         }
     }
-    if let Some(c) = &scene.contact {
+    let many = scene.contact.len() > 1 || scene.contact.iter().any(|c| c.group.is_some());
+    for (i, c) in scene.contact.iter().enumerate() {
+        let at = if many {
+            format!("contact[{i}]")
+        } else {
+            "contact".to_string()
+        };
         match &c.bound {
             Some(BoundSpec::Number(g)) if !(g.is_finite() && *g >= 0.0) => {
                 return Err(invalid(
                     origin,
-                    "contact.bound",
+                    &format!("{at}.bound"),
                     g,
                     "the bound g must be ≥ 0 (omit it for no bound), or an expression g(x, y, z) ≥ 0 in quotes such as \"0.2 + 0.02*sin(6*PI*x)\"",
                 ));
@@ -318,7 +368,7 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
             Some(BoundSpec::Expression(e)) => {
                 Expr::parse(e, &BOUND_VARIABLES).map_err(|message| SceneError::Expression {
                     origin: origin.into(),
-                    key: "contact.bound".into(),
+                    key: format!("{at}.bound"),
                     expression: e.clone(),
                     message,
                 })?;
@@ -326,7 +376,19 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
             _ => {}
         }
         if let Some(law) = &c.law {
-            check_law(law, origin)?;
+            check_law(law, origin, &at)?;
+        }
+        if let Some(o) = &c.obstacle {
+            check_obstacle(o, origin, &format!("{at}.obstacle"))?;
+        }
+        if c.direction == Some(ContactDirection::Obstacle) && c.obstacle.is_none() {
+            return Err(invalid(
+                origin,
+                &format!("{at}.direction"),
+                "\"obstacle\"",
+                "direction = \"obstacle\" needs an obstacle; without one the constraint acts along the body's normal \
+                 (direction = \"body\")",
+            ));
         }
     }
     if !(scene.solver.tolerance > 0.0 && scene.solver.tolerance < 1.0) {
@@ -377,11 +439,72 @@ fn check_components(origin: &str, key: &str, value: &[String]) -> Result<(), Sce
     }
 }
 
-fn check_law(law: &ContactLawSpec, origin: &str) -> Result<(), SceneError> {
+/// A point or a vector of 2 or 3 finite numbers.
+fn check_vector(origin: &str, key: &str, v: &[f64]) -> Result<(), SceneError> {
+    if matches!(v.len(), 2 | 3) && v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(invalid(
+            origin,
+            key,
+            format!("{v:?}"),
+            "give 2 finite numbers in 2D, 3 in 3D, e.g. [0.0, -0.1]",
+        ))
+    }
+}
+
+fn check_obstacle(o: &ObstacleSpec, origin: &str, at: &str) -> Result<(), SceneError> {
+    match o {
+        ObstacleSpec::Plane { point, normal, .. } => {
+            check_vector(origin, &format!("{at}.point"), point)?;
+            check_vector(origin, &format!("{at}.normal"), normal)?;
+            if normal.iter().map(|x| x * x).sum::<f64>() == 0.0 || normal.len() != point.len() {
+                return Err(invalid(
+                    origin,
+                    &format!("{at}.normal"),
+                    format!("{normal:?}"),
+                    "the plane's normal points out of the obstacle, toward the body: a non-zero vector with as many \
+                     components as the point",
+                ));
+            }
+        }
+        ObstacleSpec::Circle { centre, radius, .. } => {
+            check_vector(origin, &format!("{at}.centre"), centre)?;
+            if !(radius.is_finite() && *radius > 0.0) {
+                return Err(invalid(
+                    origin,
+                    &format!("{at}.radius"),
+                    radius,
+                    "the radius must be positive and finite",
+                ));
+            }
+        }
+        ObstacleSpec::Sdf { sdf, .. } => {
+            compile(origin, &format!("{at}.sdf"), sdf, &["x", "y", "z"], &[0.1, 0.2, 0.3])?;
+        }
+    }
+    if let Some(m) = o.motion() {
+        if !matches!(m.len(), 2 | 3) {
+            return Err(invalid(
+                origin,
+                &format!("{at}.motion"),
+                format!("{m:?}"),
+                "give the obstacle's rigid displacement as one expression of t per component (2 in 2D, 3 in 3D), \
+                 e.g. motion = [\"0\", \"-0.01*t\"]",
+            ));
+        }
+        for (c, e) in m.iter().enumerate() {
+            compile(origin, &format!("{at}.motion[{c}]"), e, &["t"], &[0.0])?;
+        }
+    }
+    Ok(())
+}
+
+fn check_law(law: &ContactLawSpec, origin: &str, at: &str) -> Result<(), SceneError> {
     if !(law.regularisation.is_finite() && law.regularisation > 0.0) {
         return Err(invalid(
             origin,
-            "contact.law.regularisation",
+            &format!("{at}.law.regularisation"),
             law.regularisation,
             "ε = 0 is not supported: the Clarke subdifferential is set-valued at u_ν = 0; use a small ε such as 1e-8",
         ));
@@ -389,11 +512,11 @@ fn check_law(law: &ContactLawSpec, origin: &str) -> Result<(), SceneError> {
     let scale = match &law.kind {
         LawKind::Paper { scale, a, b, alpha } => {
             if !(alpha.is_finite() && *alpha > 0.0) {
-                return Err(invalid(origin, "contact.law.alpha", alpha, "α must be positive"));
+                return Err(invalid(origin, &format!("{at}.law.alpha"), alpha, "α must be positive"));
             }
             for (k, v) in [("a", a), ("b", b)] {
                 if !(v.is_finite() && *v >= 0.0) {
-                    return Err(invalid(origin, &format!("contact.law.{k}"), v, "a and b must be ≥ 0"));
+                    return Err(invalid(origin, &format!("{at}.law.{k}"), v, "a and b must be ≥ 0"));
                 }
             }
             scale
@@ -402,7 +525,7 @@ fn check_law(law: &ContactLawSpec, origin: &str) -> Result<(), SceneError> {
             if !(exponent.is_finite() && *exponent >= 1.0) {
                 return Err(invalid(
                     origin,
-                    "contact.law.exponent",
+                    &format!("{at}.law.exponent"),
                     exponent,
                     "the exponent p of S (u_ν)₊^p must be ≥ 1",
                 ));
@@ -412,13 +535,18 @@ fn check_law(law: &ContactLawSpec, origin: &str) -> Result<(), SceneError> {
         LawKind::PiecewiseLinear { scale, table } => {
             let points: Vec<(f64, f64)> = table.iter().map(|p| (p[0], p[1])).collect();
             crate::contact::PiecewiseLinear::new(&points)
-                .map_err(|e| invalid(origin, "contact.law.table", format!("{table:?}"), &e))?;
+                .map_err(|e| invalid(origin, &format!("{at}.law.table"), format!("{table:?}"), &e))?;
             scale
         }
         LawKind::Tabulated { scale, .. } => scale,
     };
     if !(scale.is_finite() && *scale >= 0.0) {
-        return Err(invalid(origin, "contact.law.scale", scale, "the scale S must be ≥ 0"));
+        return Err(invalid(
+            origin,
+            &format!("{at}.law.scale"),
+            scale,
+            "the scale S must be ≥ 0",
+        ));
     }
     Ok(())
 }

@@ -3,6 +3,7 @@
 //! and [`timeloop`] is the short driver of docs/method.md §3–4.
 
 pub mod bound;
+pub mod contact;
 pub mod dirichlet;
 pub mod error;
 pub mod plan;

@@ -110,7 +110,7 @@ impl Plan {
                     parts.push(format!("bound u_ν ≤ g (g from {lo} to {hi} at the nodes)"));
                 }
             }
-            if let Some(l) = &c.law {
+            for l in c.laws.used() {
                 parts.push(format!(
                     "{} compliance law, S = {}, {}, ε = {:e}",
                     match l.symmetry {

@@ -4,7 +4,6 @@
 
 use super::dirichlet::Dirichlet;
 use super::error::SolveError;
-use crate::contact::{ComplianceProfile, ContactLaw, ContactNodes, ContactSettings, PiecewiseLinear, Symmetry};
 use crate::fem::loads::Loads;
 use crate::fem::DofMap;
 use crate::material::{Elasticity, PlaneModel, RelaxationKernel};
@@ -33,15 +32,7 @@ impl TimeGrid {
     }
 }
 
-/// Contact on Γ₃: nodes, the compliance law and/or the bound, and the solver settings.
-#[derive(Clone, Debug)]
-pub struct ContactSetup<const D: usize> {
-    pub nodes: ContactNodes<D>,
-    pub law: Option<ContactLaw>,
-    /// g_p per contact node.
-    pub bound: Option<Vec<f64>>,
-    pub settings: ContactSettings,
-}
+pub use super::contact::ContactSetup;
 
 /// Everything a run needs, built once from scene + mesh.
 pub struct Simulation<const D: usize = 2> {
@@ -154,67 +145,7 @@ impl<const D: usize> Simulation<D> {
                 "body_force.value",
             );
         }
-        let contact = match &scene.contact {
-            None => None,
-            Some(spec) if spec.bound.is_none() && spec.law.is_none() => None,
-            Some(spec) => {
-                let part = mesh.boundary(&scene.groups.contact)?;
-                let nodes = ContactNodes::new(&part, &dofs);
-                let law = match &spec.law {
-                    None => None,
-                    Some(l) => {
-                        let (scale, profile) = match &l.kind {
-                            scene::LawKind::Paper { scale, a, b, alpha } => (
-                                *scale,
-                                ComplianceProfile::Paper {
-                                    a: *a,
-                                    b: *b,
-                                    alpha: *alpha,
-                                },
-                            ),
-                            scene::LawKind::Power { scale, exponent } => {
-                                (*scale, ComplianceProfile::Power { exponent: *exponent })
-                            }
-                            scene::LawKind::PiecewiseLinear { scale, table } => {
-                                let points: Vec<(f64, f64)> = table.iter().map(|p| (p[0], p[1])).collect();
-                                let table = PiecewiseLinear::new(&points)
-                                    .map_err(|e| SolveError::Setup(format!("contact.law.table: {e}")))?;
-                                (*scale, ComplianceProfile::PiecewiseLinear { table })
-                            }
-                            scene::LawKind::Tabulated { .. } => {
-                                return Err(SolveError::Setup("a tabulated law must be read by Scene::load".into()))
-                            }
-                        };
-                        Some(ContactLaw {
-                            scale,
-                            profile,
-                            symmetry: if l.one_sided { Symmetry::OneSided } else { Symmetry::Odd },
-                            epsilon: l.regularisation,
-                        })
-                    }
-                };
-                let bound = match &spec.bound {
-                    None => None,
-                    Some(b) => Some(super::bound::nodal_bound(
-                        b,
-                        &nodes.nodes,
-                        &mesh.points,
-                        &origin,
-                        "contact.bound",
-                    )?),
-                };
-                Some(ContactSetup {
-                    nodes,
-                    law,
-                    bound,
-                    settings: ContactSettings {
-                        tolerance: scene.solver.tolerance,
-                        max_iterations: scene.solver.max_iterations,
-                        dense_limit: scene.solver.dense_newton_limit,
-                    },
-                })
-            }
-        };
+        let contact = super::contact::build(scene, &mesh, &dofs, &origin)?;
         Ok(Simulation {
             mesh,
             dofs,

@@ -69,12 +69,16 @@ pub struct RunStats {
     pub condensation: Option<String>,
     /// Reaction forces at every output step: one row per (time, group, component).
     pub reactions: Vec<Reaction>,
+    /// The total contact force on the body per contact group at every output step, one row per
+    /// (time, group, component) (docs/method.md §14.4).
+    pub contact_forces: Vec<Reaction>,
     /// Peak resident memory of the process (VmHWM, Linux), in bytes.
     pub peak_memory_bytes: Option<u64>,
     pub phases: PhaseTimes,
 }
 
-/// The reaction force of one prescribed (group, component) at one output time (docs/method.md §7).
+/// The reaction force of one prescribed (group, component) at one output time (docs/method.md §7),
+/// or the total contact force of one contact group (§14.4).
 #[derive(Clone, Debug, Serialize)]
 pub struct Reaction {
     pub time: f64,

@@ -43,6 +43,9 @@ pub struct StepView<'a> {
     pub outcome: Option<ContactOutcome>,
     /// The reaction of each of the simulation's reaction groups (output steps only).
     pub reactions: Option<&'a [f64]>,
+    /// The total contact force on the body of each contact group, D components per group
+    /// (output steps with contact only; docs/method.md §14.4).
+    pub contact_forces: Option<&'a [f64]>,
 }
 
 /// Receives the steps of a run (the output layer implements this; tests collect in memory).
@@ -301,11 +304,20 @@ fn contact_solve<const D: usize>(
     d: &[f64],
     state: &mut ContactState,
 ) -> Result<ContactOutcome, SolveError> {
+    // a moving obstacle moves the laws' origins and the bounds (docs/method.md §14.2)
+    let t = sim.time.time(step);
+    let moved = setup
+        .gaps_at(t)
+        .map_err(|detail| SolveError::NonFiniteLoad { step, time: t, detail })?;
+    let (offset, bound) = match &moved {
+        Some((o, g)) => (Some(&o[..]), Some(&g[..])),
+        None => (setup.gap.as_deref(), setup.bound.as_deref()),
+    };
     let solver = ActiveSetSolver {
         operator: op.stiffness(),
-        weights: &setup.nodes.weights,
-        law: setup.law.as_ref(),
-        bound: setup.bound.as_deref(),
+        laws: &setup.laws,
+        offset,
+        bound,
         settings: setup.settings,
     };
     solver.solve(d, state).map_err(|f| SolveError::ContactFailed {
@@ -412,6 +424,7 @@ pub struct Stepper<'s, const D: usize> {
     contact: Option<ContactState>,
     reactions: Option<Reactions>,
     reaction_values: Vec<f64>,
+    contact_forces: Vec<f64>,
     time_dependent_loads: bool,
     /// No memory, constant loads and constant prescribed values: every step equals step 0.
     single_solve: bool,
@@ -500,8 +513,9 @@ impl<'s, const D: usize> Stepper<'s, D> {
             }
         };
         if let (Some(op), Some(c)) = (&main.condensed, &sim.contact) {
-            if let Some(law) = &c.law {
-                stats.smallness = Some(law.relaxed_monotonicity() * op.stiffness().trace_constant(&c.nodes.weights));
+            if !c.laws.is_empty() {
+                let weights = c.laws.monotonicity_weights(c.nodes.len());
+                stats.smallness = Some(op.stiffness().trace_constant(&weights));
             }
         }
         let reactions = (!sim.dirichlet.reaction_groups.is_empty()).then(|| Reactions::new(sim, &k_a, k_b.as_ref()));
@@ -526,6 +540,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
             history,
             contact,
             reaction_values: Vec::new(),
+            contact_forces: Vec::new(),
             reactions,
             time_dependent_loads,
             load: vec![0.0; n_dof],
@@ -626,6 +641,27 @@ impl<'s, const D: usize> Stepper<'s, D> {
                 });
             }
         }
+        let with_forces = output && self.contact.is_some();
+        if let (Some(setup), Some(state), true) = (&sim.contact, &self.contact, with_forces) {
+            let moved = setup.gaps_at(t).map_err(|detail| SolveError::NonFiniteLoad {
+                step: n,
+                time: t,
+                detail,
+            })?;
+            let forces = setup.group_forces(state, moved.as_ref().map(|(o, _)| &o[..]));
+            self.contact_forces.clear();
+            for (group, f) in setup.groups.iter().zip(&forces) {
+                self.contact_forces.extend_from_slice(f);
+                for (c, &force) in f.iter().enumerate() {
+                    self.stats.contact_forces.push(Reaction {
+                        time: t,
+                        group: group.clone(),
+                        component: ["x", "y", "z"][c],
+                        force,
+                    });
+                }
+            }
+        }
         self.next += 1;
         Ok(StepView {
             step: n,
@@ -635,6 +671,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
             contact: self.contact.as_ref(),
             outcome: self.outcome,
             reactions: (self.reactions.is_some() && output).then_some(&self.reaction_values[..]),
+            contact_forces: with_forces.then_some(&self.contact_forces[..]),
         })
     }
 
@@ -643,16 +680,15 @@ impl<'s, const D: usize> Stepper<'s, D> {
     /// nothing is factorised.
     fn step_zero(&mut self, rhs: &mut [f64]) -> Result<Option<ContactOutcome>, SolveError> {
         let sim = self.sim;
-        let law_at_zero = sim
-            .contact
-            .as_ref()
-            .and_then(|c| c.law.as_ref())
-            .map_or(0.0, |l| l.derivative(0.0));
+        let law_at_zero = sim.contact.as_ref().map_or(0.0, |c| {
+            (0..c.nodes.len())
+                .map(|p| c.laws.force(p, -c.gap.as_ref().map_or(0.0, |o| o[p])).abs())
+                .fold(0.0, f64::max)
+        });
         let bound_ok = sim
             .contact
             .as_ref()
-            .and_then(|c| c.bound.as_ref())
-            .is_none_or(|g| g.iter().all(|v| *v >= 0.0));
+            .is_none_or(|c| c.motion.is_none() && c.bound.as_ref().is_none_or(|g| g.iter().all(|v| *v >= 0.0)));
         let prescribed_zero = self.prescribed.as_ref().is_none_or(|g| g.iter().all(|v| *v == 0.0));
         if rhs.iter().all(|v| *v == 0.0) && law_at_zero == 0.0 && bound_ok && prescribed_zero {
             let outcome = self.contact.as_mut().map(|s| {

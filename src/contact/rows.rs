@@ -1,0 +1,215 @@
+//! The contact rows of a run (docs/method.md §14): every contact group contributes, at each of
+//! its nodes, one row u_ν = d·u per cluster of the node's facets whose normals lie within 45° of
+//! each other (one row on a smooth part, one per face at a corner of the group); rows of a node
+//! whose directions lie within 45° are then merged into one (the stricter wall's, carrying the
+//! laws of all of them), the others stay separate constraints. A node never carries more than D
+//! rows.
+
+use super::nodal::LawTerm;
+use super::obstacle::Obstacle;
+use crate::mesh::BoundaryPart;
+
+/// Directions closer than this (cos 45°) are one wall; farther apart, two.
+pub const CORNER_COSINE: f64 = std::f64::consts::FRAC_1_SQRT_2;
+
+/// What one contact group brings.
+pub struct GroupRows<'a, const D: usize> {
+    pub part: &'a BoundaryPart<D>,
+    pub obstacle: Option<&'a Obstacle<D>>,
+    /// Along the obstacle's normal (else the body's).
+    pub along_obstacle: bool,
+    /// The group's law as given and its one-sided version (indices into the run's laws), used at
+    /// rows in initial contact and at rows with an initial gap respectively.
+    pub law: Option<(usize, usize)>,
+    /// The layer g between first contact and the rigid bound, per node of `part` (∞: none).
+    pub layer: Vec<f64>,
+    /// Index of the obstacle's rigid motion a(t), if it moves.
+    pub motion: Option<usize>,
+}
+
+/// The merged rows.
+#[derive(Clone, Debug, Default)]
+pub struct Rows<const D: usize> {
+    pub nodes: Vec<usize>,
+    pub weights: Vec<f64>,
+    pub directions: Vec<[f64; D]>,
+    /// The group whose wall the row is (the stricter one where several meet).
+    pub group: Vec<usize>,
+    /// gap₀ (0 without an obstacle).
+    pub gap: Vec<f64>,
+    /// The layer g: the rigid bound is at gap + g (∞: no bound).
+    pub layer: Vec<f64>,
+    /// (motion index, ∂gap/∂a) of a moving obstacle.
+    pub motion: Vec<Option<(usize, [f64; D])>>,
+    pub terms: Vec<Vec<LawTerm>>,
+    /// Rows dropped because their normal never meets the obstacle: (node, group).
+    pub never_touching: Vec<(usize, usize)>,
+}
+
+struct Candidate<const D: usize> {
+    node: usize,
+    weight: f64,
+    normal: [f64; D],
+}
+
+fn unit<const D: usize>(v: [f64; 3]) -> [f64; D] {
+    let n = v[..D].iter().map(|x| x * x).sum::<f64>().sqrt();
+    std::array::from_fn(|k| v[k] / n)
+}
+
+fn dot<const D: usize>(a: &[f64; D], b: &[f64; D]) -> f64 {
+    (0..D).map(|k| a[k] * b[k]).sum()
+}
+
+/// The (weight, normal) clusters of a group's facets at each node: one per node unless the
+/// node is at a corner of the group.
+fn clusters<const D: usize>(part: &BoundaryPart<D>, points: &[[f64; D]]) -> Vec<Candidate<D>> {
+    // per node: the facets' (∫N, ∫N n ds) contributions
+    let mut at: Vec<Vec<(f64, [f64; 3])>> = vec![Vec::new(); part.nodes.len()];
+    for f in &part.facets {
+        let (w, nv, _) = crate::mesh::facet_integrals(points, f);
+        for (a, &p) in f.nodes().iter().enumerate() {
+            if let Some(k) = part.local(p) {
+                at[k].push((w[a], nv[a]));
+            }
+        }
+    }
+    let mut out = Vec::with_capacity(part.nodes.len());
+    for (k, contributions) in at.iter().enumerate() {
+        let mut groups: Vec<(f64, [f64; 3])> = Vec::new();
+        for &(w, nv) in contributions {
+            let n: [f64; D] = unit(nv);
+            match groups.iter_mut().find(|(_, s)| dot(&unit::<D>(*s), &n) > CORNER_COSINE) {
+                Some((gw, s)) => {
+                    *gw += w;
+                    for c in 0..3 {
+                        s[c] += nv[c];
+                    }
+                }
+                None => groups.push((w, nv)),
+            }
+        }
+        if groups.len() <= 1 {
+            // a smooth node: the part's own weight and normal (bit for bit the one-group rows)
+            out.push(Candidate {
+                node: part.nodes[k],
+                weight: part.weights[k],
+                normal: part.normals[k],
+            });
+        } else {
+            for (w, s) in groups {
+                out.push(Candidate {
+                    node: part.nodes[k],
+                    weight: w,
+                    normal: unit(s),
+                });
+            }
+        }
+    }
+    out
+}
+
+/// Builds the merged rows of all groups; `length` is the body's size (tolerances), `points` the
+/// mesh's nodes.
+pub fn build<const D: usize>(groups: &[GroupRows<D>], points: &[[f64; D]], length: f64) -> Result<Rows<D>, String> {
+    struct Row<const D: usize> {
+        node: usize,
+        weight: f64,
+        direction: [f64; D],
+        group: usize,
+        gap: f64,
+        layer: f64,
+        motion: Option<(usize, [f64; D])>,
+        terms: Vec<LawTerm>,
+    }
+    let mut rows: Vec<Row<D>> = Vec::new();
+    let mut never = Vec::new();
+    for (gi, g) in groups.iter().enumerate() {
+        for c in clusters(g.part, points) {
+            let x = &points[c.node];
+            let (direction, gap, motion) = match g.obstacle {
+                None => (c.normal, 0.0, None),
+                Some(o) => {
+                    let gap = o.gap(x, &c.normal, g.along_obstacle, length)?;
+                    (gap.direction, gap.gap, g.motion.map(|m| (m, gap.motion)))
+                }
+            };
+            if !gap.is_finite() {
+                never.push((c.node, gi));
+                continue;
+            }
+            let k = g.part.local(c.node).expect("a node of the part");
+            let terms = match g.law {
+                // a row with an initial gap never touched: its law is one-sided
+                Some((given, one_sided)) => vec![LawTerm {
+                    law: if gap > 1e-9 * length { one_sided } else { given },
+                    weight: c.weight,
+                    group: gi,
+                }],
+                None => Vec::new(),
+            };
+            rows.push(Row {
+                node: c.node,
+                weight: c.weight,
+                direction,
+                group: gi,
+                gap,
+                layer: g.layer[k],
+                motion,
+                terms,
+            });
+        }
+    }
+    // merge the rows of a node whose directions are one wall
+    rows.sort_by_key(|r| r.node); // stable: groups keep their order at a node
+    let mut out = Rows {
+        never_touching: never,
+        ..Default::default()
+    };
+    let mut rest = rows.into_iter().peekable();
+    while let Some(first) = rest.next() {
+        let node = first.node;
+        let mut merged: Vec<Row<D>> = vec![first];
+        while let Some(r) = rest.next_if(|r| r.node == node) {
+            match merged
+                .iter_mut()
+                .find(|m| dot(&m.direction, &r.direction) > CORNER_COSINE)
+            {
+                None => merged.push(r),
+                Some(m) => {
+                    // the stricter wall: the smaller gap sets direction and origin; the rigid bound
+                    // is the nearer of the two
+                    let limit = (m.gap + m.layer).min(r.gap + r.layer);
+                    let mut terms = std::mem::take(&mut m.terms);
+                    terms.extend(r.terms.iter().copied());
+                    let weight = m.weight + r.weight;
+                    if r.gap < m.gap {
+                        *m = r;
+                    }
+                    m.layer = limit - m.gap;
+                    m.terms = terms;
+                    m.weight = weight;
+                }
+            }
+        }
+        if merged.len() > D {
+            return Err(format!(
+                "the contact node at {:?} meets {} walls (contact groups or faces more than 45° apart); a node can \
+                 carry at most {D} independent constraints in {D}D: merge some of its groups",
+                points[merged[0].node],
+                merged.len()
+            ));
+        }
+        for r in merged {
+            out.nodes.push(r.node);
+            out.weights.push(r.weight);
+            out.directions.push(r.direction);
+            out.group.push(r.group);
+            out.gap.push(r.gap);
+            out.layer.push(r.layer);
+            out.motion.push(r.motion);
+            out.terms.push(r.terms);
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,313 @@
+//! The contact of a scene on a mesh (docs/method.md §14): every `[[contact]]` group (or the one
+//! `[contact]` table) with its law, bound and obstacle, turned into one set of contact rows for
+//! one active-set solve.
+
+use super::error::SolveError;
+use crate::contact::active_set::ContactState;
+use crate::contact::rows::{self, GroupRows};
+use crate::contact::{
+    ComplianceProfile, ContactLaw, ContactNodes, ContactSettings, NodalLaws, Obstacle, PiecewiseLinear, Symmetry,
+};
+use crate::fem::DofMap;
+use crate::mesh::Mesh;
+use crate::scene::{self, ContactDirection, Expr, ObstacleSpec, Scene};
+
+/// The laws' origins o_p and the bounds g_p of a step, per row.
+pub type MovedGaps = (Vec<f64>, Vec<f64>);
+
+/// The rigid motions a(t) of the moving obstacles and how each row's gap follows them.
+#[derive(Clone, Debug)]
+pub struct ObstacleMotion<const D: usize> {
+    /// One expression of t per component, per moving obstacle.
+    pub motions: Vec<Vec<Expr>>,
+    /// Per row: (motion, ∂gap/∂a).
+    pub rows: Vec<Option<(usize, [f64; D])>>,
+}
+
+/// Contact: the rows of all groups, their laws and bounds, and the solver settings.
+#[derive(Clone, Debug)]
+pub struct ContactSetup<const D: usize> {
+    pub nodes: ContactNodes<D>,
+    /// The laws of the rows, each term with its group's nodal weight (empty: no law).
+    pub laws: NodalLaws,
+    /// g_p per row at t = 0 (gap₀ + layer; ∞ where a row has none), or `None` if no row has one.
+    pub bound: Option<Vec<f64>>,
+    /// gap₀ per row: where the laws start (`None` without an obstacle).
+    pub gap: Option<Vec<f64>>,
+    /// The layer between first contact and the rigid bound per row (∞: none).
+    pub layer: Vec<f64>,
+    /// Moving obstacles (`None`: none moves, and no step pays for it).
+    pub motion: Option<ObstacleMotion<D>>,
+    /// The contact groups' names (or tags), in scene order.
+    pub groups: Vec<String>,
+    /// The group of each row (the stricter wall's where groups meet, docs/method.md §14.3).
+    pub row_group: Vec<usize>,
+    /// Γ₃ nodes whose normal never meets their obstacle (dropped): (node, group).
+    pub never_touching: Vec<(usize, usize)>,
+    pub settings: ContactSettings,
+}
+
+impl<const D: usize> ContactSetup<D> {
+    /// The law when every row has the same one (None without a law or with several).
+    pub fn law(&self) -> Option<&ContactLaw> {
+        self.laws.single()
+    }
+
+    /// The laws' origins o_p and the bounds g_p at time t (the initial ones when nothing moves).
+    pub fn gaps_at(&self, t: f64) -> Result<Option<MovedGaps>, String> {
+        let Some(motion) = &self.motion else {
+            return Ok(None);
+        };
+        let a: Vec<[f64; D]> = motion
+            .motions
+            .iter()
+            .map(|m| std::array::from_fn(|k| m[k].eval(&[t])))
+            .collect();
+        if a.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(format!("an obstacle's motion is not finite at t = {t}"));
+        }
+        let gap0 = self.gap.as_deref().unwrap_or(&[]);
+        let offset: Vec<f64> = (0..self.nodes.len())
+            .map(|p| gap0[p] + motion.rows[p].map_or(0.0, |(i, c)| (0..D).map(|k| c[k] * a[i][k]).sum::<f64>()))
+            .collect();
+        let bound = offset.iter().zip(&self.layer).map(|(o, l)| o + l).collect();
+        Ok(Some((offset, bound)))
+    }
+
+    /// The total contact force on the body exerted by each group, Σ_p −λ_p d_p (the force of
+    /// a row where groups meet split by their laws' shares, the rest to the stricter wall's
+    /// group); `offset` are the laws' origins of the step.
+    pub fn group_forces(&self, state: &ContactState, offset: Option<&[f64]>) -> Vec<[f64; D]> {
+        let mut out = vec![[0.0; D]; self.groups.len()];
+        for p in 0..self.nodes.len() {
+            let d = self.nodes.normals[p];
+            let mut rest = state.force[p];
+            let o = offset.or(self.gap.as_deref()).map_or(0.0, |o| o[p]);
+            for t in self.laws.terms(p) {
+                if t.group != self.row_group[p] {
+                    let f = t.weight * self.laws.laws[t.law].derivative(state.normal_displacement[p] - o);
+                    rest -= f;
+                    for k in 0..D {
+                        out[t.group][k] -= f * d[k];
+                    }
+                }
+            }
+            for k in 0..D {
+                out[self.row_group[p]][k] -= rest * d[k];
+            }
+        }
+        out
+    }
+}
+
+fn law_of(l: &scene::ContactLawSpec, key: &str) -> Result<ContactLaw, SolveError> {
+    let (scale, profile) = match &l.kind {
+        scene::LawKind::Paper { scale, a, b, alpha } => (
+            *scale,
+            ComplianceProfile::Paper {
+                a: *a,
+                b: *b,
+                alpha: *alpha,
+            },
+        ),
+        scene::LawKind::Power { scale, exponent } => (*scale, ComplianceProfile::Power { exponent: *exponent }),
+        scene::LawKind::PiecewiseLinear { scale, table } => {
+            let points: Vec<(f64, f64)> = table.iter().map(|p| (p[0], p[1])).collect();
+            let table =
+                PiecewiseLinear::new(&points).map_err(|e| SolveError::Setup(format!("{key}.law.table: {e}")))?;
+            (*scale, ComplianceProfile::PiecewiseLinear { table })
+        }
+        scene::LawKind::Tabulated { .. } => {
+            return Err(SolveError::Setup("a tabulated law must be read by Scene::load".into()))
+        }
+    };
+    Ok(ContactLaw {
+        scale,
+        profile,
+        symmetry: if l.one_sided { Symmetry::OneSided } else { Symmetry::Odd },
+        epsilon: l.regularisation,
+    })
+}
+
+fn vector<const D: usize>(v: &[f64], key: &str, origin: &str) -> Result<[f64; D], SolveError> {
+    v.try_into().map_err(|_| {
+        SolveError::Setup(format!(
+            "{origin}: {key} = {v:?} has {} components but the mesh is {D}D: give {D}",
+            v.len()
+        ))
+    })
+}
+
+fn obstacle_of<const D: usize>(
+    o: &ObstacleSpec,
+    key: &str,
+    origin: &str,
+    length: f64,
+) -> Result<Obstacle<D>, SolveError> {
+    Ok(match o {
+        ObstacleSpec::Plane { point, normal, .. } => {
+            let n: [f64; D] = vector(normal, &format!("{key}.normal"), origin)?;
+            let len = n.iter().map(|x| x * x).sum::<f64>().sqrt();
+            Obstacle::Plane {
+                point: vector(point, &format!("{key}.point"), origin)?,
+                normal: n.map(|x| x / len),
+            }
+        }
+        ObstacleSpec::Circle { centre, radius, .. } => Obstacle::Ball {
+            centre: vector(centre, &format!("{key}.centre"), origin)?,
+            radius: *radius,
+        },
+        ObstacleSpec::Sdf { sdf, .. } => Obstacle::Level {
+            phi: Box::new(
+                Expr::parse(sdf, &["x", "y", "z"])
+                    .map_err(|e| SolveError::Setup(format!("{key}.sdf = \"{sdf}\": {e}")))?,
+            ),
+            // central differences: error O(step²) ≈ 1e-12 of the body's size
+            step: 1e-6 * length,
+        },
+    })
+}
+
+/// The contact of `scene` on `mesh` (None when no section has a law or a bound or an obstacle).
+pub fn build<const D: usize>(
+    scene: &Scene,
+    mesh: &Mesh<D>,
+    dofs: &DofMap<D>,
+    origin: &str,
+) -> Result<Option<ContactSetup<D>>, SolveError> {
+    let used: Vec<usize> = (0..scene.contact.len())
+        .filter(|&i| {
+            let c = &scene.contact[i];
+            c.bound.is_some() || c.law.is_some() || c.obstacle.is_some()
+        })
+        .collect();
+    if used.is_empty() {
+        return Ok(None);
+    }
+    let length = {
+        let (mut lo, mut hi) = ([f64::INFINITY; D], [f64::NEG_INFINITY; D]);
+        for x in &mesh.points {
+            for k in 0..D {
+                lo[k] = lo[k].min(x[k]);
+                hi[k] = hi[k].max(x[k]);
+            }
+        }
+        (0..D)
+            .map(|k| (hi[k] - lo[k]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+            .max(f64::MIN_POSITIVE)
+    };
+    let mut laws = Vec::new();
+    let mut motions = Vec::new();
+    let mut parts = Vec::new();
+    let mut obstacles = Vec::new();
+    let mut specs = Vec::new();
+    for &i in &used {
+        let c = &scene.contact[i];
+        let key = scene.contact_key(i);
+        parts.push(mesh.boundary(&scene.contact_group(i))?);
+        obstacles.push(match &c.obstacle {
+            Some(o) => Some(obstacle_of::<D>(o, &format!("{key}.obstacle"), origin, length)?),
+            None => None,
+        });
+        let law = match &c.law {
+            Some(l) => {
+                let given = law_of(l, &key)?;
+                let one_sided = ContactLaw {
+                    symmetry: Symmetry::OneSided,
+                    ..given.clone()
+                };
+                laws.push(given.clone());
+                if given.symmetry != Symmetry::OneSided {
+                    laws.push(one_sided);
+                }
+                Some((
+                    laws.len() - if given.symmetry == Symmetry::OneSided { 1 } else { 2 },
+                    laws.len() - 1,
+                ))
+            }
+            None => None,
+        };
+        let motion = match c.obstacle.as_ref().and_then(|o| o.motion()) {
+            Some(m) => {
+                if m.len() != D {
+                    return Err(SolveError::Setup(format!(
+                        "{origin}: {key}.obstacle.motion has {} components but the mesh is {D}D: give {D} expressions of t",
+                        m.len()
+                    )));
+                }
+                let exprs = m
+                    .iter()
+                    .enumerate()
+                    .map(|(k, e)| {
+                        Expr::parse(e, &["t"])
+                            .map_err(|err| SolveError::Setup(format!("{key}.obstacle.motion[{k}] = \"{e}\": {err}")))
+                    })
+                    .collect::<Result<Vec<_>, _>>()?;
+                motions.push(exprs);
+                Some(motions.len() - 1)
+            }
+            None => None,
+        };
+        specs.push((law, motion));
+    }
+    let mut inputs = Vec::new();
+    for (k, &i) in used.iter().enumerate() {
+        let c = &scene.contact[i];
+        let n = parts[k].nodes.len();
+        // the layer: the bound if given; a rigid obstacle (no law) is its own bound
+        let layer = match (&c.bound, &c.obstacle, &c.law) {
+            (Some(g), _, _) => super::bound::nodal_bound(
+                g,
+                &parts[k].nodes,
+                &mesh.points,
+                origin,
+                &format!("{}.bound", scene.contact_key(i)),
+            )?,
+            (None, Some(_), None) => vec![0.0; n],
+            _ => vec![f64::INFINITY; n],
+        };
+        inputs.push(GroupRows {
+            part: &parts[k],
+            obstacle: obstacles[k].as_ref(),
+            along_obstacle: c.obstacle.is_some() && c.direction != Some(ContactDirection::Body),
+            law: specs[k].0,
+            layer,
+            motion: specs[k].1,
+        });
+    }
+    let rows = rows::build(&inputs, &mesh.points, length).map_err(|e| SolveError::Setup(format!("{origin}: {e}")))?;
+    let (nodes, kept) = ContactNodes::from_rows(&rows.nodes, &rows.weights, &rows.directions, dofs);
+    let pick = |v: &[f64]| -> Vec<f64> { kept.iter().map(|&k| v[k]).collect() };
+    let gap = pick(&rows.gap);
+    let layer = pick(&rows.layer);
+    let any_obstacle = obstacles.iter().any(|o| o.is_some());
+    let bound: Vec<f64> = gap.iter().zip(&layer).map(|(g, l)| g + l).collect();
+    let terms: Vec<_> = kept.iter().map(|&k| rows.terms[k].clone()).collect();
+    Ok(Some(ContactSetup {
+        laws: NodalLaws::new(laws, &terms),
+        bound: bound.iter().any(|g| g.is_finite()).then_some(bound),
+        gap: any_obstacle.then_some(gap),
+        layer,
+        motion: (!motions.is_empty()).then(|| ObstacleMotion {
+            motions,
+            rows: kept.iter().map(|&k| rows.motion[k]).collect(),
+        }),
+        groups: used
+            .iter()
+            .map(|&i| match scene.contact_group(i) {
+                crate::mesh::GroupSelector::Name(n) => n,
+                crate::mesh::GroupSelector::Tag(t) => t.to_string(),
+            })
+            .collect(),
+        row_group: kept.iter().map(|&k| rows.group[k]).collect(),
+        never_touching: rows.never_touching,
+        nodes,
+        settings: ContactSettings {
+            tolerance: scene.solver.tolerance,
+            max_iterations: scene.solver.max_iterations,
+            dense_limit: scene.solver.dense_newton_limit,
+        },
+    }))
+}
