@@ -273,6 +273,7 @@ fn reruns_are_refused_or_replace_exactly_the_earlier_run() {
         "contact.vtp.series",
         "gamma3.csv",
         "reactions.csv",
+        "contact_forces.csv",
         "scene.toml",
         "summary.json",
         ".hvi-run",
