@@ -381,6 +381,33 @@ pub struct Summary<'a> {
     pub stats: Option<&'a RunStats>,
 }
 
+impl<'a> Summary<'a> {
+    /// The summary of a run of `opts` that has computed `steps_done` steps and written up to
+    /// `last_step_written`; `status` "completed" until the caller says otherwise.
+    pub fn new(
+        opts: &SolveOptions,
+        steps_done: usize,
+        last_step_written: Option<usize>,
+        stats: Option<&'a RunStats>,
+    ) -> Self {
+        Summary {
+            hvi_version: env!("CARGO_PKG_VERSION"),
+            mesh: opts.mesh.display().to_string(),
+            scene: opts
+                .scene
+                .as_ref()
+                .map_or("<embedded default: examples/paper.toml>".into(), |p| {
+                    p.display().to_string()
+                }),
+            output: opts.out.display().to_string(),
+            status: "completed".into(),
+            steps_done,
+            last_step_written,
+            stats,
+        }
+    }
+}
+
 /// Reads a mesh file, or builds the paper's rectangle (0,2)×(0,1) for a spec `rect:NXxNY`
 /// (quadrilaterals) or `rect:NXxNY:tri` (triangles) when no such file exists.
 pub fn read_mesh(path: &Path) -> Result<AnyMesh, SolveError> {
@@ -490,21 +517,7 @@ fn solve_dim<const D: usize>(
         .map_err(SolveError::from)
         .and_then(|()| timeloop::run(&sim, &mut sink, stop));
     sink.finish();
-    let mut summary = Summary {
-        hvi_version: env!("CARGO_PKG_VERSION"),
-        mesh: opts.mesh.display().to_string(),
-        scene: opts
-            .scene
-            .as_ref()
-            .map_or("<embedded default: examples/paper.toml>".into(), |p| {
-                p.display().to_string()
-            }),
-        output: opts.out.display().to_string(),
-        status: "completed".into(),
-        steps_done: sink.steps_done,
-        last_step_written: sink.last_written,
-        stats: None,
-    };
+    let mut summary = Summary::new(opts, sink.steps_done, sink.last_written, None);
     let mut stats = match result {
         Ok(stats) => stats,
         Err(e) => {

@@ -883,21 +883,7 @@ fn run_dim<const D: usize>(
     if let Some(s) = &file_sink {
         stats.phases.stress = s.stress_seconds;
         let summary = MpiSummary {
-            summary: Summary {
-                hvi_version: env!("CARGO_PKG_VERSION"),
-                mesh: opts.mesh.display().to_string(),
-                scene: opts
-                    .scene
-                    .as_ref()
-                    .map_or("<embedded default: examples/paper.toml>".into(), |p| {
-                        p.display().to_string()
-                    }),
-                output: opts.out.display().to_string(),
-                status: "completed".into(),
-                steps_done: s.steps_done,
-                last_step_written: s.last_written,
-                stats: Some(&stats),
-            },
+            summary: Summary::new(opts, s.steps_done, s.last_written, Some(&stats)),
             backend: "petsc",
             ranks,
             petsc_solver: method_name(backend.method),
