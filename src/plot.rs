@@ -18,7 +18,7 @@ use crate::output;
 use crate::scene::Scene;
 use crate::solver::SolveError;
 use crate::study::plot::{
-    colour_map, draw_text, err, field_range, linear_ticks, minus_sign, sci, tick_label, Lettering,
+    colour_map, draw_text, draw_x_ticks, err, field_range, linear_ticks, minus_sign, sci, tick_label, Lettering,
 };
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -754,23 +754,8 @@ fn draw_gamma3<DB: DrawingBackend>(
         .map_err(err)?;
         draw_text(root, lettering, name, (LEFT, top - 22), HPos::Left, 2, black)?;
         let (xt, xstep) = linear_ticks(s0, s1, 8);
-        for v in xt {
-            let (x, _) = to_px(v, v0);
-            root.draw(&PathElement::new(
-                vec![(x, top + PANEL_H), (x, top + PANEL_H + 5)],
-                grey.stroke_width(1),
-            ))
-            .map_err(err)?;
-            draw_text(
-                root,
-                lettering,
-                &tick_label(v, xstep),
-                (x, top + PANEL_H + 9),
-                HPos::Center,
-                2,
-                black,
-            )?;
-        }
+        let xt: Vec<(i32, f64)> = xt.into_iter().map(|v| (to_px(v, v0).0, v)).collect();
+        draw_x_ticks(root, lettering, &xt, xstep, top + PANEL_H, grey, black)?;
         let (yt, ystep) = linear_ticks(v0, v1, 5);
         for v in yt {
             let (_, y) = to_px(s0, v);

@@ -741,6 +741,33 @@ pub(crate) fn text_width(text: &str, scale: i32) -> i32 {
     (text.chars().count() as i32 * 6 - 1).max(0) * scale
 }
 
+/// Tick marks hanging below a horizontal axis at pixel row `y`, and their labels: one per
+/// (pixel column, value) of `ticks`, labelled by [`tick_label`] at the ticks' `step`.
+pub(crate) fn draw_x_ticks<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    lettering: Lettering,
+    ticks: &[(i32, f64)],
+    step: f64,
+    y: i32,
+    grey: RGBColor,
+    black: RGBColor,
+) -> Result<(), String> {
+    for &(x, v) in ticks {
+        root.draw(&PathElement::new(vec![(x, y), (x, y + 5)], grey.stroke_width(1)))
+            .map_err(err)?;
+        draw_text(
+            root,
+            lettering,
+            &tick_label(v, step),
+            (x, y + 9),
+            HPos::Center,
+            2,
+            black,
+        )?;
+    }
+    Ok(())
+}
+
 /// Draws `text` with its top (the top of a capital) at `y`, anchored at `x` by `h`; the
 /// glyph cell is 5×7 `scale`-pixel squares (about 12·scale-point text in SVG).
 pub(crate) fn draw_text<DB: DrawingBackend>(
@@ -933,23 +960,8 @@ fn draw_surface_map<DB: DrawingBackend>(
         let x_range = (layout.lo[0], layout.lo[0] + pw as f64 / layout.px);
         let y_range = (layout.lo[1], layout.lo[1] + ph as f64 / layout.px);
         let (xt, xstep) = linear_ticks(x_range.0, x_range.1, (pw / 90).clamp(2, 8) as usize);
-        for v in xt {
-            let (x, _) = to_px([v, layout.lo[1]]);
-            root.draw(&PathElement::new(
-                vec![(x, top + ph), (x, top + ph + 5)],
-                grey.stroke_width(1),
-            ))
-            .map_err(err)?;
-            draw_text(
-                root,
-                lettering,
-                &tick_label(v, xstep),
-                (x, top + ph + 9),
-                HPos::Center,
-                2,
-                black,
-            )?;
-        }
+        let xt: Vec<(i32, f64)> = xt.into_iter().map(|v| (to_px([v, layout.lo[1]]).0, v)).collect();
+        draw_x_ticks(root, lettering, &xt, xstep, top + ph, grey, black)?;
         let (yt, ystep) = linear_ticks(y_range.0, y_range.1, (ph / 45).clamp(1, 6) as usize);
         for v in yt {
             let (_, y) = to_px([layout.lo[0], v]);
