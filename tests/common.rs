@@ -4,6 +4,19 @@
 use hvi::mesh::structured::{rectangle, CellShape};
 use hvi::mesh::{Facet, Mesh, PhysicalGroup};
 use hvi::scene::Scene;
+use std::process::{Command, Output};
+
+/// Runs the hvi binary with `args` and asserts it succeeded (the message shows its stderr).
+pub fn hvi_ok(args: &[&str]) -> Output {
+    let out = Command::new(env!("CARGO_BIN_EXE_hvi")).args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "hvi {}: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
 
 /// A scene from TOML text (panics with the error, which names the key).
 pub fn scene(toml: &str) -> Scene {

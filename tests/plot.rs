@@ -2,6 +2,8 @@
 //! text drawn on them (colour bar, field, time, magnification), the default magnification, the
 //! foundation, the Γ₃ plot against arc length (a vertical Γ₃ too) at chosen times.
 
+mod common;
+
 use hvi::mesh::structured::{rectangle, CellShape};
 use hvi::output::{CsvTable, Field, Frame, SeriesWriter};
 use hvi::plot::{arc_length, default_scale, plot_run, PlotOptions};
@@ -11,16 +13,7 @@ fn hvi(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_hvi")).args(args).output().unwrap()
 }
 
-fn ok(args: &[&str]) -> Output {
-    let out = hvi(args);
-    assert!(
-        out.status.success(),
-        "hvi {}: {}",
-        args.join(" "),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
+use common::hvi_ok as ok;
 
 /// The paper's scene on rect:16x8 with 8 steps (t = j/8: the Fig. 2 times are output times);
 /// Γ₃ starts at the first node off the clamped corner, x = h = 1/8.

@@ -1,28 +1,15 @@
 //! `hvi plot` on a 3D run: maps of u_ν and the contact pressure over Γ₃ (gamma3_map.png and
 //! .svg), and a 2D run still gives deformed.png and gamma3.svg; the tiles the map draws.
 
+mod common;
+
 use hvi::study::plot::{node_tiles, project_surface};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn hvi() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_hvi"))
-}
-
 fn root(name: &str) -> String {
     format!("{}/{name}", env!("CARGO_MANIFEST_DIR"))
 }
 
-fn run(args: &[&str]) -> Output {
-    let out = hvi().args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "hvi {}: {}",
-        args.join(" "),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
+use common::hvi_ok as run;
 
 /// Width and height of a PNG file, after checking its signature and IHDR chunk.
 fn png_size(path: &Path) -> (u32, u32) {
