@@ -668,6 +668,10 @@ fn check_dim<const D: usize>(
             );
         }
     }
+    let warnings = crate::solver::advice::warnings(scene, &sim);
+    for w in &warnings {
+        let _ = writeln!(out, "warning: {w}");
+    }
     Ok(out)
 }
 

@@ -2,6 +2,7 @@
 //! discrete problem with only the effects the scene names, [`plan::Plan`] says what they cost,
 //! and [`timeloop`] is the short driver of docs/method.md §3–4.
 
+pub mod advice;
 pub mod bound;
 pub mod contact;
 pub mod dirichlet;

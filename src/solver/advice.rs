@@ -1,0 +1,107 @@
+//! Warnings of `hvi check`: set-ups that are valid but probably not what the user meant
+//! (docs/method.md §14.5). Each is a sentence naming the group and what to do instead.
+
+use super::setup::Simulation;
+use crate::scene::{BoundSpec, Scene};
+
+/// The angle (degrees) between two nodal normals of one contact group above which its Γ₃
+/// counts as curved: a constant bound then follows the curve instead of a flat foundation.
+const CURVED_DEGREES: f64 = 10.0;
+
+/// The warnings for a scene on its simulation (empty: nothing looks unintended).
+pub fn warnings<const D: usize>(scene: &Scene, sim: &Simulation<D>) -> Vec<String> {
+    let mut out = Vec::new();
+    // a traction on a group whose displacement is prescribed does work only on the reaction
+    let prescribed: Vec<(String, String)> = scene
+        .clamped_group()
+        .map(|g| (g.to_string(), "every component (groups.clamped)".to_string()))
+        .into_iter()
+        .chain(scene.dirichlet.iter().map(|d| {
+            (
+                d.group.to_string(),
+                format!("components {} ([[dirichlet]])", d.components.join(", ")),
+            )
+        }))
+        .collect();
+    for t in &scene.traction {
+        let name = t.group.to_string();
+        for (g, what) in prescribed.iter().filter(|(g, _)| *g == name) {
+            out.push(format!(
+                "a traction acts on group {g}, whose {what} is prescribed: the load there only changes the \
+                 reaction; put the load on a group that is free in its direction, or drop it"
+            ));
+        }
+    }
+    let Some(c) = &sim.contact else {
+        return out;
+    };
+    let diameter = body_diameter(&sim.mesh.points);
+    for (i, spec) in scene.contact.iter().enumerate() {
+        let group = c.groups.get(i).cloned().unwrap_or_else(|| format!("#{i}"));
+        let rows: Vec<usize> = (0..c.row_group.len()).filter(|&p| c.row_group[p] == i).collect();
+        // a constant bound along each node's own normal on a curved Γ₃: the foundation is then a
+        // copy of Γ₃ shifted by g, not a flat obstacle
+        if spec.obstacle.is_none() && matches!(spec.bound, Some(BoundSpec::Number(_))) {
+            let cos = CURVED_DEGREES.to_radians().cos();
+            let curved = rows.iter().any(|&p| {
+                rows.iter().any(|&q| {
+                    let (a, b) = (c.nodes.normals[p], c.nodes.normals[q]);
+                    (0..D).map(|k| a[k] * b[k]).sum::<f64>() < cos
+                })
+            });
+            if curved {
+                out.push(format!(
+                    "contact group `{group}` is curved (its normals differ by more than {CURVED_DEGREES}°) and has a \
+                     constant bound but no obstacle: each node may move g along its own normal, so the foundation \
+                     is Γ₃ shifted by g, not a flat surface; for a rigid body use `obstacle = {{ kind = \"plane\", \
+                     … }}` (docs/method.md §14)"
+                ));
+            }
+        }
+        let never: Vec<usize> = c
+            .never_touching
+            .iter()
+            .filter(|&&(_, g)| g == i)
+            .map(|&(n, _)| n)
+            .collect();
+        if let Some(&n) = never.first() {
+            out.push(format!(
+                "{} node(s) of contact group `{group}` never meet its obstacle along their normal (e.g. the node \
+                 at {:?}) and are left out of the contact problem; check the obstacle's position and `direction`",
+                never.len(),
+                sim.mesh.points[n]
+            ));
+        }
+        if let Some(gap) = &c.gap {
+            let far: Vec<usize> = rows
+                .iter()
+                .copied()
+                .filter(|&p| gap[p].is_finite() && gap[p] > diameter)
+                .collect();
+            if let Some(&p) = far.first() {
+                out.push(format!(
+                    "{} node(s) of contact group `{group}` start farther from the obstacle than the body's size \
+                     ({diameter:.3e}; e.g. the node at {:?}, gap {:.3e}): they can hardly ever touch; check the \
+                     obstacle's position and units",
+                    far.len(),
+                    sim.mesh.points[c.nodes.nodes[p]],
+                    gap[p]
+                ));
+            }
+        }
+    }
+    out
+}
+
+/// The diagonal of the points' bounding box.
+fn body_diameter<const D: usize>(points: &[[f64; D]]) -> f64 {
+    (0..D)
+        .map(|k| {
+            let (lo, hi) = points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p[k]), hi.max(p[k]))
+            });
+            (hi - lo).powi(2)
+        })
+        .sum::<f64>()
+        .sqrt()
+}
