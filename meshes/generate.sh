@@ -105,3 +105,10 @@ python3 check_orientation.py | grep -E '^[^ ]|ERROR'
     gmsh -3 hertz_3d.geo -format msh41 -o hertz_3d.msh >/dev/null
     echo "wrote hertz_3d.msh ($(wc -c <hertz_3d.msh) bytes)"
 )
+
+# The gallery's two contact zones (examples/gallery/two_zones): Q1, h = 0.05, 0.02 at the right foot.
+(
+    cd ../examples/gallery/two_zones
+    gmsh -2 two_zones.geo -format msh41 -o two_zones.msh >/dev/null
+    echo "wrote two_zones.msh ($(wc -c <two_zones.msh) bytes)"
+)

@@ -124,7 +124,7 @@ impl<const D: usize> FileSink<D> {
             Some(_) if fields.contains(&OutputField::Contact) => {
                 let mut columns = vec!["time", "x", "y", "z"];
                 columns.truncate(1 + D);
-                columns.extend(["u_nu", "force", "pressure", "status"]);
+                columns.extend(["u_nu", "force", "pressure", "status", "group"]);
                 manifest.add("gamma3.csv")?;
                 Some(CsvTable::create(&dir.join("gamma3.csv"), &columns)?)
             }
@@ -251,7 +251,16 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
                 let pressure = state.force[k] / c.nodes.weights[k];
                 let mut row = vec![view.time];
                 row.extend_from_slice(&mesh.points[p]);
-                row.extend([normal[k], state.force[k], pressure, f64::from(state.status[k].code())]);
+                // the row's group by its physical tag (a number, like every other column): a run with
+                // several contact groups splits by it (docs/method.md §14.6)
+                let tag = c.group_tags[c.row_group[k]];
+                row.extend([
+                    normal[k],
+                    state.force[k],
+                    pressure,
+                    f64::from(state.status[k].code()),
+                    f64::from(tag),
+                ]);
                 rows.push(row);
             }
             if let Some(csv) = &mut self.gamma3 {
@@ -653,7 +662,14 @@ fn check_dim<const D: usize>(
         }
     }
     if let Some(c) = &sim.contact {
-        let _ = writeln!(out, "contact: {} nodes on {}", c.nodes.len(), scene.groups.contact);
+        // rows per group (a corner node counts once per wall, docs/method.md §14.3)
+        let per_group: Vec<String> = c
+            .groups
+            .iter()
+            .enumerate()
+            .map(|(i, g)| format!("\"{g}\" ({})", c.row_group.iter().filter(|&&r| r == i).count()))
+            .collect();
+        let _ = writeln!(out, "contact: {} rows on {}", c.nodes.len(), per_group.join(", "));
         if !c.laws.is_empty() {
             let ratio = smallness_ratio(&sim)?;
             let _ = writeln!(

@@ -154,17 +154,20 @@ pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, S
         .map(|text| read_gamma3(text, &mesh))
         .transpose()
         .map_err(fail)?;
-    let bound = match (&scene, &gamma3) {
-        (Some(scene), Some(g3)) => match scene.contact.first().and_then(|c| c.bound.as_ref()) {
-            Some(spec) => Some(crate::solver::bound::nodal_bound(
-                spec,
-                &g3.nodes,
-                &mesh.points,
-                "scene.toml",
-                "contact.bound",
-            )?),
-            None => None,
-        },
+    // one layer without an obstacle: u_ν = g along the nodes' normals (with several groups or an
+    // obstacle the foundation differs per group and is not drawn)
+    let layer = scene.as_ref().and_then(|s| match s.contact.as_slice() {
+        [one] if one.obstacle.is_none() => one.bound.as_ref(),
+        _ => None,
+    });
+    let bound = match (layer, &gamma3) {
+        (Some(spec), Some(g3)) => Some(crate::solver::bound::nodal_bound(
+            spec,
+            &g3.nodes,
+            &mesh.points,
+            "scene.toml",
+            "contact.bound",
+        )?),
         _ => None,
     };
     let (lo, hi) = bounding_box(&mesh.points);

@@ -44,12 +44,18 @@ pub struct Groups {
     /// sections, which then say everything that is prescribed ([`Scene::clamped_group`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub clamped: Option<GroupSelector>,
-    #[serde(default = "default_contact")]
+    /// Not written when it is the default: a scene with `[[contact]]` sections (which leave it at
+    /// the default) must read back, and those refuse `groups.contact`.
+    #[serde(default = "default_contact", skip_serializing_if = "is_default_contact")]
     pub contact: GroupSelector,
 }
 
 fn default_contact() -> GroupSelector {
     GroupSelector::Name("Gamma3".into())
+}
+
+fn is_default_contact(g: &GroupSelector) -> bool {
+    *g == default_contact()
 }
 
 impl Default for Groups {

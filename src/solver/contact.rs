@@ -40,6 +40,8 @@ pub struct ContactSetup<const D: usize> {
     pub motion: Option<ObstacleMotion<D>>,
     /// The contact groups' names (or tags), in scene order.
     pub groups: Vec<String>,
+    /// The physical tag of each group (the `group` column of gamma3.csv and the contact dataset).
+    pub group_tags: Vec<i32>,
     /// The group of each row (the stricter wall's where groups meet, docs/method.md §14.3).
     pub row_group: Vec<usize>,
     /// Γ₃ nodes whose normal never meets their obstacle (dropped): (node, group).
@@ -201,12 +203,14 @@ pub fn build<const D: usize>(
     let mut laws = Vec::new();
     let mut motions = Vec::new();
     let mut parts = Vec::new();
+    let mut group_tags = Vec::new();
     let mut obstacles = Vec::new();
     let mut specs = Vec::new();
     for &i in &used {
         let c = &scene.contact[i];
         let key = scene.contact_key(i);
         parts.push(mesh.boundary(&scene.contact_group(i))?);
+        group_tags.push(mesh.group(&scene.contact_group(i), (D - 1) as u8)?.tag);
         obstacles.push(match &c.obstacle {
             Some(o) => Some(obstacle_of::<D>(o, &format!("{key}.obstacle"), origin, length)?),
             None => None,
@@ -301,6 +305,7 @@ pub fn build<const D: usize>(
                 crate::mesh::GroupSelector::Tag(t) => t.to_string(),
             })
             .collect(),
+        group_tags,
         row_group: kept.iter().map(|&k| rows.group[k]).collect(),
         never_touching: rows.never_touching,
         nodes,

@@ -144,7 +144,7 @@ impl Plan {
         if sim.kernel.is_some() {
             factorisations += 1; // possibly K_A for step 0
         }
-        if sim.kernel.is_none() && !sim.loads.is_time_dependent() && !sim.dirichlet.is_time_dependent() {
+        if sim.is_static() {
             solves_per_step = 0;
         }
         Plan {
@@ -169,7 +169,8 @@ impl fmt::Display for Plan {
         if self.solves_per_step == 0 {
             writeln!(
                 f,
-                "  no memory and constant loads: one solve at t = 0, the same state written for every output step"
+                "  no memory, constant loads and no moving obstacle: one solve at t = 0, the same state written for \
+                 every output step"
             )?;
         } else {
             writeln!(

@@ -76,6 +76,16 @@ fn exprs<const D: usize>(
 }
 
 impl<const D: usize> Simulation<D> {
+    /// Whether the state of step 0 stands for every step (one solve for the run): no memory and
+    /// nothing that changes in time — loads, prescribed values, a moving obstacle
+    /// (docs/method.md §14.2). The plan and the time loop both ask here.
+    pub fn is_static(&self) -> bool {
+        self.kernel.is_none()
+            && !self.loads.is_time_dependent()
+            && !self.dirichlet.is_time_dependent()
+            && self.contact.as_ref().is_none_or(|c| c.motion.is_none())
+    }
+
     /// Builds the discrete problem of `scene` on `mesh`.
     pub fn new(scene: &Scene, mesh: Mesh<D>) -> Result<Self, SolveError> {
         let origin = mesh.path.display().to_string();

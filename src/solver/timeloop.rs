@@ -536,7 +536,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
             backend,
             main,
             memory_diagonal,
-            single_solve: history.is_none() && !time_dependent_loads && !sim.dirichlet.is_time_dependent(),
+            single_solve: sim.is_static(),
             history,
             contact,
             reaction_values: Vec::new(),
