@@ -2,7 +2,7 @@
 //! that turn steps into files (VTK series, Γ₃ CSV, summary) or keep them in memory (tests).
 
 use crate::contact::active_set::{ContactOutcome, ContactState};
-use crate::fem::stress::{cell_measures, cell_stresses, nodal_stresses};
+use crate::fem::stress::{cell_measures, cell_stresses, nodal_stresses, CellStresses};
 use crate::mesh::{self, AnyMesh, GroupSelector, Mesh};
 use crate::output::{self, ContactBoundary, CsvTable, Field, Frame, SeriesWriter, SurfaceFrame};
 use crate::scene::{OutputField, Scene};
@@ -59,7 +59,8 @@ pub struct FileSink<const D: usize = 2> {
     /// Steps computed so far, and the last step written.
     pub steps_done: usize,
     pub last_written: Option<usize>,
-    series: SeriesWriter,
+    /// The body's series (None when another writer writes the body: the PETSc run's pieces).
+    series: Option<SeriesWriter>,
     contact: Option<ContactSeries<D>>,
     /// The physical tag of each cell's group (-1 for a cell in none).
     cell_groups: Vec<i32>,
@@ -79,7 +80,7 @@ impl<const D: usize> FileSink<D> {
     /// level of the `.vtu`/`.vtp` files (0: none).
     pub fn create(
         dir: &Path,
-        mut manifest: output::RunManifest,
+        manifest: output::RunManifest,
         sim: &Simulation<D>,
         fields: &[OutputField],
         contact_groups: &[GroupSelector],
@@ -87,8 +88,47 @@ impl<const D: usize> FileSink<D> {
         progress: bool,
     ) -> Result<Self, SolveError> {
         let series = SeriesWriter::create(dir, "solution")?.with_compression(compression);
-        for name in series.index_names() {
-            manifest.add(&name)?;
+        Self::create_with(
+            dir,
+            manifest,
+            Some(series),
+            sim,
+            fields,
+            contact_groups,
+            compression,
+            progress,
+        )
+    }
+
+    /// As [`FileSink::create`] but without the body's series, which another writer writes:
+    /// the Γ₃ tables and dataset, the reactions and the contact forces only.
+    pub fn create_without_body(
+        dir: &Path,
+        manifest: output::RunManifest,
+        sim: &Simulation<D>,
+        fields: &[OutputField],
+        contact_groups: &[GroupSelector],
+        compression: u32,
+        progress: bool,
+    ) -> Result<Self, SolveError> {
+        Self::create_with(dir, manifest, None, sim, fields, contact_groups, compression, progress)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn create_with(
+        dir: &Path,
+        mut manifest: output::RunManifest,
+        series: Option<SeriesWriter>,
+        sim: &Simulation<D>,
+        fields: &[OutputField],
+        contact_groups: &[GroupSelector],
+        compression: u32,
+        progress: bool,
+    ) -> Result<Self, SolveError> {
+        if let Some(series) = &series {
+            for name in series.index_names() {
+                manifest.add(&name)?;
+            }
         }
         let contact = match &sim.contact {
             Some(_) if fields.contains(&OutputField::Contact) => {
@@ -109,13 +149,12 @@ impl<const D: usize> FileSink<D> {
             }
             _ => None,
         };
-        let mut cell_groups = vec![-1; sim.mesh.cells.len()];
-        for g in sim.mesh.groups.iter().filter(|g| g.dim as usize == D).rev() {
-            for &c in &g.cells {
-                cell_groups[c] = g.tag;
-            }
-        }
-        let cell_measures = if fields.contains(&OutputField::Stress) || fields.contains(&OutputField::VonMises) {
+        let cell_groups = if series.is_some() {
+            cell_groups(&sim.mesh)
+        } else {
+            Vec::new()
+        };
+        let cell_measures = if series.is_some() && wants_stress(fields) {
             cell_measures(&sim.mesh.cells, &sim.mesh.points)
         } else {
             Vec::new()
@@ -177,10 +216,6 @@ impl<const D: usize> FileSink<D> {
         })
     }
 
-    fn wants(&self, f: OutputField) -> bool {
-        self.fields.contains(&f)
-    }
-
     /// Clears the progress bar.
     pub fn finish(&self) {
         if let Some(bar) = &self.progress {
@@ -203,46 +238,30 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
     fn write_frame(&mut self, sim: &Simulation<D>, view: &StepView) -> Result<(), SolveError> {
         let mesh = &sim.mesh;
         let nodal = sim.dofs.to_nodal(view.displacement);
-        let displacement: Vec<f64> = nodal
-            .iter()
-            .flat_map(|u| [u[0], u[1], u.get(2).copied().unwrap_or(0.0)])
-            .collect();
-        let stresses = (self.wants(OutputField::Stress) || self.wants(OutputField::VonMises)).then(|| {
-            timed(&mut self.stress_seconds, || {
-                let memory = view.memory_displacement.map(|m| sim.dofs.to_nodal(m));
-                let cell = cell_stresses(&mesh.cells, &mesh.points, &sim.elasticity, &nodal, memory.as_deref());
-                let node = nodal_stresses(&mesh.cells, &self.cell_measures, &cell.tensor, mesh.points.len());
-                (cell, node)
-            })
-        });
-        // The first scalar of each list is the active one, which ParaView colours by: von Mises.
-        let mut point_fields = Vec::new();
-        let mut cell_fields = Vec::new();
-        if let Some((cell, node)) = &stresses {
-            if self.wants(OutputField::VonMises) {
-                point_fields.push(Field::f64("von_mises", 1, &node.von_mises));
-                cell_fields.push(Field::f64("von_mises", 1, &cell.von_mises));
-            }
-            if self.wants(OutputField::Stress) {
-                point_fields.push(Field::f64("stress", 9, &node.tensor));
-                cell_fields.push(Field::f64("stress", 9, &cell.tensor));
-            }
+        if let Some(series) = &mut self.series {
+            let displacement = displacement_3(&nodal);
+            let stresses = wants_stress(&self.fields).then(|| {
+                timed(&mut self.stress_seconds, || {
+                    let memory = view.memory_displacement.map(|m| sim.dofs.to_nodal(m));
+                    let cell = cell_stresses(&mesh.cells, &mesh.points, &sim.elasticity, &nodal, memory.as_deref());
+                    let node = nodal_stresses(&mesh.cells, &self.cell_measures, &cell.tensor, mesh.points.len());
+                    (cell, node)
+                })
+            });
+            let (point_fields, cell_fields) =
+                body_fields(&self.fields, &displacement, stresses.as_ref(), &self.cell_groups);
+            let frame = Frame {
+                step: view.step,
+                time: view.time,
+                points: &mesh.points,
+                cells: &mesh.cells,
+                point_fields,
+                cell_fields,
+            };
+            self.manifest.add(&series.frame_name(view.step))?;
+            series.write_frame(&frame)?;
+            self.last_written = Some(view.step);
         }
-        if self.wants(OutputField::Displacement) {
-            point_fields.insert(0, Field::f64("displacement", 3, &displacement));
-        }
-        cell_fields.push(Field::i32("group", 1, &self.cell_groups));
-        let frame = Frame {
-            step: view.step,
-            time: view.time,
-            points: &mesh.points,
-            cells: &mesh.cells,
-            point_fields,
-            cell_fields,
-        };
-        self.manifest.add(&self.series.frame_name(view.step))?;
-        self.series.write_frame(&frame)?;
-        self.last_written = Some(view.step);
         if let (Some(c), Some(state)) = (&sim.contact, view.contact) {
             let mut normal = vec![0.0; c.nodes.len()];
             c.nodes.normal_displacements(view.displacement, &mut normal);
@@ -304,6 +323,59 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
         }
         Ok(())
     }
+}
+
+/// True if `fields` ask for the stress or von Mises (which need the cell stresses).
+pub(crate) fn wants_stress(fields: &[OutputField]) -> bool {
+    fields.contains(&OutputField::Stress) || fields.contains(&OutputField::VonMises)
+}
+
+/// Nodal displacements as 3-vectors (z = 0 in 2D), for ParaView's Warp By Vector.
+pub(crate) fn displacement_3<const D: usize>(nodal: &[[f64; D]]) -> Vec<f64> {
+    nodal
+        .iter()
+        .flat_map(|u| [u[0], u[1], u.get(2).copied().unwrap_or(0.0)])
+        .collect()
+}
+
+/// The point and cell fields of a frame of the body (docs/method.md §12), as `fields` ask:
+/// `stresses` are the (cell, recovered nodal) stresses. The first scalar of each list is the
+/// active one, which ParaView colours by: von Mises.
+pub(crate) fn body_fields<'a>(
+    fields: &[OutputField],
+    displacement: &'a [f64],
+    stresses: Option<&'a (CellStresses, CellStresses)>,
+    cell_groups: &'a [i32],
+) -> (Vec<Field<'a>>, Vec<Field<'a>>) {
+    let mut point_fields = Vec::new();
+    let mut cell_fields = Vec::new();
+    if let Some((cell, node)) = stresses {
+        if fields.contains(&OutputField::VonMises) {
+            point_fields.push(Field::f64("von_mises", 1, &node.von_mises));
+            cell_fields.push(Field::f64("von_mises", 1, &cell.von_mises));
+        }
+        if fields.contains(&OutputField::Stress) {
+            point_fields.push(Field::f64("stress", 9, &node.tensor));
+            cell_fields.push(Field::f64("stress", 9, &cell.tensor));
+        }
+    }
+    if fields.contains(&OutputField::Displacement) {
+        point_fields.insert(0, Field::f64("displacement", 3, displacement));
+    }
+    cell_fields.push(Field::i32("group", 1, cell_groups));
+    (point_fields, cell_fields)
+}
+
+/// The physical tag of each cell's group (-1 for a cell in none): the last group of dimension
+/// D listing it.
+pub(crate) fn cell_groups<const D: usize>(mesh: &Mesh<D>) -> Vec<i32> {
+    let mut cell_groups = vec![-1; mesh.cells.len()];
+    for g in mesh.groups.iter().filter(|g| g.dim as usize == D).rev() {
+        for &c in &g.cells {
+            cell_groups[c] = g.tag;
+        }
+    }
+    cell_groups
 }
 
 /// Writes one frame of the contact dataset (docs/method.md §12): u_ν, gap, force, pressure and
@@ -577,64 +649,9 @@ fn check_dim<const D: usize>(
     mesh: Mesh<D>,
 ) -> Result<String, SolveError> {
     use std::fmt::Write;
-    let mut out = String::new();
-    let _ = writeln!(out, "mesh {}", mesh_path.display());
-    let count = |name: &str| mesh.cells.iter().filter(|c| c.name() == name).count();
-    let kinds: Vec<String> = if D == 2 {
-        vec![
-            format!("{} triangles", count("triangle")),
-            format!("{} quadrilaterals", count("quadrangle")),
-        ]
-    } else {
-        vec![
-            format!("{} tetrahedra", count("tetrahedron")),
-            format!("{} hexahedra", count("hexahedron")),
-        ]
-    };
-    let _ = writeln!(
-        out,
-        "  {D}D: {} nodes, {} cells ({})",
-        mesh.points.len(),
-        mesh.cells.len(),
-        kinds.join(", ")
-    );
-    let (hmin, hmax) = mesh.cell_size();
-    let _ = writeln!(out, "  cell size h: {hmin:.4e} … {hmax:.4e}");
-    let _ = writeln!(out, "  physical groups:");
-    for g in &mesh.groups {
-        let _ = writeln!(
-            out,
-            "    dim {} tag {:>3} {:<14} {} facets, {} cells",
-            g.dim,
-            g.tag,
-            g.name.as_deref().unwrap_or("(no name)"),
-            g.facets.len(),
-            g.cells.len()
-        );
-    }
+    let mut out = check_mesh_report(mesh_path, &mesh);
     let sim = Simulation::new(scene, mesh)?;
-    let _ = writeln!(
-        out,
-        "scene {}",
-        scene_path.map_or("<embedded default: examples/paper.toml>".to_string(), |p| p
-            .display()
-            .to_string())
-    );
-    let _ = writeln!(
-        out,
-        "  unknowns: {} free ({} prescribed components kept as identity rows)",
-        sim.dofs.n_free(),
-        sim.dofs.n_prescribed()
-    );
-    let _ = writeln!(
-        out,
-        "  time: T = {}, {} steps of k = {:.4e}",
-        sim.time.final_time,
-        sim.time.steps,
-        sim.time.step()
-    );
-    let _ = writeln!(out, "plan:");
-    let _ = write!(out, "{}", Plan::new(&sim));
+    out.push_str(&check_scene_report(scene_path, &sim));
     // The factor: symbolic analysis only (cheap), so its size is known before solving.
     let [k_a] =
         crate::fem::assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.tensor()]);
@@ -689,6 +706,76 @@ fn check_dim<const D: usize>(
         let _ = writeln!(out, "warning: {w}");
     }
     Ok(out)
+}
+
+/// The mesh part of `hvi check`'s report: counts, cell sizes, physical groups.
+pub(crate) fn check_mesh_report<const D: usize>(mesh_path: &Path, mesh: &Mesh<D>) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
+    let _ = writeln!(out, "mesh {}", mesh_path.display());
+    let count = |name: &str| mesh.cells.iter().filter(|c| c.name() == name).count();
+    let kinds: Vec<String> = if D == 2 {
+        vec![
+            format!("{} triangles", count("triangle")),
+            format!("{} quadrilaterals", count("quadrangle")),
+        ]
+    } else {
+        vec![
+            format!("{} tetrahedra", count("tetrahedron")),
+            format!("{} hexahedra", count("hexahedron")),
+        ]
+    };
+    let _ = writeln!(
+        out,
+        "  {D}D: {} nodes, {} cells ({})",
+        mesh.points.len(),
+        mesh.cells.len(),
+        kinds.join(", ")
+    );
+    let (hmin, hmax) = mesh.cell_size();
+    let _ = writeln!(out, "  cell size h: {hmin:.4e} … {hmax:.4e}");
+    let _ = writeln!(out, "  physical groups:");
+    for g in &mesh.groups {
+        let _ = writeln!(
+            out,
+            "    dim {} tag {:>3} {:<14} {} facets, {} cells",
+            g.dim,
+            g.tag,
+            g.name.as_deref().unwrap_or("(no name)"),
+            g.facets.len(),
+            g.cells.len()
+        );
+    }
+    out
+}
+
+/// The scene part of `hvi check`'s report: unknowns, time steps and the plan.
+pub(crate) fn check_scene_report<const D: usize>(scene_path: Option<&Path>, sim: &Simulation<D>) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "scene {}",
+        scene_path.map_or("<embedded default: examples/paper.toml>".to_string(), |p| p
+            .display()
+            .to_string())
+    );
+    let _ = writeln!(
+        out,
+        "  unknowns: {} free ({} prescribed components kept as identity rows)",
+        sim.dofs.n_free(),
+        sim.dofs.n_prescribed()
+    );
+    let _ = writeln!(
+        out,
+        "  time: T = {}, {} steps of k = {:.4e}",
+        sim.time.final_time,
+        sim.time.steps,
+        sim.time.step()
+    );
+    let _ = writeln!(out, "plan:");
+    let _ = write!(out, "{}", Plan::new(sim));
+    out
 }
 
 /// MemAvailable of /proc/meminfo (Linux), in bytes.

@@ -93,6 +93,13 @@ enum Command {
         scene: Option<PathBuf>,
         #[arg(long = "set", value_name = "KEY=VALUE")]
         overrides: Vec<String>,
+        /// petsc (under mpirun): also the partition over the ranks and the memory each rank
+        /// will need (README "Running on a cluster").
+        #[arg(long, value_enum, default_value_t = BackendArg::Faer)]
+        backend: BackendArg,
+        /// With --backend petsc: the solver whose memory to predict (mumps, the default, or gamg).
+        #[arg(long, value_enum)]
+        solver: Option<SolverArg>,
     },
 }
 
@@ -108,18 +115,59 @@ enum SolverArg {
     Gamg,
 }
 
+#[cfg(feature = "petsc")]
+fn petsc_solver(solver: Option<SolverArg>) -> hvi::petsc::SolverChoice {
+    match solver {
+        Some(SolverArg::Gamg) => hvi::petsc::SolverChoice::Gamg,
+        _ => hvi::petsc::SolverChoice::Mumps,
+    }
+}
+
 /// `hvi solve --backend petsc`: every rank runs; rank 0 prints the report or the error.
 #[cfg(feature = "petsc")]
 fn solve_petsc(opts: &hvi::app::SolveOptions, solver: Option<SolverArg>) -> ExitCode {
-    let choice = match solver {
-        Some(SolverArg::Gamg) => hvi::petsc::SolverChoice::Gamg,
-        _ => hvi::petsc::SolverChoice::Mumps,
-    };
-    match hvi::petsc::solve(opts, choice) {
+    let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::Relaxed));
+    match hvi::petsc::solve(opts, petsc_solver(solver), Some(&STOP)) {
         Ok(run) => match run.result {
             Ok(stats) => {
                 if run.rank == 0 {
                     println!("{}", hvi::app::report(&stats, &opts.out));
+                }
+                ExitCode::SUCCESS
+            }
+            Err(e @ hvi::solver::SolveError::Interrupted { .. }) => {
+                if run.rank == 0 {
+                    eprintln!("hvi: {e}");
+                }
+                ExitCode::from(130)
+            }
+            Err(e) => {
+                if run.rank == 0 {
+                    eprintln!("error: {e}");
+                }
+                ExitCode::FAILURE
+            }
+        },
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// `hvi check --backend petsc`: every rank checks its part; rank 0 prints the report.
+#[cfg(feature = "petsc")]
+fn check_petsc(
+    mesh: &std::path::Path,
+    scene: Option<&std::path::Path>,
+    overrides: &[String],
+    solver: Option<SolverArg>,
+) -> ExitCode {
+    match hvi::petsc::check(mesh, scene, overrides, petsc_solver(solver)) {
+        Ok(run) => match run.result {
+            Ok(report) => {
+                if run.rank == 0 {
+                    print!("{report}");
                 }
                 ExitCode::SUCCESS
             }
@@ -138,10 +186,22 @@ fn solve_petsc(opts: &hvi::app::SolveOptions, solver: Option<SolverArg>) -> Exit
 }
 
 #[cfg(not(feature = "petsc"))]
+const NO_PETSC: &str = "error: --backend petsc: this hvi was built without the PETSc backend; build it with `cargo build --release --features petsc` (needs PETSc ≥ 3.18 and MPI, see README \"Running on a cluster\") and launch it with mpirun";
+
+#[cfg(not(feature = "petsc"))]
 fn solve_petsc(_opts: &hvi::app::SolveOptions, _solver: Option<SolverArg>) -> ExitCode {
-    eprintln!(
-        "error: --backend petsc: this hvi was built without the PETSc backend; build it with `cargo build --release --features petsc` (needs PETSc ≥ 3.18 and MPI, see README \"Running on a cluster\") and launch it with mpirun"
-    );
+    eprintln!("{NO_PETSC}");
+    ExitCode::FAILURE
+}
+
+#[cfg(not(feature = "petsc"))]
+fn check_petsc(
+    _mesh: &std::path::Path,
+    _scene: Option<&std::path::Path>,
+    _overrides: &[String],
+    _solver: Option<SolverArg>,
+) -> ExitCode {
+    eprintln!("{NO_PETSC}");
     ExitCode::FAILURE
 }
 
@@ -226,15 +286,30 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Check { mesh, scene, overrides } => match hvi::app::check(&mesh, scene.as_deref(), &overrides) {
-            Ok(report) => {
-                print!("{report}");
-                ExitCode::SUCCESS
+        Command::Check {
+            mesh,
+            scene,
+            overrides,
+            backend,
+            solver,
+        } => {
+            if backend == BackendArg::Petsc {
+                return check_petsc(&mesh, scene.as_deref(), &overrides, solver);
             }
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::FAILURE
+            if solver.is_some() {
+                eprintln!("error: --solver chooses the PETSc solver: use it with --backend petsc");
+                return ExitCode::FAILURE;
             }
-        },
+            match hvi::app::check(&mesh, scene.as_deref(), &overrides) {
+                Ok(report) => {
+                    print!("{report}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
     }
 }

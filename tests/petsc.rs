@@ -91,6 +91,20 @@ fn difference(serial: &[[f64; 3]], other: &[[f64; 3]]) -> (f64, f64) {
     d
 }
 
+fn summary(dir: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(dir.join("summary.json")).expect("summary.json");
+    serde_json::from_str(&text).expect("summary.json is JSON")
+}
+
+/// The files a `.pvd` lists, in order.
+fn pvd_files(pvd: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(pvd).expect(".pvd");
+    text.split("file=\"")
+        .skip(1)
+        .map(|r| r.split('"').next().unwrap().to_string())
+        .collect()
+}
+
 /// Runs `mesh` (+ scene) serially and on 1 and 2 ranks with `solver`; returns the largest
 /// relative differences to the serial run.
 fn compare(mesh: &str, scene: Option<&str>, solver: &str) -> Vec<(usize, (f64, f64))> {
@@ -113,8 +127,9 @@ fn compare(mesh: &str, scene: Option<&str>, solver: &str) -> Vec<(usize, (f64, f
             args.extend(["--out", &out_dir, "--backend", "petsc", "--solver", solver]);
             let out = mpirun(np, &args, &[]);
             assert_ok(&out, &format!("mpirun -np {np} ({solver})"));
-            let summary = std::fs::read_to_string(Path::new(&out_dir).join("summary.json")).unwrap();
-            assert!(summary.contains(&format!("\"ranks\": {np}")), "{summary}");
+            let summary = summary(Path::new(&out_dir));
+            assert_eq!(summary["ranks"], np, "{summary}");
+            assert_eq!(summary["per_rank"].as_array().unwrap().len(), np, "{summary}");
             let d = difference(&reference, &gamma3(Path::new(&out_dir)));
             eprintln!("{mesh} {solver} np {np}: u_ν {:.2e}, force {:.2e} relative", d.0, d.1);
             (np, d)
@@ -238,4 +253,301 @@ fn solver_needs_the_petsc_backend() {
     ]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--backend petsc"));
+}
+
+/// The largest difference between two arrays relative to the first one's largest magnitude
+/// (0 when both are zero).
+fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let d = a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+    if scale == 0.0 {
+        d
+    } else {
+        d / scale
+    }
+}
+
+/// Every frame of the serial run against the same frame of a run in pieces: the same points
+/// and cells exactly, every point and cell array to `tolerance` relative to the array's largest
+/// magnitude in the frame; returns the largest difference seen.
+fn compare_series(serial: &Path, pieces: &Path, tolerance: f64) -> f64 {
+    let frames = pvd_files(&serial.join("solution.pvd"));
+    let parallel = pvd_files(&pieces.join("solution.pvd"));
+    assert_eq!(frames.len(), parallel.len(), "the runs list different frames");
+    assert!(frames.len() > 1);
+    let mut worst = 0.0f64;
+    for (s, p) in frames.iter().zip(&parallel) {
+        assert_eq!(p, &s.replace(".vtu", ".pvtu"), "frame names");
+        let a = hvi::output::read_vtu_arrays(&serial.join(s)).unwrap();
+        let b = hvi::output::read_pvtu_arrays(&pieces.join(p)).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(a.points, b.points, "{p}: points");
+        assert_eq!(a.connectivity, b.connectivity, "{p}: cells");
+        assert_eq!(a.cell_types, b.cell_types, "{p}: cell types");
+        assert_eq!(a.field_data, b.field_data, "{p}: TimeValue and step");
+        for (kind, x, y) in [
+            ("point", &a.point_data, &b.point_data),
+            ("cell", &a.cell_data, &b.cell_data),
+        ] {
+            let names =
+                |m: &std::collections::BTreeMap<String, (usize, Vec<f64>)>| m.keys().cloned().collect::<Vec<_>>();
+            assert_eq!(names(x), names(y), "{p}: {kind} arrays");
+            for (name, (k, values)) in x {
+                let (l, other) = &y[name];
+                assert_eq!(k, l, "{p}: components of {name}");
+                let d = relative_difference(values, other);
+                assert!(d <= tolerance, "{p}: {kind} array {name} off by {d:.2e} relative");
+                worst = worst.max(d);
+            }
+        }
+    }
+    worst
+}
+
+/// The body of a run in pieces reads back whole (every `.pvtu` the `.pvd` lists, through hvi's
+/// reader, which also checks that the pieces agree at the nodes they share) and equals the
+/// serial run's output: every point and cell array of every frame, 3D with memory, loads and
+/// contact, on 1 and 2 ranks. MUMPS is a direct factor: the displacements agree to round-off
+/// (≤ 2e-13 measured on gamma3.csv), and the stresses are linear in them, so 1e-10 relative
+/// leaves three orders of margin and still catches any wrong piece, node or ghost value (off by
+/// O(1)). Measured: see the printed differences.
+#[test]
+fn pieces_read_back_whole_and_equal_the_serial_output() {
+    let tmp = tempfile::tempdir().unwrap();
+    for (mesh, scene) in [
+        ("meshes/slab_q1_h8_z1.msh", Some("examples/slab.toml")),
+        ("meshes/rect_q1_h8.msh", None),
+    ] {
+        let mut base = vec!["solve", mesh, "--quiet"];
+        if let Some(s) = scene {
+            base.extend(["--scene", s]);
+        }
+        let name = Path::new(mesh).file_stem().unwrap().to_str().unwrap();
+        let serial_dir = tmp.path().join(format!("{name}-serial"));
+        let s = serial_dir.display().to_string();
+        let mut args = base.clone();
+        args.extend(["--out", &s]);
+        assert_ok(&serial(&args), "the serial run");
+        for np in [1, 2] {
+            let dir = tmp.path().join(format!("{name}-np{np}"));
+            let d = dir.display().to_string();
+            let mut args = base.clone();
+            args.extend(["--out", &d, "--backend", "petsc"]);
+            assert_ok(&mpirun(np, &args, &[]), &format!("mpirun -np {np}"));
+            let worst = compare_series(&serial_dir, &dir, 1e-10);
+            eprintln!("{mesh} np {np}: every array of every frame within {worst:.2e} relative");
+            // pieces: one per rank and frame, and the manifest lists every file of the run
+            let frames = pvd_files(&dir.join("solution.pvd"));
+            for f in &frames {
+                let pieces = hvi::output::pvtu_pieces(&dir.join(f)).unwrap();
+                assert_eq!(pieces.len(), np, "{f}");
+            }
+            let listed: std::collections::BTreeSet<String> =
+                hvi::output::read_manifest(&dir.join(hvi::output::MANIFEST_NAME))
+                    .unwrap()
+                    .into_iter()
+                    .collect();
+            let present: std::collections::BTreeSet<String> = std::fs::read_dir(&dir)
+                .unwrap()
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .filter(|n| n != hvi::output::MANIFEST_NAME)
+                .collect();
+            assert!(
+                present.is_subset(&listed),
+                "unlisted: {:?}",
+                present.difference(&listed)
+            );
+            // the rest of the run: as in serial (gamma3.csv, the contact dataset, the tables)
+            for file in ["gamma3.csv", "contact.pvd", "scene.toml"] {
+                assert!(dir.join(file).exists(), "{file}");
+            }
+            let c = hvi::output::read_vtu_arrays(&dir.join("contact_00008.vtp")).unwrap();
+            let c0 = hvi::output::read_vtu_arrays(&serial_dir.join("contact_00008.vtp")).unwrap();
+            for (name, (_, v)) in &c0.point_data {
+                let d = relative_difference(v, &c.point_data[name].1);
+                assert!(d <= 1e-10, "contact_00008.vtp: {name} off by {d:.2e}");
+            }
+        }
+    }
+}
+
+/// --overwrite removes exactly the files of the earlier run, its pieces included, whatever the
+/// number of ranks of either run; a file of the user's stays.
+#[test]
+fn overwrite_removes_every_piece_and_nothing_else() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    let d = dir.display().to_string();
+    let args = [
+        "solve",
+        "meshes/rect_q1_h8.msh",
+        "--quiet",
+        "--backend",
+        "petsc",
+        "--out",
+        &d,
+    ];
+    assert_ok(&mpirun(2, &args, &[]), "mpirun -np 2");
+    assert!(dir.join("solution_00010_1.vtu").exists());
+    std::fs::write(dir.join("notes.txt"), "mine").unwrap();
+    // again without --overwrite: refused, nothing touched
+    let again = mpirun(1, &args, &[]);
+    assert!(!again.status.success());
+    let err = String::from_utf8_lossy(&again.stderr);
+    assert!(err.contains("--overwrite"), "{err}");
+    assert!(dir.join("solution_00010_1.vtu").exists());
+    // on 1 rank with --overwrite: no piece of rank 1 survives, notes.txt does
+    let mut args = args.to_vec();
+    args.push("--overwrite");
+    assert_ok(&mpirun(1, &args, &[]), "mpirun -np 1 --overwrite");
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(!names.iter().any(|n| n.ends_with("_1.vtu")), "{names:?}");
+    assert!(names.contains(&"notes.txt".to_string()));
+    // and a serial run over it removes the pieces of rank 0 and the .pvtu files too
+    let s = ["solve", "meshes/rect_q1_h8.msh", "--quiet", "--out", &d, "--overwrite"];
+    assert_ok(&serial(&s), "the serial --overwrite");
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        !names.iter().any(|n| n.ends_with(".pvtu") || n.ends_with("_0.vtu")),
+        "{names:?}"
+    );
+    assert!(names.contains(&"notes.txt".to_string()));
+}
+
+/// A piece that cannot be written (a directory stands where rank 1's piece of step 3 goes)
+/// stops every rank with one error naming the file; every frame before it stays whole and
+/// listed, and summary.json says how far the run got.
+#[test]
+fn a_piece_that_fails_leaves_every_earlier_frame_whole() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    std::fs::create_dir_all(dir.join("solution_00003_1.vtu")).unwrap();
+    let d = dir.display().to_string();
+    let args = [
+        "solve",
+        "meshes/rect_q1_h8.msh",
+        "--quiet",
+        "--backend",
+        "petsc",
+        "--out",
+        &d,
+    ];
+    let out = mpirun(2, &args, &[]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
+    assert_eq!(errors.len(), 1, "one error, from rank 0:\n{err}");
+    assert!(
+        errors[0].contains("rank 1 of 2") && errors[0].contains("solution_00003_1.vtu"),
+        "{err}"
+    );
+    let frames = pvd_files(&dir.join("solution.pvd"));
+    assert_eq!(
+        frames,
+        ["solution_00000.pvtu", "solution_00001.pvtu", "solution_00002.pvtu"]
+    );
+    for f in &frames {
+        hvi::output::read_pvtu_arrays(&dir.join(f)).unwrap_or_else(|e| panic!("{e}"));
+    }
+    assert!(!dir.join("solution_00003.pvtu").exists());
+    let s = summary(&dir);
+    assert!(s["status"].as_str().unwrap().starts_with("failed: rank 1 of 2"), "{s}");
+    assert_eq!(s["steps_done"], 4, "{s}");
+    assert_eq!(s["last_step_written"], 2, "{s}");
+}
+
+/// A run that stops early (the contact solve allowed one Newton iteration at a tolerance it
+/// cannot meet) writes summary.json from rank 0 as in serial: the status, the steps done, the
+/// last step written — the same numbers as the serial run's.
+#[test]
+fn an_early_stop_writes_the_summary_as_in_serial() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = |dir: &Path, petsc: bool| {
+        let d = dir.display().to_string();
+        let mut args = vec!["solve", "meshes/rect_q1_h8.msh", "--quiet", "--out", &d];
+        args.extend(["--set", "solver.max_iterations=1", "--set", "solver.tolerance=1e-15"]);
+        let out = if petsc {
+            args.extend(["--backend", "petsc"]);
+            mpirun(2, &args, &[])
+        } else {
+            serial(&args)
+        };
+        assert!(!out.status.success());
+        summary(dir)
+    };
+    let s = run(&tmp.path().join("serial"), false);
+    let p = run(&tmp.path().join("mpi"), true);
+    assert!(
+        p["status"]
+            .as_str()
+            .unwrap()
+            .starts_with("failed: contact solve failed at step"),
+        "{p}"
+    );
+    assert_eq!(p["steps_done"], s["steps_done"], "{p}");
+    assert_eq!(p["last_step_written"], s["last_step_written"], "{p}");
+    assert_eq!(p["ranks"], 2);
+}
+
+/// `hvi check --backend petsc` on 2 ranks prints one row per rank whose cells, unknowns and
+/// contact nodes add up to the mesh's, and a positive predicted memory per rank.
+#[test]
+fn check_prints_the_partition_and_the_memory_per_rank() {
+    let out = mpirun(
+        2,
+        &[
+            "check",
+            "meshes/slab_q1_h8_z1.msh",
+            "--scene",
+            "examples/slab.toml",
+            "--backend",
+            "petsc",
+        ],
+        &[],
+    );
+    assert_ok(&out, "hvi check --backend petsc");
+    let text = String::from_utf8_lossy(&out.stdout);
+    let serial_text = String::from_utf8_lossy(
+        &serial(&["check", "meshes/slab_q1_h8_z1.msh", "--scene", "examples/slab.toml"]).stdout,
+    )
+    .into_owned();
+    let number = |t: &str, prefix: &str| -> usize {
+        let line = t
+            .lines()
+            .find(|l| l.trim_start().starts_with(prefix))
+            .unwrap_or_else(|| panic!("{prefix}:\n{t}"));
+        line.split_whitespace().find_map(|w| w.parse().ok()).unwrap()
+    };
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip_while(|l| !l.trim_start().starts_with("rank "))
+        .skip(1)
+        .take_while(|l| l.trim_start().chars().next().is_some_and(|c| c.is_ascii_digit()))
+        .map(|l| {
+            l.split(|c: char| c.is_whitespace() || c == '|')
+                .filter_map(|w| w.parse().ok())
+                .collect()
+        })
+        .collect();
+    assert_eq!(rows.len(), 2, "{text}");
+    let sum = |k: usize| rows.iter().map(|r| r[k]).sum::<f64>() as usize;
+    let mesh_cells: usize = text
+        .lines()
+        .find(|l| l.contains("nodes,") && l.contains("cells"))
+        .and_then(|l| l.split_whitespace().nth(3)?.parse().ok())
+        .unwrap();
+    assert_eq!(sum(2), mesh_cells, "{text}");
+    assert_eq!(sum(3), number(&serial_text, "unknowns:"), "{text}");
+    assert_eq!(sum(4), number(&serial_text, "contact:"), "{text}");
+    for r in &rows {
+        let total = *r.last().unwrap();
+        assert!(total > 10.0, "a predicted total of {total} MiB per rank:\n{text}");
+    }
+    assert!(text.contains("INFOG(16)"), "{text}");
 }

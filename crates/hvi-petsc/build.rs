@@ -34,13 +34,14 @@ fn main() {
         .allowlist_function(
             "Petsc(Initialize|Initialized|Finalize|Finalized|PushErrorHandler|PopErrorHandler|ErrorMessage|MemoryGetMaximumUsage|MemorySetGetMaximumUsage|MallocGetMaximumUsage|OptionsSetValue|OptionsClearValue)",
         )
-        .allowlist_function("Mat(Create|CreateVecs|SetSizes|SetType|SetBlockSize|MPIAIJSetPreallocation|SeqAIJSetPreallocation|SetValues|AssemblyBegin|AssemblyEnd|SetOption|Destroy|Mult|GetOwnershipRange|CreateDense|DenseGetArray|DenseRestoreArray|DenseGetLDA|NullSpaceCreateRigidBody|SetNearNullSpace|NullSpaceDestroy|GetSize|GetInfo|MumpsGetInfog|MumpsGetRinfog)")
-        .allowlist_function("Vec(Create|CreateMPI|SetSizes|SetType|SetBlockSize|SetValues|AssemblyBegin|AssemblyEnd|GetArray|GetArrayRead|RestoreArray|RestoreArrayRead|Destroy|Norm|AXPY|Set|Duplicate|GetOwnershipRange|ScatterCreateToAll|ScatterBegin|ScatterEnd|ScatterDestroy|Copy)")
+        .allowlist_function("Mat(Create|CreateVecs|SetSizes|SetType|SetBlockSize|MPIAIJSetPreallocation|SeqAIJSetPreallocation|SetValues|AssemblyBegin|AssemblyEnd|SetOption|Destroy|Mult|GetOwnershipRange|CreateDense|DenseGetArray|DenseRestoreArray|DenseGetLDA|NullSpaceCreateRigidBody|SetNearNullSpace|NullSpaceDestroy|GetSize|GetInfo|MumpsGetInfog|MumpsGetRinfog|MumpsGetInfo|GetFactor|CholeskyFactorSymbolic|FactorInfoInitialize)")
+        .allowlist_function("Vec(Create|CreateMPI|SetSizes|SetType|SetBlockSize|SetValues|AssemblyBegin|AssemblyEnd|GetArray|GetArrayRead|RestoreArray|RestoreArrayRead|Destroy|Norm|AXPY|Set|Duplicate|GetOwnershipRange|ScatterCreateToAll|ScatterCreate|ScatterBegin|ScatterEnd|ScatterDestroy|Copy|CreateSeq|GetLocalSize)")
+        .allowlist_function("IS(CreateGeneral|Destroy)")
         .allowlist_function("KSP(Create|SetOperators|SetType|GetPC|SetTolerances|SetFromOptions|SetOptionsPrefix|SetUp|Solve|MatSolve|GetConvergedReason|GetIterationNumber|Destroy|SetInitialGuessNonzero)")
         .allowlist_function("PC(SetType|FactorSetMatSolverType|FactorSetUpMatSolverType|FactorGetMatrix|SetUp|GetFailedReason)")
         .allowlist_var("PETSC_COMM_WORLD|PETSC_(DEFAULT|DECIDE|DETERMINE)")
-        .allowlist_type("KSPConvergedReason|PCFailedReason|MatAssemblyType|InsertMode|ScatterMode|NormType|MatOption|MatInfoType|MatInfo|PetscErrorType")
-        .rustified_enum("MatAssemblyType|InsertMode|ScatterMode|NormType|MatOption|MatInfoType|PetscErrorType")
+        .allowlist_type("KSPConvergedReason|PCFailedReason|MatAssemblyType|InsertMode|ScatterMode|NormType|MatOption|MatInfoType|MatInfo|PetscErrorType|MatFactorType|MatFactorInfo|PetscCopyMode")
+        .rustified_enum("MatAssemblyType|InsertMode|ScatterMode|NormType|MatOption|MatInfoType|PetscErrorType|MatFactorType|PetscCopyMode")
         .layout_tests(false)
         .generate_comments(false);
     // The string constants (MATMPIAIJ, KSPCG, PCGAMG, MATSOLVERMUMPS, ...) are macros: bindgen

@@ -106,6 +106,11 @@ impl<const D: usize> ContactNodes<D> {
         }
     }
 
+    /// The prescribed components of each row's normal displacement: (unknown, coefficient).
+    pub fn prescribed_rows(&self) -> &[Vec<(usize, f64)>] {
+        &self.prescribed
+    }
+
     /// The part of u_ν that prescribed components contribute (zero when none is prescribed
     /// on a contact node or the prescribed values are zero): added to d = C K⁻¹ r.
     pub fn prescribed_offset(&self, values: &[f64], d: &mut [f64]) {

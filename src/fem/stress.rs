@@ -71,6 +71,13 @@ pub fn cell_stresses<const D: usize>(
 /// stress of that mean tensor. `tensor` is [`CellStresses::tensor`]; `measures` the cells'
 /// areas or volumes ([`cell_measures`]). A node of no cell gets 0.
 pub fn nodal_stresses(cells: &[Cell], measures: &[f64], tensor: &[f64], n_points: usize) -> CellStresses {
+    let (sum, weight) = nodal_stress_sums(cells, measures, tensor, n_points);
+    nodal_stresses_from_sums(sum, &weight)
+}
+
+/// The sums of [`nodal_stresses`] before the division: Σ_c |c| σ_c (9 per node) and Σ_c |c|
+/// over the given cells (a mesh partition adds its parts' sums before dividing).
+pub fn nodal_stress_sums(cells: &[Cell], measures: &[f64], tensor: &[f64], n_points: usize) -> (Vec<f64>, Vec<f64>) {
     let mut sum = vec![0.0; 9 * n_points];
     let mut weight = vec![0.0; n_points];
     for ((cell, &m), s) in cells.iter().zip(measures).zip(tensor.chunks_exact(9)) {
@@ -81,8 +88,14 @@ pub fn nodal_stresses(cells: &[Cell], measures: &[f64], tensor: &[f64], n_points
             }
         }
     }
+    (sum, weight)
+}
+
+/// [`nodal_stresses`] from the sums of [`nodal_stress_sums`].
+pub fn nodal_stresses_from_sums(mut sum: Vec<f64>, weight: &[f64]) -> CellStresses {
+    let n_points = weight.len();
     let mut von = vec![0.0; n_points];
-    for (p, (s, w)) in sum.chunks_exact_mut(9).zip(&weight).enumerate() {
+    for (p, (s, w)) in sum.chunks_exact_mut(9).zip(weight).enumerate() {
         if *w > 0.0 {
             s.iter_mut().for_each(|x| *x /= w);
         }

@@ -59,6 +59,17 @@ impl Cell {
         }
     }
 
+    /// The same cell on renumbered nodes: node p becomes `number(p)` (e.g. a mesh piece's own
+    /// numbering).
+    pub fn renumbered(&self, number: impl Fn(usize) -> usize) -> Cell {
+        match *self {
+            Cell::Tri3(n) => Cell::Tri3(n.map(number)),
+            Cell::Quad4(n) => Cell::Quad4(n.map(number)),
+            Cell::Tet4(n) => Cell::Tet4(n.map(number)),
+            Cell::Hex8(n) => Cell::Hex8(n.map(number)),
+        }
+    }
+
     /// The cell with the opposite orientation (a mirror of its node order).
     pub fn flipped(&self) -> Cell {
         match *self {

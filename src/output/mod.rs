@@ -10,6 +10,9 @@
 //! - `<basename>.pvd` and `<basename>.vtu.series` (`.vtp.series`): the two index files ParaView opens as one
 //!   time series, rewritten atomically after every frame so that they list exactly the frames
 //!   written so far with their real times, even when the run is interrupted;
+//! - for a run in pieces (PETSc over MPI, [`SeriesWriter::create_parallel`]): per frame one
+//!   `<basename>_<step:05>_<rank>.vtu` per process and a `<basename>_<step:05>.pvtu` listing them,
+//!   indexed by `<basename>.pvd` and `<basename>.pvtu.series`;
 //! - any [`CsvTable`] and JSON/other files written with [`write_json_atomic`]/[`write_atomic`].
 //!
 //! Every file that is replaced is written to a hidden temporary sibling first
@@ -48,7 +51,7 @@ pub use csv::CsvTable;
 pub use error::OutputError;
 pub use manifest::{read_manifest, RunManifest, MANIFEST_NAME};
 pub use pvd::pvd_text;
-pub use vtu::{read_vtu_arrays, VtuContents};
+pub use vtu::{pvtu_pieces, read_pvtu_arrays, read_vtu_arrays, VtuContents, CELL_IDS, NODE_IDS};
 
 /// The largest zlib level of [`SeriesWriter::with_compression`].
 pub const MAX_COMPRESSION_LEVEL: u32 = 9;

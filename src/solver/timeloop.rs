@@ -31,7 +31,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
-/// What the driver shows a sink after a step: all vectors over all unknowns (D per node).
+/// What the driver shows a sink after a step. The vectors are over the unknowns this process
+/// holds: all of them (D per node) in a serial run, a [`Backend`]'s share
+/// ([`Backend::unknowns`]) otherwise.
 pub struct StepView<'a> {
     pub step: usize,
     pub time: f64,
@@ -93,10 +95,25 @@ impl PrescribedColumns {
     }
 }
 
+/// Which unmodified stiffness matrix (no identity rows) a [`Backend::product`] applies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stiffness {
+    /// K_A, the elastic stiffness.
+    Elastic,
+    /// K_B, the stiffness of B₀ = I (the memory term, docs/method.md §3).
+    Memory,
+}
+
 /// A linear-algebra backend other than the cached faer factor (docs/method.md §13): it builds
 /// the solver and the condensation of each distinct step matrix, and may run the contact solve
 /// on one process only and share its forces with the others. The time loop, the history, the
 /// loads and the contact law stay the same.
+///
+/// A backend may hold only a share of the unknowns on this process ([`Backend::unknowns`]):
+/// the time loop then keeps every step vector (loads, history, displacement) over that share,
+/// multiplies by K_A and K_B through [`Backend::product`], and makes the decisions that must be
+/// the same everywhere (a non-finite solution, a zero step) through [`Backend::sum`]
+/// (docs/method.md §13.2).
 pub trait Backend<const D: usize>: Sync {
     /// A solver (and, with contact nodes, a condensation) for the step matrix
     /// K = K_A + c K_B with identity rows at the prescribed unknowns, c = `memory` (None: K_A).
@@ -120,26 +137,51 @@ pub trait Backend<const D: usize>: Sync {
     ) -> Result<ContactOutcome, SolveError> {
         local
     }
+    /// The unknowns (hvi's numbers D·p + c) this process holds, in the order of every vector
+    /// the time loop passes to the backend's solvers and products and shows its sink.
+    fn unknowns(&self) -> &[usize];
+    /// y = K x over this process's unknowns for the unmodified K_A or K_B (collective). A
+    /// failure fills y with NaN, which the collective checks then see on every process.
+    fn product(&self, sim: &Simulation<D>, matrix: Stiffness, x: &[f64], y: &mut [f64]);
+    /// Replaces `values` by their sum over all processes (collective; NaN stays NaN).
+    fn sum(&self, values: &mut [f64]);
+}
+
+/// True on every process if `local` is true on any (collective with a backend).
+fn any<const D: usize>(backend: Option<&dyn Backend<D>>, local: bool) -> bool {
+    match backend {
+        None => local,
+        Some(b) => {
+            let mut v = [f64::from(u8::from(local))];
+            b.sum(&mut v);
+            v[0] != 0.0
+        }
+    }
+}
+
+/// How a step operator lifts non-zero prescribed values (docs/method.md §7.2).
+enum Lifting {
+    /// The unmodified columns of the prescribed unknowns (serial).
+    Columns(PrescribedColumns),
+    /// rhs −= (K_A + c K_B) g at the free unknowns through [`Backend::product`] (c = `memory`).
+    Products { memory: Option<f64> },
 }
 
 /// A factor of a step matrix and, with contact, its condensation.
 struct StepOperator {
     solver: Arc<dyn LinearSolver>,
     condensed: Option<Box<dyn Condensation>>,
-    /// The unmodified columns of the prescribed unknowns (for lifting).
-    lifting: Option<PrescribedColumns>,
+    /// How non-zero prescribed values are lifted (None when they are all zero).
+    lifting: Option<Lifting>,
 }
 
 /// The matrix a factor is built from (identity rows at the prescribed unknowns, docs/method.md
 /// §7) and, when some prescribed value is non-zero, the unmodified columns that lift them.
-fn system_matrix<const D: usize>(
-    sim: &Simulation<D>,
-    matrix: &SymmetricMatrix,
-) -> (SymmetricMatrix, Option<PrescribedColumns>) {
+fn system_matrix<const D: usize>(sim: &Simulation<D>, matrix: &SymmetricMatrix) -> (SymmetricMatrix, Option<Lifting>) {
     let lifting = sim
         .dirichlet
         .is_nonzero()
-        .then(|| PrescribedColumns::new(matrix, &sim.dofs));
+        .then(|| Lifting::Columns(PrescribedColumns::new(matrix, &sim.dofs)));
     (matrix.with_identity_rows(&sim.dofs), lifting)
 }
 
@@ -148,7 +190,7 @@ impl StepOperator {
     fn new<const D: usize>(
         sim: &Simulation<D>,
         symbolic: &Analysis,
-        (matrix, lifting): (SymmetricMatrix, Option<PrescribedColumns>),
+        (matrix, lifting): (SymmetricMatrix, Option<Lifting>),
         counters: &Counters,
         stats: &mut RunStats,
     ) -> Result<Self, SolveError> {
@@ -196,16 +238,16 @@ impl StepOperator {
         })
     }
 
-    /// The operator of a [`Backend`] for K = K_A + c K_B (c = `memory`); `lifting` from the
-    /// unmodified matrix as in [`system_matrix`].
+    /// The operator of a [`Backend`] for K = K_A + c K_B (c = `memory`), lifting through the
+    /// backend's products.
     fn with_backend<const D: usize>(
         sim: &Simulation<D>,
         backend: &dyn Backend<D>,
         memory: Option<f64>,
-        lifting: Option<PrescribedColumns>,
         counters: &Counters,
         stats: &mut RunStats,
     ) -> Result<Self, SolveError> {
+        let lifting = sim.dirichlet.is_nonzero().then_some(Lifting::Products { memory });
         let (solver, condensed) = timed(&mut stats.phases.factorisation, || {
             backend.operator(sim, memory, counters)
         })?;
@@ -350,9 +392,12 @@ impl<const D: usize> MemoryStiffness<D> {
 /// The reaction forces at the prescribed components (docs/method.md §7):
 /// R = K_A u_n + K_B m_n − F_n + Cᵀ λ at each prescribed unknown.
 struct Reactions {
-    k_a: PrescribedColumns,
+    /// K_A's and K_B's unmodified columns of the prescribed unknowns (serial; with a backend,
+    /// its products).
+    k_a: Option<PrescribedColumns>,
     k_b: Option<PrescribedColumns>,
-    /// Per reaction group: positions of its unknowns in the prescribed columns.
+    /// Per reaction group: positions of its unknowns in the prescribed columns (serial), or in
+    /// this process's vectors (only the unknowns it holds, with a backend).
     groups: Vec<Vec<usize>>,
     totals: Vec<f64>,
 }
@@ -372,8 +417,64 @@ impl Reactions {
             k_b: k_b.map(|m| PrescribedColumns::new(m, &sim.dofs)),
             groups,
             totals: vec![0.0; sim.dirichlet.reaction_groups.len()],
-            k_a,
+            k_a: Some(k_a),
         }
+    }
+
+    /// The reactions of the unknowns a backend holds (`unknowns`, its order).
+    fn held<const D: usize>(sim: &Simulation<D>, unknowns: &[usize]) -> Self {
+        let position: std::collections::HashMap<usize, usize> =
+            unknowns.iter().enumerate().map(|(k, &d)| (d, k)).collect();
+        let groups = sim
+            .dirichlet
+            .reaction_groups
+            .iter()
+            .map(|g| g.unknowns.iter().filter_map(|d| position.get(d).copied()).collect())
+            .collect();
+        Reactions {
+            k_a: None,
+            k_b: None,
+            groups,
+            totals: vec![0.0; sim.dirichlet.reaction_groups.len()],
+        }
+    }
+
+    /// [`Reactions::compute`] with a backend: R over the unknowns this process holds, the
+    /// group totals summed over all processes (collective).
+    fn compute_held<const D: usize>(
+        &mut self,
+        sim: &Simulation<D>,
+        backend: &dyn Backend<D>,
+        u: &[f64],
+        memory: Option<&[f64]>,
+        load: &[f64],
+        contact: Option<&ContactState>,
+    ) -> &[f64] {
+        let unknowns = backend.unknowns();
+        let mut r = vec![0.0; u.len()];
+        backend.product(sim, Stiffness::Elastic, u, &mut r);
+        if let Some(m) = memory {
+            let mut y = vec![0.0; u.len()];
+            backend.product(sim, Stiffness::Memory, m, &mut y);
+            r.iter_mut().zip(&y).for_each(|(a, b)| *a += b);
+        }
+        // Cᵀλ at the prescribed unknowns: the prescribed parts of the contact rows.
+        let mut force: std::collections::HashMap<usize, f64> = std::collections::HashMap::new();
+        if let (Some(c), Some(state)) = (&sim.contact, contact) {
+            for (l, fixed) in state.force.iter().zip(c.nodes.prescribed_rows()) {
+                for &(d, coefficient) in fixed {
+                    *force.entry(d).or_insert(0.0) += l * coefficient;
+                }
+            }
+        }
+        for (total, members) in self.totals.iter_mut().zip(&self.groups) {
+            *total = members
+                .iter()
+                .map(|&k| r[k] + force.get(&unknowns[k]).copied().unwrap_or(0.0) - load[k])
+                .sum();
+        }
+        backend.sum(&mut self.totals);
+        &self.totals
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -385,8 +486,11 @@ impl Reactions {
         load: &[f64],
         contact: Option<&ContactState>,
     ) -> &[f64] {
-        let mut r = vec![0.0; self.k_a.columns.len()];
-        self.k_a.add_product(u, &mut r);
+        let Some(k_a) = &self.k_a else {
+            return &self.totals;
+        };
+        let mut r = vec![0.0; k_a.columns.len()];
+        k_a.add_product(u, &mut r);
         if let (Some(kb), Some(m)) = (&self.k_b, memory) {
             kb.add_product(m, &mut r);
         }
@@ -394,7 +498,7 @@ impl Reactions {
         if let (Some(c), Some(state)) = (&sim.contact, contact) {
             c.nodes.add_forces(&state.force, &mut force);
         }
-        for (rk, (j, _)) in r.iter_mut().zip(&self.k_a.columns) {
+        for (rk, (j, _)) in r.iter_mut().zip(&k_a.columns) {
             *rk += force[*j] - load[*j];
         }
         for (total, members) in self.totals.iter_mut().zip(&self.groups) {
@@ -411,8 +515,9 @@ pub struct Stepper<'s, const D: usize> {
     sim: &'s Simulation<D>,
     pub counters: Counters,
     pub stats: RunStats,
-    k_a: SymmetricMatrix,
-    /// K_B for the memory load K_B h_n of every step.
+    /// K_A (serial; a backend holds its own).
+    k_a: Option<SymmetricMatrix>,
+    /// K_B for the memory load K_B h_n of every step (serial; a backend multiplies by its own).
     k_b: Option<MemoryStiffness<D>>,
     /// The faer factor's symbolic analysis (None with a [`Backend`]).
     symbolic: Option<Analysis>,
@@ -464,7 +569,25 @@ impl<'s, const D: usize> Stepper<'s, D> {
             ..Default::default()
         };
         let k = sim.time.step();
-        let n_dof = sim.dofs.n();
+        // The vectors of a step: over all unknowns, or the share a backend holds here.
+        let n_dof = backend.map_or(sim.dofs.n(), |b| b.unknowns().len());
+        let memory_diagonal = sim.kernel.as_ref().map(|b| 0.5 * k * b.value(0.0));
+        if let Some(b) = backend {
+            // The backend assembles and multiplies its own (distributed) matrices.
+            let main = StepOperator::with_backend(sim, b, memory_diagonal, &counters, &mut stats)?;
+            let reactions = (!sim.dirichlet.reaction_groups.is_empty()).then(|| Reactions::held(sim, b.unknowns()));
+            return Ok(Self::with_parts(
+                sim,
+                counters,
+                stats,
+                (None, None, None),
+                backend,
+                main,
+                memory_diagonal,
+                reactions,
+                n_dof,
+            ));
+        }
         let (points, cells) = (&sim.mesh.points, &sim.mesh.cells);
         let a = sim.elasticity.tensor();
         let (k_a, k_b) = timed(&mut stats.phases.assembly, || match &sim.kernel {
@@ -478,55 +601,65 @@ impl<'s, const D: usize> Stepper<'s, D> {
             }
         });
         stats.matrix_nonzeros = k_a.values.len();
-        let memory_diagonal = sim.kernel.as_ref().map(|b| 0.5 * k * b.value(0.0));
         // The pattern the factors have: identity rows, fully prescribed nodes decoupled. In 3D the
         // contact normals' unknowns go last (docs/method.md §4.5): G and W then live in the
         // factor's trailing block (measured: box 96x48x12, m = 1248, condensation 12.4 s before).
-        let (symbolic, main) = match backend {
-            None => {
-                let last = sim.unknowns_ordered_last();
-                let system = match (&k_b, memory_diagonal) {
-                    (Some(kb), Some(c)) => {
-                        let k_step = timed(&mut stats.phases.assembly, || k_a.plus_scaled(c, kb));
-                        system_matrix(sim, &k_step)
-                    }
-                    _ => system_matrix(sim, &k_a),
-                };
-                let symbolic = timed(&mut stats.phases.factorisation, || {
-                    Factor::analyse_with_last(&system.0, &last)
-                })
-                .map_err(|e| SolveError::Setup(e.to_string()))?;
-                stats.ordering = Some(symbolic.ordering().to_string());
-                stats.factor_entries = symbolic.factor_entries();
-                let main = StepOperator::new(sim, &symbolic, system, &counters, &mut stats)?;
-                (Some(symbolic), main)
+        let last = sim.unknowns_ordered_last();
+        let system = match (&k_b, memory_diagonal) {
+            (Some(kb), Some(c)) => {
+                let k_step = timed(&mut stats.phases.assembly, || k_a.plus_scaled(c, kb));
+                system_matrix(sim, &k_step)
             }
-            Some(b) => {
-                // The backend assembles its own matrix; here only the columns that lift
-                // non-zero prescribed values are needed.
-                let lifting = sim.dirichlet.is_nonzero().then(|| match (&k_b, memory_diagonal) {
-                    (Some(kb), Some(c)) => PrescribedColumns::new(&k_a.plus_scaled(c, kb), &sim.dofs),
-                    _ => PrescribedColumns::new(&k_a, &sim.dofs),
-                });
-                let main = StepOperator::with_backend(sim, b, memory_diagonal, lifting, &counters, &mut stats)?;
-                (None, main)
-            }
+            _ => system_matrix(sim, &k_a),
         };
+        let symbolic = timed(&mut stats.phases.factorisation, || {
+            Factor::analyse_with_last(&system.0, &last)
+        })
+        .map_err(|e| SolveError::Setup(e.to_string()))?;
+        stats.ordering = Some(symbolic.ordering().to_string());
+        stats.factor_entries = symbolic.factor_entries();
+        let main = StepOperator::new(sim, &symbolic, system, &counters, &mut stats)?;
+        let reactions = (!sim.dirichlet.reaction_groups.is_empty()).then(|| Reactions::new(sim, &k_a, k_b.as_ref()));
+        let k_b = k_b.map(|kb| match NodeBlockMatrix::new(&kb) {
+            Some(blocks) => MemoryStiffness::NodeBlocks(blocks),
+            None => MemoryStiffness::Full(kb),
+        });
+        Ok(Self::with_parts(
+            sim,
+            counters,
+            stats,
+            (Some(k_a), k_b, Some(symbolic)),
+            None,
+            main,
+            memory_diagonal,
+            reactions,
+            n_dof,
+        ))
+    }
+
+    /// The Stepper of prepared parts; `n_dof` the length of its vectors.
+    #[allow(clippy::too_many_arguments)]
+    fn with_parts(
+        sim: &'s Simulation<D>,
+        counters: Counters,
+        mut stats: RunStats,
+        (k_a, k_b, symbolic): (Option<SymmetricMatrix>, Option<MemoryStiffness<D>>, Option<Analysis>),
+        backend: Option<&'s dyn Backend<D>>,
+        main: StepOperator,
+        memory_diagonal: Option<f64>,
+        reactions: Option<Reactions>,
+        n_dof: usize,
+    ) -> Self {
         if let (Some(op), Some(c)) = (&main.condensed, &sim.contact) {
             if !c.laws.is_empty() {
                 let weights = c.laws.monotonicity_weights(c.nodes.len());
                 stats.smallness = Some(op.stiffness().trace_constant(&weights));
             }
         }
-        let reactions = (!sim.dirichlet.reaction_groups.is_empty()).then(|| Reactions::new(sim, &k_a, k_b.as_ref()));
-        let k_b = k_b.map(|kb| match NodeBlockMatrix::new(&kb) {
-            Some(blocks) => MemoryStiffness::NodeBlocks(blocks),
-            None => MemoryStiffness::Full(kb),
-        });
-        let history = sim.kernel.as_ref().map(|b| History::new(b, n_dof, k));
+        let history = sim.kernel.as_ref().map(|b| History::new(b, n_dof, sim.time.step()));
         let contact = sim.contact.as_ref().map(|c| ContactState::new(c.nodes.len()));
         let time_dependent_loads = sim.loads.is_time_dependent();
-        Ok(Stepper {
+        Stepper {
             sim,
             counters,
             stats,
@@ -544,7 +677,8 @@ impl<'s, const D: usize> Stepper<'s, D> {
             reactions,
             time_dependent_loads,
             load: vec![0.0; n_dof],
-            prescribed: sim.dirichlet.is_nonzero().then(|| vec![0.0; n_dof]),
+            // g(t_n) over all unknowns on every process (the contact offsets index it so)
+            prescribed: sim.dirichlet.is_nonzero().then(|| vec![0.0; sim.dofs.n()]),
             rhs: vec![0.0; n_dof],
             memory_load: vec![0.0; n_dof],
             memory_rhs: vec![0.0; n_dof],
@@ -552,7 +686,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
             memory_displacement: None,
             outcome: None,
             next: 0,
-        })
+        }
     }
 
     /// The index of the step [`Stepper::advance`] will solve next.
@@ -566,13 +700,21 @@ impl<'s, const D: usize> Stepper<'s, D> {
         let sim = self.sim;
         let t = sim.time.time(n);
         if n == 0 || self.time_dependent_loads {
-            let load = &mut self.load;
-            timed(&mut self.stats.phases.loads, || sim.loads.assemble(t, &sim.dofs, load)).map_err(|detail| {
-                SolveError::NonFiniteLoad {
-                    step: n,
-                    time: t,
-                    detail,
+            let (load, backend) = (&mut self.load, self.backend);
+            timed(&mut self.stats.phases.loads, || match backend {
+                None => sim.loads.assemble(t, &sim.dofs, load),
+                Some(b) => {
+                    // assembled whole (every process holds the mesh), kept over its share
+                    let mut full = vec![0.0; sim.dofs.n()];
+                    let assembled = sim.loads.assemble(t, &sim.dofs, &mut full);
+                    load.iter_mut().zip(b.unknowns()).for_each(|(l, &d)| *l = full[d]);
+                    assembled
                 }
+            })
+            .map_err(|detail| SolveError::NonFiniteLoad {
+                step: n,
+                time: t,
+                detail,
             })?;
         }
         if let Some(g) = &mut self.prescribed {
@@ -597,7 +739,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
             let outcome = if n == 0 && self.history.is_some() {
                 self.step_zero(&mut rhs)?
             } else {
-                lift(&self.main, sim, self.prescribed.as_deref(), &mut rhs);
+                lift(&self.main, sim, self.prescribed.as_deref(), &mut rhs, self.backend);
                 self.main.solve(
                     sim,
                     n,
@@ -611,7 +753,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
                 )?
             };
             self.rhs = rhs;
-            if self.displacement.iter().any(|v| !v.is_finite()) {
+            if any(self.backend, self.displacement.iter().any(|v| !v.is_finite())) {
                 return Err(SolveError::NonFinite { step: n, time: t });
             }
             self.outcome = outcome;
@@ -629,7 +771,10 @@ impl<'s, const D: usize> Stepper<'s, D> {
             } else {
                 self.memory_displacement.as_deref()
             };
-            let values = r.compute(sim, &self.displacement, memory, &self.load, self.contact.as_ref());
+            let values = match self.backend {
+                None => r.compute(sim, &self.displacement, memory, &self.load, self.contact.as_ref()),
+                Some(b) => r.compute_held(sim, b, &self.displacement, memory, &self.load, self.contact.as_ref()),
+            };
             self.reaction_values.clear();
             self.reaction_values.extend_from_slice(values);
             for (g, &force) in sim.dirichlet.reaction_groups.iter().zip(values) {
@@ -690,7 +835,8 @@ impl<'s, const D: usize> Stepper<'s, D> {
             .as_ref()
             .is_none_or(|c| c.motion.is_none() && c.bound.as_ref().is_none_or(|g| g.iter().all(|v| *v >= 0.0)));
         let prescribed_zero = self.prescribed.as_ref().is_none_or(|g| g.iter().all(|v| *v == 0.0));
-        if rhs.iter().all(|v| *v == 0.0) && law_at_zero == 0.0 && bound_ok && prescribed_zero {
+        let rhs_zero = !any(self.backend, rhs.iter().any(|v| *v != 0.0));
+        if rhs_zero && law_at_zero == 0.0 && bound_ok && prescribed_zero {
             let outcome = self.contact.as_mut().map(|s| {
                 let m = s.force.len();
                 *s = ContactState::new(m);
@@ -699,24 +845,14 @@ impl<'s, const D: usize> Stepper<'s, D> {
             self.displacement.fill(0.0);
             return Ok(outcome);
         }
-        let mut op = match (&self.symbolic, self.backend) {
-            (Some(symbolic), _) => StepOperator::new(
-                sim,
-                symbolic,
-                system_matrix(sim, &self.k_a),
-                &self.counters,
-                &mut self.stats,
-            )?,
-            (None, Some(b)) => {
-                let lifting = sim
-                    .dirichlet
-                    .is_nonzero()
-                    .then(|| PrescribedColumns::new(&self.k_a, &sim.dofs));
-                StepOperator::with_backend(sim, b, None, lifting, &self.counters, &mut self.stats)?
+        let mut op = match (&self.symbolic, &self.k_a, self.backend) {
+            (Some(symbolic), Some(k_a), _) => {
+                StepOperator::new(sim, symbolic, system_matrix(sim, k_a), &self.counters, &mut self.stats)?
             }
-            (None, None) => unreachable!("a Stepper has a symbolic analysis or a backend"),
+            (_, _, Some(b)) => StepOperator::with_backend(sim, b, None, &self.counters, &mut self.stats)?,
+            _ => unreachable!("a Stepper has a symbolic analysis and K_A, or a backend"),
         };
-        lift(&op, sim, self.prescribed.as_deref(), rhs);
+        lift(&op, sim, self.prescribed.as_deref(), rhs, self.backend);
         op.solve(
             sim,
             0,
@@ -732,14 +868,19 @@ impl<'s, const D: usize> Stepper<'s, D> {
 
     /// rhs ← rhs − K_B h_n (docs/method.md §3); h_0 = 0.
     fn subtract_memory_load(&mut self, n: usize, rhs: &mut [f64]) {
-        let (Some(history), Some(k_b)) = (&self.history, &self.k_b) else {
+        let Some(history) = &self.history else {
             return;
         };
+        let (sim, k_b, backend) = (self.sim, &self.k_b, self.backend);
         let (h, kb_h) = (&mut self.memory_load, &mut self.memory_rhs);
         timed(&mut self.stats.phases.history, || {
             history.memory_load(h);
             if n > 0 {
-                k_b.matvec(h, kb_h);
+                match (k_b, backend) {
+                    (Some(k_b), _) => k_b.matvec(h, kb_h),
+                    (None, Some(b)) => b.product(sim, Stiffness::Memory, h, kb_h),
+                    (None, None) => return,
+                }
                 rhs.iter_mut().zip(kb_h.iter()).for_each(|(r, v)| *r -= v);
             }
         });
@@ -778,12 +919,37 @@ impl<'s, const D: usize> Stepper<'s, D> {
 }
 
 /// The prescribed components in a right-hand side (docs/method.md §7): rhs_f −= K_fp g at the
-/// free rows, rhs_p = g_p at the prescribed ones (zero without non-zero values).
-fn lift<const D: usize>(op: &StepOperator, sim: &Simulation<D>, g: Option<&[f64]>, rhs: &mut [f64]) {
-    if let (Some(g), Some(columns)) = (g, &op.lifting) {
-        columns.lift(g, &sim.dofs, rhs);
+/// free rows, rhs_p = g_p at the prescribed ones (zero without non-zero values). `g` is over
+/// all unknowns, `rhs` over this process's ([`Backend::unknowns`] with a backend).
+fn lift<const D: usize>(
+    op: &StepOperator,
+    sim: &Simulation<D>,
+    g: Option<&[f64]>,
+    rhs: &mut [f64],
+    backend: Option<&dyn Backend<D>>,
+) {
+    match (g, &op.lifting, backend) {
+        (Some(g), Some(Lifting::Columns(columns)), _) => columns.lift(g, &sim.dofs, rhs),
+        (Some(g), Some(Lifting::Products { memory }), Some(b)) => {
+            // K g with g zero at the free unknowns is Σ_j K_ij g_j over the prescribed j.
+            let held: Vec<f64> = b.unknowns().iter().map(|&d| g[d]).collect();
+            let mut kg = vec![0.0; held.len()];
+            b.product(sim, Stiffness::Elastic, &held, &mut kg);
+            if let Some(c) = memory {
+                let mut y = vec![0.0; held.len()];
+                b.product(sim, Stiffness::Memory, &held, &mut y);
+                kg.iter_mut().zip(&y).for_each(|(a, v)| *a += c * v);
+            }
+            for ((r, &d), v) in rhs.iter_mut().zip(b.unknowns()).zip(&kg) {
+                if !sim.dofs.is_prescribed(d) {
+                    *r -= v;
+                }
+            }
+        }
+        _ => {}
     }
-    for (d, r) in rhs.iter_mut().enumerate() {
+    for (k, r) in rhs.iter_mut().enumerate() {
+        let d = backend.map_or(k, |b| b.unknowns()[k]);
         if sim.dofs.is_prescribed(d) {
             *r = g.map_or(0.0, |g| g[d]);
         }
@@ -812,7 +978,8 @@ pub fn run_with<const D: usize>(
     let mut frames = 0;
     let mut last_written = None;
     for n in 0..=sim.time.steps {
-        if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+        // (with a backend, a stop on any process stops every process at the same step)
+        if stop.is_some() && any(backend, stop.is_some_and(|s| s.load(Ordering::Relaxed))) {
             return Err(SolveError::Interrupted { last_written });
         }
         let view = stepper.advance()?;

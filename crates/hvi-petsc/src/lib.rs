@@ -1,8 +1,9 @@
 //! A small safe wrapper over the PETSc calls hvi needs (docs/method.md §13 of hvi): the
 //! library's lifetime tied to MPI's ([`Petsc`]), a distributed sparse matrix ([`Matrix`],
-//! MPIAIJ with preallocation), vectors ([`Vector`], [`AllGather`]), dense blocks of
-//! right-hand sides ([`DenseBlock`]) and a linear solver ([`Solver`]: MUMPS Cholesky or CG with
-//! GAMG; `KSPMatSolve` for many right-hand sides).
+//! MPIAIJ with preallocation), vectors ([`Vector`]; [`Scatter`] moves chosen entries between
+//! ranks, [`AllGather`] all of them to every rank), dense blocks of right-hand sides
+//! ([`DenseBlock`]), a linear solver ([`Solver`]: MUMPS Cholesky or CG with GAMG;
+//! `KSPMatSolve` for many right-hand sides) and MUMPS's memory estimates ([`MumpsMemory`]).
 //!
 //! Every `PetscErrorCode` becomes an [`Error`] carrying PETSc's own message (an error handler
 //! records it instead of printing a traceback); nothing here panics across the FFI boundary.
@@ -177,6 +178,14 @@ fn comm() -> ffi::MPI_Comm {
     unsafe { ffi::PETSC_COMM_WORLD }
 }
 
+/// MPI_COMM_SELF (PETSc's PETSC_COMM_SELF is a macro bindgen cannot translate): the handle of
+/// the MPI that PETSc was built with, as rsmpi links it.
+fn comm_self() -> ffi::MPI_Comm {
+    use mpi::raw::AsRaw;
+    // The same MPI library (pkg-config's) on both sides: the handles are the same pointer.
+    SimpleCommunicator::self_comm().as_raw().0.cast()
+}
+
 /// A distributed vector.
 pub struct Vector {
     raw: ffi::Vec,
@@ -187,6 +196,47 @@ pub struct Vector {
 unsafe impl Send for Vector {}
 
 impl Vector {
+    /// A distributed vector with `local` entries on this rank, zero (collective).
+    pub fn mpi(petsc: &Petsc, local: usize) -> Result<Vector> {
+        let mut raw = ptr::null_mut();
+        check(unsafe { ffi::VecCreateMPI(comm(), int(local, "local entries")?, ffi::PETSC_DETERMINE, &mut raw) })?;
+        let mut v = Vector {
+            raw,
+            _session: petsc.session.clone(),
+        };
+        v.with_local_mut(|a| a.fill(0.0))?;
+        Ok(v)
+    }
+
+    /// Sets the locally owned entries to `values` (as many as this rank owns).
+    pub fn set_local(&mut self, values: &[f64]) -> Result<()> {
+        let mut wrong = None;
+        self.with_local_mut(|a| match a.len() == values.len() {
+            true => a.copy_from_slice(values),
+            false => wrong = Some(a.len()),
+        })?;
+        match wrong {
+            None => Ok(()),
+            Some(n) => Err(error(format!(
+                "{} values for the {n} entries this rank owns",
+                values.len()
+            ))),
+        }
+    }
+
+    /// Copies the locally owned entries into `out` (as many as this rank owns).
+    pub fn get_local(&self, out: &mut [f64]) -> Result<()> {
+        let mut wrong = None;
+        self.with_local(|a| match a.len() == out.len() {
+            true => out.copy_from_slice(a),
+            false => wrong = Some(a.len()),
+        })?;
+        match wrong {
+            None => Ok(()),
+            Some(n) => Err(error(format!("room for {} values, but this rank owns {n}", out.len()))),
+        }
+    }
+
     /// The locally owned entries, copied out.
     pub fn local(&self) -> Result<Vec<f64>> {
         let mut out = Vec::new();
@@ -286,6 +336,96 @@ impl Drop for AllGather {
     }
 }
 
+/// Chosen entries of a distributed vector on the rank that wants them, and sums back to their
+/// owners (VecScatterCreate with a sequential vector): the ghost values of a partition.
+pub struct Scatter {
+    scatter: ffi::VecScatter,
+    local: Vector,
+}
+
+unsafe impl Send for Scatter {}
+
+impl Scatter {
+    /// A scatter of the global entries `indices` (in `like`'s layout, in the order wanted; any
+    /// rank's) to this rank (collective).
+    pub fn new(like: &Vector, indices: &[Int]) -> Result<Self> {
+        let n = int(indices.len(), "scattered entries")?;
+        let mut raw = ptr::null_mut();
+        check(unsafe { ffi::VecCreateSeq(comm_self(), n, &mut raw) })?;
+        let local = Vector {
+            raw,
+            _session: like._session.clone(),
+        };
+        let mut from = ptr::null_mut();
+        check(unsafe {
+            ffi::ISCreateGeneral(
+                comm_self(),
+                n,
+                indices.as_ptr(),
+                ffi::PetscCopyMode::PETSC_COPY_VALUES,
+                &mut from,
+            )
+        })?;
+        let mut scatter = ptr::null_mut();
+        // A null target index set: the whole local vector, in order.
+        let created = check(unsafe { ffi::VecScatterCreate(like.raw, from, local.raw, ptr::null_mut(), &mut scatter) });
+        unsafe { ffi::ISDestroy(&mut from) };
+        created?;
+        Ok(Scatter { scatter, local })
+    }
+
+    /// out[i] = x[indices[i]] (collective).
+    pub fn gather(&mut self, x: &Vector, out: &mut [f64]) -> Result<()> {
+        use ffi::{InsertMode::INSERT_VALUES, ScatterMode::SCATTER_FORWARD};
+        check(unsafe { ffi::VecScatterBegin(self.scatter, x.raw, self.local.raw, INSERT_VALUES, SCATTER_FORWARD) })?;
+        check(unsafe { ffi::VecScatterEnd(self.scatter, x.raw, self.local.raw, INSERT_VALUES, SCATTER_FORWARD) })?;
+        self.local.get_local(out)
+    }
+
+    /// y[indices[i]] += values[i] on every rank, summed at the owners (collective).
+    pub fn add_back(&mut self, values: &[f64], y: &mut Vector) -> Result<()> {
+        use ffi::{InsertMode::ADD_VALUES, ScatterMode::SCATTER_REVERSE};
+        self.local.set_local(values)?;
+        check(unsafe { ffi::VecScatterBegin(self.scatter, self.local.raw, y.raw, ADD_VALUES, SCATTER_REVERSE) })?;
+        check(unsafe { ffi::VecScatterEnd(self.scatter, self.local.raw, y.raw, ADD_VALUES, SCATTER_REVERSE) })
+    }
+}
+
+impl Drop for Scatter {
+    fn drop(&mut self) {
+        unsafe { ffi::VecScatterDestroy(&mut self.scatter) };
+    }
+}
+
+/// MUMPS's memory of a Cholesky factor, in MB (10⁶ bytes) as MUMPS reports it: estimated by its
+/// analysis (INFO(15) on this rank, INFOG(16) the largest rank, INFOG(17) the sum) and, after the
+/// numerical factorisation, allocated (INFO(16), INFOG(18), INFOG(19)); the factor's entries
+/// (INFOG(3) estimated, INFOG(29) effective, summed over the ranks).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MumpsMemory {
+    pub this_rank_mb: i64,
+    pub largest_rank_mb: i64,
+    pub total_mb: i64,
+    pub factor_entries: i64,
+}
+
+/// MUMPS's INFO/INFOG integers of a factored matrix `f`; INFOG(3) and (29) are negative when
+/// they count millions.
+fn mumps_info(f: ffi::Mat, local: Int, largest: Int, total: Int, entries: Int) -> Result<MumpsMemory> {
+    let (mut a, mut b, mut c, mut e) = (0, 0, 0, 0);
+    check(unsafe { ffi::MatMumpsGetInfo(f, local, &mut a) })?;
+    check(unsafe { ffi::MatMumpsGetInfog(f, largest, &mut b) })?;
+    check(unsafe { ffi::MatMumpsGetInfog(f, total, &mut c) })?;
+    check(unsafe { ffi::MatMumpsGetInfog(f, entries, &mut e) })?;
+    let count = |v: Int| if v < 0 { -(v as i64) * 1_000_000 } else { v as i64 };
+    Ok(MumpsMemory {
+        this_rank_mb: a as i64,
+        largest_rank_mb: b as i64,
+        total_mb: c as i64,
+        factor_entries: count(e),
+    })
+}
+
 /// A distributed sparse matrix (MPIAIJ; SeqAIJ-compatible on one rank) with `block`-sized
 /// node blocks, each rank owning a contiguous range of rows.
 pub struct Matrix {
@@ -376,6 +516,40 @@ impl Matrix {
     /// y = A x (collective).
     pub fn mult(&self, x: &Vector, y: &mut Vector) -> Result<()> {
         check(unsafe { ffi::MatMult(self.raw, x.raw, y.raw) })
+    }
+
+    /// Bytes of this rank's part of the matrix: its allocated entries (MatGetInfo, MAT_LOCAL:
+    /// an 8-byte value and a 4-byte column index each) and its row arrays (MatGetInfo's own
+    /// `memory` is only counted when PETSc logs its mallocs).
+    pub fn local_bytes(&self) -> Result<f64> {
+        // SAFETY: MatInfo is plain data that MatGetInfo fills.
+        let mut info: ffi::MatInfo = unsafe { std::mem::zeroed() };
+        check(unsafe { ffi::MatGetInfo(self.raw, ffi::MatInfoType::MAT_LOCAL, &mut info) })?;
+        let (mut lo, mut hi) = (0, 0);
+        check(unsafe { ffi::MatGetOwnershipRange(self.raw, &mut lo, &mut hi) })?;
+        Ok(info.memory.max(12.0 * info.nz_allocated + 32.0 * (hi - lo) as f64))
+    }
+
+    /// MUMPS's analysis (ordering and symbolic Cholesky factorisation) of this matrix, without the
+    /// numerical factorisation: what the factor will need (collective).
+    pub fn mumps_estimate(&self) -> Result<MumpsMemory> {
+        let mut f = ptr::null_mut();
+        check(unsafe {
+            ffi::MatGetFactor(
+                self.raw,
+                ffi::MATSOLVERMUMPS.as_ptr().cast(),
+                ffi::MatFactorType::MAT_FACTOR_CHOLESKY,
+                &mut f,
+            )
+        })?;
+        // SAFETY: MatFactorInfo is plain data that MatFactorInfoInitialize fills.
+        let mut info: ffi::MatFactorInfo = unsafe { std::mem::zeroed() };
+        let analysed = check(unsafe { ffi::MatFactorInfoInitialize(&mut info) })
+            // MUMPS orders the matrix itself: no permutation is passed.
+            .and_then(|()| check(unsafe { ffi::MatCholeskyFactorSymbolic(f, self.raw, ptr::null_mut(), &info) }))
+            .and_then(|()| mumps_info(f, 15, 16, 17, 3));
+        unsafe { ffi::MatDestroy(&mut f) };
+        analysed
     }
 
     /// Sets the rigid-body modes of the coordinates `coords` (a vector with this row layout
@@ -547,6 +721,18 @@ impl Solver {
 
     pub fn method(&self) -> Method {
         self.method
+    }
+
+    /// The memory MUMPS allocated for the factor (after [`Solver::new`]; None for GAMG).
+    pub fn mumps_memory(&self) -> Result<Option<MumpsMemory>> {
+        if self.method != Method::MumpsCholesky {
+            return Ok(None);
+        }
+        let mut pc = ptr::null_mut();
+        check(unsafe { ffi::KSPGetPC(self.raw, &mut pc) })?;
+        let mut f = ptr::null_mut();
+        check(unsafe { ffi::PCFactorGetMatrix(pc, &mut f) })?;
+        mumps_info(f, 16, 18, 19, 29).map(Some)
     }
 
     pub fn name(&self) -> &'static str {

@@ -302,15 +302,15 @@ impl Scalar {
 }
 
 /// One tag of the XML header: `<name a="v" ...>`, `<name .../>` or `</name>`.
-struct Tag<'a> {
-    name: &'a str,
+pub(super) struct Tag<'a> {
+    pub(super) name: &'a str,
     attrs: Vec<(&'a str, String)>,
-    closing: bool,
+    pub(super) closing: bool,
     self_closing: bool,
 }
 
 impl Tag<'_> {
-    fn attr(&self, key: &str) -> Option<&str> {
+    pub(super) fn attr(&self, key: &str) -> Option<&str> {
         self.attrs.iter().find(|(k, _)| *k == key).map(|(_, v)| v.as_str())
     }
 }
@@ -364,7 +364,7 @@ fn parse_tag(inner: &str) -> Option<Tag<'_>> {
 }
 
 /// The tags of `text` in order, skipping the XML declaration, comments and text between tags.
-fn parse_tags(text: &str) -> Result<Vec<Tag<'_>>, String> {
+pub(super) fn parse_tags(text: &str) -> Result<Vec<Tag<'_>>, String> {
     let mut tags = Vec::new();
     let mut rest = text;
     while let Some(open) = rest.find('<') {
