@@ -206,7 +206,7 @@ pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, S
         scale_text: magnified,
         foundation,
     };
-    let (png, svg) = (run_dir.join("deformed.png"), run_dir.join("deformed.svg"));
+    let (png, svg) = pictures(run_dir, "deformed")?;
     render_deformed(&png, Some(&svg), &picture).map_err(fail)?;
     let mut written = vec![png, svg];
     if let Some(g3) = &gamma3 {
@@ -240,11 +240,20 @@ pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, S
                 })
                 .collect(),
         };
-        let (png, svg) = (run_dir.join("gamma3.png"), run_dir.join("gamma3.svg"));
+        let (png, svg) = pictures(run_dir, "gamma3")?;
         render_gamma3(&png, Some(&svg), &figure).map_err(fail)?;
         written.extend([png, svg]);
     }
     Ok(written)
+}
+
+/// The PNG and SVG files of picture `stem` in the run directory, recorded in the run's manifest
+/// before they are written, so that `hvi solve --overwrite` removes them with the run's own files
+/// (docs/method.md §12.2).
+fn pictures(run_dir: &Path, stem: &str) -> Result<(PathBuf, PathBuf), SolveError> {
+    let (png, svg) = (format!("{stem}.png"), format!("{stem}.svg"));
+    output::record_in_run(run_dir, &[&png, &svg])?;
+    Ok((run_dir.join(png), run_dir.join(svg)))
 }
 
 /// A number as short text with the minus sign −.
@@ -899,7 +908,7 @@ fn plot_3d(run_dir: &Path, last: &str) -> Result<Vec<PathBuf>, SolveError> {
             },
         ],
     };
-    let (png, svg) = (run_dir.join("gamma3_map.png"), run_dir.join("gamma3_map.svg"));
+    let (png, svg) = pictures(run_dir, "gamma3_map")?;
     render_surface_map(&png, Some(&svg), &map).map_err(fail)?;
     Ok(vec![png, svg])
 }

@@ -167,3 +167,53 @@ fn a_vertical_gamma3_is_plotted_against_its_arc_length() {
     );
     assert!(deformed.contains("|u| (no von_mises in the run)"));
 }
+
+/// The pictures of `hvi plot` are recorded in the run's manifest (docs/method.md §12.2): a rerun
+/// with --overwrite removes them with the run's frames (no stale picture of the earlier run), a
+/// file of the user's stays, and plotting twice lists each picture once.
+#[test]
+fn plot_pictures_are_in_the_manifest_and_a_rerun_removes_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let o = out.to_str().unwrap();
+    ok(&["solve", "rect:8x4", "--set", "time.steps=4", "--out", o, "--quiet"]);
+    ok(&["plot", o]);
+    ok(&["plot", o]);
+    let pictures = ["deformed.png", "deformed.svg", "gamma3.png", "gamma3.svg"];
+    let listed = hvi::output::read_manifest(&out.join(hvi::output::MANIFEST_NAME)).unwrap();
+    for p in pictures {
+        assert_eq!(listed.iter().filter(|l| *l == p).count(), 1, "{p} in {listed:?}");
+        assert!(out.join(p).is_file());
+    }
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    ok(&[
+        "solve",
+        "rect:8x4",
+        "--set",
+        "time.steps=2",
+        "--out",
+        o,
+        "--quiet",
+        "--overwrite",
+    ]);
+    for p in pictures {
+        assert!(!out.join(p).exists(), "{p} survived the rerun");
+    }
+    assert!(out.join("notes.txt").is_file());
+    // the new run's manifest lists its own files and no picture until it is plotted again
+    let listed = hvi::output::read_manifest(&out.join(hvi::output::MANIFEST_NAME)).unwrap();
+    assert!(listed.iter().all(|l| !pictures.contains(&l.as_str())), "{listed:?}");
+    ok(&["plot", o]);
+    let listed = hvi::output::read_manifest(&out.join(hvi::output::MANIFEST_NAME)).unwrap();
+    assert!(pictures.iter().all(|p| listed.iter().any(|l| l == p)), "{listed:?}");
+    let mut on_disk: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n != hvi::output::MANIFEST_NAME && n != "notes.txt")
+        .collect();
+    on_disk.sort();
+    let mut expected = listed.clone();
+    expected.sort();
+    expected.dedup();
+    assert_eq!(on_disk, expected, "the directory holds exactly the listed files");
+}

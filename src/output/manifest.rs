@@ -5,7 +5,8 @@
 //!
 //! The manifest is a hidden text file in the output directory: a first line naming the format,
 //! then one file name per line, appended (and flushed) *before* hvi creates the file, so that
-//! even an interrupted or killed run leaves a manifest covering everything it wrote.
+//! even an interrupted or killed run leaves a manifest covering everything it wrote. `hvi plot`
+//! adds the pictures it writes into a run's directory ([`record_in_run`]; docs/method.md §12.2).
 
 use super::OutputError;
 use std::fs::{self, File, OpenOptions};
@@ -66,13 +67,13 @@ impl RunManifest {
             }
             remove_listed(dir, &path)?;
         }
-        let mut file = OpenOptions::new()
-            .create(true)
-            .write(true)
-            .truncate(true)
+        fs::write(&path, format!("{FIRST_LINE}\n")).map_err(|e| OutputError::write(&path, e))?;
+        // appending (O_APPEND), so that names another command records meanwhile
+        // ([`record_in_run`]) are never overwritten by this run's next line
+        let file = OpenOptions::new()
+            .append(true)
             .open(&path)
             .map_err(|e| OutputError::write(&path, e))?;
-        writeln!(file, "{FIRST_LINE}").map_err(|e| OutputError::write(&path, e))?;
         Ok(RunManifest { path, file })
     }
 
@@ -95,6 +96,41 @@ impl RunManifest {
     pub fn path(&self) -> &Path {
         &self.path
     }
+}
+
+/// Records that a later command (`hvi plot`) writes the files `names` into the run directory
+/// `dir`, so that `--overwrite` removes them with the run's own files and a rerun leaves no stale
+/// picture. Call before creating the files. Each name not yet listed is appended to the run's
+/// manifest as one line in one `write` on a file opened for appending (O_APPEND: concurrent
+/// appenders, e.g. a run still writing its frames, never interleave within a line), flushed.
+/// Returns false, recording nothing, when `dir` holds no manifest: no run, or a run of an hvi
+/// before manifests, which `--overwrite` refuses anyway (a manifest started here would make
+/// such a run's frames look unlisted, hence survivable).
+pub fn record_in_run(dir: &Path, names: &[&str]) -> Result<bool, OutputError> {
+    let path = dir.join(MANIFEST_NAME);
+    if !path.is_file() {
+        return Ok(false);
+    }
+    let listed = read_manifest(&path)?;
+    let mut file = OpenOptions::new()
+        .append(true)
+        .open(&path)
+        .map_err(|e| OutputError::write(&path, e))?;
+    for name in names {
+        if !plain(name) {
+            return Err(OutputError::InvalidArgument {
+                path: path.clone(),
+                detail: format!("{name:?} is not a plain file name of the output directory"),
+            });
+        }
+        if listed.iter().any(|l| l == name) {
+            continue;
+        }
+        file.write_all(format!("{name}\n").as_bytes())
+            .and_then(|()| file.flush())
+            .map_err(|e| OutputError::write(&path, e))?;
+    }
+    Ok(true)
 }
 
 /// The file names a manifest lists (its first line checked).

@@ -49,7 +49,7 @@ pub use atomic::{is_temporary_name, write_atomic, write_json_atomic};
 pub use boundary::ContactBoundary;
 pub use csv::CsvTable;
 pub use error::OutputError;
-pub use manifest::{read_manifest, RunManifest, MANIFEST_NAME};
+pub use manifest::{read_manifest, record_in_run, RunManifest, MANIFEST_NAME};
 pub use pvd::pvd_text;
 pub use vtu::{pvtu_pieces, read_pvtu_arrays, read_vtu_arrays, VtuContents, CELL_IDS, NODE_IDS};
 

@@ -416,6 +416,76 @@ fn solve_command(c: &TargetContext, n: usize, steps: usize) -> String {
     command
 }
 
+/// Why no candidate is cheaper than `chosen` (docs/method.md §6.1): the nearest coarser mesh
+/// among the candidates (its spatial error alone, and its best prediction with the shortest
+/// step), and on the chosen mesh the next longer step.
+fn why_no_cheaper(
+    error: &ErrorModel,
+    cost: &CostModel,
+    candidates: &[Candidate],
+    chosen: Candidate,
+    target: f64,
+) -> String {
+    let fmt_n = |x: f64| format!("{x:.3e}");
+    let mut why = Vec::new();
+    let coarser = candidates.iter().filter(|c| c.n < chosen.n).map(|c| c.n).max();
+    match coarser {
+        Some(m) => {
+            let h = 1.0 / m as f64;
+            let k_min = candidates.iter().map(|c| c.k).fold(f64::INFINITY, f64::min);
+            let spatial = error.spatial(h);
+            let meeting = candidates
+                .iter()
+                .filter(|c| c.n == m && error.predict(c.h, c.k) <= target)
+                .map(|c| (cost.predict(c.unknowns, c.steps as f64), c))
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            why.push(match meeting {
+                _ if spatial > target => format!(
+                    "The nearest coarser mesh the model describes, h = 1/{m}, has a spatial error of {} alone, more \
+                     than the target whatever the step.",
+                    fmt_n(spatial)
+                ),
+                None => format!(
+                    "The nearest coarser mesh the model describes, h = 1/{m}, is predicted at {} even with the \
+                     shortest step k = {} (spatial {}).",
+                    fmt_n(error.predict(h, k_min)),
+                    fraction(k_min),
+                    fmt_n(spatial)
+                ),
+                Some((wall, c)) => format!(
+                    "The nearest coarser mesh the model describes, h = 1/{m}, meets the target only with k ≤ {}, \
+                     predicted to take {wall:.2} s.",
+                    fraction(c.k)
+                ),
+            });
+        }
+        None => why.push(format!(
+            "No candidate mesh is coarser than h = 1/{} (the candidates are the meshes nested in the reference's, \
+             or the study's mesh files).",
+            chosen.n
+        )),
+    }
+    if let Some(longer) = candidates
+        .iter()
+        .filter(|c| c.n == chosen.n && c.steps < chosen.steps)
+        .max_by_key(|c| c.steps)
+    {
+        why.push(format!(
+            "On h = 1/{}, the next longer step k = {} is predicted at {}, above the target.",
+            chosen.n,
+            fraction(longer.k),
+            fmt_n(error.predict(longer.h, longer.k))
+        ));
+    }
+    why.push(
+        "Meshes the model cannot describe are left out on purpose: non-nested ones, whose transfer to the reference \
+         mesh measures less than their error (docs/method.md §6.1, which also measures cells of other aspect ratios \
+         on the paper's example)."
+            .into(),
+    );
+    why.join(" ")
+}
+
 /// The Markdown sections of the targets: models, recommendation, and the check when asked.
 fn target_sections(
     study: &Study,
@@ -582,6 +652,15 @@ fn target_sections(
             None => {
                 let _ = writeln!(md, "* No run of the tables reaches the target.");
             }
+        }
+        if let Some(r) = cheapest.filter(|r| (n_of(r.summary.h), r.summary.steps) == (n, steps)) {
+            let _ = writeln!(
+                md,
+                "* **The recommendation is the cheapest run of the tables itself ({}): no run the model describes is \
+                 predicted cheaper and within the target.** {}",
+                r.summary.label,
+                why_no_cheaper(&error, &cost, &candidates, p.run, e_target)
+            );
         }
         if targets.verify {
             let options = RunOptions {
