@@ -70,6 +70,8 @@ pub struct FileSink<const D: usize = 2> {
     reactions: Option<CsvTable>,
     contact_forces: Option<CsvTable>,
     fields: Vec<OutputField>,
+    /// The body's active scalars (`output.active_scalar`; None: the first 1-component field).
+    active_scalar: Option<String>,
     progress: Option<indicatif::ProgressBar>,
     pub stress_seconds: f64,
 }
@@ -211,9 +213,17 @@ impl<const D: usize> FileSink<D> {
             reactions,
             contact_forces,
             fields: fields.to_vec(),
+            active_scalar: None,
             progress,
             stress_seconds: 0.0,
         })
+    }
+
+    /// Marks the point field `name` (and the cell field of that name, if any) as the active
+    /// scalars of the body's frames (`output.active_scalar`, docs/method.md §12.3).
+    pub fn with_active_scalar(mut self, name: Option<&str>) -> Self {
+        self.active_scalar = name.map(str::to_string);
+        self
     }
 
     /// Clears the progress bar.
@@ -248,8 +258,9 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
                     (cell, node)
                 })
             });
-            let (point_fields, cell_fields) =
+            let (mut point_fields, mut cell_fields) =
                 body_fields(&self.fields, &displacement, stresses.as_ref(), &self.cell_groups);
+            mark_active(&mut point_fields, &mut cell_fields, self.active_scalar.as_deref());
             let frame = Frame {
                 step: view.step,
                 time: view.time,
@@ -364,6 +375,17 @@ pub(crate) fn body_fields<'a>(
     }
     cell_fields.push(Field::i32("group", 1, cell_groups));
     (point_fields, cell_fields)
+}
+
+/// Marks the point field `name` and the cell field of that name, if any, as the active scalars
+/// (`output.active_scalar`, docs/method.md §12.3); None leaves the writer's default (the first
+/// 1-component field: von Mises).
+pub(crate) fn mark_active<'a>(point_fields: &mut [Field<'a>], cell_fields: &mut [Field<'a>], name: Option<&str>) {
+    if let Some(name) = name {
+        for f in point_fields.iter_mut().chain(cell_fields.iter_mut()) {
+            f.active = f.name == name;
+        }
+    }
 }
 
 /// The physical tag of each cell's group (-1 for a cell in none): the last group of dimension
@@ -591,7 +613,8 @@ fn solve_dim<const D: usize>(
         &contact_groups,
         scene.output.compression_level(),
         opts.progress,
-    )?;
+    )?
+    .with_active_scalar(scene.output.active_scalar_name());
     sink.manifest.add("scene.toml")?;
     sink.manifest.add("summary.json")?;
     let result = output::write_atomic(&opts.out.join("scene.toml"), scene.to_toml_string().as_bytes())

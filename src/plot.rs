@@ -1,7 +1,8 @@
 //! `hvi plot RUN_DIR`: pictures of a run written by `hvi solve`, each as PNG and SVG.
 //!
 //! * 2D, `deformed.png`/`.svg`: the last frame's mesh deformed by a magnified displacement,
-//!   coloured by von Mises (or |u| without stress output), with a colour bar, the field's name,
+//!   coloured by the run's active scalar (`output.active_scalar`: von Mises by default, |u| or
+//!   |σ|; docs/method.md §12.3), with a colour bar, the field's name,
 //!   the time, the magnification and — when the scene has a bound — the foundation
 //!   u_ν = g drawn at the same magnification.
 //! * 2D, `gamma3.png`/`.svg`: u_ν and the contact pressure along Γ₃ against arc length (so a
@@ -122,22 +123,14 @@ pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, S
         Some((3, v)) => v.chunks(3).map(|c| [c[0], c[1]]).collect(),
         _ => return Err(fail(format!("{last} has no displacement field"))),
     };
-    let (field, values) = match vtu.cell_data.get("von_mises") {
-        Some((1, v)) => ("von Mises stress".to_string(), v.clone()),
-        _ => (
-            "|u| (no von_mises in the run)".to_string(),
-            cells
-                .iter()
-                .map(|c| {
-                    let n = c.nodes();
-                    n.iter()
-                        .map(|&p| (u[p][0].powi(2) + u[p][1].powi(2)).sqrt())
-                        .sum::<f64>()
-                        / n.len() as f64
-                })
-                .collect(),
-        ),
-    };
+    // the scene (for the active scalar, the bound, the obstacles and to recognise the paper's
+    // example), if the run kept it
+    let scene = Scene::load(Some(&run_dir.join("scene.toml")), &[]).ok();
+    let active = scene
+        .as_ref()
+        .and_then(|s| s.output.active_scalar_name().map(str::to_string))
+        .unwrap_or_else(|| "von_mises".into());
+    let (field, values) = cell_colours(&active, &vtu, &cells, &u);
     let n_cells = cells.len();
     let mesh = Mesh {
         path: run_dir.join(&last),
@@ -147,8 +140,6 @@ pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, S
         groups: vec![],
     };
     let name = run_name(run_dir);
-    // the scene (for the bound and to recognise the paper's example), if the run kept it
-    let scene = Scene::load(Some(&run_dir.join("scene.toml")), &[]).ok();
     let gamma3 = csv
         .as_deref()
         .map(|text| read_gamma3(text, &mesh))
@@ -254,6 +245,39 @@ fn pictures(run_dir: &Path, stem: &str) -> Result<(PathBuf, PathBuf), SolveError
     let (png, svg) = (format!("{stem}.png"), format!("{stem}.svg"));
     output::record_in_run(run_dir, &[&png, &svg])?;
     Ok((run_dir.join(png), run_dir.join(svg)))
+}
+
+/// The colour of each cell and the colour bar's name: the run's active scalar
+/// (`output.active_scalar`, docs/method.md §12.3) — von Mises from the cells' values, the stress
+/// by its Frobenius norm |σ| (ParaView's magnitude of the tensor), the displacement by |u| (the
+/// mean over the cell's nodes) — falling back to |u| when the run has not written the field.
+fn cell_colours(active: &str, vtu: &output::VtuContents, cells: &[Cell], u: &[[f64; 2]]) -> (String, Vec<f64>) {
+    match (active, vtu.cell_data.get(active)) {
+        ("von_mises", Some((1, v))) => ("von Mises stress".to_string(), v.clone()),
+        ("stress", Some((9, v))) => (
+            "|σ| (Frobenius norm of the stress)".to_string(),
+            v.chunks(9)
+                .map(|c| c.iter().map(|x| x * x).sum::<f64>().sqrt())
+                .collect(),
+        ),
+        _ => (
+            if active == "displacement" {
+                "|u|".to_string()
+            } else {
+                format!("|u| (no {active} in the run)")
+            },
+            cells
+                .iter()
+                .map(|c| {
+                    let n = c.nodes();
+                    n.iter()
+                        .map(|&p| (u[p][0].powi(2) + u[p][1].powi(2)).sqrt())
+                        .sum::<f64>()
+                        / n.len() as f64
+                })
+                .collect(),
+        ),
+    }
 }
 
 /// A number as short text with the minus sign −.

@@ -1347,7 +1347,7 @@ fn scene_bases() -> Vec<String> {
             &DEFAULT_SCENE_TOML[..memory],
             &DEFAULT_SCENE_TOML[time..]
         ),
-        "[material]\nplane = \"strain\"\nyoungs_modulus = 2e11\npoisson_ratio = 0.25\n[time]\nfinal_time = 2.0\nsteps = 4\n[body_force]\nvalue = [\"0\", \"-(x^2)*exp(-t)\"]\n[contact]\nbound = 0.0\n[output]\ncompress = 3\n".to_string(),
+        "[material]\nplane = \"strain\"\nyoungs_modulus = 2e11\npoisson_ratio = 0.25\n[time]\nfinal_time = 2.0\nsteps = 4\n[body_force]\nvalue = [\"0\", \"-(x^2)*exp(-t)\"]\n[contact]\nbound = 0.0\n[output]\ncompress = 3\nactive_scalar = \"displacement\"\n".to_string(),
         DEFAULT_SCENE_TOML.replacen("bound = 0.2", "bound = \"0.2 + 0.02*sin(6*PI*x) + 0.01*sqrt(1.5 - y)\"", 1),
         // a pressure with a conditional, comparisons and logic (README "Expression language")
         "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n[time]\nfinal_time = 1.0\nsteps = 2\n\

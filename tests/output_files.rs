@@ -65,12 +65,14 @@ impl FrameData {
                     name: "displacement",
                     components: 3,
                     values: FieldValues::F64(&self.displacement),
+                    active: false,
                 },
                 Field::f64("pair", 2, &self.pair),
                 Field {
                     name: "contact_status",
                     components: 1,
                     values: FieldValues::I32(&self.status),
+                    active: false,
                 },
             ],
             cell_fields: vec![

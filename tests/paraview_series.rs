@@ -338,3 +338,62 @@ fn an_interrupted_run_writes_its_summary() {
     assert_eq!(s["steps_done"], 0);
     assert!(s["last_step_written"].is_null());
 }
+
+/// `output.active_scalar` (docs/method.md §12.3) names the body's active scalars — what ParaView
+/// (and `hvi plot`) colour by — among the point fields the run writes; any other value is an
+/// error naming the key, the value and the valid names, before anything is written.
+#[test]
+fn the_active_scalar_is_the_scenes_choice_among_the_written_fields() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("u");
+    solve(&opts(&out, 2, &["output.active_scalar=\"displacement\""], false), None).unwrap();
+    let h = header(&out.join("solution_00002.vtu"));
+    assert!(
+        h.contains("<PointData Scalars=\"displacement\" Vectors=\"displacement\" Tensors=\"stress\">"),
+        "{h}"
+    );
+    // no cell field of that name: the cells keep their first scalar
+    assert!(h.contains("<CellData Scalars=\"von_mises\" Tensors=\"stress\">"), "{h}");
+    let out = dir.path().join("s");
+    solve(&opts(&out, 2, &["output.active_scalar=\"stress\""], false), None).unwrap();
+    let h = header(&out.join("solution_00002.vtu"));
+    assert!(
+        h.contains("<PointData Scalars=\"stress\" Vectors=\"displacement\" Tensors=\"stress\">"),
+        "{h}"
+    );
+    assert!(h.contains("<CellData Scalars=\"stress\" Tensors=\"stress\">"), "{h}");
+
+    let bad = dir.path().join("bad");
+    let e = solve(&opts(&bad, 2, &["output.active_scalar=\"u_nu\""], false), None)
+        .unwrap_err()
+        .to_string();
+    for part in [
+        "output.active_scalar",
+        "\"u_nu\"",
+        "\"von_mises\", \"displacement\", \"stress\"",
+    ] {
+        assert!(e.contains(part), "no {part:?} in: {e}");
+    }
+    // a field the run does not write is not offered
+    let e = solve(
+        &opts(
+            &bad,
+            2,
+            &[
+                "output.fields=[\"displacement\", \"von_mises\"]",
+                "output.active_scalar=\"stress\"",
+            ],
+            false,
+        ),
+        None,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("\"stress\"")
+            && e.contains("\"von_mises\", \"displacement\"")
+            && !e.contains("\"von_mises\", \"displacement\", \"stress\""),
+        "{e}"
+    );
+    assert!(!bad.exists(), "the refused run created {}", bad.display());
+}

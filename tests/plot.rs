@@ -217,3 +217,33 @@ fn plot_pictures_are_in_the_manifest_and_a_rerun_removes_them() {
     expected.dedup();
     assert_eq!(on_disk, expected, "the directory holds exactly the listed files");
 }
+
+/// `hvi plot` colours the body by the run's active scalar (`output.active_scalar`,
+/// docs/method.md §12.3), as ParaView does.
+#[test]
+fn plot_colours_by_the_active_scalar() {
+    let dir = tempfile::tempdir().unwrap();
+    for (value, bar) in [
+        ("displacement", "|u| (colours span"),
+        ("stress", "|σ| (Frobenius norm of the stress) (colours span"),
+        ("von_mises", "von Mises stress (colours span"),
+    ] {
+        let out = dir.path().join(value);
+        let o = out.to_str().unwrap();
+        let set = format!("output.active_scalar=\"{value}\"");
+        ok(&[
+            "solve",
+            "rect:8x4",
+            "--set",
+            "time.steps=2",
+            "--set",
+            &set,
+            "--out",
+            o,
+            "--quiet",
+        ]);
+        ok(&["plot", o]);
+        let svg = std::fs::read_to_string(out.join("deformed.svg")).unwrap();
+        assert!(svg.contains(bar), "{value}: no {bar:?} in deformed.svg");
+    }
+}

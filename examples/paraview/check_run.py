@@ -4,7 +4,8 @@
     xvfb-run -a pvpython examples/paraview/check_run.py RUN_DIR --render  # and open_run.py's picture
 
 * solution.pvd: the time steps ParaView reports are the .pvd's, every frame's FieldData
-  TimeValue is its time, von_mises is the active point scalar, displacement the active vector
+  TimeValue is its time, the scene's output.active_scalar (von_mises by default) is the active
+  point scalar, displacement the active vector
   (so that Warp By Vector picks it), and the warped body at the last time moves by the largest
   |displacement|;
 * contact.pvd: the same times; at the last time its points are the contact nodes gamma3.csv
@@ -12,7 +13,7 @@
   (status -1, docs/method.md §7.4); Plot Over Line along Gamma3 (the line open_run.py
   draws) returns u_nu equal to the linear interpolation of the nodal values (exact on a straight
   Gamma3, whose facets are the line's segments); Plot Data on contact.pvd holds u_nu;
-* with --render: open_run.py's view is at the last time, coloured by von_mises over its range
+* with --render: open_run.py's view is at the last time, coloured by the active scalar over its range
   at that time and Gamma3 by u_nu over its range (not the first frame's), and its picture
   RUN_DIR/paraview.png is written.
 
@@ -65,6 +66,15 @@ def gamma3_last(run_dir):
     return last, nodes
 
 
+def scene_active_scalar(run_dir):
+    """output.active_scalar of the run's scene.toml, von_mises when absent."""
+    import tomllib
+
+    with open(os.path.join(run_dir, "scene.toml"), "rb") as f:
+        scene = tomllib.load(f)
+    return scene.get("output", {}).get("active_scalar", "von_mises")
+
+
 def check_series(run_dir):
     print("ParaView %s, run %s" % (GetParaViewVersion(), run_dir))
     written = pvd_times(os.path.join(run_dir, "solution.pvd"))
@@ -85,9 +95,11 @@ def check_series(run_dir):
     d = fetch(body, t_last)
     pd = d.VTKObject.GetPointData()
     scalars, vectors = pd.GetScalars(), pd.GetVectors()
+    wanted = scene_active_scalar(run_dir)
     check(
-        scalars is not None and scalars.GetName() == "von_mises",
-        "solution.pvd: the active point scalar is %s" % (scalars.GetName() if scalars else None),
+        scalars is not None and scalars.GetName() == wanted,
+        "solution.pvd: the active point scalar is %s (the scene's output.active_scalar: %s)"
+        % (scalars.GetName() if scalars else None, wanted),
     )
     check(
         vectors is not None and vectors.GetName() == "displacement",
@@ -183,7 +195,12 @@ def check_render(run_dir):
     opened = open_run(run_dir)
     t_last = opened["times"][-1]
     check(opened["time"] == t_last, "open_run.py shows t = %g (the last time %g)" % (opened["time"], t_last))
-    for array, reader in (("von_mises", opened["body"]), ("u_nu", opened.get("contact"))):
+    check(
+        opened["scalar"] == scene_active_scalar(run_dir),
+        "open_run.py colours the body by %s (the scene's output.active_scalar: %s)"
+        % (opened["scalar"], scene_active_scalar(run_dir)),
+    )
+    for array, reader in ((opened["scalar"], opened["body"]), ("u_nu", opened.get("contact"))):
         if reader is None:
             continue
         lo, hi = _range(reader, array, t_last)
@@ -203,7 +220,11 @@ def check_render(run_dir):
 
 
 def _range(reader, array, t):
-    values = [float(v) for v in fetch(reader, t).PointData[array]]
+    """The range ParaView colours by: the values, or the magnitudes of a vector or tensor."""
+    values = fetch(reader, t).PointData[array]
+    if len(values.shape) > 1:
+        values = [math.sqrt(sum(float(c) ** 2 for c in v)) for v in values]
+    values = [float(v) for v in values]
     return min(values), max(values)
 
 

@@ -1,4 +1,5 @@
-"""Open an hvi run in ParaView: the body warped by its displacement and coloured by von Mises,
+"""Open an hvi run in ParaView: the body warped by its displacement and coloured by its active
+scalar (von Mises unless the scene's output.active_scalar names another field),
 the contact boundary Gamma3 coloured by its normal displacement u_nu, at the run's times, and
 beside them u_nu along Gamma3 at the shown time (Plot Over Line on contact.pvd).
 
@@ -54,6 +55,22 @@ def gamma3_line(bounds, flat):
     return p1, p2
 
 
+def active_scalar(run_dir):
+    """The body's active point scalars (the scene's output.active_scalar, von_mises by default),
+    as the last frame of solution.pvd marks them; von_mises if it marks none."""
+    import re
+    import xml.etree.ElementTree as ET
+
+    frames = list(ET.parse(os.path.join(run_dir, "solution.pvd")).getroot().iter("DataSet"))
+    if frames:
+        with open(os.path.join(run_dir, frames[-1].get("file")), "rb") as f:
+            head = f.read(8192).decode("latin-1")
+        found = re.search(r'<PointData[^>]*\bScalars="([^"]+)"', head)
+        if found:
+            return found.group(1)
+    return "von_mises"
+
+
 def open_run(run_dir, scale=1.0, time=None, chart=True):
     """Loads solution.pvd (and contact.pvd if present) at `time` (default: the last output
     time); returns a dict with the readers, the render view and (with `chart`, when the run has
@@ -78,10 +95,12 @@ def open_run(run_dir, scale=1.0, time=None, chart=True):
     warped.Vectors = ["POINTS", "displacement"]
     warped.ScaleFactor = scale
     shown = Show(warped, view)
-    ColorBy(shown, ("POINTS", "von_mises"))
+    scalar = active_scalar(run_dir)
+    ColorBy(shown, ("POINTS", scalar))
     shown.RescaleTransferFunctionToDataRange(False, True)
-    _bar(view, "von_mises", "von Mises stress", [0.6, 0.72])
-    out = {"body": body, "view": view, "layout": layout, "time": shown_time, "times": times}
+    titles = {"von_mises": "von Mises stress", "displacement": "|u|", "stress": "|stress|"}
+    _bar(view, scalar, titles.get(scalar, scalar), [0.6, 0.72])
+    out = {"body": body, "view": view, "layout": layout, "time": shown_time, "times": times, "scalar": scalar}
     contact_pvd = os.path.join(run_dir, "contact.pvd")
     if os.path.exists(contact_pvd):
         contact = PVDReader(FileName=contact_pvd)

@@ -31,7 +31,7 @@
 //!         time: 0.0,
 //!         points: &points,
 //!         cells: &cells,
-//!         point_fields: vec![Field { name: "displacement", components: 3, values: FieldValues::F64(&u) }],
+//!         point_fields: vec![Field { name: "displacement", components: 3, values: FieldValues::F64(&u), active: false }],
 //!         cell_fields: vec![],
 //!     })
 //!     .unwrap();
@@ -77,15 +77,24 @@ pub struct Field<'a> {
     /// 1 for a scalar, 3 for a vector (ParaView's Warp By Vector wants 3), 9 for a tensor.
     pub components: usize,
     pub values: FieldValues<'a>,
+    /// Marked as the active scalars of its PointData/CellData (`Scalars="…"`, what ParaView
+    /// colours by) whatever its components; without a marked field the first 1-component one is.
+    pub active: bool,
 }
 
 impl<'a> Field<'a> {
+    /// The same field marked as the active scalars.
+    pub fn active(self) -> Self {
+        Field { active: true, ..self }
+    }
+
     /// A `Float64` field.
     pub fn f64(name: &'a str, components: usize, values: &'a [f64]) -> Self {
         Field {
             name,
             components,
             values: FieldValues::F64(values),
+            active: false,
         }
     }
 
@@ -95,6 +104,7 @@ impl<'a> Field<'a> {
             name,
             components,
             values: FieldValues::I32(values),
+            active: false,
         }
     }
 }

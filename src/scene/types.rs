@@ -430,12 +430,39 @@ pub struct OutputSpec {
     /// [`DEFAULT_COMPRESS_LEVEL`]) or a level 0–9; checked by `validate::check_values`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub compress: Option<toml::Value>,
+    /// The body's active scalars, what ParaView and `hvi plot` colour by: one of the point
+    /// fields written ([`OutputSpec::scalar_names`]); `von_mises` when absent (docs/method.md §12.3).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub active_scalar: Option<String>,
 }
 
 /// The zlib level of `output.compress = true` (measured in README, "Outputs").
 pub const DEFAULT_COMPRESS_LEVEL: u32 = 1;
 
 impl OutputSpec {
+    /// The point fields of the body that `output.fields` writes, by name: the values
+    /// `output.active_scalar` may take.
+    pub fn scalar_names(&self) -> Vec<&'static str> {
+        [
+            (OutputField::VonMises, "von_mises"),
+            (OutputField::Displacement, "displacement"),
+            (OutputField::Stress, "stress"),
+        ]
+        .iter()
+        .filter(|(f, _)| self.fields.contains(f))
+        .map(|(_, n)| *n)
+        .collect()
+    }
+
+    /// The name of the body's active scalars: `output.active_scalar`, else `von_mises` when it is
+    /// written, else None (the writer's default: the first 1-component field).
+    pub fn active_scalar_name(&self) -> Option<&str> {
+        match &self.active_scalar {
+            Some(n) => Some(n.as_str()),
+            None => self.fields.contains(&OutputField::VonMises).then_some("von_mises"),
+        }
+    }
+
     /// The zlib level `output.compress` asks for (0: uncompressed); a value that
     /// `validate::check_values` rejects counts as 0.
     pub fn compression_level(&self) -> u32 {
@@ -465,6 +492,7 @@ impl Default for OutputSpec {
             every: default_every(),
             fields: default_fields(),
             compress: None,
+            active_scalar: None,
         }
     }
 }

@@ -56,7 +56,7 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
             keys
         }
         "solver" => vec!["tolerance", "max_iterations", "condensation", "dense_newton_limit"],
-        "output" => vec!["every", "fields", "compress"],
+        "output" => vec!["every", "fields", "compress", "active_scalar"],
         _ => return None,
     })
 }
@@ -420,6 +420,21 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
                 v,
                 "give true, false or a zlib level from 0 (none) to 9 (smallest); 1 is fastest, true means 1",
             ))
+        }
+    }
+    if let Some(name) = &scene.output.active_scalar {
+        let valid = scene.output.scalar_names();
+        if !valid.iter().any(|v| v == name) {
+            let fix = if valid.is_empty() {
+                "output.fields writes no point field of the body to colour by: add \"von_mises\" to output.fields"
+                    .to_string()
+            } else {
+                format!(
+                    "give one of the point fields output.fields writes: {}",
+                    valid.iter().map(|v| format!("\"{v}\"")).collect::<Vec<_>>().join(", ")
+                )
+            };
+            return Err(invalid(origin, "output.active_scalar", format!("\"{name}\""), &fix));
         }
     }
     Ok(())

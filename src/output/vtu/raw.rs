@@ -115,7 +115,8 @@ fn declare(text: &mut String, vtk_type: &str, name: &str, components: usize, ext
 fn fields(text: &mut String, a: &mut Appended, tag: &str, fields: &[Field]) {
     let _ = write!(text, "      <{tag}");
     for (attr, components) in [("Scalars", 1), ("Vectors", 3), ("Tensors", 9)] {
-        if let Some(f) = fields.iter().find(|f| f.components == components) {
+        let marked = (attr == "Scalars").then(|| fields.iter().find(|f| f.active)).flatten();
+        if let Some(f) = marked.or_else(|| fields.iter().find(|f| f.components == components)) {
             let _ = write!(text, " {attr}=\"{}\"", xml_escape(f.name));
         }
     }
