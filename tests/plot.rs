@@ -247,3 +247,86 @@ fn plot_colours_by_the_active_scalar() {
         assert!(svg.contains(bar), "{value}: no {bar:?} in deformed.svg");
     }
 }
+
+/// The obstacle outline (docs/method.md §12.4): marching squares put a circle's vertices within
+/// h²/R of it (linear interpolation of φ = |x − c| − R along a grid edge of length h errs by at
+/// most h²/(8R)) with the inward direction towards the centre, and its length within 1 % of 2πR
+/// (a polygon inscribed to within h²/R in a circle of R = 1 with h = 0.02 is 0.02 % short).
+#[test]
+fn the_obstacle_outline_follows_a_circle_and_points_into_it() {
+    use hvi::plot::level_set_segments;
+    let (c, r) = ([0.3, -0.2], 1.0);
+    let phi = |x: [f64; 2]| ((x[0] - c[0]).powi(2) + (x[1] - c[1]).powi(2)).sqrt() - r;
+    let (n, lo, hi) = (150, [-1.2, -1.7], [1.8, 1.3]);
+    let h = (hi[0] - lo[0]) / n as f64;
+    let edges = level_set_segments(&phi, lo, hi, n, n);
+    let mut length = 0.0;
+    for e in &edges {
+        for p in [e.a, e.b] {
+            assert!(phi(p).abs() <= h * h / r, "{p:?} is {} off the circle", phi(p));
+        }
+        length += ((e.b[0] - e.a[0]).powi(2) + (e.b[1] - e.a[1]).powi(2)).sqrt();
+        let m = [(e.a[0] + e.b[0]) / 2.0, (e.a[1] + e.b[1]) / 2.0];
+        let to_centre = [c[0] - m[0], c[1] - m[1]];
+        let d = (to_centre[0].powi(2) + to_centre[1].powi(2)).sqrt();
+        assert!(
+            (e.inward[0] * to_centre[0] + e.inward[1] * to_centre[1]) / d > 0.999,
+            "{e:?}"
+        );
+    }
+    let circumference = 2.0 * std::f64::consts::PI * r;
+    assert!((length / circumference - 1.0).abs() < 0.01, "length {length}");
+}
+
+/// Magnified like the displacement: a plane 0.05 below a flat Γ₃ is drawn 10 × 0.05 below it
+/// at scale 10 — exactly, since marching squares are exact for a plane and the closest point of
+/// Γ₃ is straight above — so a node resting on the plane (u_y = −0.05, drawn at −0.5) is drawn on it.
+#[test]
+fn a_magnified_picture_moves_the_obstacle_with_the_gap() {
+    use hvi::plot::{level_set_segments, magnify_from};
+    let phi = |x: [f64; 2]| x[1] + 0.05;
+    let mut edges = level_set_segments(&phi, [-0.2, -0.3], [1.2, 0.5], 70, 40);
+    assert!(!edges.is_empty());
+    let gamma3 = [[[0.0, 0.0], [0.5, 0.0]], [[0.5, 0.0], [1.0, 0.0]]];
+    magnify_from(&mut edges, &gamma3, 10.0);
+    let mut under = 0;
+    for e in &edges {
+        for p in [e.a, e.b] {
+            if (0.0..=1.0).contains(&p[0]) {
+                assert!((p[1] + 0.5).abs() < 1e-12, "{p:?}");
+                under += 1;
+            }
+        }
+        assert!((e.inward[1] + 1.0).abs() < 1e-9, "{e:?}");
+    }
+    assert!(under > 0);
+}
+
+/// A run against a rigid circle: `hvi plot` draws the obstacle (hatched, said in the legend).
+#[test]
+fn plot_draws_a_circular_obstacle() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("circle.toml");
+    std::fs::write(
+        &scene,
+        "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n[time]\nfinal_time = 1.0\nsteps = 4\n\
+         [[dirichlet]]\ngroup = \"Gamma2_top\"\ncomponents = [\"x\", \"y\"]\nvalue = [\"0\", \"-0.1*t\"]\n\
+         [contact]\nobstacle = { kind = \"circle\", centre = [1.0, -2.02], radius = 2.0 }\n",
+    )
+    .unwrap();
+    let out = dir.path().join("run");
+    let o = out.to_str().unwrap();
+    ok(&[
+        "solve",
+        "rect:16x8",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--out",
+        o,
+        "--quiet",
+    ]);
+    ok(&["plot", o]);
+    let svg = std::fs::read_to_string(out.join("deformed.svg")).unwrap();
+    assert!(svg.contains("black, hatched: the obstacle"), "no obstacle legend");
+    assert!(svg.matches("stroke=\"#282828\"").count() > 20, "no obstacle outline");
+}

@@ -337,6 +337,7 @@ fn reduced_paper_study_shows_first_order_in_h_and_second_order_in_k() {
             scale: 1.0,
             scale_text: "true scale".into(),
             foundation: None,
+            obstacles: vec![],
         },
     )
     .unwrap();

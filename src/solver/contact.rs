@@ -140,7 +140,8 @@ fn vector<const D: usize>(v: &[f64], key: &str, origin: &str) -> Result<[f64; D]
     })
 }
 
-fn obstacle_of<const D: usize>(
+/// The obstacle of a `[[contact]]` section (also drawn by `hvi plot`, src/plot.rs).
+pub(crate) fn obstacle_of<const D: usize>(
     o: &ObstacleSpec,
     key: &str,
     origin: &str,
