@@ -204,3 +204,116 @@ fn a_scene_with_contact_groups_round_trips() {
     let again = hvi::scene::Scene::from_toml_str(&one.to_toml_string(), "round trip").unwrap();
     assert_eq!(again.contact_group(0), hvi::mesh::GroupSelector::Name("Floor".into()));
 }
+
+/// The rectangle (0, 2) × (0, 1) on rollers (u_x = 0 at x = 0, u_y = 0 at y = 0) with its top in
+/// contact with a rigid plane `depth` below the top (normal (0, −1), toward the body), no load.
+fn interference(depth: f64) -> String {
+    format!(
+        "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n[time]\nfinal_time = 1.0\nsteps = 1\n\
+         [[dirichlet]]\ngroup = \"Gamma3\"\ncomponents = [\"y\"]\n[[dirichlet]]\ngroup = \"Gamma1\"\ncomponents = [\"x\"]\n\
+         [[contact]]\ngroup = \"Gamma2_top\"\nobstacle = {{ kind = \"plane\", point = [0.0, {}], normal = [0.0, -1.0] }}\n",
+        1.0 - depth
+    )
+}
+
+/// An interference fit: the plane starts 0.01 inside the top, and nothing is loaded. The plane
+/// pushes the top out at t = 0: uniaxial compression by δ = 0.01, force E/(1 − ν²) δ L/H on the
+/// body (L = 2, H = 1), exactly in the Q1 space. Before the contact solve's force scale counted
+/// the interference, an unloaded step had the scale 0 and never converged (it reported a residual
+/// of 1e291 "after 100 iterations"); `hvi check` says the nodes start inside the obstacle.
+#[test]
+fn an_interference_fit_is_pushed_out_with_the_analytic_force() {
+    let (e, nu, depth) = (1.0, 0.3, 0.01);
+    let mesh = hvi::mesh::structured::rectangle(2.0, 1.0, 8, 4, CellShape::Quad);
+    let (sim, stats, sink) = solve_in_memory(&scene(&interference(depth)), mesh).unwrap();
+    let expected = -e / (1.0 - nu * nu) * depth * 2.0;
+    for s in &sink.steps {
+        let force = stats
+            .contact_forces
+            .iter()
+            .find(|r| r.time == s.time && r.component == "y")
+            .unwrap()
+            .force;
+        // the exact solution is in the space: round-off of the solve (1e-10 relative)
+        assert!(
+            (force - expected).abs() < 1e-10 * expected.abs(),
+            "t = {}: {force} against {expected}",
+            s.time
+        );
+        let u = sim.dofs.to_nodal(&s.displacement);
+        for &p in &sim.contact.as_ref().unwrap().nodes.nodes {
+            assert!((u[p][1] + depth).abs() < 1e-12, "u_y = {}", u[p][1]);
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("fit.toml");
+    std::fs::write(&path, interference(depth)).unwrap();
+    let report = hvi::app::check(std::path::Path::new("rect:8x4"), Some(&path), &[]).unwrap();
+    assert!(
+        report.contains("warning: 9 node(s) of contact group `Gamma2_top` start inside its obstacle"),
+        "{report}"
+    );
+    // touching, not inside: no such warning
+    std::fs::write(&path, interference(0.0)).unwrap();
+    let report = hvi::app::check(std::path::Path::new("rect:8x4"), Some(&path), &[]).unwrap();
+    assert!(!report.contains("inside its obstacle"), "{report}");
+}
+
+/// Bad values of contact keys that only show when the scene meets the mesh or the clock name
+/// the key, the value and what is valid.
+#[test]
+fn bad_contact_values_name_their_key() {
+    let base = "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n[time]\nfinal_time = 1.0\nsteps = 2\n";
+    let mesh = || hvi::mesh::structured::rectangle(2.0, 1.0, 4, 2, CellShape::Quad);
+    let fails = |text: String| -> String {
+        match hvi::scene::Scene::from_toml_str(&text, "bad.toml") {
+            Err(e) => e.to_string(),
+            Ok(s) => match solve_in_memory(&s, mesh()) {
+                Err(e) => e.to_string(),
+                Ok(_) => panic!("accepted:\n{text}"),
+            },
+        }
+    };
+    // a motion that is not finite at a step time: the key, the expression and the value
+    let e = fails(format!(
+        "{base}[[contact]]\ngroup = \"Gamma3\"\nobstacle = {{ kind = \"plane\", point = [0.0, -0.1], normal = [0.0, 1.0], motion = [\"0\", \"1/(t - 0.5)\"] }}\n"
+    ));
+    assert!(
+        e.contains("contact[0].obstacle.motion[1] = \"1/(t - 0.5)\" is inf") && e.contains("t = 0.5"),
+        "{e}"
+    );
+    // an sdf without a gradient: the key and the expression
+    let e = fails(format!(
+        "{base}[[contact]]\ngroup = \"Gamma3\"\nobstacle = {{ kind = \"sdf\", sdf = \"1\" }}\n"
+    ));
+    assert!(
+        e.contains("contact[0].obstacle.sdf = \"1\"") && e.contains("gradient vanishes"),
+        "{e}"
+    );
+    // a section with a group and nothing else would have been dropped silently
+    let e = fails(format!("{base}[[contact]]\ngroup = \"Gamma3\"\n"));
+    assert!(
+        e.contains("contact[0].group") && e.contains("no bound, law or obstacle"),
+        "{e}"
+    );
+    // a group that is neither a name nor an integer tag, or a tag out of range
+    let e = fails(format!("{base}[[contact]]\ngroup = 3.5\nbound = 0.1\n"));
+    assert!(
+        e.contains("3.5") && e.contains("its name in quotes") && e.contains("integer tag"),
+        "{e}"
+    );
+    let e = fails(format!("{base}[[contact]]\ngroup = 99999999999\nbound = 0.1\n"));
+    assert!(e.contains("99999999999 is out of range"), "{e}");
+    // a plane's normal whose square overflows is still a direction: [1e300, 1e300] is (1, 1)/√2
+    let ok = format!(
+        "{base}[groups]\nclamped = \"Gamma1\"\n[[contact]]\ngroup = \"Gamma3\"\nobstacle = {{ kind = \"plane\", point = [0.0, -1.0], normal = [1e300, 1e300] }}\n"
+    );
+    let (sim, _, _) = solve_in_memory(&scene(&ok), mesh()).unwrap();
+    let c = sim.contact.unwrap();
+    let s = std::f64::consts::FRAC_1_SQRT_2;
+    assert!(c
+        .nodes
+        .normals
+        .iter()
+        .all(|d| (d[0] + s).abs() < 1e-15 && (d[1] + s).abs() < 1e-15));
+}

@@ -204,13 +204,29 @@ impl ActiveSetSolver<'_> {
         self.complementarity_residual(&moved, &grad)
     }
 
-    /// The force scale of the step: max(‖Q d‖∞, max_p w_p S sup μ).
+    /// The force scale of the step: max(‖Q d‖∞, ‖Q v‖∞, max_p w_p S sup μ), v_p = min(0, g_p, o_p)
+    /// the interference of rows that start past their bound or their obstacle's surface (a body
+    /// placed into an obstacle is pushed out by forces of that size even without load; without
+    /// the term an unloaded step with interference had a scale of 0 and could not converge).
     fn force_scale(&self, d: &[f64]) -> f64 {
-        let mut qd = vec![0.0; self.m()];
+        let m = self.m();
+        let mut qd = vec![0.0; m];
         self.operator.apply_q(d, &mut qd);
         let load = qd.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-        let law = self.laws.force_scale(self.m());
-        load.max(law).max(f64::MIN_POSITIVE)
+        let interference: Vec<f64> = (0..m)
+            .map(|p| {
+                let g = self.g(p);
+                0.0f64.min(if g.is_finite() { g } else { 0.0 }).min(self.origin(p))
+            })
+            .collect();
+        let overlap = if interference.iter().any(|v| *v < 0.0) {
+            self.operator.apply_q(&interference, &mut qd);
+            qd.iter().fold(0.0f64, |a, b| a.max(b.abs()))
+        } else {
+            0.0
+        };
+        let law = self.laws.force_scale(m);
+        load.max(overlap).max(law).max(f64::MIN_POSITIVE)
     }
 
     /// Solves the step for free normal displacements `d` = C K⁻¹ F̃, warm-started from `state`.

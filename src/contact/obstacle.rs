@@ -80,6 +80,22 @@ impl<const D: usize> Obstacle<D> {
     /// The foot of x on the surface and the outward unit normal there; `length` is the size of
     /// the body (the tolerance of the projection is 1e-13 of it).
     fn foot(&self, x: &[f64; D], length: f64) -> Result<([f64; D], [f64; D]), String> {
+        // a plane and a ball in closed form (exact, and no projection to degenerate for a tiny or
+        // huge radius)
+        match self {
+            Obstacle::Plane { normal, .. } => {
+                let f = self.phi(x);
+                return Ok((std::array::from_fn(|k| x[k] - f * normal[k]), *normal));
+            }
+            Obstacle::Ball { centre, radius } => {
+                let v: [f64; D] = std::array::from_fn(|k| x[k] - centre[k]);
+                let n = unit(v).ok_or_else(|| {
+                    format!("the node at {x:?} is the ball's centre: it has no closest point on the surface")
+                })?;
+                return Ok((std::array::from_fn(|k| centre[k] + radius * n[k]), n));
+            }
+            Obstacle::Level { .. } => {}
+        }
         let mut y = *x;
         for _ in 0..100 {
             let (f, g) = (self.phi(&y), self.gradient(&y));
@@ -176,6 +192,32 @@ mod tests {
         assert!((g.motion[1] + 1.25).abs() < 1e-14);
         // a normal pointing away never meets the plane
         assert!(o.gap(&[0.3, 0.0], &[0.0, 1.0], false, 1.0).unwrap().gap.is_infinite());
+    }
+
+    /// A ball's closest point in closed form: the gap is |x − c| − R for any radius (the
+    /// gradient projection it replaced failed for a radius of 1e-300).
+    #[test]
+    fn ball_gap_is_exact_for_tiny_and_large_radii() {
+        for radius in [1e-300, 1e-6, 0.5, 1e6] {
+            let ball = Obstacle::<2>::Ball {
+                centre: [0.3, -0.52 - radius],
+                radius,
+            };
+            let g = ball.gap(&[0.0, 0.0], &[0.0, -1.0], true, 1.0).unwrap();
+            let exact = (0.09f64 + (0.52 + radius).powi(2)).sqrt() - radius;
+            assert!(
+                (g.gap - exact).abs() <= 1e-15 * (0.52 + radius),
+                "R = {radius}: {} vs {exact}",
+                g.gap
+            );
+            let n = (0.09f64 + (0.52 + radius).powi(2)).sqrt();
+            assert!((g.direction[0] - 0.3 / n).abs() < 1e-15);
+        }
+        let ball = Obstacle::<2>::Ball {
+            centre: [0.0, 0.0],
+            radius: 1.0,
+        };
+        assert!(ball.gap(&[0.0, 0.0], &[0.0, -1.0], true, 1.0).is_err());
     }
 
     #[test]

@@ -14,6 +14,8 @@ pub const CORNER_COSINE: f64 = std::f64::consts::FRAC_1_SQRT_2;
 
 /// What one contact group brings.
 pub struct GroupRows<'a, const D: usize> {
+    /// How messages name the group's obstacle (e.g. `contact[1].obstacle`).
+    pub key: String,
     pub part: &'a BoundaryPart<D>,
     pub obstacle: Option<&'a Obstacle<D>>,
     /// Along the obstacle's normal (else the body's).
@@ -130,7 +132,9 @@ pub fn build<const D: usize>(groups: &[GroupRows<D>], points: &[[f64; D]], lengt
             let (direction, gap, motion) = match g.obstacle {
                 None => (c.normal, 0.0, None),
                 Some(o) => {
-                    let gap = o.gap(x, &c.normal, g.along_obstacle, length)?;
+                    let gap = o
+                        .gap(x, &c.normal, g.along_obstacle, length)
+                        .map_err(|e| format!("{}: {e}", g.key))?;
                     (gap.direction, gap.gap, g.motion.map(|m| (m, gap.motion)))
                 }
             };

@@ -354,6 +354,16 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
         } else {
             "contact".to_string()
         };
+        if many && c.bound.is_none() && c.law.is_none() && c.obstacle.is_none() {
+            // a section naming a group and nothing else would be left out without a word
+            return Err(invalid(
+                origin,
+                &format!("{at}.group"),
+                c.group.as_ref().map_or("(none)".to_string(), |g| g.to_string()),
+                "this contact section has no bound, law or obstacle, so it would impose nothing: give it a `bound`, a \
+                 [contact.law] or an `obstacle` (docs/method.md §14.1), or remove the section",
+            ));
+        }
         match &c.bound {
             Some(BoundSpec::Number(g)) if !(g.is_finite() && *g >= 0.0) => {
                 return Err(invalid(

@@ -78,6 +78,19 @@ pub fn warnings<const D: usize>(scene: &Scene, sim: &Simulation<D>) -> Vec<Strin
                 .copied()
                 .filter(|&p| gap[p].is_finite() && gap[p] > diameter)
                 .collect();
+            // a node that starts inside its obstacle is pushed out at t = 0: an interference fit
+            // if meant, a misplaced obstacle (or a normal pointing the wrong way) if not
+            let inside: Vec<usize> = rows.iter().copied().filter(|&p| gap[p] < -1e-9 * diameter).collect();
+            if let Some(&deepest) = inside.iter().min_by(|&&p, &&q| gap[p].total_cmp(&gap[q])) {
+                out.push(format!(
+                    "{} node(s) of contact group `{group}` start inside its obstacle (deepest: the node at {:?}, \
+                     {:.3e} inside): at t = 0 the body is pushed out of it, an interference fit; if that is not \
+                     meant, check the obstacle's position and that its normal (or φ > 0) points toward the body",
+                    inside.len(),
+                    sim.mesh.points[c.nodes.nodes[deepest]],
+                    -gap[deepest]
+                ));
+            }
             if let Some(&p) = far.first() {
                 out.push(format!(
                     "{} node(s) of contact group `{group}` start farther from the obstacle than the body's size \

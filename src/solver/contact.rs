@@ -20,6 +20,8 @@ pub type MovedGaps = (Vec<f64>, Vec<f64>);
 pub struct ObstacleMotion<const D: usize> {
     /// One expression of t per component, per moving obstacle.
     pub motions: Vec<Vec<Expr>>,
+    /// The scene key of each motion (`contact[i].obstacle.motion`), for messages.
+    pub keys: Vec<String>,
     /// Per row: (motion, ∂gap/∂a).
     pub rows: Vec<Option<(usize, [f64; D])>>,
 }
@@ -65,8 +67,15 @@ impl<const D: usize> ContactSetup<D> {
             .iter()
             .map(|m| std::array::from_fn(|k| m[k].eval(&[t])))
             .collect();
-        if a.iter().flatten().any(|v| !v.is_finite()) {
-            return Err(format!("an obstacle's motion is not finite at t = {t}"));
+        for (i, v) in a.iter().enumerate() {
+            if let Some(k) = (0..D).find(|&k| !v[k].is_finite()) {
+                return Err(format!(
+                    "{}[{k}] = \"{}\" is {} (the obstacle's rigid displacement must be finite for 0 ≤ t ≤ T)",
+                    motion.keys[i],
+                    motion.motions[i][k].source(),
+                    v[k]
+                ));
+            }
         }
         let gap0 = self.gap.as_deref().unwrap_or(&[]);
         let offset: Vec<f64> = (0..self.nodes.len())
@@ -150,6 +159,9 @@ pub(crate) fn obstacle_of<const D: usize>(
     Ok(match o {
         ObstacleSpec::Plane { point, normal, .. } => {
             let n: [f64; D] = vector(normal, &format!("{key}.normal"), origin)?;
+            // scaled by its largest entry first: |n|² of [1e300, 1e300] would overflow
+            let big = n.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+            let n = n.map(|x| x / big);
             let len = n.iter().map(|x| x * x).sum::<f64>().sqrt();
             Obstacle::Plane {
                 point: vector(point, &format!("{key}.point"), origin)?,
@@ -203,6 +215,7 @@ pub fn build<const D: usize>(
     };
     let mut laws = Vec::new();
     let mut motions = Vec::new();
+    let mut motion_keys = Vec::new();
     let mut parts = Vec::new();
     let mut group_tags = Vec::new();
     let mut obstacles = Vec::new();
@@ -251,6 +264,7 @@ pub fn build<const D: usize>(
                     })
                     .collect::<Result<Vec<_>, _>>()?;
                 motions.push(exprs);
+                motion_keys.push(format!("{key}.obstacle.motion"));
                 Some(motions.len() - 1)
             }
             None => None,
@@ -273,7 +287,12 @@ pub fn build<const D: usize>(
             (None, Some(_), None) => vec![0.0; n],
             _ => vec![f64::INFINITY; n],
         };
+        let key = match &c.obstacle {
+            Some(ObstacleSpec::Sdf { sdf, .. }) => format!("{}.obstacle.sdf = \"{sdf}\"", scene.contact_key(i)),
+            _ => format!("{}.obstacle", scene.contact_key(i)),
+        };
         inputs.push(GroupRows {
+            key,
             part: &parts[k],
             obstacle: obstacles[k].as_ref(),
             along_obstacle: c.obstacle.is_some() && c.direction != Some(ContactDirection::Body),
@@ -297,6 +316,7 @@ pub fn build<const D: usize>(
         layer,
         motion: (!motions.is_empty()).then(|| ObstacleMotion {
             motions,
+            keys: motion_keys,
             rows: kept.iter().map(|&k| rows.motion[k]).collect(),
         }),
         groups: used
