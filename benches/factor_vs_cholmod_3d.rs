@@ -396,7 +396,7 @@ fn main() {
             &sim.dofs,
             &[sim.elasticity.tensor(), IDENTITY_TENSOR],
         );
-        let b0 = sim.kernel.as_ref().map_or(0.0, |b| b.value(0.0));
+        let b0 = sim.memory.as_ref().map_or(0.0, |m| m.kernel_value(0, 0.0)); // one channel on I (slab.toml)
         let matrix = k_a
             .plus_scaled(0.5 * sim.time.step() * b0, &k_b)
             .with_identity_rows(&sim.dofs);

@@ -325,7 +325,7 @@ impl Off {
 fn switched_off(full: &Scene, off: Off) -> Scene {
     let mut s = full.clone();
     if off.memory {
-        s.memory = None;
+        s.memory.clear();
     }
     let c = s.contact.first_mut().expect("full scene has contact");
     if off.bound {
@@ -344,7 +344,7 @@ fn switched_off(full: &Scene, off: Off) -> Scene {
 fn neutralised(full: &Scene, off: Off) -> Scene {
     let mut s = full.clone();
     if off.memory {
-        s.memory = Some(neutral_kernel());
+        s.memory = vec![neutral_kernel().into()];
     }
     let c = s.contact.first_mut().expect("full scene has contact");
     if off.bound {
@@ -359,7 +359,9 @@ fn neutralised(full: &Scene, off: Off) -> Scene {
 /// Completes a scene with every absent effect at its neutral value (its "neutral twin").
 fn with_neutral_effects(scene: &Scene) -> Scene {
     let mut s = scene.clone();
-    s.memory.get_or_insert_with(neutral_kernel);
+    if s.memory.is_empty() {
+        s.memory.push(neutral_kernel().into());
+    }
     if s.contact.is_empty() {
         s.contact.push(ContactSpec::default());
     }
@@ -374,7 +376,7 @@ fn assert_equivalent(what: &str, off: &Scene, neutral: &Scene, mesh: &Mesh) -> (
     let (sim_neutral, stats_neutral, b) = run(&format!("{what} (neutral twin)"), neutral, mesh.clone());
     // the switched-off run really has fewer effects than its twin
     assert!(stats_off.effects.len() <= stats_neutral.effects.len(), "{what}");
-    assert!(sim_off.kernel.is_none() || sim_neutral.kernel.is_some(), "{what}");
+    assert!(sim_off.memory.is_none() || sim_neutral.memory.is_some(), "{what}");
     let du = relative_difference(&a, &b);
     let dl = contact_force_difference(&sim_neutral, &a, &b);
     println!("{what}: relative difference of u {du:.2e}, of contact forces {dl:.2e}");
@@ -455,11 +457,12 @@ fn recursive_history_equals_direct_sum_over_1000_steps() {
         let scene = load(base, &steps(n));
         for (kernel, expression) in &cases {
             let mut recursive = scene.clone();
-            recursive.memory = Some(kernel.clone());
+            recursive.memory = vec![kernel.clone().into()];
             let mut direct = scene.clone();
-            direct.memory = Some(MemoryKernelSpec::Expression {
+            direct.memory = vec![MemoryKernelSpec::Expression {
                 expression: expression.to_string(),
-            });
+            }
+            .into()];
             let what = format!("{base} with b(s) = {expression}");
             let (_, sr, a) = run(&what, &recursive, tiny_mesh());
             let (_, sd, b) = run(&what, &direct, tiny_mesh());
@@ -488,7 +491,7 @@ fn elastic_only_allocates_no_history_factorises_once_and_solves_once() {
         let scene = load("elastic_only.toml", &steps(n));
         let (sim, stats, sink) = run("elastic_only", &scene, mesh("rect_q1_h8.msh"));
         assert!(
-            sim.kernel.is_none() && sim.contact.is_none(),
+            sim.memory.is_none() && sim.contact.is_none(),
             "nothing but elasticity is built"
         );
         assert!(!sim.loads.is_time_dependent());
@@ -599,7 +602,7 @@ fn the_plan_lists_exactly_the_effects_in_force() {
         }
         expected.sort();
         assert_eq!(names, expected, "{name}: plan {plan}");
-        assert_eq!(sim.kernel.is_some(), want.history.is_some(), "{name}: kernel built");
+        assert_eq!(sim.memory.is_some(), want.history.is_some(), "{name}: kernel built");
         assert_eq!(sim.contact.is_some(), want.bound || want.law, "{name}: contact built");
         let detail = |effect: &str| {
             plan.effects

@@ -1,11 +1,14 @@
-//! Cell stresses for output: σ = Aε(u_n) + B₀ ε(m_n) at the cell centroid, where
-//! m_n = h_n + (k/2) b(0) u_n is the memory displacement (docs/method.md §3), and the von Mises
-//! equivalent stress, in any dimension.
+//! Cell stresses for output: σ = Aε(u_n) + Σ_j T_j ε(m_n^j) at the cell centroid, where
+//! m_n^j = h_n^j + (k/2) b_j(0) u_n is the memory displacement of memory channel j with tensor
+//! T_j (docs/method.md §3, §15), and the von Mises equivalent stress, in any dimension.
 
 use super::element::{reference_centroid, shape_at, strain};
-use crate::material::{Elasticity, IDENTITY_TENSOR};
+use crate::material::{Elasticity, Isotropic, PlaneModel};
 use crate::mesh::Cell;
 use rayon::prelude::*;
+
+/// A memory channel's tensor T_j and its nodal memory displacement m^j.
+pub type MemoryField<const D: usize> = (Isotropic, Vec<[f64; D]>);
 
 /// Per-cell stress tensors (9 components, row-major 3×3, for ParaView) and von Mises values.
 pub struct CellStresses {
@@ -20,15 +23,18 @@ pub fn von_mises(s: &[[f64; 3]; 3]) -> f64 {
     (0.5 * d + 3.0 * shear).sqrt()
 }
 
-/// Evaluates the stress of every cell at its centroid. In 2D the out-of-plane stress σ₃₃ of
-/// plane strain is included (zero in plane stress).
+/// Evaluates the stress of every cell at its centroid; `memory` holds each memory channel's
+/// tensor T_j and nodal memory displacement m^j (None or empty without memory). In 2D the out-of-plane
+/// stress σ₃₃ of plane strain is included, λ_A tr ε(u) + Σ_j λ_j tr ε(m^j) (zero in plane stress).
 pub fn cell_stresses<const D: usize>(
     cells: &[Cell],
     points: &[[f64; D]],
     elasticity: &Elasticity,
     u: &[[f64; D]],
-    memory: Option<&[[f64; D]]>,
+    memory: Option<&[MemoryField<D>]>,
 ) -> CellStresses {
+    let memory = memory.unwrap_or_default();
+    let plane_strain = D == 2 && elasticity.plane == Some(PlaneModel::Strain);
     let a = elasticity.tensor();
     let per_cell: Vec<([f64; 9], f64)> = cells
         .par_iter()
@@ -39,12 +45,17 @@ pub fn cell_stresses<const D: usize>(
             let mut sig = a.apply(&e);
             let trace: f64 = (0..D).map(|i| e[i][i]).sum();
             let mut full = [[0.0; 3]; 3];
-            if let Some(m) = memory {
-                let sm = IDENTITY_TENSOR.apply(&strain(&s, &local(m)));
+            let mut out_of_plane = 0.0;
+            for (t, m) in memory {
+                let em = strain(&s, &local(m));
+                let sm = t.apply(&em);
                 for i in 0..D {
                     for j in 0..D {
                         sig[i][j] += sm[i][j];
                     }
+                }
+                if plane_strain && t.lambda != 0.0 {
+                    out_of_plane += t.lambda * (0..D).map(|i| em[i][i]).sum::<f64>();
                 }
             }
             for i in 0..D {
@@ -53,7 +64,7 @@ pub fn cell_stresses<const D: usize>(
                 }
             }
             if D == 2 {
-                full[2][2] = elasticity.out_of_plane_stress(trace);
+                full[2][2] = elasticity.out_of_plane_stress(trace) + out_of_plane;
             }
             let vm = von_mises(&full);
             let flat: [f64; 9] = std::array::from_fn(|k| full[k / 3][k % 3]);

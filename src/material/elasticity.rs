@@ -18,6 +18,14 @@ pub struct Isotropic {
 pub const IDENTITY_TENSOR: Isotropic = Isotropic { lambda: 0.0, mu: 0.5 };
 
 impl Isotropic {
+    /// The tensor of bulk modulus κ and shear modulus G: λ = κ − 2G/3, μ = G (3D relations).
+    pub fn from_moduli(bulk: f64, shear: f64) -> Isotropic {
+        Isotropic {
+            lambda: bulk - 2.0 * shear / 3.0,
+            mu: shear,
+        }
+    }
+
     /// σ = C ε.
     pub fn apply<const D: usize>(&self, e: &[[f64; D]; D]) -> [[f64; D]; D] {
         let tr: f64 = (0..D).map(|i| e[i][i]).sum();

@@ -1,4 +1,5 @@
-//! Relaxation kernels b(s) of the memory term B(s) = b(s)·B₀ (docs/method.md §1, §5).
+//! Scalar relaxation kernels b_m(s) of the memory term B(s) = Σ_m b_m(s) B_m (docs/method.md §1,
+//! §5, §15).
 //!
 //! The kernel's *structure* decides how the history sum is computed: polynomials and sums of
 //! exponentials separate in (t_n − t_i) and admit exact O(1)-per-step recursions; anything

@@ -80,14 +80,24 @@ pub struct PetscBackend<'p, const D: usize> {
 // Stepper holds it by reference.
 unsafe impl<const D: usize> Sync for PetscBackend<'_, D> {}
 
-/// The element stiffness of K_A + c K_B: linear in (λ, μ), and K_B is the stiffness of
-/// B₀ = I (docs/method.md §3), so it is the stiffness of (λ_A + c λ_I, μ_A + c μ_I).
+/// The tensor of K_B: the memory's one channel tensor T (B₀ = I for the paper; the time loop
+/// refuses two channels with a backend, docs/method.md §15.1).
+fn memory_tensor<const D: usize>(sim: &Simulation<D>) -> Isotropic {
+    sim.memory
+        .as_ref()
+        .and_then(|m| m.channels().first())
+        .map_or(IDENTITY_TENSOR, |c| c.tensor)
+}
+
+/// The element stiffness of K_A + c K_B: linear in (λ, μ), and K_B is the stiffness of the
+/// channel tensor T (docs/method.md §3, §15.1), so it is the stiffness of (λ_A + c λ_T, μ_A + c μ_T).
 fn step_tensor<const D: usize>(sim: &Simulation<D>, memory: Option<f64>) -> Isotropic {
     let a = sim.elasticity.tensor();
+    let t = memory_tensor(sim);
     match memory {
         Some(c) => Isotropic {
-            lambda: a.lambda + c * IDENTITY_TENSOR.lambda,
-            mu: a.mu + c * IDENTITY_TENSOR.mu,
+            lambda: a.lambda + c * t.lambda,
+            mu: a.mu + c * t.mu,
         },
         None => a,
     }
@@ -190,9 +200,9 @@ impl<'p, const D: usize> PetscBackend<'p, D> {
             let a = sim.elasticity.tensor();
             let elastic = elastic.then(|| self.assemble(sim, a, false)).transpose()?;
             let memory = sim
-                .kernel
+                .memory
                 .is_some()
-                .then(|| self.assemble(sim, IDENTITY_TENSOR, false))
+                .then(|| self.assemble(sim, memory_tensor(sim), false))
                 .transpose()?;
             let bytes = elastic
                 .iter()
@@ -269,7 +279,10 @@ impl<'p, const D: usize> PetscBackend<'p, D> {
     /// returns the bytes PETSc holds for it on this rank and, with `mumps`, MUMPS's analysis of
     /// it (collective; nothing is factorised).
     pub fn analyse(&self, sim: &Simulation<D>, mumps: bool) -> Result<(f64, Option<MumpsMemory>), String> {
-        let memory = sim.kernel.as_ref().map(|b| 0.5 * sim.time.step() * b.value(0.0));
+        let memory = sim
+            .memory
+            .as_ref()
+            .map(|m| 0.5 * sim.time.step() * m.kernel_value(0, 0.0));
         let matrix = self
             .assemble(sim, step_tensor(sim, memory), true)
             .map_err(|e| e.to_string())?;

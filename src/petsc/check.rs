@@ -184,7 +184,7 @@ fn check_dim<const D: usize>(
 /// Step matrices and factors held at once: K̃ and, with memory, K_A for step 0 (its factor is
 /// made while K̃'s exists).
 fn factors_held<const D: usize>(sim: &Simulation<D>) -> usize {
-    if sim.kernel.is_some() {
+    if sim.memory.is_some() {
         2
     } else {
         1
@@ -195,7 +195,7 @@ fn factors_held<const D: usize>(sim: &Simulation<D>) -> usize {
 /// reactions and the lifting) and K_B (memory) for the products.
 fn matrices_held<const D: usize>(sim: &Simulation<D>) -> usize {
     let elastic = !sim.dirichlet.reaction_groups.is_empty() || sim.dirichlet.is_nonzero();
-    factors_held(sim) + usize::from(elastic) + usize::from(sim.kernel.is_some())
+    factors_held(sim) + usize::from(elastic) + usize::from(sim.memory.is_some())
 }
 
 /// The memory rank `rank` will need (docs/method.md §13.4).
@@ -211,7 +211,7 @@ fn predict<const D: usize>(
     let local = backend.unknowns().len() as f64;
     let all = sim.dofs.n() as f64;
     let m = sim.contact.as_ref().map_or(0, |c| c.nodes.len()) as f64;
-    let history = sim.kernel.as_ref().map_or(0.0, |b| {
+    let history = sim.memory.as_ref().map_or(0.0, |b| {
         let h = History::new(b, backend.unknowns().len(), sim.time.step());
         if h.bytes_held() > 0 {
             h.bytes_held() as f64

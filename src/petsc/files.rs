@@ -210,7 +210,14 @@ impl<'a, const D: usize> PieceSink<'a, D> {
         &mut self,
         sim: &Simulation<D>,
         view: &StepView,
-    ) -> Result<(Vec<[f64; D]>, Option<Vec<[f64; D]>>, Option<Vec<f64>>), hvi_petsc::Error> {
+    ) -> Result<
+        (
+            Vec<[f64; D]>,
+            Option<Vec<crate::fem::stress::MemoryField<D>>>,
+            Option<Vec<f64>>,
+        ),
+        hvi_petsc::Error,
+    > {
         let x = &mut self.exchange;
         let np = self.piece.nodes.len();
         let mut flat = vec![0.0; D * np];
@@ -226,13 +233,14 @@ impl<'a, const D: usize> PieceSink<'a, D> {
             }
             u
         });
-        let memory = match view.memory_displacement {
-            Some(m) => {
+        // one memory channel with a backend (docs/method.md §15.1): its tensor and m_n
+        let memory = match (view.memory_displacement, &sim.memory) {
+            (Some(m), Some(memory)) => {
                 x.owned.set_local(m)?;
                 x.to_piece.gather(&x.owned, &mut flat)?;
-                Some(sim.dofs.to_nodal(&flat))
+                Some(vec![(memory.channels()[0].tensor, sim.dofs.to_nodal(&flat))])
             }
-            None => None,
+            _ => None,
         };
         Ok((nodal, memory, whole))
     }
@@ -243,7 +251,7 @@ impl<'a, const D: usize> PieceSink<'a, D> {
         &mut self,
         sim: &Simulation<D>,
         nodal: &[[f64; D]],
-        memory: Option<&[[f64; D]]>,
+        memory: Option<&[crate::fem::stress::MemoryField<D>]>,
     ) -> Result<(crate::fem::stress::CellStresses, crate::fem::stress::CellStresses), hvi_petsc::Error> {
         let p = &self.piece;
         let cell = cell_stresses(&p.cells, &p.points, &sim.elasticity, nodal, memory);

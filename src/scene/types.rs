@@ -12,8 +12,14 @@ pub struct Scene {
     #[serde(default)]
     pub groups: Groups,
     pub material: Material,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub memory: Option<MemoryKernelSpec>,
+    /// `[memory]` (one term) or `[[memory]]` sections (B(s) = Σ_m b_m(s) B_m, docs/method.md §15).
+    #[serde(
+        default,
+        skip_serializing_if = "Vec::is_empty",
+        deserialize_with = "memory_sections",
+        serialize_with = "write_memory_sections"
+    )]
+    pub memory: Vec<MemorySpec>,
     pub time: TimeSpec,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub dirichlet: Vec<DirichletSpec>,
@@ -116,18 +122,134 @@ pub enum Plane {
     Strain,
 }
 
-/// Isotropic linear elasticity A.
+/// Isotropic linear elasticity A: Young's modulus and Poisson's ratio, or a relaxation modulus
+/// (which gives A = G(0) and the memory term, docs/method.md §15.2).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Material {
     /// The 2D model (required for a 2D mesh, an error for a 3D one).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub plane: Option<Plane>,
-    pub youngs_modulus: f64,
-    pub poisson_ratio: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub youngs_modulus: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub poisson_ratio: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub relaxation_modulus: Option<RelaxationModulusSpec>,
 }
 
-/// The relaxation kernel b(s) of B(s) = b(s)·I.
+/// Bulk and shear relaxation moduli κ(t), G(t), each a Prony series.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RelaxationModulusSpec {
+    pub bulk: PronySeriesSpec,
+    pub shear: PronySeriesSpec,
+}
+
+/// f(t) = f∞ + Σ_m f_m e^{−t/τ_m}.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PronySeriesSpec {
+    /// f∞ ≥ 0.
+    pub long_term: f64,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub terms: Vec<ModulusTermSpec>,
+}
+
+/// One term f_m e^{−t/τ_m} of a relaxation modulus.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModulusTermSpec {
+    pub modulus: f64,
+    pub relaxation_time: f64,
+}
+
+/// One term b(s) B of the memory: a scalar kernel and its tensor (default: the identity).
+#[derive(Clone, Debug)]
+pub struct MemorySpec {
+    pub kernel: MemoryKernelSpec,
+    pub tensor: Option<TensorSpec>,
+}
+
+/// The keys of a memory section as written (read without `serde(flatten)`, so that an error in
+/// `kind` or a value points at its own line).
+#[derive(Serialize, Deserialize)]
+struct RawMemorySpec {
+    kind: KernelKind,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    coefficients: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    terms: Option<Vec<PronyTerm>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    expression: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    tensor: Option<TensorSpec>,
+}
+
+#[derive(Clone, Copy, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum KernelKind {
+    Polynomial,
+    Exponential,
+    Expression,
+}
+
+impl<'de> Deserialize<'de> for MemorySpec {
+    fn deserialize<De: serde::Deserializer<'de>>(d: De) -> Result<Self, De::Error> {
+        use serde::de::Error;
+        let raw = RawMemorySpec::deserialize(d)?;
+        let kernel = match raw.kind {
+            KernelKind::Polynomial => MemoryKernelSpec::Polynomial {
+                coefficients: raw
+                    .coefficients
+                    .ok_or_else(|| De::Error::missing_field("coefficients"))?,
+            },
+            KernelKind::Exponential => MemoryKernelSpec::Exponential {
+                terms: raw.terms.ok_or_else(|| De::Error::missing_field("terms"))?,
+            },
+            KernelKind::Expression => MemoryKernelSpec::Expression {
+                expression: raw.expression.ok_or_else(|| De::Error::missing_field("expression"))?,
+            },
+        };
+        Ok(MemorySpec {
+            kernel,
+            tensor: raw.tensor,
+        })
+    }
+}
+
+impl Serialize for MemorySpec {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut raw = RawMemorySpec {
+            kind: KernelKind::Polynomial,
+            coefficients: None,
+            terms: None,
+            expression: None,
+            tensor: self.tensor,
+        };
+        match &self.kernel {
+            MemoryKernelSpec::Polynomial { coefficients } => raw.coefficients = Some(coefficients.clone()),
+            MemoryKernelSpec::Exponential { terms } => {
+                raw.kind = KernelKind::Exponential;
+                raw.terms = Some(terms.clone());
+            }
+            MemoryKernelSpec::Expression { expression } => {
+                raw.kind = KernelKind::Expression;
+                raw.expression = Some(expression.clone());
+            }
+        }
+        raw.serialize(s)
+    }
+}
+
+impl From<MemoryKernelSpec> for MemorySpec {
+    /// The kernel on the identity (the paper's B(s) = b(s) I).
+    fn from(kernel: MemoryKernelSpec) -> Self {
+        MemorySpec { kernel, tensor: None }
+    }
+}
+
+/// The scalar relaxation kernel b(s) of one memory term.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum MemoryKernelSpec {
@@ -145,6 +267,106 @@ pub enum MemoryKernelSpec {
 pub struct PronyTerm {
     pub coefficient: f64,
     pub relaxation_time: f64,
+}
+
+/// The tensor B of a memory term: `"identity"` (the paper), `"elasticity"` (B = A), or
+/// `{ bulk = κ, shear = G }` (λ = κ − 2G/3, μ = G).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TensorSpec {
+    Identity,
+    Elasticity,
+    Moduli { bulk: f64, shear: f64 },
+}
+
+impl Serialize for TensorSpec {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        match self {
+            TensorSpec::Identity => s.serialize_str("identity"),
+            TensorSpec::Elasticity => s.serialize_str("elasticity"),
+            TensorSpec::Moduli { bulk, shear } => {
+                let mut m = s.serialize_map(Some(2))?;
+                m.serialize_entry("bulk", bulk)?;
+                m.serialize_entry("shear", shear)?;
+                m.end()
+            }
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for TensorSpec {
+    fn deserialize<De: serde::Deserializer<'de>>(d: De) -> Result<Self, De::Error> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Moduli {
+            bulk: f64,
+            shear: f64,
+        }
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = TensorSpec;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(
+                    "memory.tensor: \"identity\" (the paper), \"elasticity\" (B = A) or { bulk = κ, shear = G }",
+                )
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<TensorSpec, E> {
+                match v {
+                    "identity" => Ok(TensorSpec::Identity),
+                    "elasticity" => Ok(TensorSpec::Elasticity),
+                    _ => Err(E::custom(format!(
+                        "memory.tensor = \"{v}\": give \"identity\" (the paper), \"elasticity\" (B = A) or \
+                         {{ bulk = κ, shear = G }}"
+                    ))),
+                }
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<TensorSpec, A::Error> {
+                let m = Moduli::deserialize(serde::de::value::MapAccessDeserializer::new(map))?;
+                Ok(TensorSpec::Moduli {
+                    bulk: m.bulk,
+                    shear: m.shear,
+                })
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
+}
+
+fn memory_sections<'de, De: serde::Deserializer<'de>>(d: De) -> Result<Vec<MemorySpec>, De::Error> {
+    struct Sections;
+    impl<'de> serde::de::Visitor<'de> for Sections {
+        type Value = Vec<MemorySpec>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a [memory] table or [[memory]] sections")
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
+            Ok(vec![MemorySpec::deserialize(
+                serde::de::value::MapAccessDeserializer::new(map),
+            )?])
+        }
+        fn visit_seq<A: serde::de::SeqAccess<'de>>(self, seq: A) -> Result<Self::Value, A::Error> {
+            Vec::<MemorySpec>::deserialize(serde::de::value::SeqAccessDeserializer::new(seq))
+        }
+    }
+    d.deserialize_any(Sections)
+}
+
+fn write_memory_sections<S: serde::Serializer>(specs: &[MemorySpec], s: S) -> Result<S::Ok, S::Error> {
+    match specs {
+        [one] => one.serialize(s),
+        _ => specs.serialize(s),
+    }
+}
+
+impl Scene {
+    /// How messages name memory section `i`: `memory` for one, else `memory[i]`.
+    pub fn memory_key(&self, i: usize) -> String {
+        if self.memory.len() > 1 {
+            format!("memory[{i}]")
+        } else {
+            "memory".into()
+        }
+    }
 }
 
 /// Uniform time steps on [0, T].

@@ -4,7 +4,8 @@
 use super::error::SceneError;
 use super::expr::Expr;
 use super::types::{
-    BoundSpec, ContactDirection, ContactLawSpec, LawKind, MemoryKernelSpec, ObstacleSpec, Scene, BOUND_VARIABLES,
+    BoundSpec, ContactDirection, ContactLawSpec, LawKind, MemoryKernelSpec, MemorySpec, ObstacleSpec, Scene,
+    TensorSpec, BOUND_VARIABLES,
 };
 use toml::Value;
 
@@ -25,14 +26,20 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
             "output",
         ],
         "groups" => vec!["clamped", "contact"],
-        "material" => vec!["plane", "youngs_modulus", "poisson_ratio"],
+        "material" => vec!["plane", "youngs_modulus", "poisson_ratio", "relaxation_modulus"],
+        "material.relaxation_modulus" => vec!["bulk", "shear"],
+        "material.relaxation_modulus.bulk" | "material.relaxation_modulus.shear" => vec!["long_term", "terms"],
+        "material.relaxation_modulus.bulk.terms" | "material.relaxation_modulus.shear.terms" => {
+            vec!["modulus", "relaxation_time"]
+        }
         "memory" => match kind {
-            Some("polynomial") => vec!["kind", "coefficients"],
-            Some("exponential") => vec!["kind", "terms"],
-            Some("expression") => vec!["kind", "expression"],
-            _ => vec!["kind", "coefficients", "terms", "expression"],
+            Some("polynomial") => vec!["kind", "coefficients", "tensor"],
+            Some("exponential") => vec!["kind", "terms", "tensor"],
+            Some("expression") => vec!["kind", "expression", "tensor"],
+            _ => vec!["kind", "coefficients", "terms", "expression", "tensor"],
         },
         "memory.terms" => vec!["coefficient", "relaxation_time"],
+        "memory.tensor" => vec!["bulk", "shear"],
         "time" => vec!["final_time", "steps"],
         "traction" => vec!["group", "value", "pressure"],
         "dirichlet" => vec!["group", "components", "value"],
@@ -165,23 +172,8 @@ fn invalid(origin: &str, key: &str, value: impl std::fmt::Display, fix: &str) ->
 
 /// Range checks of every value; expressions compile and are finite at a probe point.
 pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
-    let m = &scene.material;
-    if !(m.youngs_modulus.is_finite() && m.youngs_modulus > 0.0) {
-        return Err(invalid(
-            origin,
-            "material.youngs_modulus",
-            m.youngs_modulus,
-            "Young's modulus must be positive and finite",
-        ));
-    }
-    if !(m.poisson_ratio > -1.0 && m.poisson_ratio < 0.5) {
-        return Err(invalid(
-            origin,
-            "material.poisson_ratio",
-            m.poisson_ratio,
-            "Poisson's ratio must lie in (−1, 0.5)",
-        ));
-    }
+    check_material(scene, origin)?;
+    check_plane_stress(scene, origin)?;
     let t = &scene.time;
     if !(t.final_time.is_finite() && t.final_time > 0.0) {
         return Err(invalid(
@@ -202,55 +194,8 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
             "more than 10⁸ steps is surely a typo",
         ));
     }
-    match &scene.memory {
-        Some(MemoryKernelSpec::Polynomial { coefficients })
-            if coefficients.is_empty() || coefficients.iter().any(|c| !c.is_finite()) =>
-        {
-            return Err(invalid(
-                origin,
-                "memory.coefficients",
-                format!("{coefficients:?}"),
-                "give at least one finite coefficient c0, c1, … of b(s) = Σ c_j s^j",
-            ));
-        }
-        Some(MemoryKernelSpec::Exponential { terms }) => {
-            if terms.is_empty() {
-                return Err(invalid(
-                    origin,
-                    "memory.terms",
-                    "[]",
-                    "give at least one { coefficient, relaxation_time }",
-                ));
-            }
-            for (i, term) in terms.iter().enumerate() {
-                if !(term.relaxation_time.is_finite() && term.relaxation_time > 0.0) {
-                    return Err(invalid(
-                        origin,
-                        &format!("memory.terms[{i}].relaxation_time"),
-                        term.relaxation_time,
-                        "relaxation times must be positive",
-                    ));
-                }
-                if !term.coefficient.is_finite() {
-                    return Err(invalid(
-                        origin,
-                        &format!("memory.terms[{i}].coefficient"),
-                        term.coefficient,
-                        "coefficients must be finite",
-                    ));
-                }
-            }
-        }
-        Some(MemoryKernelSpec::Expression { expression }) => {
-            compile(
-                origin,
-                "memory.expression",
-                expression,
-                &super::KERNEL_VARIABLES,
-                &[0.0],
-            )?;
-        }
-        Some(MemoryKernelSpec::Polynomial { .. }) | None => {}
+    for (i, spec) in scene.memory.iter().enumerate() {
+        check_memory(spec, origin, &scene.memory_key(i))?;
     }
     for (i, dc) in scene.dirichlet.iter().enumerate() {
         if dc.components.is_empty() {
@@ -445,6 +390,246 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
                 )
             };
             return Err(invalid(origin, "output.active_scalar", format!("\"{name}\""), &fix));
+        }
+    }
+    Ok(())
+}
+
+/// `[material]`: either Young's modulus and Poisson's ratio, or a relaxation modulus (then no
+/// `[memory]`: the relaxation modulus is the memory, docs/method.md §15.2).
+fn check_material(scene: &Scene, origin: &str) -> Result<(), SceneError> {
+    let m = &scene.material;
+    if let Some(r) = &m.relaxation_modulus {
+        for (key, given) in [("youngs_modulus", m.youngs_modulus), ("poisson_ratio", m.poisson_ratio)] {
+            if let Some(v) = given {
+                return Err(invalid(
+                    origin,
+                    &format!("material.{key}"),
+                    v,
+                    &format!(
+                        "material.relaxation_modulus is given too, and sets A = G(0): give either youngs_modulus and \
+                         poisson_ratio, or relaxation_modulus; remove material.{key} or the relaxation modulus"
+                    ),
+                ));
+            }
+        }
+        if !scene.memory.is_empty() {
+            return Err(invalid(
+                origin,
+                "memory",
+                format!("({} section(s))", scene.memory.len()),
+                "material.relaxation_modulus is given too, and is the material's memory (B = G′): give either \
+                 [memory] or material.relaxation_modulus, not both",
+            ));
+        }
+        for (part, p) in [("bulk", &r.bulk), ("shear", &r.shear)] {
+            let at = format!("material.relaxation_modulus.{part}");
+            if !(p.long_term.is_finite() && p.long_term >= 0.0) {
+                return Err(invalid(
+                    origin,
+                    &format!("{at}.long_term"),
+                    p.long_term,
+                    "the long-term modulus must be finite and ≥ 0",
+                ));
+            }
+            for (i, t) in p.terms.iter().enumerate() {
+                if !(t.modulus.is_finite() && t.modulus > 0.0) {
+                    return Err(invalid(
+                        origin,
+                        &format!("{at}.terms[{i}].modulus"),
+                        t.modulus,
+                        "a Prony term's modulus must be positive and finite (a relaxation modulus decreases; drop \
+                         a zero term)",
+                    ));
+                }
+                if !(t.relaxation_time.is_finite() && t.relaxation_time > 0.0) {
+                    return Err(invalid(
+                        origin,
+                        &format!("{at}.terms[{i}].relaxation_time"),
+                        t.relaxation_time,
+                        "relaxation times must be positive and finite",
+                    ));
+                }
+            }
+            if p.long_term == 0.0 && p.terms.is_empty() {
+                return Err(invalid(
+                    origin,
+                    &format!("{at}.long_term"),
+                    0,
+                    &format!(
+                        "the {part} modulus would be zero at every time (no terms and no long-term value): the \
+                         instantaneous modulus {part}(0) must be positive"
+                    ),
+                ));
+            }
+        }
+        let value = |p: &super::PronySeriesSpec| p.long_term + p.terms.iter().map(|t| t.modulus).sum::<f64>();
+        let (k0, g0) = (value(&r.bulk), value(&r.shear));
+        let e0 = 9.0 * k0 * g0 / (3.0 * k0 + g0);
+        if !(k0.is_finite() && g0.is_finite() && e0.is_finite() && e0 > 0.0) {
+            return Err(invalid(
+                origin,
+                "material.relaxation_modulus",
+                format!("κ(0) = {k0:e}, G(0) = {g0:e}"),
+                "the instantaneous moduli κ(0) = long_term + Σ modulus and G(0) (and E(0) = 9κG/(3κ + G)) must be \
+                 positive and finite",
+            ));
+        }
+        return Ok(());
+    }
+    let (Some(e), Some(nu)) = (m.youngs_modulus, m.poisson_ratio) else {
+        let missing = if m.youngs_modulus.is_none() {
+            "material.youngs_modulus"
+        } else {
+            "material.poisson_ratio"
+        };
+        return Err(invalid(
+            origin,
+            missing,
+            "(missing)",
+            "give youngs_modulus and poisson_ratio (e.g. youngs_modulus = 1.0, poisson_ratio = 0.3), or a \
+             relaxation_modulus = { bulk = { long_term = κ∞, terms = [...] }, shear = { ... } }",
+        ));
+    };
+    if !(e.is_finite() && e > 0.0) {
+        return Err(invalid(
+            origin,
+            "material.youngs_modulus",
+            e,
+            "Young's modulus must be positive and finite",
+        ));
+    }
+    if !(nu > -1.0 && nu < 0.5) {
+        return Err(invalid(
+            origin,
+            "material.poisson_ratio",
+            nu,
+            "Poisson's ratio must lie in (−1, 0.5)",
+        ));
+    }
+    Ok(())
+}
+
+/// In plane stress a memory tensor with its own moduli has an isotropic 2D reduction only when
+/// it is proportional to A (docs/method.md §15.1); so has a relaxation modulus only when bulk
+/// and shear relax proportionally.
+fn check_plane_stress(scene: &Scene, origin: &str) -> Result<(), SceneError> {
+    use crate::material::{memory::proportional, Isotropic, Memory, PlaneModel, Prony};
+    if scene.material.plane != Some(super::Plane::Stress) {
+        return Ok(());
+    }
+    let m = &scene.material;
+    if let Some(r) = &m.relaxation_modulus {
+        let prony = |p: &super::PronySeriesSpec| Prony {
+            long_term: p.long_term,
+            terms: p.terms.iter().map(|t| (t.modulus, t.relaxation_time)).collect(),
+        };
+        return match Memory::from_relaxation_modulus(&prony(&r.bulk), &prony(&r.shear), Some(PlaneModel::Stress)) {
+            Ok(_) => Ok(()),
+            Err(e) => Err(invalid(
+                origin,
+                "material.relaxation_modulus",
+                "(bulk and shear terms)",
+                &format!("with material.plane = \"stress\": {e}"),
+            )),
+        };
+    }
+    let (Some(e), Some(nu)) = (m.youngs_modulus, m.poisson_ratio) else {
+        return Ok(());
+    };
+    let a3 = Isotropic {
+        lambda: e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
+        mu: e / (2.0 * (1.0 + nu)),
+    };
+    for (i, spec) in scene.memory.iter().enumerate() {
+        if let Some(TensorSpec::Moduli { bulk, shear }) = spec.tensor {
+            if proportional(Isotropic::from_moduli(bulk, shear), a3).is_none() {
+                return Err(invalid(
+                    origin,
+                    &format!("{}.tensor", scene.memory_key(i)),
+                    format!("{{ bulk = {bulk}, shear = {shear} }}"),
+                    &format!(
+                        "with material.plane = \"stress\" a tensor with its own moduli has no isotropic plane-stress \
+                         reduction unless it is proportional to A (bulk/shear = {:.6}, from E and ν); use \
+                         material.plane = \"strain\", or tensor = \"elasticity\" (B = A, the factor in the kernel)",
+                        (a3.lambda + 2.0 * a3.mu / 3.0) / a3.mu
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// One memory term: its kernel's values and its tensor.
+fn check_memory(spec: &MemorySpec, origin: &str, at: &str) -> Result<(), SceneError> {
+    match &spec.kernel {
+        MemoryKernelSpec::Polynomial { coefficients }
+            if coefficients.is_empty() || coefficients.iter().any(|c| !c.is_finite()) =>
+        {
+            return Err(invalid(
+                origin,
+                &format!("{at}.coefficients"),
+                format!("{coefficients:?}"),
+                "give at least one finite coefficient c0, c1, … of b(s) = Σ c_j s^j",
+            ));
+        }
+        MemoryKernelSpec::Polynomial { coefficients } if coefficients.len() > 64 => {
+            return Err(invalid(
+                origin,
+                &format!("{at}.coefficients"),
+                format!("({} coefficients)", coefficients.len()),
+                "a polynomial kernel of degree above 63 is surely a mistake (each degree holds a history vector); \
+                 give at most 64 coefficients, or kind = \"expression\"",
+            ));
+        }
+        MemoryKernelSpec::Exponential { terms } => {
+            if terms.is_empty() {
+                return Err(invalid(
+                    origin,
+                    &format!("{at}.terms"),
+                    "[]",
+                    "give at least one { coefficient, relaxation_time }",
+                ));
+            }
+            for (i, term) in terms.iter().enumerate() {
+                if !(term.relaxation_time.is_finite() && term.relaxation_time > 0.0) {
+                    return Err(invalid(
+                        origin,
+                        &format!("{at}.terms[{i}].relaxation_time"),
+                        term.relaxation_time,
+                        "relaxation times must be positive",
+                    ));
+                }
+                if !term.coefficient.is_finite() {
+                    return Err(invalid(
+                        origin,
+                        &format!("{at}.terms[{i}].coefficient"),
+                        term.coefficient,
+                        "coefficients must be finite (negative for a relaxing material, README \"Memory\")",
+                    ));
+                }
+            }
+        }
+        MemoryKernelSpec::Expression { expression } => {
+            compile(
+                origin,
+                &format!("{at}.expression"),
+                expression,
+                &super::KERNEL_VARIABLES,
+                &[0.0],
+            )?;
+        }
+        MemoryKernelSpec::Polynomial { .. } => {}
+    }
+    if let Some(TensorSpec::Moduli { bulk, shear }) = spec.tensor {
+        if !(bulk.is_finite() && shear.is_finite()) || (bulk == 0.0 && shear == 0.0) {
+            return Err(invalid(
+                origin,
+                &format!("{at}.tensor"),
+                format!("{{ bulk = {bulk}, shear = {shear} }}"),
+                "the tensor's bulk and shear moduli must be finite and not both zero (B = (κ − 2G/3, G))",
+            ));
         }
     }
     Ok(())

@@ -27,7 +27,7 @@ impl Plan {
         let mut effects = vec![Effect {
             name: "elasticity",
             detail: format!(
-                "{}, E = {}, ν = {}",
+                "{}, E = {}, ν = {}{}",
                 match sim.elasticity.plane {
                     Some(p) => format!(
                         "2D, plane {}",
@@ -40,7 +40,12 @@ impl Plan {
                     None => "3D".to_string(),
                 },
                 sim.elasticity.youngs_modulus,
-                sim.elasticity.poisson_ratio
+                sim.elasticity.poisson_ratio,
+                if sim.memory.as_ref().is_some_and(|m| m.is_from_relaxation_modulus()) {
+                    " (instantaneous: A = G(0) of the relaxation modulus)"
+                } else {
+                    ""
+                }
             ),
             cost: format!("K_A assembled once ({n} unknowns), factorised once"),
         }];
@@ -63,22 +68,52 @@ impl Plan {
         }
         let mut factorisations = 1;
         let mut solves_per_step = 1;
-        if let Some(kernel) = &sim.kernel {
-            let (algo, memory) = match kernel {
-                crate::material::RelaxationKernel::Polynomial { coefficients } => {
-                    ("recursive polynomial moments", coefficients.len())
+        if let Some(memory) = &sim.memory {
+            // the accumulated atoms of all kernels: one vector per distinct relaxation time and
+            // per monomial degree, every step's displacement for a general kernel (§5, §15)
+            let mut taus: Vec<f64> = Vec::new();
+            let (mut degree, mut direct) = (0, false);
+            for t in memory.terms() {
+                match &t.kernel {
+                    crate::material::RelaxationKernel::Polynomial { coefficients } => {
+                        degree = degree.max(coefficients.len())
+                    }
+                    crate::material::RelaxationKernel::Exponentials { terms } => {
+                        for (_, tau) in terms {
+                            if !taus.contains(tau) {
+                                taus.push(*tau);
+                            }
+                        }
+                    }
+                    crate::material::RelaxationKernel::General { .. } => direct = true,
                 }
-                crate::material::RelaxationKernel::Exponentials { terms } => {
-                    ("recursive exponential sums", terms.len())
-                }
-                crate::material::RelaxationKernel::General { .. } => ("direct sum", sim.time.steps + 1),
+            }
+            let vectors = taus.len() + degree + if direct { sim.time.steps + 1 } else { 0 };
+            let algo: Vec<&str> = [
+                (!taus.is_empty()).then_some("recursive exponential sums"),
+                (degree > 0).then_some("recursive polynomial moments"),
+                direct.then_some("direct sum"),
+            ]
+            .into_iter()
+            .flatten()
+            .collect();
+            let algo = algo.join(" + ");
+            let j = memory.channels().len();
+            let d = sim.elasticity.plane.map_or(3, |_| 2);
+            let bound = match memory.largest_stable_step(sim.elasticity.tensor(), d) {
+                Some(k_max) => format!(
+                    "; b(0) < 0: K positive definite for k < {k_max:.4e} (here k = {:.4e})",
+                    sim.time.step()
+                ),
+                None => String::new(),
             };
             effects.push(Effect {
                 name: "memory",
-                detail: kernel.describe(),
+                detail: format!("{}{bound}", memory.describe()),
                 cost: format!(
-                    "K_B assembled once; history by {algo}: {memory} vectors of {n} unknowns ({:.1} MiB), one K_B product per step",
-                    (memory * n * 8) as f64 / 1048576.0
+                    "{j} K_B matri{} assembled once; history by {algo}: {vectors} vectors of {n} unknowns ({:.1} MiB), {j} K_B product(s) per step",
+                    if j == 1 { "x" } else { "ces" },
+                    (vectors * n * 8) as f64 / 1048576.0
                 ),
             });
         }
@@ -141,7 +176,7 @@ impl Plan {
                 },
             });
         }
-        if sim.kernel.is_some() {
+        if sim.memory.is_some() {
             factorisations += 1; // possibly K_A for step 0
         }
         if sim.is_static() {

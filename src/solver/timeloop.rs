@@ -2,7 +2,7 @@
 //!
 //! ```text
 //!   F_n            ← loads(t_n)                      (once, if no load depends on t)
-//!   rhs            ← F_n − K_B h_n                   (history, only with a memory kernel)
+//!   rhs            ← F_n − Σ_j K_j h_n^j             (history, only with memory: one or two channels)
 //!   rhs            ← lift(rhs, g(t_n))               (prescribed components: rhs_f −= K_fp g, rhs_p = g)
 //!   d              ← C K⁻¹ rhs                       (condensation: start the step's solve)
 //!   λ              ← contact.solve(d)                (only with contact)
@@ -25,7 +25,7 @@ use crate::fem::assembly::assemble_stiffness;
 use crate::fem::{NodeBlockMatrix, SymmetricMatrix};
 use crate::history::History;
 use crate::linalg::{Analysis, Counters, Factor, LinearSolver};
-use crate::material::IDENTITY_TENSOR;
+use crate::material::Isotropic;
 use crate::scene::CondensationKind;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -39,7 +39,8 @@ pub struct StepView<'a> {
     pub time: f64,
     /// u_n.
     pub displacement: &'a [f64],
-    /// m_n = h_n + (k/2) b(0) u_n, whose strain is the memory stress (None without memory).
+    /// m_n^j = h_n^j + (k/2) b_j(0) u_n of each memory channel j, one after the other (one vector
+    /// of the step's length each); σ_n = Aε(u_n) + Σ_j T_j ε(m_n^j) (None without memory).
     pub memory_displacement: Option<&'a [f64]>,
     pub contact: Option<&'a ContactState>,
     pub outcome: Option<ContactOutcome>,
@@ -100,7 +101,8 @@ impl PrescribedColumns {
 pub enum Stiffness {
     /// K_A, the elastic stiffness.
     Elastic,
-    /// K_B, the stiffness of B₀ = I (the memory term, docs/method.md §3).
+    /// K_B, the stiffness of the memory's one channel tensor (B₀ = I for the paper; docs/method.md
+    /// §3, §15.1). A backend runs memory of one channel only ([`Stepper::prepare_with`]).
     Memory,
 }
 
@@ -395,7 +397,8 @@ struct Reactions {
     /// K_A's and K_B's unmodified columns of the prescribed unknowns (serial; with a backend,
     /// its products).
     k_a: Option<PrescribedColumns>,
-    k_b: Option<PrescribedColumns>,
+    /// One per memory channel (serial).
+    k_b: Vec<PrescribedColumns>,
     /// Per reaction group: positions of its unknowns in the prescribed columns (serial), or in
     /// this process's vectors (only the unknowns it holds, with a backend).
     groups: Vec<Vec<usize>>,
@@ -403,7 +406,7 @@ struct Reactions {
 }
 
 impl Reactions {
-    fn new<const D: usize>(sim: &Simulation<D>, k_a: &SymmetricMatrix, k_b: Option<&SymmetricMatrix>) -> Self {
+    fn new<const D: usize>(sim: &Simulation<D>, k_a: &SymmetricMatrix, k_b: &[SymmetricMatrix]) -> Self {
         let k_a = PrescribedColumns::new(k_a, &sim.dofs);
         let position: std::collections::HashMap<usize, usize> =
             k_a.columns.iter().enumerate().map(|(k, (j, _))| (*j, k)).collect();
@@ -414,7 +417,7 @@ impl Reactions {
             .map(|g| g.unknowns.iter().map(|d| position[d]).collect())
             .collect();
         Reactions {
-            k_b: k_b.map(|m| PrescribedColumns::new(m, &sim.dofs)),
+            k_b: k_b.iter().map(|m| PrescribedColumns::new(m, &sim.dofs)).collect(),
             groups,
             totals: vec![0.0; sim.dirichlet.reaction_groups.len()],
             k_a: Some(k_a),
@@ -433,7 +436,7 @@ impl Reactions {
             .collect();
         Reactions {
             k_a: None,
-            k_b: None,
+            k_b: Vec::new(),
             groups,
             totals: vec![0.0; sim.dirichlet.reaction_groups.len()],
         }
@@ -491,8 +494,10 @@ impl Reactions {
         };
         let mut r = vec![0.0; k_a.columns.len()];
         k_a.add_product(u, &mut r);
-        if let (Some(kb), Some(m)) = (&self.k_b, memory) {
-            kb.add_product(m, &mut r);
+        if let Some(m) = memory {
+            for (kb, m) in self.k_b.iter().zip(m.chunks_exact(u.len())) {
+                kb.add_product(m, &mut r);
+            }
         }
         let mut force = vec![0.0; u.len()];
         if let (Some(c), Some(state)) = (&sim.contact, contact) {
@@ -518,13 +523,13 @@ pub struct Stepper<'s, const D: usize> {
     /// K_A (serial; a backend holds its own).
     k_a: Option<SymmetricMatrix>,
     /// K_B for the memory load K_B h_n of every step (serial; a backend multiplies by its own).
-    k_b: Option<MemoryStiffness<D>>,
+    k_b: Vec<MemoryStiffness<D>>,
     /// The faer factor's symbolic analysis (None with a [`Backend`]).
     symbolic: Option<Analysis>,
     backend: Option<&'s dyn Backend<D>>,
     main: StepOperator,
     /// (k/2) b(0), the memory term's share of K.
-    memory_diagonal: Option<f64>,
+    memory_diagonal: Vec<f64>,
     history: Option<History>,
     contact: Option<ContactState>,
     reactions: Option<Reactions>,
@@ -538,6 +543,7 @@ pub struct Stepper<'s, const D: usize> {
     prescribed: Option<Vec<f64>>,
     /// Work vectors of a step.
     rhs: Vec<f64>,
+    /// h_n^j of each channel, one after the other.
     memory_load: Vec<f64>,
     memory_rhs: Vec<f64>,
     displacement: Vec<f64>,
@@ -571,16 +577,31 @@ impl<'s, const D: usize> Stepper<'s, D> {
         let k = sim.time.step();
         // The vectors of a step: over all unknowns, or the share a backend holds here.
         let n_dof = backend.map_or(sim.dofs.n(), |b| b.unknowns().len());
-        let memory_diagonal = sim.kernel.as_ref().map(|b| 0.5 * k * b.value(0.0));
+        // (k/2) b_j(0) of each memory channel (docs/method.md §15.1)
+        let memory_diagonal: Vec<f64> = sim.memory.as_ref().map_or(Vec::new(), |m| {
+            (0..m.channels().len())
+                .map(|j| 0.5 * k * m.kernel_value(j, 0.0))
+                .collect()
+        });
         if let Some(b) = backend {
+            if memory_diagonal.len() > 1 {
+                return Err(SolveError::Setup(
+                    "this memory has two channels (tensors that are not proportional, docs/method.md §15.1), and the \
+                     PETSc backend runs memory of one channel only: run it without --backend petsc, or give memory \
+                     terms whose tensors are proportional (e.g. all \"identity\" or all \"elasticity\", or bulk and \
+                     shear relaxing proportionally)"
+                        .into(),
+                ));
+            }
             // The backend assembles and multiplies its own (distributed) matrices.
-            let main = StepOperator::with_backend(sim, b, memory_diagonal, &counters, &mut stats)?;
+            let c = memory_diagonal.first().copied();
+            let main = StepOperator::with_backend(sim, b, c, &counters, &mut stats)?;
             let reactions = (!sim.dirichlet.reaction_groups.is_empty()).then(|| Reactions::held(sim, b.unknowns()));
             return Ok(Self::with_parts(
                 sim,
                 counters,
                 stats,
-                (None, None, None),
+                (None, Vec::new(), None),
                 backend,
                 main,
                 memory_diagonal,
@@ -590,28 +611,40 @@ impl<'s, const D: usize> Stepper<'s, D> {
         }
         let (points, cells) = (&sim.mesh.points, &sim.mesh.cells);
         let a = sim.elasticity.tensor();
-        let (k_a, k_b) = timed(&mut stats.phases.assembly, || match &sim.kernel {
-            Some(_) => {
-                let [a, b] = assemble_stiffness(cells, points, &sim.dofs, &[a, IDENTITY_TENSOR]);
-                (a, Some(b))
-            }
-            None => {
+        let channels: Vec<Isotropic> = sim
+            .memory
+            .as_ref()
+            .map_or(Vec::new(), |m| m.channels().iter().map(|c| c.tensor).collect());
+        let (k_a, k_b) = timed(&mut stats.phases.assembly, || match channels[..] {
+            [] => {
                 let [a] = assemble_stiffness(cells, points, &sim.dofs, &[a]);
-                (a, None)
+                (a, Vec::new())
             }
+            [t] => {
+                let [a, b] = assemble_stiffness(cells, points, &sim.dofs, &[a, t]);
+                (a, vec![b])
+            }
+            [t, v] => {
+                let [a, b, c] = assemble_stiffness(cells, points, &sim.dofs, &[a, t, v]);
+                (a, vec![b, c])
+            }
+            _ => unreachable!("a memory term has one or two channels"),
         });
         stats.matrix_nonzeros = k_a.values.len();
         // The pattern the factors have: identity rows, fully prescribed nodes decoupled. In 3D the
         // contact normals' unknowns go last (docs/method.md §4.5): G and W then live in the
         // factor's trailing block (measured: box 96x48x12, m = 1248, condensation 12.4 s before).
         let last = sim.unknowns_ordered_last();
-        let system = match (&k_b, memory_diagonal) {
-            (Some(kb), Some(c)) => {
-                let k_step = timed(&mut stats.phases.assembly, || k_a.plus_scaled(c, kb));
-                system_matrix(sim, &k_step)
+        // K = K_A + Σ_j (k/2) b_j(0) K_j (unmodified: before the identity rows)
+        let k_step = timed(&mut stats.phases.assembly, || {
+            let mut sum: Option<SymmetricMatrix> = None;
+            for (kb, c) in k_b.iter().zip(&memory_diagonal) {
+                sum = Some(sum.as_ref().unwrap_or(&k_a).plus_scaled(*c, kb));
             }
-            _ => system_matrix(sim, &k_a),
-        };
+            sum
+        });
+        let system = system_matrix(sim, k_step.as_ref().unwrap_or(&k_a));
+        drop(k_step);
         let symbolic = timed(&mut stats.phases.factorisation, || {
             Factor::analyse_with_last(&system.0, &last)
         })
@@ -619,11 +652,14 @@ impl<'s, const D: usize> Stepper<'s, D> {
         stats.ordering = Some(symbolic.ordering().to_string());
         stats.factor_entries = symbolic.factor_entries();
         let main = StepOperator::new(sim, &symbolic, system, &counters, &mut stats)?;
-        let reactions = (!sim.dirichlet.reaction_groups.is_empty()).then(|| Reactions::new(sim, &k_a, k_b.as_ref()));
-        let k_b = k_b.map(|kb| match NodeBlockMatrix::new(&kb) {
-            Some(blocks) => MemoryStiffness::NodeBlocks(blocks),
-            None => MemoryStiffness::Full(kb),
-        });
+        let reactions = (!sim.dirichlet.reaction_groups.is_empty()).then(|| Reactions::new(sim, &k_a, &k_b));
+        let k_b: Vec<MemoryStiffness<D>> = k_b
+            .into_iter()
+            .map(|kb| match NodeBlockMatrix::new(&kb) {
+                Some(blocks) => MemoryStiffness::NodeBlocks(blocks),
+                None => MemoryStiffness::Full(kb),
+            })
+            .collect();
         Ok(Self::with_parts(
             sim,
             counters,
@@ -643,10 +679,10 @@ impl<'s, const D: usize> Stepper<'s, D> {
         sim: &'s Simulation<D>,
         counters: Counters,
         mut stats: RunStats,
-        (k_a, k_b, symbolic): (Option<SymmetricMatrix>, Option<MemoryStiffness<D>>, Option<Analysis>),
+        (k_a, k_b, symbolic): (Option<SymmetricMatrix>, Vec<MemoryStiffness<D>>, Option<Analysis>),
         backend: Option<&'s dyn Backend<D>>,
         main: StepOperator,
-        memory_diagonal: Option<f64>,
+        memory_diagonal: Vec<f64>,
         reactions: Option<Reactions>,
         n_dof: usize,
     ) -> Self {
@@ -656,7 +692,8 @@ impl<'s, const D: usize> Stepper<'s, D> {
                 stats.smallness = Some(op.stiffness().trace_constant(&weights));
             }
         }
-        let history = sim.kernel.as_ref().map(|b| History::new(b, n_dof, sim.time.step()));
+        let history = sim.memory.as_ref().map(|m| History::new(m, n_dof, sim.time.step()));
+        let n_channels = memory_diagonal.len();
         let contact = sim.contact.as_ref().map(|c| ContactState::new(c.nodes.len()));
         let time_dependent_loads = sim.loads.is_time_dependent();
         Stepper {
@@ -680,7 +717,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
             // g(t_n) over all unknowns on every process (the contact offsets index it so)
             prescribed: sim.dirichlet.is_nonzero().then(|| vec![0.0; sim.dofs.n()]),
             rhs: vec![0.0; n_dof],
-            memory_load: vec![0.0; n_dof],
+            memory_load: vec![0.0; n_channels * n_dof],
             memory_rhs: vec![0.0; n_dof],
             displacement: vec![0.0; n_dof],
             memory_displacement: None,
@@ -866,41 +903,50 @@ impl<'s, const D: usize> Stepper<'s, D> {
         )
     }
 
-    /// rhs ← rhs − K_B h_n (docs/method.md §3); h_0 = 0.
+    /// rhs ← rhs − Σ_j K_j h_n^j (docs/method.md §3, §15); h_0 = 0.
     fn subtract_memory_load(&mut self, n: usize, rhs: &mut [f64]) {
         let Some(history) = &self.history else {
             return;
         };
         let (sim, k_b, backend) = (self.sim, &self.k_b, self.backend);
-        let (h, kb_h) = (&mut self.memory_load, &mut self.memory_rhs);
+        let (loads, kb_h) = (&mut self.memory_load, &mut self.memory_rhs);
         timed(&mut self.stats.phases.history, || {
-            history.memory_load(h);
-            if n > 0 {
-                match (k_b, backend) {
-                    (Some(k_b), _) => k_b.matvec(h, kb_h),
-                    (None, Some(b)) => b.product(sim, Stiffness::Memory, h, kb_h),
-                    (None, None) => return,
+            for (j, h) in loads.chunks_exact_mut(rhs.len()).enumerate() {
+                history.memory_load(j, h);
+                if n > 0 {
+                    match (k_b.get(j), backend) {
+                        (Some(k_b), _) => k_b.matvec(h, kb_h),
+                        // one channel only with a backend (prepare_with)
+                        (None, Some(b)) => b.product(sim, Stiffness::Memory, h, kb_h),
+                        (None, None) => return,
+                    }
+                    rhs.iter_mut().zip(kb_h.iter()).for_each(|(r, v)| *r -= v);
                 }
-                rhs.iter_mut().zip(kb_h.iter()).for_each(|(r, v)| *r -= v);
             }
         });
     }
 
-    /// Records u_n in the history and keeps m_n = h_n + (k/2) b(0) u_n for the stresses (m_0 = 0:
-    /// the trapezoidal sum is empty at n = 0, docs/method.md §3).
+    /// Records u_n in the history and keeps m_n^j = h_n^j + (k/2) b_j(0) u_n of every channel for
+    /// the stresses (m_0 = 0: the trapezoidal sum is empty at n = 0, docs/method.md §3).
     fn update_history(&mut self, n: usize) {
-        let (Some(history), Some(c)) = (&mut self.history, self.memory_diagonal) else {
+        let Some(history) = &mut self.history else {
             return;
         };
-        let (h, u) = (&self.memory_load, &self.displacement);
+        let (loads, u) = (&self.memory_load, &self.displacement);
+        let diagonal = &self.memory_diagonal;
         let memory_displacement = &mut self.memory_displacement;
         let wanted = self.sim.is_output_step(n);
         timed(&mut self.stats.phases.history, || {
             // only output steps show the memory stress
             *memory_displacement = wanted.then(|| {
-                h.iter()
-                    .zip(u)
-                    .map(|(hv, uv)| if n == 0 { 0.0 } else { hv + c * uv })
+                loads
+                    .chunks_exact(u.len())
+                    .zip(diagonal)
+                    .flat_map(|(h, &c)| {
+                        h.iter()
+                            .zip(u)
+                            .map(move |(hv, uv)| if n == 0 { 0.0 } else { hv + c * uv })
+                    })
                     .collect()
             });
             history.push(u);
@@ -909,7 +955,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
 
     /// Closes the statistics of the run.
     pub fn finish(mut self) -> RunStats {
-        self.stats.history_algorithm = self.history.as_ref().map(|h| h.algorithm().to_string());
+        self.stats.history_algorithm = self.history.as_ref().map(|h| h.algorithm());
         self.stats.history_bytes = self.history.as_ref().map_or(0, |h| h.bytes_held());
         self.stats.factorisations = self.counters.factorisations();
         self.stats.solves = self.counters.solves();
