@@ -740,8 +740,13 @@ fn draw_deformed<DB: DrawingBackend>(
     const HATCH: f64 = 12.0;
     let dark = RGBColor(40, 40, 40);
     let mut along = 0.0;
+    let mut last_end = None;
     for e in &picture.obstacles {
         let (a, b) = (to_px(e.a), to_px(e.b));
+        if last_end != Some(a) {
+            along = 0.0; // a new curve
+        }
+        last_end = Some(b);
         root.draw(&PathElement::new(vec![a, b], dark.stroke_width(3)))
             .map_err(err)?;
         let len = (((b.0 - a.0) as f64).powi(2) + ((b.1 - a.1) as f64).powi(2)).sqrt();
@@ -1121,8 +1126,14 @@ pub fn level_set_segments(
             let crossings: Vec<(usize, [f64; 2])> = (0..4)
                 .filter(|&k| inside[k] != inside[(k + 1) % 4])
                 .map(|k| {
-                    let (p, q) = (corner[k], corner[(k + 1) % 4]);
-                    (k, cross(at(p.0, p.1), at(q.0, q.1), val[k], val[(k + 1) % 4]))
+                    // from the corner of lower (j, i) to the other, as the neighbouring cell
+                    // does too: both compute the same point, bit for bit
+                    let (mut p, mut q, mut vp, mut vq) = (corner[k], corner[(k + 1) % 4], val[k], val[(k + 1) % 4]);
+                    if (q.1, q.0) < (p.1, p.0) {
+                        std::mem::swap(&mut p, &mut q);
+                        std::mem::swap(&mut vp, &mut vq);
+                    }
+                    (k, cross(at(p.0, p.1), at(q.0, q.1), vp, vq))
                 })
                 .collect();
             let pairs: Vec<([f64; 2], [f64; 2])> = match crossings.len() {
@@ -1149,7 +1160,55 @@ pub fn level_set_segments(
             }
         }
     }
-    edges
+    // a grid vertex exactly on the curve (φ = 0) makes a segment of no length in a cell
+    // touching it: dropped, the curve runs through the vertex in the neighbouring cells
+    let tol = 1e-9 * d[0].abs().max(d[1].abs());
+    edges.retain(|e| (e.a[0] - e.b[0]).abs().max((e.a[1] - e.b[1]).abs()) > tol);
+    chain(edges, tol)
+}
+
+/// The edges reordered (and turned) so that each next one starts where the previous one ended,
+/// curve by curve (open curves from an end): the hatching then runs at an even pitch along each
+/// curve. Ends closer than `tol` are one point (a grid edge's crossing is computed in both cells
+/// that share it).
+fn chain(edges: Vec<ObstacleEdge>, tol: f64) -> Vec<ObstacleEdge> {
+    let key = |p: [f64; 2]| ((p[0] / tol).round() as i64, (p[1] / tol).round() as i64);
+    let mut at: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
+    for (i, e) in edges.iter().enumerate() {
+        at.entry(key(e.a)).or_default().push(i);
+        at.entry(key(e.b)).or_default().push(i);
+    }
+    let degree = |p: [f64; 2]| at.get(&key(p)).map_or(0, Vec::len);
+    let n = edges.len();
+    let starts: Vec<usize> = (0..n)
+        .filter(|&i| degree(edges[i].a) == 1 || degree(edges[i].b) == 1)
+        .chain(0..n)
+        .collect();
+    let mut used = vec![false; n];
+    let mut out = Vec::with_capacity(n);
+    for start in starts {
+        if used[start] {
+            continue;
+        }
+        used[start] = true;
+        let mut e = edges[start];
+        if degree(e.b) == 1 && degree(e.a) != 1 {
+            std::mem::swap(&mut e.a, &mut e.b);
+        }
+        loop {
+            out.push(e);
+            let end = e.b;
+            let Some(j) = at.get(&key(end)).and_then(|v| v.iter().copied().find(|&j| !used[j])) else {
+                break;
+            };
+            used[j] = true;
+            e = edges[j];
+            if key(e.a) != key(end) {
+                std::mem::swap(&mut e.a, &mut e.b);
+            }
+        }
+    }
+    out
 }
 
 /// The outline moved into a picture whose displacements are magnified by `scale`: each point y

@@ -276,6 +276,12 @@ fn the_obstacle_outline_follows_a_circle_and_points_into_it() {
     }
     let circumference = 2.0 * std::f64::consts::PI * r;
     assert!((length / circumference - 1.0).abs() < 0.01, "length {length}");
+    // one closed curve, in order: each edge starts where the previous one ended (the grid has
+    // vertices exactly on the circle, e.g. (0.02, −1.16) = c + (−0.28, −0.96): no edge of no length)
+    let gap = |p: [f64; 2], q: [f64; 2]| ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
+    let breaks = edges.windows(2).filter(|w| gap(w[0].b, w[1].a) > 1e-9).count();
+    assert_eq!(breaks, 0);
+    assert!(gap(edges[edges.len() - 1].b, edges[0].a) <= 1e-9);
 }
 
 /// Magnified like the displacement: a plane 0.05 below a flat Γ₃ is drawn 10 × 0.05 below it
