@@ -25,7 +25,7 @@ pub const GAMG_RTOL: f64 = 1e-10;
 
 /// Right-hand sides per `KSPMatSolve` block when forming W (bounds the dense blocks held at
 /// once to 32 columns of the local rows).
-const BLOCK: usize = 32;
+pub(super) const BLOCK: usize = 32;
 
 /// The row layout of the PETSc matrices: hvi unknown D·p + c is PETSc row D·position[p] + c;
 /// this rank owns rows lo..hi, the unknowns of its nodes.

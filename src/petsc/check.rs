@@ -11,6 +11,7 @@ use crate::app;
 use crate::history::History;
 use crate::mesh::{AnyMesh, Mesh};
 use crate::scene::Scene;
+use crate::solver::timeloop;
 use crate::solver::{Simulation, SolveError};
 use hvi_petsc::mpi::traits::*;
 use hvi_petsc::Petsc;
@@ -27,11 +28,13 @@ pub(super) struct RankMemory {
     /// simulation's quadrature and contact data, the partition.
     pub base: f64,
     /// PETSc matrices: the step matrices and K_A, K_B for the products (MatGetInfo of the step
-    /// matrix, times their number).
+    /// matrix, times their number), and the copy of each factored one PETSc hands MUMPS (its
+    /// upper triangle as (row, column, value) triples, 16 bytes each: ≈ 2/3 of the matrix).
     pub matrices: f64,
     /// MUMPS's INFO(15) per factor, times the factors held at once.
     pub factor: f64,
-    /// W and its inverse on rank 0 (and the dense work of inverting it).
+    /// W and its inverse on rank 0 (and the dense work of inverting it); on every rank the two
+    /// dense blocks of right-hand sides that form W.
     pub contact: f64,
     /// The history's vectors (docs/method.md §5) over the rank's unknowns.
     pub history: f64,
@@ -99,7 +102,16 @@ fn check_dim<const D: usize>(
     let analysed = backend.analyse(&sim, choice == SolverChoice::Mumps);
     agree(world, analysed.as_ref().map(|_| ()).map_err(|e| e.to_string())).map_err(SolveError::Setup)?;
     let (matrix_bytes, mumps) = analysed.map_err(SolveError::Setup)?;
-    let memory = predict(&sim, &backend, rank, base, matrix_bytes, mumps.map(|m| m.this_rank_mb));
+    let factors = factors_held(&sim);
+    let memory = predict(
+        &sim,
+        &backend,
+        rank,
+        base,
+        matrix_bytes,
+        mumps.map(|m| m.this_rank_mb),
+        factors,
+    );
     // Every rank's prediction on rank 0.
     let parts = [
         memory.base,
@@ -153,7 +165,7 @@ fn check_dim<const D: usize>(
                 m.factor_entries,
                 m.largest_rank_mb,
                 m.total_mb,
-                factors_held(&sim)
+                factors
             );
         }
         None => {
@@ -165,8 +177,8 @@ fn check_dim<const D: usize>(
     }
     let _ = writeln!(
         out,
-        "  base = this process now (mesh, scene, partition: VmRSS); matrices = the step matrix as assembled × {} (step matrices and K_A, K_B); factor = MUMPS's INFO(15) × factors; contact = W and its inverse on rank 0",
-        matrices_held(&sim)
+        "  base = this process now (mesh, scene, partition: VmRSS); matrices = the step matrix as assembled × {} (step matrices, K_A, K_B) + PETSc's copy for MUMPS (2/3 of it per factor); factor = MUMPS's INFO(15) × factors; contact = W's right-hand-side blocks, W and its inverse on rank 0",
+        matrices_held(&sim, factors)
     );
     if let Some(c) = &sim.contact {
         let _ = writeln!(
@@ -182,20 +194,28 @@ fn check_dim<const D: usize>(
 }
 
 /// Step matrices and factors held at once: K̃ and, with memory, K_A for step 0 (its factor is
-/// made while K̃'s exists).
+/// made while K̃'s exists) unless u_0 = 0 solves step 0 (docs/method.md §3).
 fn factors_held<const D: usize>(sim: &Simulation<D>) -> usize {
-    if sim.memory.is_some() {
-        2
-    } else {
+    if sim.memory.is_none() {
+        return 1;
+    }
+    let mut load = vec![0.0; sim.dofs.n()];
+    let mut g = vec![0.0; sim.dofs.n()];
+    // (a load or value that cannot be evaluated fails the run's step 0; count the factor)
+    let rhs_zero = sim.loads.assemble(0.0, &sim.dofs, &mut load).is_ok() && load.iter().all(|v| *v == 0.0);
+    let prescribed_zero = sim.dirichlet.values(0.0, &mut g).is_ok() && g.iter().all(|v| *v == 0.0);
+    if timeloop::zero_solves_step_zero(sim, rhs_zero, prescribed_zero) {
         1
+    } else {
+        2
     }
 }
 
 /// PETSc matrices of the step matrix's size held at once: the step matrices, and K_A (for the
 /// reactions and the lifting) and K_B (memory) for the products.
-fn matrices_held<const D: usize>(sim: &Simulation<D>) -> usize {
+fn matrices_held<const D: usize>(sim: &Simulation<D>, factors: usize) -> usize {
     let elastic = !sim.dirichlet.reaction_groups.is_empty() || sim.dirichlet.is_nonzero();
-    factors_held(sim) + usize::from(elastic) + usize::from(sim.memory.is_some())
+    factors + usize::from(elastic) + usize::from(sim.memory.is_some())
 }
 
 /// The memory rank `rank` will need (docs/method.md §13.4).
@@ -206,6 +226,7 @@ fn predict<const D: usize>(
     base: f64,
     matrix_bytes: f64,
     mumps_mb: Option<i64>,
+    factors: usize,
 ) -> RankMemory {
     use crate::solver::Backend;
     let local = backend.unknowns().len() as f64;
@@ -227,9 +248,13 @@ fn predict<const D: usize>(
     let vectors = 8.0 * (8.0 * local + 3.0 * all) + piece;
     RankMemory {
         base,
-        matrices: matrix_bytes * matrices_held(sim) as f64,
-        factor: mumps_mb.map_or(0.0, |mb| mb as f64 * 1e6) * factors_held(sim) as f64,
-        contact: if rank == 0 { 4.0 * 8.0 * m * m } else { 0.0 },
+        matrices: matrix_bytes * (matrices_held(sim, factors) as f64 + 2.0 / 3.0 * factors as f64),
+        factor: mumps_mb.map_or(0.0, |mb| mb as f64 * 1e6) * factors as f64,
+        contact: if m > 0.0 {
+            2.0 * 8.0 * super::backend::BLOCK as f64 * local + if rank == 0 { 4.0 * 8.0 * m * m } else { 0.0 }
+        } else {
+            0.0
+        },
         history,
         vectors,
     }

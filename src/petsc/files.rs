@@ -294,26 +294,24 @@ impl<const D: usize> FrameSink<D> for PieceSink<'_, D> {
             None => Ok(()),
         };
         // 2. The values at the piece's nodes (collective, whatever happened above).
+        // (A rank whose gather failed goes on with zeros, so that every rank makes the same
+        // collective calls; the agreement below then stops all of them.)
         let gathered = self.gather(sim, view).map_err(|e| e.to_string());
-        let stresses = match (&gathered, wants_stress(&self.fields)) {
-            (Ok((nodal, memory, _)), true) => {
-                let mut seconds = 0.0;
-                let s = timed(&mut seconds, || self.stresses(sim, nodal, memory.as_deref()));
-                self.stress_seconds += seconds;
-                Some(s.map_err(|e| e.to_string()))
-            }
-            _ => None,
+        let (nodal, memory, whole) = match &gathered {
+            Ok(values) => values.clone(),
+            Err(_) => (vec![[0.0; D]; self.piece.nodes.len()], None, None),
         };
-        let ready = listed
-            .and(gathered.as_ref().map(|_| ()).map_err(Clone::clone))
-            .and(match &stresses {
-                Some(Err(e)) => Err(e.clone()),
-                _ => Ok(()),
-            });
+        let stresses = wants_stress(&self.fields).then(|| {
+            let mut seconds = 0.0;
+            let s = timed(&mut seconds, || self.stresses(sim, &nodal, memory.as_deref()));
+            self.stress_seconds += seconds;
+            s.map_err(|e| e.to_string())
+        });
+        let ready = listed.and(gathered.map(|_| ())).and(match &stresses {
+            Some(Err(e)) => Err(e.clone()),
+            _ => Ok(()),
+        });
         agree(self.world, ready).map_err(SolveError::Setup)?;
-        let Ok((nodal, _, whole)) = gathered else {
-            unreachable!("agreed above")
-        };
         let stresses = stresses.and_then(Result::ok);
         // 3. Every rank writes its piece.
         let p = &self.piece;

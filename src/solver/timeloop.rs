@@ -862,18 +862,9 @@ impl<'s, const D: usize> Stepper<'s, D> {
     /// nothing is factorised.
     fn step_zero(&mut self, rhs: &mut [f64]) -> Result<Option<ContactOutcome>, SolveError> {
         let sim = self.sim;
-        let law_at_zero = sim.contact.as_ref().map_or(0.0, |c| {
-            (0..c.nodes.len())
-                .map(|p| c.laws.force(p, -c.gap.as_ref().map_or(0.0, |o| o[p])).abs())
-                .fold(0.0, f64::max)
-        });
-        let bound_ok = sim
-            .contact
-            .as_ref()
-            .is_none_or(|c| c.motion.is_none() && c.bound.as_ref().is_none_or(|g| g.iter().all(|v| *v >= 0.0)));
         let prescribed_zero = self.prescribed.as_ref().is_none_or(|g| g.iter().all(|v| *v == 0.0));
         let rhs_zero = !any(self.backend, rhs.iter().any(|v| *v != 0.0));
-        if rhs_zero && law_at_zero == 0.0 && bound_ok && prescribed_zero {
+        if zero_solves_step_zero(sim, rhs_zero, prescribed_zero) {
             let outcome = self.contact.as_mut().map(|s| {
                 let m = s.force.len();
                 *s = ContactState::new(m);
@@ -1000,6 +991,22 @@ fn lift<const D: usize>(
             *r = g.map_or(0.0, |g| g[d]);
         }
     }
+}
+
+/// True if u_0 = 0 solves step 0 exactly, so that K_A gets no factor of its own: no load
+/// (`rhs_zero`), no prescribed value (`prescribed_zero`), no fixed obstacle motion or negative
+/// bound, and a contact law that exerts no force at its origin.
+pub fn zero_solves_step_zero<const D: usize>(sim: &Simulation<D>, rhs_zero: bool, prescribed_zero: bool) -> bool {
+    let law_at_zero = sim.contact.as_ref().map_or(0.0, |c| {
+        (0..c.nodes.len())
+            .map(|p| c.laws.force(p, -c.gap.as_ref().map_or(0.0, |o| o[p])).abs())
+            .fold(0.0, f64::max)
+    });
+    let bound_ok = sim
+        .contact
+        .as_ref()
+        .is_none_or(|c| c.motion.is_none() && c.bound.as_ref().is_none_or(|g| g.iter().all(|v| *v >= 0.0)));
+    rhs_zero && law_at_zero == 0.0 && bound_ok && prescribed_zero
 }
 
 /// Runs the whole time series, handing every step to `sink`. `stop` is polled once per step.
