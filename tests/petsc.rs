@@ -551,3 +551,29 @@ fn check_prints_the_partition_and_the_memory_per_rank() {
     }
     assert!(text.contains("INFOG(16)"), "{text}");
 }
+
+/// output.active_scalar marks the same array in every piece and in the `.pvtu` as in a serial
+/// frame (ParaView colours the frame by it).
+#[test]
+fn the_active_scalar_is_marked_in_the_pieces_and_the_pvtu() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("run").display().to_string();
+    let args = [
+        "solve",
+        "meshes/rect_q1_h8.msh",
+        "--quiet",
+        "--backend",
+        "petsc",
+        "--out",
+        &d,
+        "--set",
+        "output.active_scalar=displacement",
+    ];
+    assert_ok(&mpirun(2, &args, &[]), "mpirun -np 2");
+    let read = |name: &str| std::fs::read_to_string(tmp.path().join("run").join(name)).unwrap();
+    assert!(read("solution_00004.pvtu").contains("<PPointData Scalars=\"displacement\""));
+    for piece in ["solution_00004_0.vtu", "solution_00004_1.vtu"] {
+        let text = String::from_utf8_lossy(&std::fs::read(tmp.path().join("run").join(piece)).unwrap()).into_owned();
+        assert!(text.contains("<PointData Scalars=\"displacement\""), "{piece}");
+    }
+}

@@ -11,7 +11,7 @@
 
 use super::agree;
 use super::partition::Partition;
-use crate::app::{body_fields, cell_groups, displacement_3, wants_stress, FileSink};
+use crate::app::{body_fields, cell_groups, displacement_3, mark_active, wants_stress, FileSink};
 use crate::fem::stress::{cell_measures, cell_stresses, nodal_stress_sums, nodal_stresses_from_sums};
 use crate::mesh::{Cell, GroupSelector};
 use crate::output::{Field, Frame, SeriesWriter, CELL_IDS, NODE_IDS};
@@ -116,6 +116,8 @@ pub(super) struct PieceSink<'a, const D: usize> {
     piece: Piece<D>,
     exchange: Exchange,
     fields: Vec<OutputField>,
+    /// `output.active_scalar` (None: von Mises, the first scalar).
+    active_scalar: Option<String>,
     pub stress_seconds: f64,
 }
 
@@ -170,8 +172,16 @@ impl<'a, const D: usize> PieceSink<'a, D> {
             piece,
             exchange: exchange.map_err(|e| SolveError::Setup(e.to_string()))?,
             fields: fields.to_vec(),
+            active_scalar: None,
             stress_seconds: 0.0,
         })
+    }
+
+    /// Marks the body's active scalars as a serial run does (`output.active_scalar`,
+    /// docs/method.md §12.3).
+    pub fn with_active_scalar(mut self, name: Option<&str>) -> Self {
+        self.active_scalar = name.map(str::to_string);
+        self
     }
 
     fn exchange(
@@ -318,6 +328,7 @@ impl<const D: usize> FrameSink<D> for PieceSink<'_, D> {
         let displacement = displacement_3(&nodal);
         let (mut point_fields, mut cell_fields) =
             body_fields(&self.fields, &displacement, stresses.as_ref(), &p.cell_groups);
+        mark_active(&mut point_fields, &mut cell_fields, self.active_scalar.as_deref());
         point_fields.push(Field::i32(NODE_IDS, 1, &p.node_ids));
         cell_fields.push(Field::i32(CELL_IDS, 1, &p.cell_ids));
         let frame = Frame {

@@ -326,7 +326,7 @@ fn run_dim<const D: usize>(
         scene.output.compression_level(),
         tables,
     );
-    let mut sink = sink?;
+    let mut sink = sink?.with_active_scalar(scene.output.active_scalar_name());
     let result = timeloop::run_with(&sim, &mut sink, stop, Some(&backend));
     if let Some(t) = &sink.tables {
         t.finish();

@@ -90,7 +90,9 @@ impl SeriesWriter {
 fn declare(text: &mut String, tag: &str, fields: &[Field]) {
     let _ = write!(text, "    <{tag}");
     for (attr, components) in [("Scalars", 1), ("Vectors", 3), ("Tensors", 9)] {
-        if let Some(f) = fields.iter().find(|f| f.components == components) {
+        // as a piece's header marks them (raw.rs): a field marked active, else the first
+        let marked = (attr == "Scalars").then(|| fields.iter().find(|f| f.active)).flatten();
+        if let Some(f) = marked.or_else(|| fields.iter().find(|f| f.components == components)) {
             let _ = write!(text, " {attr}=\"{}\"", xml_escape(f.name));
         }
     }
