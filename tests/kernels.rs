@@ -864,13 +864,11 @@ fn a_time_step_too_large_for_a_relaxing_material_is_refused_with_the_bound() {
     };
     let small = || rectangle(2.0, 1.0, 4, 2, CellShape::Quad);
     for steps in [1, 2, 3] {
-        let err = Simulation::new(&scene(&text(steps)), small())
-            .err()
-            .expect("refused")
-            .to_string();
+        let err = scene_error(&text(steps));
         assert_contains(
             &err,
             &[
+                "bad.toml",
                 &format!("`time.steps` = {steps}"),
                 "positive definite only for k < 3.33",
                 "time.steps ≥ 4",
@@ -880,6 +878,11 @@ fn a_time_step_too_large_for_a_relaxing_material_is_refused_with_the_bound() {
     let (_, stats, sink) = solve_in_memory(&scene(&text(4)), small()).unwrap();
     assert_eq!(stats.factorisations, 2);
     assert!(sink.steps.iter().all(|s| s.displacement.iter().all(|v| v.is_finite())));
+    // the same check guards a scene changed in code, which the set-up checks again
+    let mut changed = scene(&text(4));
+    changed.time.steps = 3;
+    let err = Simulation::new(&changed, small()).err().expect("refused").to_string();
+    assert_contains(&err, &["the scene's `time.steps` = 3", "time.steps ≥ 4"]);
     // 3D: the same bound (the shear modulus limits it in any dimension)
     let text3 = |steps: usize| {
         format!(
@@ -888,12 +891,17 @@ fn a_time_step_too_large_for_a_relaxing_material_is_refused_with_the_bound() {
             prescribed(&["Gamma1"], &["0", "0", "0"])
         )
     };
-    let err = Simulation::new(&scene(&text3(3)), block([1.0; 3], [1, 1, 1], SolidShape::Hex))
-        .err()
-        .expect("refused")
-        .to_string();
-    assert_contains(&err, &["time.steps ≥ 4"]);
+    assert_contains(&scene_error(&text3(3)), &["`time.steps` = 3", "time.steps ≥ 4"]);
     assert!(Simulation::new(&scene(&text3(4)), block([1.0; 3], [1, 1, 1], SolidShape::Hex)).is_ok());
+    // a kernel far too negative for any reasonable N says so
+    let huge = format!(
+        "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n{TIME}\
+         [memory]\nkind = \"exponential\"\nterms = [{{ coefficient = -1e12, relaxation_time = 1.0 }}]\n"
+    );
+    assert_contains(
+        &scene_error(&huge),
+        &["`time.steps` = 4", "more than 10⁸ time steps", "far too negative"],
+    );
 }
 
 /// The TOML examples of README "Viscoelastic memory" are valid scenes (with a `[time]` added)

@@ -3,6 +3,7 @@
 
 mod error;
 mod expr;
+mod material;
 mod overrides;
 mod types;
 mod validate;
@@ -11,6 +12,7 @@ pub use error::SceneError;
 pub use expr::{
     Expr, BINARY_FUNCTIONS, BODY_FORCE_VARIABLES, CONSTANTS, FUNCTIONS, KERNEL_VARIABLES, TRACTION_VARIABLES,
 };
+pub use material::MaterialError;
 pub use types::*;
 
 use std::path::Path;

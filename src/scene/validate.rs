@@ -173,7 +173,6 @@ fn invalid(origin: &str, key: &str, value: impl std::fmt::Display, fix: &str) ->
 /// Range checks of every value; expressions compile and are finite at a probe point.
 pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
     check_material(scene, origin)?;
-    check_plane_stress(scene, origin)?;
     let t = &scene.time;
     if !(t.final_time.is_finite() && t.final_time > 0.0) {
         return Err(invalid(
@@ -197,6 +196,7 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
     for (i, spec) in scene.memory.iter().enumerate() {
         check_memory(spec, origin, &scene.memory_key(i))?;
     }
+    check_memory_model(scene, origin)?;
     for (i, dc) in scene.dirichlet.iter().enumerate() {
         if dc.components.is_empty() {
             return Err(invalid(
@@ -510,53 +510,21 @@ fn check_material(scene: &Scene, origin: &str) -> Result<(), SceneError> {
     Ok(())
 }
 
-/// In plane stress a memory tensor with its own moduli has an isotropic 2D reduction only when
-/// it is proportional to A (docs/method.md §15.1); so has a relaxation modulus only when bulk
-/// and shear relax proportionally.
-fn check_plane_stress(scene: &Scene, origin: &str) -> Result<(), SceneError> {
-    use crate::material::{memory::proportional, Isotropic, Memory, PlaneModel, Prony};
-    if scene.material.plane != Some(super::Plane::Stress) {
-        return Ok(());
-    }
-    let m = &scene.material;
-    if let Some(r) = &m.relaxation_modulus {
-        let prony = |p: &super::PronySeriesSpec| Prony {
-            long_term: p.long_term,
-            terms: p.terms.iter().map(|t| (t.modulus, t.relaxation_time)).collect(),
-        };
-        return match Memory::from_relaxation_modulus(&prony(&r.bulk), &prony(&r.shear), Some(PlaneModel::Stress)) {
-            Ok(_) => Ok(()),
-            Err(e) => Err(invalid(
-                origin,
-                "material.relaxation_modulus",
-                "(bulk and shear terms)",
-                &format!("with material.plane = \"stress\": {e}"),
-            )),
-        };
-    }
-    let (Some(e), Some(nu)) = (m.youngs_modulus, m.poisson_ratio) else {
-        return Ok(());
-    };
-    let a3 = Isotropic {
-        lambda: e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
-        mu: e / (2.0 * (1.0 + nu)),
-    };
-    for (i, spec) in scene.memory.iter().enumerate() {
-        if let Some(TensorSpec::Moduli { bulk, shear }) = spec.tensor {
-            if proportional(Isotropic::from_moduli(bulk, shear), a3).is_none() {
-                return Err(invalid(
-                    origin,
-                    &format!("{}.tensor", scene.memory_key(i)),
-                    format!("{{ bulk = {bulk}, shear = {shear} }}"),
-                    &format!(
-                        "with material.plane = \"stress\" a tensor with its own moduli has no isotropic plane-stress \
-                         reduction unless it is proportional to A (bulk/shear = {:.6}, from E and ν); use \
-                         material.plane = \"strain\", or tensor = \"elasticity\" (B = A, the factor in the kernel)",
-                        (a3.lambda + 2.0 * a3.mu / 3.0) / a3.mu
-                    ),
-                ));
-            }
-        }
+/// The material as constitutive data (docs/method.md §15): in plane stress a tensor with its own
+/// moduli only when ∝ A (a relaxation modulus only when bulk and shear relax proportionally), and
+/// a time step within the bound a relaxing memory sets. The dimension is the scene's: 2 with
+/// `material.plane` (a 2D mesh requires it), 3 without.
+fn check_memory_model(scene: &Scene, origin: &str) -> Result<(), SceneError> {
+    use crate::material::PlaneModel;
+    let plane = scene.material.plane.map(|p| match p {
+        super::Plane::Stress => PlaneModel::Stress,
+        super::Plane::Strain => PlaneModel::Strain,
+    });
+    let bad = |e: super::MaterialError| invalid(origin, &e.key, e.value, &e.fix);
+    let (elasticity, memory) = scene.material_model(plane).map_err(bad)?;
+    if let Some(m) = memory {
+        let dim = if plane.is_some() { 2 } else { 3 };
+        scene.check_time_step(&m, elasticity.tensor(), dim).map_err(bad)?;
     }
     Ok(())
 }

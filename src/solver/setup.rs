@@ -6,7 +6,7 @@ use super::dirichlet::Dirichlet;
 use super::error::SolveError;
 use crate::fem::loads::Loads;
 use crate::fem::DofMap;
-use crate::material::{Elasticity, Memory, MemoryTensor, MemoryTerm, PlaneModel, Prony, RelaxationKernel};
+use crate::material::{Elasticity, Memory, PlaneModel};
 use crate::mesh::{GroupSelector, Mesh};
 use crate::scene::{self, Expr, Scene};
 
@@ -76,89 +76,6 @@ fn exprs<const D: usize>(
     Ok(out.try_into().unwrap_or_else(|_| unreachable!("D expressions")))
 }
 
-/// The elasticity A and the memory term of the scene's material: Young's modulus and
-/// Poisson's ratio with the `[memory]` terms, or a relaxation modulus (docs/method.md §15).
-fn memory_of(
-    scene: &Scene,
-    plane: Option<PlaneModel>,
-    origin: &str,
-) -> Result<(Elasticity, Option<Memory>), SolveError> {
-    let m = &scene.material;
-    if let Some(r) = &m.relaxation_modulus {
-        let prony = |p: &scene::PronySeriesSpec| Prony {
-            long_term: p.long_term,
-            terms: p.terms.iter().map(|t| (t.modulus, t.relaxation_time)).collect(),
-        };
-        return Memory::from_relaxation_modulus(&prony(&r.bulk), &prony(&r.shear), plane).map_err(|e| {
-            SolveError::Setup(format!(
-                "{origin}: material.relaxation_modulus with material.plane = \"stress\": {e}"
-            ))
-        });
-    }
-    // check_values has made sure both are given
-    let elasticity = Elasticity {
-        youngs_modulus: m.youngs_modulus.unwrap_or(f64::NAN),
-        poisson_ratio: m.poisson_ratio.unwrap_or(f64::NAN),
-        plane,
-    };
-    if scene.memory.is_empty() {
-        return Ok((elasticity, None));
-    }
-    let mut terms = Vec::with_capacity(scene.memory.len());
-    for (i, spec) in scene.memory.iter().enumerate() {
-        let kernel = match &spec.kernel {
-            scene::MemoryKernelSpec::Polynomial { coefficients } => RelaxationKernel::Polynomial {
-                coefficients: coefficients.clone(),
-            },
-            scene::MemoryKernelSpec::Exponential { terms } => RelaxationKernel::Exponentials {
-                terms: terms.iter().map(|t| (t.coefficient, t.relaxation_time)).collect(),
-            },
-            scene::MemoryKernelSpec::Expression { expression } => RelaxationKernel::General {
-                expression: Box::new(Expr::parse(expression, &scene::KERNEL_VARIABLES).map_err(|e| {
-                    SolveError::Setup(format!("{}.expression = \"{expression}\": {e}", scene.memory_key(i)))
-                })?),
-            },
-        };
-        let tensor = match spec.tensor {
-            None | Some(scene::TensorSpec::Identity) => MemoryTensor::Identity,
-            Some(scene::TensorSpec::Elasticity) => MemoryTensor::Elasticity,
-            Some(scene::TensorSpec::Moduli { bulk, shear }) => MemoryTensor::Moduli { bulk, shear },
-        };
-        terms.push(MemoryTerm { kernel, tensor });
-    }
-    let memory = Memory::new(terms, &elasticity)
-        .map_err(|(i, e)| SolveError::Setup(format!("{origin}: `{}.tensor` = {e}", scene.memory_key(i))))?;
-    Ok((elasticity, Some(memory)))
-}
-
-/// The step matrix K = K_A + Σ_j (k/2) b_j(0) K_{T_j} must be positive definite: with a negative
-/// b_j(0) (a relaxing material) that bounds the time step (docs/method.md §15.3). Checked on the
-/// tensors, before anything is assembled.
-fn check_step(memory: &Memory, elasticity: &Elasticity, dim: usize, scene: &Scene) -> Result<(), SolveError> {
-    let (t, n) = (scene.time.final_time, scene.time.steps);
-    let k = t / n as f64;
-    let Some(k_max) = memory.largest_stable_step(elasticity.tensor(), dim) else {
-        return Ok(());
-    };
-    if k < k_max {
-        return Ok(());
-    }
-    let n_min = (t / k_max).floor();
-    if !n_min.is_finite() || n_min >= 1e8 {
-        return Err(SolveError::Setup(format!(
-            "the scene's memory term makes the step matrix K = K_A + (k/2) Σ_j b_j(0) K_j positive definite only for \
-             k < {k_max:e}, which needs more than 10⁸ time steps: b(0) is far too negative for the material's A \
-             (a relaxing material has b(0) = G′(0), docs/method.md §15.3); check the memory's coefficients"
-        )));
-    }
-    let n_min = n_min as usize + 1;
-    Err(SolveError::Setup(format!(
-        "`time.steps` = {n}: the time step k = T/N = {k:e} is too large for this memory term: the step matrix \
-         K = K_A + (k/2) Σ_j b_j(0) K_j is positive definite only for k < {k_max:e} (b(0) < 0, a relaxing material; \
-         the bound keeps K's tensor at ≥ 10⁻⁶ of A's, docs/method.md §15.3); give time.steps ≥ {n_min}"
-    )))
-}
-
 impl<const D: usize> Simulation<D> {
     /// Whether the state of step 0 stands for every step (one solve for the run): no memory and
     /// nothing that changes in time — loads, prescribed values, a moving obstacle
@@ -193,9 +110,11 @@ impl<const D: usize> Simulation<D> {
             }
             (_, None) => None,
         };
-        let (elasticity, memory) = memory_of(scene, plane, &origin)?;
+        // the scene's checks have run these too (with D from material.plane), naming the file
+        let scene_error = |e: scene::MaterialError| SolveError::Setup(format!("the scene's {e}"));
+        let (elasticity, memory) = scene.material_model(plane).map_err(scene_error)?;
         if let Some(m) = &memory {
-            check_step(m, &elasticity, D, scene)?;
+            scene.check_time_step(m, elasticity.tensor(), D).map_err(scene_error)?;
         }
         let mut loads = Loads::new();
         for (i, t) in scene.traction.iter().enumerate() {
