@@ -747,6 +747,7 @@ fn wrong_types_name_the_line_and_the_key() {
             "steps = \"ten\"",
             vec![
                 "line 29",
+                "`time.steps`",
                 "steps = \"ten\"",
                 "invalid type: string \"ten\", expected usize",
             ],
@@ -754,29 +755,47 @@ fn wrong_types_name_the_line_and_the_key() {
         (
             "steps = 32",
             "steps = -3",
-            vec!["line 29", "steps = -3", "expected usize"],
+            vec!["line 29", "`time.steps`", "steps = -3", "expected usize"],
         ),
-        ("steps = 32", "steps = 3.5", vec!["line 29", "expected usize"]),
+        (
+            "steps = 32",
+            "steps = 3.5",
+            vec!["line 29", "`time.steps`", "expected usize"],
+        ),
         (
             "youngs_modulus = 1.0",
             "youngs_modulus = \"1\"",
-            vec!["line 18", "youngs_modulus = \"1\"", "expected f64"],
+            vec![
+                "line 18",
+                "`material.youngs_modulus`",
+                "youngs_modulus = \"1\"",
+                "expected f64",
+            ],
         ),
         (
             "plane = \"stress\"",
             "plane = \"stres\"",
-            vec!["line 17", "unknown variant `stres`, expected `stress` or `strain`"],
+            vec![
+                "line 17",
+                "`material.plane`",
+                "unknown variant `stres`, expected `stress` or `strain`",
+            ],
         ),
         (
             "kind = \"polynomial\"",
             "kind = \"polynomal\"",
-            vec!["line 22", "expected one of `polynomial`, `exponential`, `expression`"],
+            vec![
+                "line 22",
+                "`memory.kind`",
+                "expected one of `polynomial`, `exponential`, `expression`",
+            ],
         ),
         (
             "bound = 0.2",
             "bound = true",
             vec![
                 "line 44",
+                "`contact.bound`",
                 "bound = true",
                 "expected contact.bound: a number g ≥ 0 (bound = 0.2) or an expression of x, y, z in quotes",
             ],
@@ -784,17 +803,32 @@ fn wrong_types_name_the_line_and_the_key() {
         (
             "bound = 0.2",
             "bound = [0.2]",
-            vec!["line 44", "bound = [0.2]", "contact.bound: a number g ≥ 0"],
+            vec![
+                "line 44",
+                "`contact.bound`",
+                "bound = [0.2]",
+                "contact.bound: a number g ≥ 0",
+            ],
         ),
         (
             "\"von_mises\",",
             "\"speed\",",
-            vec!["line 62", "unknown variant `speed`", "`von_mises`"],
+            vec![
+                "line 62",
+                "`output.fields[2]`",
+                "unknown variant `speed`",
+                "`von_mises`",
+            ],
         ),
         (
             "value = [\"0\", \"-0.1*(1 - exp(-2*t))*x*ny\"]",
             "value = [0, 1]",
-            vec!["line 35", "value = [0, 1]", "expected a string"],
+            vec![
+                "line 35",
+                "`traction[0].value[0]`",
+                "value = [0, 1]",
+                "expected a string",
+            ],
         ),
         ("steps = 32", "steps = = 32", vec!["TOML syntax error", "line 29"]),
     ] {

@@ -85,3 +85,58 @@ fn contact_nodes_that_can_never_touch_are_named() {
     );
     assert!(never.iter().any(|l| l.contains("never meet")), "{never:?}");
 }
+
+/// The paper's scene with its one `[contact]` table written as `copies` `[[contact]]` sections on
+/// Gamma3, the law's scale `scale` in each.
+fn paper_with_contact_sections(copies: usize, scale: f64) -> String {
+    let paper = hvi::scene::DEFAULT_SCENE_TOML;
+    let start = paper
+        .find("[contact]\n")
+        .expect("the paper scene has a [contact] table");
+    let end = paper.find("[solver]").expect("the paper scene has a [solver] table");
+    let section = paper[start..end]
+        .replacen("[contact]\n", "[[contact]]\ngroup = \"Gamma3\"\n", 1)
+        .replace("scale = 0.1 ", &format!("scale = {scale} "));
+    assert!(section.contains(&format!("scale = {scale} ")), "{section}");
+    let head = paper[..start].replace("contact = \"Gamma3\"", "");
+    format!("{head}{}{}", section.repeat(copies), &paper[end..])
+}
+
+#[test]
+fn two_sections_on_one_contact_group_are_named_and_their_laws_add_up() {
+    let w = warnings("rect_q1_h16.msh", Some(&paper_with_contact_sections(2, 0.1)), &[]);
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].contains("sections 0 and 1") && w[0].contains("Gamma3"), "{w:?}");
+    assert!(warnings("rect_q1_h16.msh", Some(&paper_with_contact_sections(1, 0.1)), &[]).is_empty());
+    // what the warning says: the two laws act together, as one section with twice the scale
+    // (the paper's law is linear in its scale; both runs are solved to the same 1e-10
+    // complementarity tolerance, so they agree to about that, relative)
+    let solve = |text: &str| {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("scene.toml");
+        std::fs::write(&path, text).unwrap();
+        let scene = hvi::scene::Scene::load(Some(&path), &[]).unwrap();
+        let mesh = match hvi::app::read_mesh(&mesh("rect_q1_h16.msh")).unwrap() {
+            hvi::mesh::AnyMesh::Two(m) => m,
+            _ => unreachable!("a 2D mesh"),
+        };
+        let (_, _, sink) = hvi::app::solve_in_memory(&scene, mesh).unwrap();
+        sink.steps.last().unwrap().displacement.clone()
+    };
+    let twice = solve(&paper_with_contact_sections(2, 0.1));
+    let doubled = solve(&paper_with_contact_sections(1, 0.2));
+    let once = solve(&paper_with_contact_sections(1, 0.1));
+    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let diff = |a: &[f64], b: &[f64]| norm(&a.iter().zip(b).map(|(x, y)| x - y).collect::<Vec<_>>());
+    assert!(
+        diff(&twice, &doubled) <= 1e-8 * norm(&doubled),
+        "{}",
+        diff(&twice, &doubled) / norm(&doubled)
+    );
+    // and the law matters here: doubling it changes the solution far beyond that
+    assert!(
+        diff(&once, &doubled) > 1e-4 * norm(&doubled),
+        "{}",
+        diff(&once, &doubled) / norm(&doubled)
+    );
+}

@@ -68,14 +68,23 @@ impl Scene {
                 message: e.to_string(),
             })?
         };
-        let mut scene: Scene = toml::from_str(&effective).map_err(|e: toml::de::Error| SceneError::Type {
-            origin: if overrides.is_empty() {
-                origin.into()
-            } else {
-                format!("{origin} (after --set {})", overrides.join(" --set "))
-            },
-            key: "scene".into(),
-            message: e.to_string(),
+        // serde_path_to_error tracks the dotted key (`contact[1].law.scale`) that toml's own
+        // error does not name; toml's message keeps the line, the column and the caret.
+        let mut scene: Scene = serde_path_to_error::deserialize(toml::Deserializer::new(&effective)).map_err(|e| {
+            let path = e.path().to_string();
+            SceneError::Type {
+                origin: if overrides.is_empty() {
+                    origin.into()
+                } else {
+                    format!("{origin} (after --set {})", overrides.join(" --set "))
+                },
+                key: if path.is_empty() || path == "." {
+                    "scene".into()
+                } else {
+                    path
+                },
+                message: e.into_inner().to_string(),
+            }
         })?;
         scene.read_tables(origin, dir)?;
         validate::check_values(&scene, origin)?;

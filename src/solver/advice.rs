@@ -36,6 +36,19 @@ pub fn warnings<const D: usize>(scene: &Scene, sim: &Simulation<D>) -> Vec<Strin
         return out;
     };
     let diameter = body_diameter(&sim.mesh.points);
+    // two sections on one group: their rows are merged per wall (§14.3), so the laws add up and
+    // the stricter bound wins; meant for one group meeting two obstacles, a slip if repeated
+    for (j, tag) in c.group_tags.iter().enumerate() {
+        if let Some(i) = c.group_tags[..j].iter().position(|t| t == tag) {
+            out.push(format!(
+                "[[contact]] sections {i} and {j} both name group `{}`: at every node their walls are merged \
+                 where they lie within 45° (the stricter bound wins and both laws act, each with the node's full \
+                 weight, so a repeated section doubles the law's force) and kept apart where they do not \
+                 (docs/method.md §14.3); unless the group really meets two obstacles, give it one section",
+                c.groups[j]
+            ));
+        }
+    }
     for (i, spec) in scene.contact.iter().enumerate() {
         let group = c.groups.get(i).cloned().unwrap_or_else(|| format!("#{i}"));
         let rows: Vec<usize> = (0..c.row_group.len()).filter(|&p| c.row_group[p] == i).collect();
