@@ -3,26 +3,26 @@
 //!
 //! [`Locator`] puts the cells of a mesh into a uniform bucket grid over their bounding boxes,
 //! once; [`Locator::locate`] then finds the cell holding a point and its reference
-//! coordinates (barycentric for P1, Newton on the bilinear map for Q1). [`Transfer`] keeps
+//! coordinates (barycentric for P1, Newton on the bi- or trilinear map for Q1), in 2D and 3D. [`Transfer`] keeps
 //! the located weights for a fixed set of target points, so that many fields (one per output
 //! time) are carried at the cost of a sparse product each.
 //!
 //! Carrying is nodal interpolation: exact for nested meshes (a coarse Q1/P1 field is itself
 //! in the fine space) and for linear fields on any meshes.
 
-use crate::fem::element::{shape_at, MAX_NODES};
+use crate::fem::element::{invert, reference, shape_at, MAX_NODES};
 use crate::mesh::{Cell, Mesh};
 
 /// Relative tolerance (of the mesh diameter) for points on or just outside the boundary.
 pub const OUTSIDE_TOLERANCE: f64 = 1e-10;
 
-/// A bucket grid over the cells of one mesh, for point location.
-pub struct Locator<'m> {
+/// A bucket grid over the cells of one mesh (2D or 3D), for point location.
+pub struct Locator<'m, const D: usize = 2> {
     cells: &'m [Cell],
-    points: &'m [[f64; 2]],
-    origin: [f64; 2],
-    bucket: [f64; 2],
-    dims: [usize; 2],
+    points: &'m [[f64; D]],
+    origin: [f64; D],
+    bucket: [f64; D],
+    dims: [usize; D],
     /// CSR: cells of bucket b are `items[start[b]..start[b + 1]]`.
     start: Vec<usize>,
     items: Vec<u32>,
@@ -30,60 +30,78 @@ pub struct Locator<'m> {
     tolerance: f64,
 }
 
-impl<'m> Locator<'m> {
+impl<'m, const D: usize> Locator<'m, D> {
     /// Builds the bucket grid of `mesh` (about one cell per bucket).
-    pub fn new(mesh: &'m Mesh) -> Self {
+    pub fn new(mesh: &'m Mesh<D>) -> Self {
         Self::from_parts(&mesh.cells, &mesh.points)
     }
 
     /// Builds the bucket grid of the given cells and points.
-    pub fn from_parts(cells: &'m [Cell], points: &'m [[f64; 2]]) -> Self {
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    pub fn from_parts(cells: &'m [Cell], points: &'m [[f64; D]]) -> Self {
+        let (mut lo, mut hi) = ([f64::INFINITY; D], [f64::NEG_INFINITY; D]);
         for c in cells {
             for &p in c.nodes() {
-                for d in 0..2 {
+                for d in 0..D {
                     lo[d] = lo[d].min(points[p][d]);
                     hi[d] = hi[d].max(points[p][d]);
                 }
             }
         }
         if cells.is_empty() {
-            (lo, hi) = ([0.0; 2], [0.0; 2]);
+            (lo, hi) = ([0.0; D], [0.0; D]);
         }
-        let diam = ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2)).sqrt();
+        let diam = (0..D).map(|d| (hi[d] - lo[d]).powi(2)).sum::<f64>().sqrt();
         let tolerance = OUTSIDE_TOLERANCE * diam;
         let pad = 2.0 * tolerance + f64::MIN_POSITIVE;
-        let ext = [
-            (hi[0] - lo[0]).max(diam * 1e-6) + 2.0 * pad,
-            (hi[1] - lo[1]).max(diam * 1e-6) + 2.0 * pad,
-        ];
-        let origin = [lo[0] - pad, lo[1] - pad];
-        // about one cell per bucket, buckets as square as the box allows
+        let ext: [f64; D] = std::array::from_fn(|d| (hi[d] - lo[d]).max(diam * 1e-6) + 2.0 * pad);
+        let origin: [f64; D] = std::array::from_fn(|d| lo[d] - pad);
+        // about one cell per bucket, buckets as square as the box allows; at most about 4·10⁶
+        // buckets (2048 per side in 2D, 160 in 3D)
         let n = cells.len().max(1) as f64;
-        let side = (ext[0] * ext[1] / n).sqrt().max(f64::MIN_POSITIVE);
-        let dims = [
-            ((ext[0] / side).ceil() as usize).clamp(1, 2048),
-            ((ext[1] / side).ceil() as usize).clamp(1, 2048),
-        ];
-        let bucket = [ext[0] / dims[0] as f64, ext[1] / dims[1] as f64];
+        let per_cell = ext.iter().product::<f64>() / n;
+        let side = if D == 2 { per_cell.sqrt() } else { per_cell.cbrt() }.max(f64::MIN_POSITIVE);
+        let limit = if D == 2 { 2048 } else { 160 };
+        let dims: [usize; D] = std::array::from_fn(|d| ((ext[d] / side).ceil() as usize).clamp(1, limit));
+        let bucket: [f64; D] = std::array::from_fn(|d| ext[d] / dims[d] as f64);
         let range = |c: &Cell| {
-            let (mut a, mut b) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            let (mut a, mut b) = ([f64::INFINITY; D], [f64::NEG_INFINITY; D]);
             for &p in c.nodes() {
-                for d in 0..2 {
+                for d in 0..D {
                     a[d] = a[d].min(points[p][d] - pad);
                     b[d] = b[d].max(points[p][d] + pad);
                 }
             }
             let i = |v: f64, d: usize| (((v - origin[d]) / bucket[d]).floor().max(0.0) as usize).min(dims[d] - 1);
-            ([i(a[0], 0), i(a[1], 1)], [i(b[0], 0), i(b[1], 1)])
+            (
+                std::array::from_fn::<usize, D, _>(|d| i(a[d], d)),
+                std::array::from_fn::<usize, D, _>(|d| i(b[d], d)),
+            )
         };
-        let mut count = vec![0usize; dims[0] * dims[1] + 1];
+        // the buckets of the index box [a, b] (first axis fastest)
+        let buckets = |a: [usize; D], b: [usize; D]| {
+            let mut out = Vec::new();
+            let mut idx = a;
+            loop {
+                out.push(flat(&dims, &idx));
+                let mut d = 0;
+                loop {
+                    if d == D {
+                        return out;
+                    }
+                    if idx[d] < b[d] {
+                        idx[d] += 1;
+                        break;
+                    }
+                    idx[d] = a[d];
+                    d += 1;
+                }
+            }
+        };
+        let mut count = vec![0usize; dims.iter().product::<usize>() + 1];
         for c in cells {
             let (a, b) = range(c);
-            for j in a[1]..=b[1] {
-                for i in a[0]..=b[0] {
-                    count[j * dims[0] + i + 1] += 1;
-                }
+            for k in buckets(a, b) {
+                count[k + 1] += 1;
             }
         }
         for b in 1..count.len() {
@@ -93,12 +111,10 @@ impl<'m> Locator<'m> {
         let mut items = vec![0u32; *count.last().unwrap_or(&0)];
         for (k, c) in cells.iter().enumerate() {
             let (a, b) = range(c);
-            for j in a[1]..=b[1] {
-                for i in a[0]..=b[0] {
-                    let slot = &mut count[j * dims[0] + i];
-                    items[*slot] = k as u32;
-                    *slot += 1;
-                }
+            for j in buckets(a, b) {
+                let slot = &mut count[j];
+                items[*slot] = k as u32;
+                *slot += 1;
             }
         }
         Locator {
@@ -118,10 +134,10 @@ impl<'m> Locator<'m> {
         self.tolerance
     }
 
-    /// The cell holding `x` and the reference coordinates of `x` in it (P1: (ξ, η) with
-    /// barycentrics (1 − ξ − η, ξ, η); Q1: (ξ, η) ∈ [−1, 1]²), or None if `x` is outside
-    /// the mesh by more than [`Locator::tolerance`].
-    pub fn locate(&self, x: [f64; 2]) -> Option<(usize, [f64; 2])> {
+    /// The cell holding `x` and the reference coordinates of `x` in it (P1: barycentrics
+    /// (1 − Σξ, ξ₁, …); Q1: ξ ∈ [−1, 1]^D; 3 components, the unused ones 0), or None if `x` is
+    /// outside the mesh by more than [`Locator::tolerance`].
+    pub fn locate(&self, x: [f64; D]) -> Option<(usize, [f64; 3])> {
         self.locate_with_distance(x)
             .filter(|&(_, _, d)| d <= self.tolerance)
             .map(|(c, xi, _)| (c, xi))
@@ -129,17 +145,17 @@ impl<'m> Locator<'m> {
 
     /// Like [`Locator::locate`], but returns the best candidate whatever its distance,
     /// with that distance (None only if no cell's bucket covers `x`).
-    pub fn locate_with_distance(&self, x: [f64; 2]) -> Option<(usize, [f64; 2], f64)> {
-        let mut idx = [0usize; 2];
-        for d in 0..2 {
+    pub fn locate_with_distance(&self, x: [f64; D]) -> Option<(usize, [f64; 3], f64)> {
+        let mut idx = [0usize; D];
+        for d in 0..D {
             let f = (x[d] - self.origin[d]) / self.bucket[d];
             if !(f >= 0.0 && f < self.dims[d] as f64) {
                 return None;
             }
             idx[d] = f as usize;
         }
-        let b = idx[1] * self.dims[0] + idx[0];
-        let mut best: Option<(usize, [f64; 2], f64)> = None;
+        let b = flat(&self.dims, &idx);
+        let mut best: Option<(usize, [f64; 3], f64)> = None;
         for &k in &self.items[self.start[b]..self.start[b + 1]] {
             let k = k as usize;
             let (xi, dist) = reference_coordinates(&self.cells[k], self.points, x);
@@ -154,12 +170,12 @@ impl<'m> Locator<'m> {
     }
 
     /// Locates every point once, for carrying many fields to the same points.
-    pub fn transfer(&self, to_points: &[[f64; 2]]) -> Result<Transfer, String> {
+    pub fn transfer(&self, to_points: &[[f64; D]]) -> Result<Transfer, String> {
         let mut weights = Vec::with_capacity(to_points.len());
         for &x in to_points {
             let (c, xi) = self.locate(x).ok_or_else(|| self.outside_message(x))?;
             let cell = &self.cells[c];
-            let s = shape_at(cell, self.points, [xi[0], xi[1], 0.0]);
+            let s = shape_at(cell, self.points, xi);
             let mut nodes = [0usize; MAX_NODES];
             let mut w = [0.0; MAX_NODES];
             nodes[..s.n].copy_from_slice(&cell.nodes()[..s.n]);
@@ -172,18 +188,21 @@ impl<'m> Locator<'m> {
         })
     }
 
-    fn outside_message(&self, x: [f64; 2]) -> String {
+    fn outside_message(&self, x: [f64; D]) -> String {
+        let at = x.iter().map(|v| format!("{v:.17e}")).collect::<Vec<_>>().join(", ");
         match self.locate_with_distance(x) {
             Some((_, _, d)) => format!(
-                "point ({:.17e}, {:.17e}) lies outside the mesh: {:.3e} from the nearest cell (tolerance {:.3e})",
-                x[0], x[1], d, self.tolerance
+                "point ({at}) lies outside the mesh: {d:.3e} from the nearest cell (tolerance {:.3e})",
+                self.tolerance
             ),
-            None => format!(
-                "point ({:.17e}, {:.17e}) lies outside the bounding box of the mesh",
-                x[0], x[1]
-            ),
+            None => format!("point ({at}) lies outside the bounding box of the mesh"),
         }
     }
+}
+
+/// The flat index of a bucket (first axis fastest).
+fn flat<const D: usize>(dims: &[usize; D], idx: &[usize; D]) -> usize {
+    (0..D).rev().fold(0, |acc, d| acc * dims[d] + idx[d])
 }
 
 /// Interpolation weights from the nodes of one mesh to a fixed list of points.
@@ -204,7 +223,7 @@ impl Transfer {
     }
 
     /// Evaluates the nodal field `u` (on the source mesh) at the target points.
-    pub fn apply(&self, u: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    pub fn apply<const D: usize>(&self, u: &[[f64; D]]) -> Vec<[f64; D]> {
         assert_eq!(
             u.len(),
             self.n_from,
@@ -215,10 +234,11 @@ impl Transfer {
         self.weights
             .iter()
             .map(|(n, nodes, w)| {
-                let mut v = [0.0; 2];
+                let mut v = [0.0; D];
                 for a in 0..*n as usize {
-                    v[0] += w[a] * u[nodes[a]][0];
-                    v[1] += w[a] * u[nodes[a]][1];
+                    for (d, vd) in v.iter_mut().enumerate() {
+                        *vd += w[a] * u[nodes[a]][d];
+                    }
                 }
                 v
             })
@@ -228,7 +248,11 @@ impl Transfer {
 
 /// Evaluates the FE field `u` (nodal values on `from`) at each of `to_points`. A point outside
 /// `from` by more than 1e-10 × its diameter is an error naming the point.
-pub fn interpolate_nodal(from: &Mesh, u: &[[f64; 2]], to_points: &[[f64; 2]]) -> Result<Vec<[f64; 2]>, String> {
+pub fn interpolate_nodal<const D: usize>(
+    from: &Mesh<D>,
+    u: &[[f64; D]],
+    to_points: &[[f64; D]],
+) -> Result<Vec<[f64; D]>, String> {
     if u.len() != from.points.len() {
         return Err(format!(
             "field has {} nodal values, the mesh {} nodes",
@@ -239,15 +263,110 @@ pub fn interpolate_nodal(from: &Mesh, u: &[[f64; 2]], to_points: &[[f64; 2]]) ->
     Ok(Locator::new(from).transfer(to_points)?.apply(u))
 }
 
-/// Reference coordinates of `x` in `cell` and the physical distance from `x` to the cell
-/// (0 inside; for P1 the largest signed distance to an edge line, for Q1 the distance to the
-/// quadrilateral, whose edges are straight). Outside the cell the reference coordinates
-/// extrapolate the map (exactly for P1; for Q1 Newton's last iterate, meaningful only close
-/// to the cell).
-pub fn reference_coordinates(cell: &Cell, points: &[[f64; 2]], x: [f64; 2]) -> ([f64; 2], f64) {
+/// Reference coordinates of `x` in `cell` (3 components, the unused ones 0) and the physical
+/// distance from `x` to the cell (0 inside). 2D cells: [`planar_coordinates`]; 3D cells:
+/// [`solid_coordinates`].
+pub fn reference_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x: [f64; D]) -> ([f64; 3], f64) {
+    match cell {
+        Cell::Tri3(_) | Cell::Quad4(_) => {
+            let (xi, dist) = planar_coordinates(cell, &|p| [points[p][0], points[p][1]], [x[0], x[1]]);
+            ([xi[0], xi[1], 0.0], dist)
+        }
+        Cell::Tet4(_) | Cell::Hex8(_) => solid_coordinates(cell, points, x),
+    }
+}
+
+/// [`reference_coordinates`] of a tetrahedron or a hexahedron: Newton on the (affine or
+/// trilinear) map from the cell's centre. The distance: for P1 the largest signed distance to a
+/// face plane (−λ_i / |∇λ_i|); for Q1 0 when ξ ∈ [−1, 1]³, else |x − x(clamp ξ)| (an upper
+/// bound, exact in the direction of one face); far from the cell (farther than half its size
+/// from its bounding box) the distance to that box, without coordinates.
+pub fn solid_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x: [f64; D]) -> ([f64; 3], f64) {
+    let nodes = cell.nodes();
+    let (mut lo, mut hi) = ([f64::INFINITY; D], [f64::NEG_INFINITY; D]);
+    for &p in nodes {
+        for d in 0..D {
+            lo[d] = lo[d].min(points[p][d]);
+            hi[d] = hi[d].max(points[p][d]);
+        }
+    }
+    let size = (0..D).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
+    let outside_box = (0..D)
+        .map(|d| (lo[d] - x[d]).max(x[d] - hi[d]).max(0.0).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    if outside_box > 0.5 * size {
+        return ([f64::NAN; 3], outside_box);
+    }
+    let simplex = matches!(cell, Cell::Tet4(_));
+    let map = |xi: [f64; 3]| {
+        let (n, v, g) = reference(cell, xi);
+        let (mut y, mut j) = ([0.0; D], [[0.0; D]; D]);
+        for a in 0..n {
+            let p = points[nodes[a]];
+            for r in 0..D {
+                y[r] += v[a] * p[r];
+                for c in 0..D {
+                    j[r][c] += p[r] * g[a][c];
+                }
+            }
+        }
+        (y, j)
+    };
+    let mut xi = if simplex { [0.25; 3] } else { [0.0; 3] };
+    for _ in 0..50 {
+        let (y, j) = map(xi);
+        let (inv, det) = invert(&j);
+        if det.abs() <= f64::MIN_POSITIVE {
+            break;
+        }
+        let r: [f64; D] = std::array::from_fn(|k| x[k] - y[k]);
+        let d: [f64; D] = std::array::from_fn(|k| (0..D).map(|c| inv[k][c] * r[c]).sum());
+        if d.iter().any(|v| !v.is_finite()) {
+            return ([0.0; 3], f64::INFINITY);
+        }
+        let mut step = 0.0;
+        for k in 0..D {
+            // keep far-away iterates bounded (the point is outside then anyway)
+            xi[k] = (xi[k] + d[k]).clamp(-1e3, 1e3);
+            step += d[k].abs();
+        }
+        if step <= 1e-15 {
+            break;
+        }
+    }
+    let (y, _) = map(xi);
+    let residual = (0..D).map(|k| (x[k] - y[k]).powi(2)).sum::<f64>().sqrt();
+    if residual > 1e-10 * size {
+        // Newton failed (a degenerate cell): unusable
+        return (xi, f64::INFINITY);
+    }
+    let dist = if simplex {
+        let s = shape_at(cell, points, xi);
+        (0..4)
+            .map(|a| {
+                let g = s.grad[a].iter().map(|v| v * v).sum::<f64>().sqrt();
+                -s.value[a] / g
+            })
+            .fold(0.0, f64::max)
+    } else if xi.iter().all(|v| v.abs() <= 1.0) {
+        0.0
+    } else {
+        let (y, _) = map(xi.map(|v| v.clamp(-1.0, 1.0)));
+        (0..D).map(|k| (x[k] - y[k]).powi(2)).sum::<f64>().sqrt()
+    };
+    (xi, dist)
+}
+
+/// Reference coordinates of `x` in a triangle or quadrilateral `cell` (`point(p)`: the
+/// coordinates of node p) and the physical distance from `x` to the cell (0 inside; for P1 the
+/// largest signed distance to an edge line, for Q1 the distance to the quadrilateral, whose
+/// edges are straight). Outside the cell the reference coordinates extrapolate the map
+/// (exactly for P1; for Q1 Newton's last iterate, meaningful only close to the cell).
+fn planar_coordinates(cell: &Cell, point: &dyn Fn(usize) -> [f64; 2], x: [f64; 2]) -> ([f64; 2], f64) {
     match cell {
         Cell::Tri3(n) => {
-            let (a, b, c) = (points[n[0]], points[n[1]], points[n[2]]);
+            let (a, b, c) = (point(n[0]), point(n[1]), point(n[2]));
             let (e1, e2) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
             let det = e1[0] * e2[1] - e1[1] * e2[0];
             let r = [x[0] - a[0], x[1] - a[1]];
@@ -260,7 +379,7 @@ pub fn reference_coordinates(cell: &Cell, points: &[[f64; 2]], x: [f64; 2]) -> (
             (xi, dist)
         }
         Cell::Quad4(n) => {
-            let p = [points[n[0]], points[n[1]], points[n[2]], points[n[3]]];
+            let p = [point(n[0]), point(n[1]), point(n[2]), point(n[3])];
             let map = |xi: [f64; 2]| {
                 const C: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
                 let mut y = [0.0; 2];
@@ -322,8 +441,7 @@ pub fn reference_coordinates(cell: &Cell, points: &[[f64; 2]], x: [f64; 2]) -> (
             }
             (xi, dist)
         }
-        // The interpolation between meshes of a study is 2D (3D cells never reach it).
-        Cell::Tet4(_) | Cell::Hex8(_) => ([0.0; 2], f64::INFINITY),
+        Cell::Tet4(_) | Cell::Hex8(_) => unreachable!("3D cells take solid_coordinates"),
     }
 }
 

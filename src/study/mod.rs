@@ -44,7 +44,7 @@ use crate::mesh::Mesh;
 
 /// The H¹ seminorm and L² norm of `u_ref − u_carried`, two nodal fields on the reference
 /// mesh (the carried one typically from [`interpolate_nodal`]).
-pub fn seminorm_errors(reference: &Mesh, u_ref: &[[f64; 2]], u_carried: &[[f64; 2]]) -> FieldErrors {
+pub fn seminorm_errors<const D: usize>(reference: &Mesh<D>, u_ref: &[[f64; D]], u_carried: &[[f64; D]]) -> FieldErrors {
     assert_eq!(
         u_ref.len(),
         reference.points.len(),
@@ -55,12 +55,12 @@ pub fn seminorm_errors(reference: &Mesh, u_ref: &[[f64; 2]], u_carried: &[[f64; 
         reference.points.len(),
         "carried field and reference mesh differ in size"
     );
-    let difference: Vec<[f64; 2]> = u_ref
+    let difference: Vec<[f64; D]> = u_ref
         .iter()
         .zip(u_carried)
-        .map(|(a, b)| [a[0] - b[0], a[1] - b[1]])
+        .map(|(a, b)| std::array::from_fn(|d| a[d] - b[d]))
         .collect();
     errors(&reference.cells, &reference.points, &difference, |_| {
-        ([0.0; 2], [[0.0; 2]; 2])
+        ([0.0; D], [[0.0; D]; D])
     })
 }

@@ -30,7 +30,7 @@ pub enum Keep {
 }
 
 impl Keep {
-    fn wants(&self, sim: &Simulation, n: usize, t: f64) -> bool {
+    fn wants<const D: usize>(&self, sim: &Simulation<D>, n: usize, t: f64) -> bool {
         let tol = 1e-9 * sim.time.final_time.abs().max(1.0);
         match self {
             Keep::Output => sim.is_output_step(n),
@@ -66,7 +66,7 @@ impl RunOptions {
 }
 
 /// One solved run, with what a study compares and reports.
-pub struct RunRecord {
+pub struct RunRecord<const D: usize = 2> {
     pub label: String,
     /// Mesh size (the longest cell edge unless set by [`RunOptions::h`]).
     pub h: f64,
@@ -77,9 +77,9 @@ pub struct RunRecord {
     pub nodes: usize,
     pub unknowns: usize,
     /// Nodal displacement at T (zero on Γ₁).
-    pub final_displacement: Vec<[f64; 2]>,
+    pub final_displacement: Vec<[f64; D]>,
     /// Nodal displacements at the kept times (see [`Keep`]), in time order.
-    pub displacement_at: Vec<(f64, Vec<[f64; 2]>)>,
+    pub displacement_at: Vec<(f64, Vec<[f64; D]>)>,
     pub phases: PhaseTimes,
     /// Wall time of setup and time loop, seconds.
     pub wall: f64,
@@ -88,10 +88,10 @@ pub struct RunRecord {
     /// Peak resident memory of the process during the run (VmHWM, reset before the run where
     /// the kernel allows; it includes whatever the process already held).
     pub peak_rss_bytes: Option<u64>,
-    pub mesh: Mesh,
+    pub mesh: Mesh<D>,
 }
 
-impl RunRecord {
+impl<const D: usize> RunRecord<D> {
     /// The run without its fields and mesh (what reports need).
     pub fn summary(&self) -> RunSummary {
         RunSummary {
@@ -132,14 +132,14 @@ impl RunSummary {
     }
 }
 
-struct KeepSink<'a> {
+struct KeepSink<'a, const D: usize> {
     keep: &'a Keep,
-    kept: Vec<(f64, Vec<[f64; 2]>)>,
-    last: Option<Vec<[f64; 2]>>,
+    kept: Vec<(f64, Vec<[f64; D]>)>,
+    last: Option<Vec<[f64; D]>>,
 }
 
-impl FrameSink<2> for KeepSink<'_> {
-    fn step_done(&mut self, sim: &Simulation, view: &StepView) {
+impl<const D: usize> FrameSink<D> for KeepSink<'_, D> {
+    fn step_done(&mut self, sim: &Simulation<D>, view: &StepView) {
         let last = view.step == sim.time.steps;
         let wanted = self.keep.wants(sim, view.step, view.time);
         if wanted || last {
@@ -153,18 +153,22 @@ impl FrameSink<2> for KeepSink<'_> {
         }
     }
 
-    fn write_frame(&mut self, _sim: &Simulation, _view: &StepView) -> Result<(), SolveError> {
+    fn write_frame(&mut self, _sim: &Simulation<D>, _view: &StepView) -> Result<(), SolveError> {
         Ok(())
     }
 }
 
 /// Solves `scene` on `mesh`, keeping the output steps.
-pub fn run(mesh: Mesh, scene: &Scene, label: impl Into<String>) -> Result<RunRecord, SolveError> {
+pub fn run<const D: usize>(mesh: Mesh<D>, scene: &Scene, label: impl Into<String>) -> Result<RunRecord<D>, SolveError> {
     run_with(mesh, scene, &RunOptions::new(label))
 }
 
 /// Solves `scene` on `mesh` with the given options.
-pub fn run_with(mesh: Mesh, scene: &Scene, options: &RunOptions) -> Result<RunRecord, SolveError> {
+pub fn run_with<const D: usize>(
+    mesh: Mesh<D>,
+    scene: &Scene,
+    options: &RunOptions,
+) -> Result<RunRecord<D>, SolveError> {
     reset_peak_rss();
     let started = Instant::now();
     let h = options.h.unwrap_or_else(|| longest_edge(&mesh));
@@ -199,13 +203,13 @@ pub fn run_with(mesh: Mesh, scene: &Scene, options: &RunOptions) -> Result<RunRe
 }
 
 /// The longest cell edge of a mesh.
-pub fn longest_edge(mesh: &Mesh) -> f64 {
+pub fn longest_edge<const D: usize>(mesh: &Mesh<D>) -> f64 {
     mesh.cells
         .iter()
         .flat_map(|c| c.edges())
         .map(|[a, b]| {
             let (p, q) = (mesh.points[a], mesh.points[b]);
-            ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt()
+            (0..D).map(|d| (q[d] - p[d]).powi(2)).sum::<f64>().sqrt()
         })
         .fold(0.0, f64::max)
 }
@@ -220,15 +224,15 @@ pub fn reset_peak_rss() {
     let _ = std::fs::write("/proc/self/clear_refs", "5");
 }
 
-/// An exact displacement field: (t, x) ↦ (u, ∇u), ∇u = [[∂u₁/∂x, ∂u₁/∂y], [∂u₂/∂x, ∂u₂/∂y]].
-pub type ExactField = Box<dyn Fn(f64, [f64; 2]) -> ([f64; 2], [[f64; 2]; 2])>;
+/// An exact displacement field: (t, x) ↦ (u, ∇u), (∇u)_ij = ∂u_i/∂x_j.
+pub type ExactField<const D: usize = 2> = Box<dyn Fn(f64, [f64; D]) -> ([f64; D], [[f64; D]; D])>;
 
 /// What the runs of a study are compared with.
-pub enum Reference {
+pub enum Reference<const D: usize = 2> {
     /// A (finer) run: coarse fields are carried to its mesh by nodal interpolation.
-    Run(Box<RunRecord>),
+    Run(Box<RunRecord<D>>),
     /// A known solution: errors are integrated on each run's own mesh.
-    Exact(ExactField),
+    Exact(ExactField<D>),
 }
 
 /// Which parameter a refinement path refines.
@@ -291,15 +295,15 @@ pub struct Row {
 ///
 /// Runs are evaluated when added and their fields dropped, so a study holds only the
 /// reference's fields.
-pub struct Study {
-    pub reference: Reference,
+pub struct Study<const D: usize = 2> {
+    pub reference: Reference<D>,
     pub runs: Vec<EvaluatedRun>,
     pub paths: Vec<RefinementPath>,
 }
 
-impl Study {
+impl<const D: usize> Study<D> {
     /// A study against a reference run (keep the times to compare: see [`Keep`]).
-    pub fn against_run(reference: RunRecord) -> Self {
+    pub fn against_run(reference: RunRecord<D>) -> Self {
         Study {
             reference: Reference::Run(Box::new(reference)),
             runs: Vec::new(),
@@ -308,7 +312,7 @@ impl Study {
     }
 
     /// A study against an exact solution.
-    pub fn against_exact(exact: ExactField) -> Self {
+    pub fn against_exact(exact: ExactField<D>) -> Self {
         Study {
             reference: Reference::Exact(exact),
             runs: Vec::new(),
@@ -317,7 +321,7 @@ impl Study {
     }
 
     /// The reference run, if the reference is a run.
-    pub fn reference_run(&self) -> Option<&RunRecord> {
+    pub fn reference_run(&self) -> Option<&RunRecord<D>> {
         match &self.reference {
             Reference::Run(r) => Some(r),
             Reference::Exact(_) => None,
@@ -326,7 +330,7 @@ impl Study {
 
     /// Evaluates `run` against the reference and stores its summary and errors; returns its
     /// index for [`Study::add_path`].
-    pub fn add_run(&mut self, run: &RunRecord) -> Result<usize, String> {
+    pub fn add_run(&mut self, run: &RunRecord<D>) -> Result<usize, String> {
         let errors = self.evaluate(run)?;
         self.runs.push(EvaluatedRun {
             summary: run.summary(),
@@ -352,10 +356,10 @@ impl Study {
     }
 
     /// The errors of `run` against the reference (nothing stored).
-    pub fn evaluate(&self, run: &RunRecord) -> Result<RunErrors, String> {
+    pub fn evaluate(&self, run: &RunRecord<D>) -> Result<RunErrors, String> {
         match &self.reference {
             Reference::Exact(exact) => {
-                let on_mesh = |t: f64, u: &[[f64; 2]]| errors(&run.mesh.cells, &run.mesh.points, u, |x| exact(t, x));
+                let on_mesh = |t: f64, u: &[[f64; D]]| errors(&run.mesh.cells, &run.mesh.points, u, |x| exact(t, x));
                 let at_final = on_mesh(run.final_time, &run.final_displacement);
                 let tol = time_tolerance(run.final_time);
                 let others = run
@@ -377,7 +381,7 @@ impl Study {
                     .transfer(&reference.mesh.points)
                     .map_err(|e| format!("carrying run {} to the reference mesh: {e}", run.label))?;
                 let at =
-                    |u_ref: &[[f64; 2]], u: &[[f64; 2]]| seminorm_errors(&reference.mesh, u_ref, &transfer.apply(u));
+                    |u_ref: &[[f64; D]], u: &[[f64; D]]| seminorm_errors(&reference.mesh, u_ref, &transfer.apply(u));
                 let at_final = at(&reference.final_displacement, &run.final_displacement);
                 let others = run
                     .displacement_at
@@ -471,13 +475,13 @@ pub struct StudyPlan {
 /// paths name them, each evaluated and dropped (only the reference's fields are held).
 /// `make_mesh(n)` builds the mesh of h = 1/n, `make_scene(N)` the scene with N steps;
 /// `progress` sees each run (with its errors, None for the reference) as it finishes.
-pub fn run_plan(
+pub fn run_plan<const D: usize>(
     plan: &StudyPlan,
-    make_mesh: &dyn Fn(usize) -> Mesh,
+    make_mesh: &dyn Fn(usize) -> Mesh<D>,
     make_scene: &dyn Fn(usize) -> Scene,
-    progress: &mut dyn FnMut(&RunRecord, Option<&RunErrors>),
-) -> Result<Study, String> {
-    let one = |n: usize, steps: usize, label: String| -> Result<RunRecord, String> {
+    progress: &mut dyn FnMut(&RunRecord<D>, Option<&RunErrors>),
+) -> Result<Study<D>, String> {
+    let one = |n: usize, steps: usize, label: String| -> Result<RunRecord<D>, String> {
         let options = RunOptions {
             label: label.clone(),
             h: Some(1.0 / n as f64),
@@ -491,10 +495,10 @@ pub fn run_plan(
     progress(&reference, None);
     let mut study = Study::against_run(reference);
     let mut done: Vec<((usize, usize), usize)> = Vec::new();
-    let mut index = |study: &mut Study,
+    let mut index = |study: &mut Study<D>,
                      n: usize,
                      steps: usize,
-                     progress: &mut dyn FnMut(&RunRecord, Option<&RunErrors>)|
+                     progress: &mut dyn FnMut(&RunRecord<D>, Option<&RunErrors>)|
      -> Result<usize, String> {
         if let Some(&(_, i)) = done.iter().find(|(key, _)| *key == (n, steps)) {
             return Ok(i);

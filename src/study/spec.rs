@@ -7,8 +7,8 @@
 use super::report::{self, fraction, Published};
 use super::target::{self, Candidate, CostModel, CostSample, ErrorModel, ErrorSample};
 use super::{plot, run_plan, Keep, Refinement, RunErrors, RunOptions, RunRecord, Study, StudyPlan};
-use crate::mesh::structured::{rectangle, CellShape};
-use crate::mesh::Mesh;
+use crate::mesh::structured::{block, rectangle, CellShape, SolidShape};
+use crate::mesh::{AnyMesh, Mesh};
 use crate::scene::Scene;
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -170,10 +170,16 @@ pub fn run_spec_with(
         s.time.steps = steps;
         s
     };
-    let shape = match spec.shape.as_str() {
-        "quad" => CellShape::Quad,
-        "tri" => CellShape::Tri,
-        other => return Err(format!("{name}: shape = \"{other}\": use \"quad\" or \"tri\"")),
+    // Generated meshes: the paper's rectangle (quad, tri) or its slab (0,2)×(0,1)×(0,0.25) with
+    // cubic cells (hex, tet); mesh files decide the dimension when given.
+    let simplex = match spec.shape.as_str() {
+        "quad" | "hex" => false,
+        "tri" | "tet" => true,
+        other => {
+            return Err(format!(
+                "{name}: shape = \"{other}\": use \"quad\" or \"tri\" (the rectangle), \"hex\" or \"tet\" (the slab)"
+            ))
+        }
     };
     let wide = match spec.cells.as_str() {
         "square" => false,
@@ -184,23 +190,28 @@ pub fn run_spec_with(
             ))
         }
     };
-    let mut files = BTreeMap::new();
+    let (mut two, mut three) = (BTreeMap::new(), BTreeMap::new());
     for (n, file) in &spec.mesh_files {
         let n: usize = n
             .parse()
             .map_err(|_| format!("{name}: mesh_files key `{n}` is not an integer n = 1/h"))?;
-        files.insert(
-            n,
-            crate::mesh::read_mesh::<2>(&dir.join(file)).map_err(|e| e.to_string())?,
-        );
-    }
-    let make_mesh = |n: usize| -> Mesh {
-        match files.get(&n) {
-            Some(m) => m.clone(),
-            None if wide => rectangle(2.0, 1.0, n, n, shape),
-            None => rectangle(2.0, 1.0, 2 * n, n, shape),
+        match crate::mesh::read_msh(&dir.join(file)).map_err(|e| e.to_string())? {
+            AnyMesh::Two(m) => {
+                two.insert(n, m);
+            }
+            AnyMesh::Three(m) => {
+                three.insert(n, m);
+            }
         }
-    };
+    }
+    if !two.is_empty() && !three.is_empty() {
+        return Err(format!(
+            "{name}: mesh_files mixes 2D meshes (n = {}) and 3D meshes (n = {}): a study runs in one dimension",
+            two.keys().map(|n| n.to_string()).collect::<Vec<_>>().join(", "),
+            three.keys().map(|n| n.to_string()).collect::<Vec<_>>().join(", ")
+        ));
+    }
+    let solid = !three.is_empty() || (two.is_empty() && matches!(spec.shape.as_str(), "hex" | "tet"));
     let t = base.time.final_time;
     let plan = StudyPlan {
         reference: (spec.reference.n, spec.reference.steps),
@@ -208,7 +219,98 @@ pub fn run_spec_with(
         k_paths: spec.k_paths.iter().map(|p| (p.n, p.steps.clone())).collect(),
         keep: Keep::MultiplesOf(spec.compare_every.unwrap_or(t / 16.0)),
     };
-    let mut progress = |r: &RunRecord, e: Option<&RunErrors>| {
+    let setup = Setup {
+        spec,
+        dir,
+        out,
+        extra,
+        name,
+        targets,
+        base: &base,
+        make_scene: &make_scene,
+        plan,
+        started,
+        wide,
+    };
+    if solid {
+        // cubic cells h = 1/n through the depth 0.25: n/4 layers
+        let needed = std::iter::once(spec.reference.n)
+            .chain(spec.h_paths.iter().flat_map(|p| p.n.iter().copied()))
+            .chain(spec.k_paths.iter().map(|p| p.n));
+        for n in needed {
+            if !three.contains_key(&n) && n % 4 != 0 {
+                return Err(format!(
+                    "{name}: n = {n}: a generated slab (0,2)×(0,1)×(0,0.25) with cubic cells of size 1/n needs n \
+                     divisible by 4 (n/4 layers); use such n or give a mesh file for it in mesh_files"
+                ));
+            }
+        }
+        let kind = if simplex { SolidShape::Tet } else { SolidShape::Hex };
+        let make_mesh = |n: usize| -> Mesh<3> {
+            match three.get(&n) {
+                Some(m) => m.clone(),
+                None => {
+                    let h = 1.0 / n as f64;
+                    let nx = if wide { n } else { 2 * n };
+                    block(
+                        [2.0, 1.0, (n / 4) as f64 * h],
+                        [nx, if wide { n / 2 } else { n }, n / 4],
+                        kind,
+                    )
+                }
+            }
+        };
+        run_in(&setup, &three, &make_mesh)
+    } else {
+        let shape = if simplex { CellShape::Tri } else { CellShape::Quad };
+        let make_mesh = |n: usize| -> Mesh<2> {
+            match two.get(&n) {
+                Some(m) => m.clone(),
+                None if wide => rectangle(2.0, 1.0, n, n, shape),
+                None => rectangle(2.0, 1.0, 2 * n, n, shape),
+            }
+        };
+        run_in(&setup, &two, &make_mesh)
+    }
+}
+
+/// What a study's runs in either dimension share (read and checked by [`run_spec_with`]).
+struct Setup<'a> {
+    spec: &'a StudySpec,
+    dir: &'a Path,
+    out: &'a Path,
+    extra: &'a [String],
+    name: &'a str,
+    targets: &'a Targets,
+    base: &'a Scene,
+    make_scene: &'a dyn Fn(usize) -> Scene,
+    plan: StudyPlan,
+    started: Instant,
+    wide: bool,
+}
+
+/// Runs the study in dimension D (the meshes `make_mesh` builds), writes its tables, plots and
+/// plans.
+fn run_in<const D: usize>(
+    setup: &Setup,
+    files: &BTreeMap<usize, Mesh<D>>,
+    make_mesh: &dyn Fn(usize) -> Mesh<D>,
+) -> Result<StudyOutput, String> {
+    let Setup {
+        spec,
+        dir,
+        out,
+        extra,
+        name,
+        targets,
+        base,
+        make_scene,
+        ref plan,
+        started,
+        ..
+    } = *setup;
+    let t = base.time.final_time;
+    let mut progress = |r: &RunRecord<D>, e: Option<&RunErrors>| {
         let errs = e.map_or(String::from("(reference)"), |e| {
             format!(
                 "H¹ error {:.4e}, L² {:.4e}, max_t H¹ {:.4e}",
@@ -220,7 +322,7 @@ pub fn run_spec_with(
             r.label, r.unknowns, r.steps, r.wall, r.newton_total
         );
     };
-    let study = run_plan(&plan, &make_mesh, &make_scene, &mut progress)?;
+    let study = run_plan(plan, make_mesh, make_scene, &mut progress)?;
     let rows = study.rows();
     let mut written: Vec<String> = Vec::new();
 
@@ -234,7 +336,12 @@ pub fn run_spec_with(
         plan.reference.0,
         plan.reference.1,
         if files.is_empty() {
-            format!("the paper's rectangle, {} {} cells", spec.cells, spec.shape)
+            format!(
+                "the paper's {}, {} {} cells",
+                if D == 2 { "rectangle" } else { "slab" },
+                spec.cells,
+                spec.shape
+            )
         } else {
             "mesh files".into()
         },
@@ -304,9 +411,11 @@ pub fn run_spec_with(
                 .peak_rss_bytes
                 .map_or("unknown".into(), |b| format!("{:.0} MB", b as f64 / 1048576.0))
         );
-        // u_ν on Γ₃ of the reference at the compared times, against arc length
-        if let Ok(gamma3) = reference.mesh.boundary(&base.groups.contact) {
-            let (arc, order, _) = crate::plot::arc_length(&reference.mesh, &gamma3.nodes);
+        // u_ν on Γ₃ of the reference at the compared times, against arc length (2D: a 3D Γ₃
+        // is a surface, drawn by `hvi plot` of a run)
+        let plane = (&reference.mesh as &dyn std::any::Any).downcast_ref::<Mesh<2>>();
+        if let Some((mesh, gamma3)) = plane.and_then(|m| Some((m, m.boundary(&base.groups.contact).ok()?))) {
+            let (arc, order, _) = crate::plot::arc_length(mesh, &gamma3.nodes);
             let series: Vec<(f64, Vec<(f64, f64)>)> = reference
                 .displacement_at
                 .iter()
@@ -357,9 +466,11 @@ pub fn run_spec_with(
             final_time: t,
             keep: &plan.keep,
             reference: plan.reference,
-            mesh_files: &files,
+            mesh_files: files.keys().copied().collect(),
+            wide: setup.wide,
+            solid: D == 3,
         };
-        let section = target_sections(&study, &context, targets, &make_mesh, &make_scene)?;
+        let section = target_sections(&study, &context, targets, make_mesh, make_scene)?;
         md.push_str(&section);
     }
     let write = |file: &str, text: &str| {
@@ -382,7 +493,12 @@ struct TargetContext<'a> {
     final_time: f64,
     keep: &'a Keep,
     reference: (usize, usize),
-    mesh_files: &'a BTreeMap<usize, Mesh>,
+    /// The n of the study's mesh files.
+    mesh_files: std::collections::BTreeSet<usize>,
+    /// Generated meshes: 2h × h cells (n × n in the plane) instead of square ones.
+    wide: bool,
+    /// Generated meshes are the 3D slab (n divisible by 4), not the rectangle.
+    solid: bool,
 }
 
 /// n = 1/h of a run (h is set to 1/n by the study).
@@ -399,8 +515,17 @@ fn solve_command(c: &TargetContext, n: usize, steps: usize) -> String {
         .find(|(key, _)| key.parse::<usize>().ok() == Some(n))
     {
         Some((_, file)) => c.dir.join(file).display().to_string(),
+        None if c.solid => {
+            let (nx, ny) = if c.wide { (n, n / 2) } else { (2 * n, n) };
+            let shape = if c.spec.shape == "tet" || c.spec.shape == "tri" {
+                ":tet"
+            } else {
+                ""
+            };
+            format!("box:{nx}x{ny}x{}{shape}", n / 4)
+        }
         None => {
-            let (nx, ny) = if c.spec.cells == "wide" { (n, n) } else { (2 * n, n) };
+            let (nx, ny) = if c.wide { (n, n) } else { (2 * n, n) };
             let shape = if c.spec.shape == "tri" { ":tri" } else { "" };
             format!("rect:{nx}x{ny}{shape}")
         }
@@ -487,11 +612,11 @@ fn why_no_cheaper(
 }
 
 /// The Markdown sections of the targets: models, recommendation, and the check when asked.
-fn target_sections(
-    study: &Study,
+fn target_sections<const D: usize>(
+    study: &Study<D>,
     c: &TargetContext,
     targets: &Targets,
-    make_mesh: &dyn Fn(usize) -> Mesh,
+    make_mesh: &dyn Fn(usize) -> Mesh<D>,
     make_scene: &dyn Fn(usize) -> Scene,
 ) -> Result<String, String> {
     let (n_ref, steps_ref) = c.reference;
@@ -538,9 +663,11 @@ fn target_sections(
     // neighbours (h = 1/37 against h_r = 1/64: 1.6e-3, the nested trend 2.9e-3), so a model
     // fitted to nested runs would not predict what --verify measures.
     let ns: Vec<usize> = if c.mesh_files.is_empty() {
-        (n_min..=n_ref).filter(|n| n_ref % n == 0).collect()
+        (n_min..=n_ref)
+            .filter(|n| n_ref % n == 0 && (!c.solid || n % 4 == 0))
+            .collect()
     } else {
-        let mut v: Vec<usize> = sizes.iter().map(|s| s.0).chain(c.mesh_files.keys().copied()).collect();
+        let mut v: Vec<usize> = sizes.iter().map(|s| s.0).chain(c.mesh_files.iter().copied()).collect();
         v.sort_unstable();
         v.dedup();
         v.retain(|n| (n_min..=n_ref).contains(n));
