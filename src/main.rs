@@ -123,36 +123,49 @@ fn petsc_solver(solver: Option<SolverArg>) -> hvi::petsc::SolverChoice {
     }
 }
 
+/// The exit of a PETSc command on one rank: rank 0 prints the outcome (every rank holds the
+/// same error), `print` on success; a start-up failure is printed by every rank (there is no
+/// agreed rank 0 then).
+#[cfg(feature = "petsc")]
+fn petsc_exit<T>(
+    started: Result<(usize, Result<T, hvi::solver::SolveError>), String>,
+    print: impl FnOnce(T),
+) -> ExitCode {
+    let (rank, result) = match started {
+        Ok(run) => run,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    match result {
+        Ok(value) => {
+            if rank == 0 {
+                print(value);
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e @ hvi::solver::SolveError::Interrupted { .. }) => {
+            if rank == 0 {
+                eprintln!("hvi: {e}");
+            }
+            ExitCode::from(130)
+        }
+        Err(e) => {
+            if rank == 0 {
+                eprintln!("error: {e}");
+            }
+            ExitCode::FAILURE
+        }
+    }
+}
+
 /// `hvi solve --backend petsc`: every rank runs; rank 0 prints the report or the error.
 #[cfg(feature = "petsc")]
 fn solve_petsc(opts: &hvi::app::SolveOptions, solver: Option<SolverArg>) -> ExitCode {
     let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::Relaxed));
-    match hvi::petsc::solve(opts, petsc_solver(solver), Some(&STOP)) {
-        Ok(run) => match run.result {
-            Ok(stats) => {
-                if run.rank == 0 {
-                    println!("{}", hvi::app::report(&stats, &opts.out));
-                }
-                ExitCode::SUCCESS
-            }
-            Err(e @ hvi::solver::SolveError::Interrupted { .. }) => {
-                if run.rank == 0 {
-                    eprintln!("hvi: {e}");
-                }
-                ExitCode::from(130)
-            }
-            Err(e) => {
-                if run.rank == 0 {
-                    eprintln!("error: {e}");
-                }
-                ExitCode::FAILURE
-            }
-        },
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
-    }
+    let run = hvi::petsc::solve(opts, petsc_solver(solver), Some(&STOP)).map(|r| (r.rank, r.result));
+    petsc_exit(run, |stats| println!("{}", hvi::app::report(&stats, &opts.out)))
 }
 
 /// `hvi check --backend petsc`: every rank checks its part; rank 0 prints the report.
@@ -163,26 +176,8 @@ fn check_petsc(
     overrides: &[String],
     solver: Option<SolverArg>,
 ) -> ExitCode {
-    match hvi::petsc::check(mesh, scene, overrides, petsc_solver(solver)) {
-        Ok(run) => match run.result {
-            Ok(report) => {
-                if run.rank == 0 {
-                    print!("{report}");
-                }
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                if run.rank == 0 {
-                    eprintln!("error: {e}");
-                }
-                ExitCode::FAILURE
-            }
-        },
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
-    }
+    let run = hvi::petsc::check(mesh, scene, overrides, petsc_solver(solver)).map(|r| (r.rank, r.result));
+    petsc_exit(run, |report| print!("{report}"))
 }
 
 #[cfg(not(feature = "petsc"))]

@@ -577,3 +577,70 @@ fn the_active_scalar_is_marked_in_the_pieces_and_the_pvtu() {
         assert!(text.contains("<PointData Scalars=\"displacement\""), "{piece}");
     }
 }
+
+/// Memory of two channels (own bulk and shear moduli not in A's ratio, docs/method.md §15.1) is
+/// not run by the PETSc backend (it assembles one K_B): `hvi solve` and `hvi check` with
+/// `--backend petsc` both refuse the scene before anything is assembled or written, with one
+/// error that names the scene file, what is not supported and the fix; the same scene runs
+/// serially.
+#[test]
+fn memory_of_two_channels_is_refused_by_solve_and_check() {
+    let tmp = tempfile::tempdir().unwrap();
+    let slab = std::fs::read_to_string("examples/slab.toml").unwrap();
+    assert!(slab.contains("[memory]"), "examples/slab.toml has a [memory] section");
+    // the slab's B(s) = (0.5 + s)² I, plus a term on a tensor with its own moduli: not ∝ I
+    let text = slab.replace("[memory]", "[[memory]]")
+        + "\n[[memory]]\nkind = \"polynomial\"\ncoefficients = [0.1]\ntensor = { bulk = 2.0, shear = 0.1 }\n";
+    let scene = tmp.path().join("two_channels.toml");
+    std::fs::write(&scene, text).unwrap();
+    let scene_arg = scene.display().to_string();
+    let mesh = "meshes/slab_q1_h8_z1.msh";
+    let serial_dir = tmp.path().join("serial").display().to_string();
+    assert_ok(
+        &serial(&["solve", mesh, "--scene", &scene_arg, "--quiet", "--out", &serial_dir]),
+        "the serial run of the two-channel scene",
+    );
+    let out_dir = tmp.path().join("mpi");
+    let d = out_dir.display().to_string();
+    for args in [
+        vec!["check", mesh, "--scene", &scene_arg, "--backend", "petsc"],
+        vec![
+            "solve",
+            mesh,
+            "--scene",
+            &scene_arg,
+            "--quiet",
+            "--backend",
+            "petsc",
+            "--out",
+            &d,
+        ],
+    ] {
+        let out = mpirun(2, &args, &[]);
+        assert!(!out.status.success(), "{} accepted two channels", args[0]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
+        assert_eq!(errors.len(), 1, "one error, from rank 0:\n{err}");
+        for part in [
+            scene_arg.as_str(),
+            "two channels",
+            "PETSc backend does not support",
+            "without --backend petsc",
+            "proportional",
+        ] {
+            assert!(
+                errors[0].contains(part),
+                "`{part}` missing from {}'s error:\n{err}",
+                args[0]
+            );
+        }
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            !stdout.contains("predicted memory"),
+            "check predicted memory anyway:\n{stdout}"
+        );
+    }
+    // refused before the output was prepared: nothing written
+    let written = std::fs::read_dir(&out_dir).map_or(0, |d| d.count());
+    assert_eq!(written, 0, "the refused run wrote into {d}");
+}

@@ -94,7 +94,7 @@ fn check_dim<const D: usize>(
     let world = petsc.world();
     let (rank, ranks) = (petsc.rank(), petsc.size());
     let mut out = app::check_mesh_report(mesh_path, &mesh);
-    let (sim, partition) = simulation_and_partition(world, scene, mesh)?;
+    let (sim, partition) = simulation_and_partition(world, scene_path, scene, mesh)?;
     out.push_str(&app::check_scene_report(scene_path, &sim));
     let shares = RankShare::all(&sim, &partition);
     let backend = PetscBackend::new(petsc, &sim, partition, choice);

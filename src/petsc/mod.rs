@@ -138,9 +138,33 @@ fn read_everywhere(
     Ok((scene, mesh))
 }
 
+/// What the PETSc backend does not run, refused before anything is assembled, naming the scene
+/// file (`scene_path`, or the embedded default), what is not supported and the fix: memory of two
+/// channels (docs/method.md §15.1: the backend assembles one K_B, from the one channel's tensor).
+/// The time loop refuses it too ([`timeloop`]'s set-up with a backend); here `hvi check` says so.
+fn unsupported<const D: usize>(scene_path: Option<&std::path::Path>, sim: &Simulation<D>) -> Result<(), String> {
+    match &sim.memory {
+        Some(m) if m.channels().len() > 1 => {
+            let origin = scene_path.map_or("<embedded default scene (examples/paper.toml)>".into(), |p| {
+                p.display().to_string()
+            });
+            Err(format!(
+                "{origin}: the memory has two channels (its tensors are not proportional: own bulk and shear \
+                 moduli that are not A's ratio, docs/method.md §15.1), which the PETSc backend does not support \
+                 (it runs memory of one channel only): run this scene without --backend petsc, or give memory \
+                 terms whose tensors are proportional (e.g. all \"identity\" or all \"elasticity\", or bulk and \
+                 shear relaxing proportionally)"
+            ))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// The scene on the mesh on every rank, and the partition rank 0 computes (collective).
+/// `scene_path` names the scene in a refusal ([`unsupported`]).
 fn simulation_and_partition<const D: usize>(
     world: &SimpleCommunicator,
+    scene_path: Option<&std::path::Path>,
     scene: &Scene,
     mesh: Mesh<D>,
 ) -> Result<(Simulation<D>, Partition), SolveError> {
@@ -151,6 +175,7 @@ fn simulation_and_partition<const D: usize>(
     let sim = Simulation::new(scene, mesh);
     collective(sim.as_ref().map(|_| ()).map_err(|e| e.to_string()))?;
     let sim = sim?;
+    collective(unsupported(scene_path, &sim))?;
     let mut owner: Vec<u64> = vec![0; sim.mesh.points.len()];
     let parts = if rank == 0 {
         Partition::metis(&sim.mesh, ranks).map(|o| owner = o.into_iter().map(|v| v as u64).collect())
@@ -281,7 +306,7 @@ fn run_dim<const D: usize>(
     let world = petsc.world();
     let (rank, ranks) = (petsc.rank(), petsc.size());
     let collective = |r: Result<(), String>| agree(world, r).map_err(SolveError::Setup);
-    let (sim, partition) = simulation_and_partition(world, scene, mesh)?;
+    let (sim, partition) = simulation_and_partition(world, opts.scene.as_deref(), scene, mesh)?;
     let shares = RankShare::all(&sim, &partition);
     let backend = PetscBackend::new(petsc, &sim, partition, choice);
     collective(backend.prepare_products(&sim).map_err(|e| e.to_string()))?;

@@ -11,11 +11,12 @@
 //! renamed, and the `.pvtu` and the index only after every piece of its frame is in place, so a
 //! run that stops leaves every frame the index lists whole.
 
+use super::raw::{open_section, start_array, vtk_type};
 use super::read::parse_tags;
-use super::{component_names, read_vtu_arrays, write_vtu, VtuContents};
+use super::{read_vtu_arrays, write_vtu, VtuContents};
 use crate::output::atomic::write_atomic;
 use crate::output::pvd::{write_index, xml_escape};
-use crate::output::{Field, FieldValues, Frame, OutputError, SeriesWriter};
+use crate::output::{Field, Frame, OutputError, SeriesWriter};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -86,33 +87,12 @@ impl SeriesWriter {
 }
 
 /// Declares the arrays of one section (`PPointData`/`PCellData`), with the active scalars,
-/// vectors and tensors as a piece's `PointData`/`CellData` marks them.
+/// vectors and tensors as a piece's `PointData`/`CellData` marks them (the same code, raw.rs).
 fn declare(text: &mut String, tag: &str, fields: &[Field]) {
-    let _ = write!(text, "    <{tag}");
-    for (attr, components) in [("Scalars", 1), ("Vectors", 3), ("Tensors", 9)] {
-        // as a piece's header marks them (raw.rs): a field marked active, else the first
-        let marked = (attr == "Scalars").then(|| fields.iter().find(|f| f.active)).flatten();
-        if let Some(f) = marked.or_else(|| fields.iter().find(|f| f.components == components)) {
-            let _ = write!(text, " {attr}=\"{}\"", xml_escape(f.name));
-        }
-    }
-    text.push_str(">\n");
+    open_section(text, "    ", tag, fields);
     for f in fields {
-        let vtk_type = match f.values {
-            FieldValues::F64(_) => "Float64",
-            FieldValues::I32(_) => "Int32",
-        };
-        let _ = write!(
-            text,
-            "      <PDataArray type=\"{vtk_type}\" Name=\"{}\"",
-            xml_escape(f.name)
-        );
-        if f.components != 1 {
-            let _ = write!(text, " NumberOfComponents=\"{}\"", f.components);
-        }
-        for (i, c) in component_names(f.components).iter().enumerate() {
-            let _ = write!(text, " ComponentName{i}=\"{c}\"");
-        }
+        text.push_str("      ");
+        start_array(text, "PDataArray", vtk_type(&f.values), f.name, f.components);
         text.push_str("/>\n");
     }
     let _ = writeln!(text, "    </{tag}>");

@@ -92,28 +92,19 @@ fn put_items<const N: usize, T>(
     }
 }
 
-/// Declares one `DataArray` of the header. `NumberOfComponents` is left out for one component
-/// (VTK's default), as VTK and vtkio do: meshio reads an explicit 1 as an n × 1 array instead of
-/// n.
-fn declare(text: &mut String, vtk_type: &str, name: &str, components: usize, extra: &str, offset: usize) {
-    let _ = write!(
-        text,
-        "        <DataArray type=\"{vtk_type}\" Name=\"{}\"",
-        xml_escape(name)
-    );
-    if components != 1 {
-        let _ = write!(text, " NumberOfComponents=\"{components}\"");
+/// The VTK type name of a field's values.
+pub(super) fn vtk_type(values: &FieldValues) -> &'static str {
+    match values {
+        FieldValues::F64(_) => "Float64",
+        FieldValues::I32(_) => "Int32",
     }
-    for (i, c) in component_names(components).iter().enumerate() {
-        let _ = write!(text, " ComponentName{i}=\"{c}\"");
-    }
-    let _ = writeln!(text, "{extra} format=\"appended\" offset=\"{offset}\"/>");
 }
 
-/// `<PointData`/`<CellData` with the active scalars, vectors and tensors, its arrays, and the
-/// closing tag.
-fn fields(text: &mut String, a: &mut Appended, tag: &str, fields: &[Field]) {
-    let _ = write!(text, "      <{tag}");
+/// Opens a `<PointData`/`<CellData` section (or the `.pvtu`'s `<PPointData`/`<PCellData`, pvtu.rs)
+/// indented by `indent`, with the active scalars, vectors and tensors: a field marked active, else
+/// the first with one component; the first with 3 and with 9 components.
+pub(super) fn open_section(text: &mut String, indent: &str, tag: &str, fields: &[Field]) {
+    let _ = write!(text, "{indent}<{tag}");
     for (attr, components) in [("Scalars", 1), ("Vectors", 3), ("Tensors", 9)] {
         let marked = (attr == "Scalars").then(|| fields.iter().find(|f| f.active)).flatten();
         if let Some(f) = marked.or_else(|| fields.iter().find(|f| f.components == components)) {
@@ -121,13 +112,36 @@ fn fields(text: &mut String, a: &mut Appended, tag: &str, fields: &[Field]) {
         }
     }
     text.push_str(">\n");
+}
+
+/// Starts the declaration of one array, `<{element} type= Name= [NumberOfComponents=]
+/// ComponentNameI=...` (the caller closes it). `NumberOfComponents` is left out for one
+/// component (VTK's default), as VTK and vtkio do: meshio reads an explicit 1 as an n × 1 array
+/// instead of n.
+pub(super) fn start_array(text: &mut String, element: &str, vtk_type: &str, name: &str, components: usize) {
+    let _ = write!(text, "<{element} type=\"{vtk_type}\" Name=\"{}\"", xml_escape(name));
+    if components != 1 {
+        let _ = write!(text, " NumberOfComponents=\"{components}\"");
+    }
+    for (i, c) in component_names(components).iter().enumerate() {
+        let _ = write!(text, " ComponentName{i}=\"{c}\"");
+    }
+}
+
+/// Declares one `DataArray` of the header ([`start_array`]).
+fn declare(text: &mut String, vtk_type: &str, name: &str, components: usize, extra: &str, offset: usize) {
+    text.push_str("        ");
+    start_array(text, "DataArray", vtk_type, name, components);
+    let _ = writeln!(text, "{extra} format=\"appended\" offset=\"{offset}\"/>");
+}
+
+/// `<PointData`/`<CellData` with the active scalars, vectors and tensors, its arrays, and the
+/// closing tag.
+fn fields(text: &mut String, a: &mut Appended, tag: &str, fields: &[Field]) {
+    open_section(text, "      ", tag, fields);
     for f in fields {
-        let vtk_type = match f.values {
-            FieldValues::F64(_) => "Float64",
-            FieldValues::I32(_) => "Int32",
-        };
         let offset = a.field(f);
-        declare(text, vtk_type, f.name, f.components, "", offset);
+        declare(text, vtk_type(&f.values), f.name, f.components, "", offset);
     }
     let _ = writeln!(text, "      </{tag}>");
 }
