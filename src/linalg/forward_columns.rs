@@ -126,10 +126,19 @@ impl ForwardColumns {
             .map(|t| {
                 let mut w = vec![0.0; m * m];
                 for list in on.iter().skip(t).step_by(threads) {
-                    let Some(&(_, first)) = list.first() else { continue };
-                    let width = self.segments[first].len;
-                    let g = faer::Mat::<f64>::from_fn(width, list.len(), |r, c| {
-                        self.segment_values(&self.segments[list[c].1])[r]
+                    if list.is_empty() {
+                        continue;
+                    }
+                    // Segments on one supernode end together; a trimmed one starts later, its
+                    // rows above its start being zeros of G.
+                    let top = list.iter().map(|&(_, k)| self.segments[k].start).min().unwrap_or(0);
+                    let end = self.segments[list[0].1].start + self.segments[list[0].1].len;
+                    let g = faer::Mat::<f64>::from_fn(end - top, list.len(), |r, c| {
+                        let segment = &self.segments[list[c].1];
+                        match (top + r).checked_sub(segment.start) {
+                            Some(k) => self.segment_values(segment)[k],
+                            None => 0.0,
+                        }
                     });
                     let block = g.transpose() * &g;
                     for (a, &(ca, _)) in list.iter().enumerate() {
@@ -182,12 +191,23 @@ fn sparse_forward_sweep(
         }
     }
     path.sort_unstable();
+    // L⁻¹ P b is zero above b's first non-zero row. With unknowns ordered last (docs/method.md
+    // §9.1) the columns of G start deep inside the wide trailing supernode, so the segments
+    // are trimmed to that row (box 96x48x12: 6.8 M values → 2.2 M); otherwise they are kept
+    // whole, which leaves every product of the 2D runs as it was.
+    let first = if factor.analysis().ordered_last() > 0 {
+        entries.iter().map(|&(i, _)| factor.position(i)).min().unwrap_or(0)
+    } else {
+        0
+    };
     let mut local = vec![0.0; supernodes.max_rows];
     let mut segments = Vec::with_capacity(path.len());
     let mut values = Vec::new();
     for &s in &path {
         factor.forward_supernode(s, work, &mut local);
-        let (start, len) = (supernodes.start[s], supernodes.width[s]);
+        let end = supernodes.start[s] + supernodes.width[s];
+        let start = supernodes.start[s].max(first);
+        let len = end - start;
         segments.push(Segment {
             supernode: s,
             start,

@@ -196,18 +196,19 @@ impl StepOperator {
         counters: &Counters,
         stats: &mut RunStats,
     ) -> Result<Self, SolveError> {
+        // The probe's product K v is taken before the factorisation, which consumes the matrix:
+        // K is not held next to its factor (docs/method.md §9.3).
+        let probe = timed(&mut stats.phases.factorisation, || Probe::new(&matrix));
         let factor = timed(&mut stats.phases.factorisation, || {
-            Factor::new(symbolic, &matrix, counters)
+            Factor::new_consuming(symbolic, matrix, counters)
         })
         .map_err(|e| SolveError::Singular {
             mesh: sim.mesh.path.display().to_string(),
             detail: e.to_string(),
         })?;
-        timed(&mut stats.phases.factorisation, || probe_singularity(&factor, &matrix)).map_err(|detail| {
-            SolveError::Singular {
-                mesh: sim.mesh.path.display().to_string(),
-                detail,
-            }
+        timed(&mut stats.phases.factorisation, || probe.verdict(&factor)).map_err(|detail| SolveError::Singular {
+            mesh: sim.mesh.path.display().to_string(),
+            detail,
         })?;
         let factor = Arc::new(factor);
         let condensed: Option<Box<dyn Condensation>> = match &sim.contact {
@@ -316,17 +317,36 @@ impl StepOperator {
 /// at a single point can still rotate about it). One probe solve, K⁻¹(K v) against v for a fixed
 /// pseudo-random v, tells: an error far above round-off means the matrix is (nearly) singular.
 /// The probe is not counted among the run's solves.
-fn probe_singularity(factor: &Factor, matrix: &SymmetricMatrix) -> Result<(), String> {
-    let n = matrix.n();
-    let v: Vec<f64> = (0..n)
-        .map(|i| ((i as f64 + 1.0) * 0.618_033_988_749_895).fract() - 0.5)
-        .collect();
-    let mut x = vec![0.0; n];
-    matrix.matvec(&v, &mut x);
-    factor.solve_in_place(&mut x, &Counters::default());
-    let scale = v.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-    let error = x.iter().zip(&v).fold(0.0f64, |a, (p, q)| a.max((p - q).abs())) / scale;
-    singularity_verdict(error)
+struct Probe {
+    v: Vec<f64>,
+    /// K v.
+    product: Vec<f64>,
+}
+
+impl Probe {
+    /// The probe vector v and K v.
+    fn new(matrix: &SymmetricMatrix) -> Self {
+        let n = matrix.n();
+        let v: Vec<f64> = (0..n)
+            .map(|i| ((i as f64 + 1.0) * 0.618_033_988_749_895).fract() - 0.5)
+            .collect();
+        let mut product = vec![0.0; n];
+        matrix.matvec(&v, &mut product);
+        Probe { v, product }
+    }
+
+    /// K⁻¹(K v) against v with the factor of K.
+    fn verdict(mut self, factor: &Factor) -> Result<(), String> {
+        factor.solve_in_place(&mut self.product, &Counters::default());
+        let scale = self.v.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        let error = self
+            .product
+            .iter()
+            .zip(&self.v)
+            .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()))
+            / scale;
+        singularity_verdict(error)
+    }
 }
 
 /// The verdict of a probe solve whose relative error is `error` (any backend's probe).
@@ -645,13 +665,8 @@ impl<'s, const D: usize> Stepper<'s, D> {
         });
         let system = system_matrix(sim, k_step.as_ref().unwrap_or(&k_a));
         drop(k_step);
-        let symbolic = timed(&mut stats.phases.factorisation, || {
-            Factor::analyse_with_last(&system.0, &last)
-        })
-        .map_err(|e| SolveError::Setup(e.to_string()))?;
-        stats.ordering = Some(symbolic.ordering().to_string());
-        stats.factor_entries = symbolic.factor_entries();
-        let main = StepOperator::new(sim, &symbolic, system, &counters, &mut stats)?;
+        // K_B's prescribed columns and its node blocks are taken before the factorisation, and
+        // the assembled K_B dropped: it is not held next to the factor (docs/method.md §9.3).
         let reactions = (!sim.dirichlet.reaction_groups.is_empty()).then(|| Reactions::new(sim, &k_a, &k_b));
         let k_b: Vec<MemoryStiffness<D>> = k_b
             .into_iter()
@@ -660,6 +675,13 @@ impl<'s, const D: usize> Stepper<'s, D> {
                 None => MemoryStiffness::Full(kb),
             })
             .collect();
+        let symbolic = timed(&mut stats.phases.factorisation, || {
+            Factor::analyse_with_last(&system.0, &last)
+        })
+        .map_err(|e| SolveError::Setup(e.to_string()))?;
+        stats.ordering = Some(symbolic.ordering().to_string());
+        stats.factor_entries = symbolic.factor_entries();
+        let main = StepOperator::new(sim, &symbolic, system, &counters, &mut stats)?;
         Ok(Self::with_parts(
             sim,
             counters,
