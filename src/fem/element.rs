@@ -102,11 +102,17 @@ pub fn invert<const D: usize>(j: &[[f64; D]; D]) -> ([[f64; D]; D], f64) {
     (inv, det)
 }
 
-/// Evaluates shape functions, physical gradients and det J of `cell` at reference point `xi`.
-pub fn shape_at<const D: usize>(cell: &Cell, points: &[[f64; D]], xi: [f64; 3]) -> ShapeAt<D> {
-    let (n, value, gref) = reference(cell, xi);
+/// The point x(ξ) = Σ_a N_a x_a of `cell`'s map and its Jacobian J = Σ_a x_a ⊗ ∇_ξ N_a, from the
+/// reference values and gradients of the `n` shape functions at ξ ([`reference`]).
+#[inline]
+pub fn map_at<const D: usize>(
+    cell: &Cell,
+    points: &[[f64; D]],
+    n: usize,
+    value: &[f64; MAX_NODES],
+    gref: &[[f64; 3]; MAX_NODES],
+) -> ([f64; D], [[f64; D]; D]) {
     let nodes = cell.nodes();
-    // J = Σ_a x_a ⊗ ∇_ξ N_a
     let mut j = [[0.0; D]; D];
     let mut x = [0.0; D];
     for a in 0..n {
@@ -118,6 +124,13 @@ pub fn shape_at<const D: usize>(cell: &Cell, points: &[[f64; D]], xi: [f64; 3]) 
             }
         }
     }
+    (x, j)
+}
+
+/// Evaluates shape functions, physical gradients and det J of `cell` at reference point `xi`.
+pub fn shape_at<const D: usize>(cell: &Cell, points: &[[f64; D]], xi: [f64; 3]) -> ShapeAt<D> {
+    let (n, value, gref) = reference(cell, xi);
+    let (x, j) = map_at(cell, points, n, &value, &gref);
     let (inv, det_j) = invert(&j);
     // ∇_x N = J^{-T} ∇_ξ N
     let mut grad = [[0.0; D]; MAX_NODES];

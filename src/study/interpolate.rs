@@ -10,7 +10,7 @@
 //! Carrying is nodal interpolation: exact for nested meshes (a coarse Q1/P1 field is itself
 //! in the fine space) and for linear fields on any meshes.
 
-use crate::fem::element::{invert, reference, shape_at, MAX_NODES};
+use crate::fem::element::{invert, map_at, reference, shape_at, MAX_NODES};
 use crate::mesh::{Cell, Mesh};
 
 /// Relative tolerance (of the mesh diameter) for points on or just outside the boundary.
@@ -301,17 +301,7 @@ pub fn solid_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x: [f
     let simplex = matches!(cell, Cell::Tet4(_));
     let map = |xi: [f64; 3]| {
         let (n, v, g) = reference(cell, xi);
-        let (mut y, mut j) = ([0.0; D], [[0.0; D]; D]);
-        for a in 0..n {
-            let p = points[nodes[a]];
-            for r in 0..D {
-                y[r] += v[a] * p[r];
-                for c in 0..D {
-                    j[r][c] += p[r] * g[a][c];
-                }
-            }
-        }
-        (y, j)
+        map_at(cell, points, n, &v, &g)
     };
     let mut xi = if simplex { [0.25; 3] } else { [0.0; 3] };
     for _ in 0..50 {
