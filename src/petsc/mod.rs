@@ -145,9 +145,7 @@ fn read_everywhere(
 fn unsupported<const D: usize>(scene_path: Option<&std::path::Path>, sim: &Simulation<D>) -> Result<(), String> {
     match &sim.memory {
         Some(m) if m.channels().len() > 1 => {
-            let origin = scene_path.map_or("<embedded default scene (examples/paper.toml)>".into(), |p| {
-                p.display().to_string()
-            });
+            let origin = scene_path.map_or(crate::scene::DEFAULT_SCENE_ORIGIN.into(), |p| p.display().to_string());
             Err(format!(
                 "{origin}: the memory has two channels (its tensors are not proportional: own bulk and shear \
                  moduli that are not A's ratio, docs/method.md §15.1), which the PETSc backend does not support \

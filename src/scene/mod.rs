@@ -17,6 +17,9 @@ pub use types::*;
 
 use std::path::Path;
 
+/// How messages name the embedded default scene (there is no file to name).
+pub const DEFAULT_SCENE_ORIGIN: &str = "<embedded default scene (examples/paper.toml)>";
+
 /// The embedded default scene: `examples/paper.toml`.
 pub const DEFAULT_SCENE_TOML: &str = include_str!("../../examples/paper.toml");
 
@@ -37,12 +40,7 @@ impl Scene {
                 })?;
                 Self::from_text(&text, &origin, overrides, p.parent())
             }
-            None => Self::from_text(
-                DEFAULT_SCENE_TOML,
-                "<embedded default scene (examples/paper.toml)>",
-                overrides,
-                None,
-            ),
+            None => Self::from_text(DEFAULT_SCENE_TOML, DEFAULT_SCENE_ORIGIN, overrides, None),
         }
     }
 
