@@ -14,6 +14,15 @@ const HVI: &str = env!("CARGO_BIN_EXE_hvi");
 const TIMEOUT: &str = "120";
 
 /// `mpirun -np <np> hvi <args>` as root on an oversubscribed machine, ranks yielding the CPU
+/// The one `error:` line of a failed run's stderr (every rank holds the error, rank 0 prints it)
+/// and the whole stderr, for messages.
+fn the_one_error(out: &Output) -> (String, String) {
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
+    assert_eq!(errors.len(), 1, "one error, from rank 0:\n{err}");
+    (errors[0].to_string(), err)
+}
+
 /// while they wait (2 ranks share 2 cores with everything else here), under a timeout.
 fn mpirun(np: usize, args: &[&str], env: &[(&str, &str)]) -> Output {
     let np = np.to_string();
@@ -202,13 +211,8 @@ fn a_rank_that_reads_a_bad_mesh_stops_every_rank() {
     let out = cmd.output().expect("mpirun");
     assert_ne!(out.status.code(), Some(124), "the ranks hang");
     assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
-    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
-    assert_eq!(errors.len(), 1, "one error, from rank 0:\n{err}");
-    assert!(
-        errors[0].contains("rank 1 of 2") && errors[0].contains("mesh.msh"),
-        "{err}"
-    );
+    let (error, err) = the_one_error(&out);
+    assert!(error.contains("rank 1 of 2") && error.contains("mesh.msh"), "{err}");
     assert!(!Path::new(&out_dir).join("summary.json").exists(), "nothing was solved");
 }
 
@@ -231,11 +235,9 @@ fn a_failing_solver_stops_every_rank_with_one_error() {
     ];
     let out = mpirun(2, &args, &[("PETSC_OPTIONS", "-hvi_ksp_max_it 1")]);
     assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
-    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
-    assert_eq!(errors.len(), 1, "one error, from rank 0:\n{err}");
+    let (error, err) = the_one_error(&out);
     assert!(
-        errors[0].contains("CG + GAMG") && errors[0].contains("iteration limit"),
+        error.contains("CG + GAMG") && error.contains("iteration limit"),
         "{err}"
     );
 }
@@ -440,11 +442,9 @@ fn a_piece_that_fails_leaves_every_earlier_frame_whole() {
     ];
     let out = mpirun(2, &args, &[]);
     assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
-    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
-    assert_eq!(errors.len(), 1, "one error, from rank 0:\n{err}");
+    let (error, err) = the_one_error(&out);
     assert!(
-        errors[0].contains("rank 1 of 2") && errors[0].contains("solution_00003_1.vtu"),
+        error.contains("rank 1 of 2") && error.contains("solution_00003_1.vtu"),
         "{err}"
     );
     let frames = pvd_files(&dir.join("solution.pvd"));
@@ -618,9 +618,7 @@ fn memory_of_two_channels_is_refused_by_solve_and_check() {
     ] {
         let out = mpirun(2, &args, &[]);
         assert!(!out.status.success(), "{} accepted two channels", args[0]);
-        let err = String::from_utf8_lossy(&out.stderr);
-        let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
-        assert_eq!(errors.len(), 1, "one error, from rank 0:\n{err}");
+        let (error, err) = the_one_error(&out);
         for part in [
             scene_arg.as_str(),
             "two channels",
@@ -629,7 +627,7 @@ fn memory_of_two_channels_is_refused_by_solve_and_check() {
             "proportional",
         ] {
             assert!(
-                errors[0].contains(part),
+                error.contains(part),
                 "`{part}` missing from {}'s error:\n{err}",
                 args[0]
             );
