@@ -116,8 +116,8 @@ def env_with(blas):
 LOCK = []  # ["flock", "-x", LOCK] with --lock
 
 
-def run(hvi, n, steps, np_, blas, out):
-    args = ["solve", *scene_args(n, steps), "--out", out]
+def run(hvi, n, steps, np_, blas, out, extra=()):
+    args = ["solve", *scene_args(n, steps), *extra, "--out", out]
     time = ["/usr/bin/time", "-f", "rank-peak-kb %M"]
     if np_ == 0:
         cmd = LOCK + time + [hvi, *args]
@@ -132,6 +132,14 @@ def run(hvi, n, steps, np_, blas, out):
     ph = s["phases"]
     per_step = (ph["loads"] + ph["history"] + ph["forward_sweep"] + ph["contact"] + ph["backward_sweep"]) / s["steps"]
     return s, (ph["factorisation"], ph["condensation"]), per_step, ph["total"], peaks
+
+
+def solves_per_step(name, s):
+    """Distributed solves per step (docs/method.md §13): 1 with the stored responses, 2 with a
+    recovery solve; faer's split sweeps are one solve."""
+    if name == "faer":
+        return 1
+    return 1 if "stored responses" in (s.get("condensation") or "") else 2
 
 
 def predicted(hvi, n, steps, np_, blas):
@@ -163,6 +171,9 @@ def main():
     ap.add_argument("--no-faer", action="store_true")
     ap.add_argument("--patch", action="store_true", help="Γ₃ on a patch of the bottom only (see above)")
     ap.add_argument("--lock", help="wrap every timed run in flock -x LOCK")
+    ap.add_argument("--recovery-solve", action="store_true",
+                    help="also run the PETSc backend forced to a recovery solve per step (solver.condensation = "
+                         "\"recovery_solve\", docs/method.md §13), as runs petsc2-npP, interleaved")
     a = ap.parse_args()
     global PATCH, LOCK
     if a.lock:
@@ -170,18 +181,21 @@ def main():
     if a.patch:
         PATCH = tempfile.mkdtemp(prefix="hvi-patch-")
     print("n,unknowns,contact_nodes,run,repeat,factor_s,w_s,per_step_s,total_s,peak_mib_max_rank,peak_mib_per_rank,"
-          "predicted_mib_max_rank,mumps_factor_entries,mumps_factor_mb_per_rank")
-    configs = ([] if a.no_faer else [("faer", a.hvi, 0)]) + [(f"petsc-np{r}", a.hvi, r) for r in a.ranks]
+          "predicted_mib_max_rank,mumps_factor_entries,mumps_factor_mb_per_rank,solves_per_step")
+    configs = ([] if a.no_faer else [("faer", a.hvi, 0, ())]) + [(f"petsc-np{r}", a.hvi, r, ()) for r in a.ranks]
+    if a.recovery_solve:
+        forced = ("--set", 'solver.condensation="recovery_solve"')
+        configs += [(f"petsc2-np{r}", a.hvi, r, forced) for r in a.ranks]
     if a.before:
-        configs += [(f"before-np{r}", a.before, r) for r in a.ranks]
+        configs += [(f"before-np{r}", a.before, r, ()) for r in a.ranks]
     predictions = {}
     for rep in range(a.repeats):
         for n in a.n:
-            for name, hvi, np_ in configs:
+            for name, hvi, np_, extra in configs:
                 with tempfile.TemporaryDirectory() as d:
-                    s, setup, step, total, peaks = run(hvi, n, a.steps, np_, a.blas, os.path.join(d, "run"))
+                    s, setup, step, total, peaks = run(hvi, n, a.steps, np_, a.blas, os.path.join(d, "run"), extra)
                 pred, entries, mumps = "", "", ""
-                if name.startswith("petsc"):
+                if name.startswith("petsc-np"):
                     key = (n, np_)
                     if key not in predictions:
                         predictions[key] = predicted(hvi, n, a.steps, np_, a.blas)
@@ -189,8 +203,8 @@ def main():
                     pred = f"{max(r[-1] for r in rows):.0f}"
                     mumps = "/".join(str(r.get("mumps_factor_mb")) for r in s.get("per_rank", []))
                 print(f"{n},{s['unknowns']},{s['contact_nodes']},{name},{rep},{setup[0]:.2f},{setup[1]:.2f},{step:.4f},"
-                      f"{total:.2f},{max(peaks):.0f},{'/'.join(f'{p:.0f}' for p in peaks)},{pred},{entries},{mumps}",
-                      flush=True)
+                      f"{total:.2f},{max(peaks):.0f},{'/'.join(f'{p:.0f}' for p in peaks)},{pred},{entries},{mumps},"
+                      f"{solves_per_step(name, s)}", flush=True)
 
 
 if __name__ == "__main__":

@@ -97,7 +97,8 @@ fn extruded_slab_equals_the_2d_plane_strain_solution() {
 }
 
 /// The contact law at every contact node of every step of a 3D run (as tests/hard_cases.rs does
-/// in 2D), and the two condensation backends give the same steps.
+/// in 2D), and the three condensations (split sweeps, stored responses, a recovery solve) give the
+/// same steps.
 #[test]
 fn contact_law_holds_in_3d_and_both_backends_agree() {
     let steps = 16;
@@ -110,8 +111,10 @@ fn contact_law_holds_in_3d_and_both_backends_agree() {
     };
     let (sim, stats, split) = run("split_sweeps");
     let (_, stats_z, stored) = run("stored_responses");
+    let (_, stats_r, recovered) = run("recovery_solve");
     assert!(stats.condensation.as_deref().unwrap().starts_with("split"));
     assert!(stats_z.condensation.as_deref().unwrap().starts_with("stored"));
+    assert!(stats_r.condensation.as_deref().unwrap().starts_with("a recovery solve"));
     let c = sim.contact.as_ref().unwrap();
     let (g, law, w) = (c.bound.as_ref().unwrap(), c.law().unwrap(), &c.nodes.weights);
     let scale = w.iter().fold(0.0f64, |m, v| m.max(*v)) * law.force_scale();
@@ -140,10 +143,13 @@ fn contact_law_holds_in_3d_and_both_backends_agree() {
         }
     }
     assert!(on_bound > 0, "the bound is reached");
-    for (step, diff) in step_differences(&split, &stored) {
-        assert!(diff <= 1e-10, "step {step}: backends differ by {diff:e}");
+    for other in [&stored, &recovered] {
+        for (step, diff) in step_differences(&split, other) {
+            assert!(diff <= 1e-10, "step {step}: condensations differ by {diff:e}");
+        }
     }
     assert_eq!(stats.newton_iterations, stats_z.newton_iterations);
+    assert_eq!(stats.newton_iterations, stats_r.newton_iterations);
 }
 
 /// Moves the interior nodes (on no boundary group) of a mesh pseudo-randomly by up to `amount`

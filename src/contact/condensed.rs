@@ -276,21 +276,25 @@ impl Condensation for SplitSweeps {
     }
 }
 
-/// The simple path for any linear solver: stored responses Z = K⁻¹ Cᵀ (n × m).
+/// The simple path for any linear solver: stored responses Z = K⁻¹ Cᵀ (n × m), or, without
+/// `keep`, Z only while W is formed and a recovery solve per step.
 pub struct StoredResponses {
     solver: Arc<dyn LinearSolver>,
     rows: Vec<Vec<(usize, f64)>>,
-    /// Z column-major: column p is K⁻¹ (row p of C)ᵀ.
+    /// Z column-major: column p is K⁻¹ (row p of C)ᵀ (empty: the recovery is a solve).
     z: Vec<f64>,
     stiffness: DenseNormalStiffness,
     u_free: Vec<f64>,
+    /// The step's right-hand side, for the recovery solve.
+    rhs: Vec<f64>,
 }
 
 impl StoredResponses {
-    /// m solves for Z (in blocks of right-hand sides) and W = C Z.
+    /// m solves for Z (in blocks of right-hand sides) and W = C Z; Z is kept with `keep`.
     pub fn new<const D: usize>(
         nodes: &ContactNodes<D>,
         solver: Arc<dyn LinearSolver>,
+        keep: bool,
         counters: &Counters,
     ) -> Result<Self, String> {
         let (n, m) = (solver.n(), nodes.len());
@@ -321,16 +325,21 @@ impl StoredResponses {
         Ok(StoredResponses {
             solver,
             rows,
-            z,
+            z: if keep { z } else { Vec::new() },
             stiffness: DenseNormalStiffness::from_w(w, m)?,
             u_free: vec![0.0; n],
+            rhs: if keep { Vec::new() } else { vec![0.0; n] },
         })
     }
 }
 
 impl Condensation for StoredResponses {
     fn name(&self) -> &'static str {
-        "stored responses (Z = K⁻¹Cᵀ, one whole solve per step)"
+        if self.z.is_empty() {
+            "a recovery solve (W from Z = K⁻¹Cᵀ once, a free and a recovery solve per step)"
+        } else {
+            "stored responses (Z = K⁻¹Cᵀ, one whole solve per step)"
+        }
     }
 
     fn stiffness(&self) -> &DenseNormalStiffness {
@@ -338,13 +347,25 @@ impl Condensation for StoredResponses {
     }
 
     fn free_normal(&mut self, rhs: &[f64], d: &mut [f64], counters: &Counters) {
+        if self.z.is_empty() {
+            self.rhs.copy_from_slice(rhs);
+        }
         self.solver.solve(rhs, &mut self.u_free, counters);
         for (dp, row) in d.iter_mut().zip(&self.rows) {
             *dp = row.iter().map(|&(i, c)| c * self.u_free[i]).sum();
         }
     }
 
-    fn recover(&mut self, lambda: &[f64], u: &mut [f64], _counters: &Counters) {
+    fn recover(&mut self, lambda: &[f64], u: &mut [f64], counters: &Counters) {
+        if self.z.is_empty() {
+            for (&l, row) in lambda.iter().zip(&self.rows) {
+                for &(i, c) in row {
+                    self.rhs[i] -= c * l;
+                }
+            }
+            self.solver.solve(&self.rhs, u, counters);
+            return;
+        }
         let n = self.u_free.len();
         u.copy_from_slice(&self.u_free);
         for (p, &l) in lambda.iter().enumerate() {

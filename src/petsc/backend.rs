@@ -1,6 +1,7 @@
 //! The time loop's [`Backend`] on PETSc (docs/method.md §13): distributed step matrices, their
 //! factor or preconditioner, the unmodified K_A and K_B for the products, and the condensation
-//! of the contact normals by two distributed solves per step.
+//! of the contact normals: one distributed solve per step with the stored responses Z = K⁻¹Cᵀ
+//! when they fit the budget of [`keeps_responses`], two otherwise.
 
 use super::partition::Partition;
 use super::SolverChoice;
@@ -9,6 +10,7 @@ use crate::contact::{Condensation, ContactNodes, DenseNormalStiffness};
 use crate::fem::assembly::local_stiffness;
 use crate::linalg::{Counters, LinearSolver};
 use crate::material::{Isotropic, IDENTITY_TENSOR};
+use crate::scene::CondensationKind;
 use crate::solver::timeloop::{self, Backend, Stiffness};
 use crate::solver::{Simulation, SolveError};
 use hvi_petsc::mpi::collective::SystemOperation;
@@ -26,6 +28,25 @@ pub const GAMG_RTOL: f64 = 1e-10;
 /// Right-hand sides per `KSPMatSolve` block when forming W (bounds the dense blocks held at
 /// once to 32 columns of the local rows).
 pub(super) const BLOCK: usize = 32;
+
+/// Whether the condensation keeps this rank's rows of Z = K⁻¹Cᵀ (8 · local unknowns · m bytes), so
+/// that a step recovers u = u_free − Zλ instead of a second distributed solve (docs/method.md §13):
+/// always with `solver.condensation = "stored_responses"`; otherwise when Z takes at most half of
+/// what the rank's solver holds already (`solver_bytes`: MUMPS's memory on the rank, or the step
+/// matrix under GAMG, whose hierarchy is about as large again). Below that budget the product
+/// also reads fewer bytes than the solve it replaces (a forward and a backward pass over the
+/// rank's share of L). The answer on every rank is the AND over the ranks ([`agree_all`]).
+pub(super) fn keeps_responses(forced: bool, local_unknowns: usize, m: usize, solver_bytes: f64) -> bool {
+    forced || 8.0 * local_unknowns as f64 * m as f64 <= 0.5 * solver_bytes
+}
+
+/// True on every rank if `mine` is true on every rank (collective).
+pub(super) fn agree_all(mine: bool) -> bool {
+    let world = SimpleCommunicator::world();
+    let mut all = 0u8;
+    world.all_reduce_into(&u8::from(mine), &mut all, SystemOperation::min());
+    all == 1
+}
 
 /// The row layout of the PETSc matrices: hvi unknown D·p + c is PETSc row D·position[p] + c;
 /// this rank owns rows lo..hi, the unknowns of its nodes.
@@ -320,6 +341,15 @@ impl<'p, const D: usize> PetscBackend<'p, D> {
         })
     }
 
+    /// What the rank's solver of `solver` holds, for [`keeps_responses`]: MUMPS's memory on the
+    /// rank, or the step matrix's bytes under GAMG.
+    fn solver_bytes(&self, solver: &PetscSolver) -> f64 {
+        match self.mumps_memory() {
+            Some(m) => m.this_rank_mb as f64 * 1e6,
+            None => solver.inner().matrix.local_bytes().unwrap_or(0.0),
+        }
+    }
+
     fn error(&self, sim: &Simulation<D>, e: hvi_petsc::Error) -> SolveError {
         SolveError::Singular {
             mesh: sim.mesh.path.display().to_string(),
@@ -355,12 +385,22 @@ impl<const D: usize> Backend<D> for PetscBackend<'_, D> {
             detail,
         })?;
         let condensed: Option<Box<dyn Condensation>> = match &sim.contact {
-            Some(c) if !c.nodes.is_empty() => Some(Box::new(
-                TwoSolves::new(&c.nodes, solver.clone(), self.petsc.rank() == 0, counters).map_err(|e| match e {
-                    Ok(e) => self.error(sim, e),
-                    Err(detail) => SolveError::Setup(detail),
-                })?,
-            )),
+            Some(c) if !c.nodes.is_empty() => {
+                let keep = sim.condensation != CondensationKind::RecoverySolve
+                    && agree_all(keeps_responses(
+                        sim.condensation == CondensationKind::StoredResponses,
+                        solver.n(),
+                        c.nodes.len(),
+                        self.solver_bytes(&solver),
+                    ));
+                Some(Box::new(
+                    DistributedCondensation::new(&c.nodes, solver.clone(), self.petsc.rank() == 0, keep, counters)
+                        .map_err(|e| match e {
+                            Ok(e) => self.error(sim, e),
+                            Err(detail) => SolveError::Setup(detail),
+                        })?,
+                ))
+            }
             _ => None,
         };
         Ok((solver, condensed))
@@ -522,11 +562,29 @@ impl PetscSolver {
 
     /// W = C K⁻¹ Cᵀ (m × m, row-major) on rank 0 (`root`; empty elsewhere) for the rows of C
     /// over hvi's unknowns: blocks of right-hand sides by `KSPMatSolve`, each rank summing the
-    /// share of its rows (collective).
-    fn normal_responses(&self, rows: &[Vec<(usize, f64)>], root: bool) -> Result<Vec<f64>, hvi_petsc::Error> {
+    /// share of its rows (collective). With `keep`, also this rank's rows of Z = K⁻¹Cᵀ
+    /// (column-major, a column per row of C, in [`Layout`] order).
+    fn normal_responses(
+        &self,
+        rows: &[Vec<(usize, f64)>],
+        root: bool,
+        keep: bool,
+    ) -> Result<(Vec<f64>, Option<Vec<f64>>), hvi_petsc::Error> {
         let l = &self.layout;
         let m = rows.len();
+        let nl = l.hi - l.lo;
         let mut w = if root { vec![0.0; m * m] } else { Vec::new() };
+        let mut z = if keep {
+            let mut z = Vec::new();
+            z.try_reserve_exact(nl * m).map_err(|_| hvi_petsc::Error {
+                code: -1,
+                message: format!("out of memory for the stored responses Z ({nl} × {m} on this rank)"),
+            })?;
+            z.resize(nl * m, 0.0);
+            Some(z)
+        } else {
+            None
+        };
         let inner = self.inner();
         let world = SimpleCommunicator::world();
         let rank0 = world.process_at_rank(0);
@@ -546,6 +604,11 @@ impl PetscSolver {
             inner.solver.solve_block(&b, &mut x)?;
             let mut part = vec![0.0; m * cols];
             x.with_local_mut(|a, lda| {
+                if let Some(z) = z.as_mut() {
+                    for j in 0..cols {
+                        z[(start + j) * nl..(start + j + 1) * nl].copy_from_slice(&a[j * lda..j * lda + nl]);
+                    }
+                }
                 for (p, row) in rows.iter().enumerate() {
                     for &(d, c) in row {
                         if let Some(r) = l.local(d) {
@@ -575,7 +638,7 @@ impl PetscSolver {
                 }
             }
         }
-        Ok(w)
+        Ok((w, z))
     }
 }
 
@@ -594,29 +657,33 @@ impl LinearSolver for PetscSolver {
     }
 }
 
-/// The condensation of the PETSc backend: W by blocks of solves (held on rank 0 only, where the
-/// contact solve runs), then per step a free solve d = C K⁻¹ r and a recovery solve
-/// u = K⁻¹ (r − Cᵀ λ) (docs/method.md §13). Z = K⁻¹ Cᵀ is never stored whole.
-pub struct TwoSolves {
+/// The condensation of the PETSc backend (docs/method.md §13): W by blocks of solves (held on
+/// rank 0 only, where the contact solve runs), then per step a free solve d = C K⁻¹ r and the
+/// recovery: u = u_free − Zλ from this rank's rows of the stored responses Z = K⁻¹Cᵀ when
+/// [`keeps_responses`] allows them, else a second solve u = K⁻¹ (r − Cᵀ λ).
+pub struct DistributedCondensation {
     solver: Arc<PetscSolver>,
     /// The rows of C restricted to this rank's unknowns: (local index, coefficient).
     rows: Vec<Vec<(usize, f64)>>,
+    /// This rank's rows of Z, column-major (None: the recovery is a solve).
+    responses: Option<Vec<f64>>,
     stiffness: DenseNormalStiffness,
     rhs: Vec<f64>,
     u_free: Vec<f64>,
 }
 
-impl TwoSolves {
+impl DistributedCondensation {
     /// Err(Ok(e)): PETSc failed; Err(Err(detail)): W is not positive definite (on every rank:
     /// rank 0 decides and tells the others).
     fn new<const D: usize>(
         nodes: &ContactNodes<D>,
         solver: Arc<PetscSolver>,
         root: bool,
+        keep: bool,
         counters: &Counters,
     ) -> Result<Self, Result<hvi_petsc::Error, String>> {
         let m = nodes.len();
-        let w = solver.normal_responses(nodes.rows(), root).map_err(Ok)?;
+        let (w, responses) = solver.normal_responses(nodes.rows(), root, keep).map_err(Ok)?;
         counters.solves.fetch_add(m, Ordering::Relaxed);
         let stiffness = match root {
             true => DenseNormalStiffness::from_w(w, m),
@@ -648,9 +715,10 @@ impl TwoSolves {
             .map(|row| row.iter().filter_map(|&(d, c)| l.local(d).map(|k| (k, c))).collect())
             .collect();
         let n = solver.n();
-        Ok(TwoSolves {
+        Ok(DistributedCondensation {
             solver,
             rows,
+            responses,
             stiffness,
             rhs: vec![0.0; n],
             u_free: vec![0.0; n],
@@ -658,9 +726,12 @@ impl TwoSolves {
     }
 }
 
-impl Condensation for TwoSolves {
+impl Condensation for DistributedCondensation {
     fn name(&self) -> &'static str {
-        "PETSc: W by KSPMatSolve, a free and a recovery solve per step"
+        match self.responses {
+            Some(_) => "PETSc: W and the stored responses Z by KSPMatSolve, one solve per step (u = u_free − Zλ)",
+            None => "PETSc: W by KSPMatSolve, a free and a recovery solve per step",
+        }
     }
 
     fn stiffness(&self) -> &DenseNormalStiffness {
@@ -679,6 +750,18 @@ impl Condensation for TwoSolves {
     }
 
     fn recover(&mut self, lambda: &[f64], u: &mut [f64], counters: &Counters) {
+        if let Some(z) = &self.responses {
+            let n = self.u_free.len();
+            u.copy_from_slice(&self.u_free);
+            for (p, &l) in lambda.iter().enumerate() {
+                if l != 0.0 {
+                    for (ui, zi) in u.iter_mut().zip(&z[p * n..(p + 1) * n]) {
+                        *ui -= l * zi;
+                    }
+                }
+            }
+            return;
+        }
         for (&l, row) in lambda.iter().zip(&self.rows) {
             for &(k, c) in row {
                 self.rhs[k] -= c * l;

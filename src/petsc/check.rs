@@ -34,7 +34,8 @@ pub(super) struct RankMemory {
     /// MUMPS's INFO(15) per factor, times the factors held at once.
     pub factor: f64,
     /// W and its inverse on rank 0 (and the dense work of inverting it); on every rank the two
-    /// dense blocks of right-hand sides that form W.
+    /// dense blocks of right-hand sides that form W and, when kept, its rows of Z = K⁻¹Cᵀ per
+    /// factor.
     pub contact: f64,
     /// The history's vectors (docs/method.md §5) over the rank's unknowns.
     pub history: f64,
@@ -103,6 +104,18 @@ fn check_dim<const D: usize>(
     agree(world, analysed.as_ref().map(|_| ()).map_err(|e| e.to_string())).map_err(SolveError::Setup)?;
     let (matrix_bytes, mumps) = analysed.map_err(SolveError::Setup)?;
     let factors = factors_held(&sim);
+    let m_contact = sim.contact.as_ref().map_or(0, |c| c.nodes.len());
+    let responses = m_contact > 0
+        && sim.condensation != crate::scene::CondensationKind::RecoverySolve
+        && super::backend::agree_all(super::backend::keeps_responses(
+            sim.condensation == crate::scene::CondensationKind::StoredResponses,
+            {
+                use crate::solver::Backend;
+                backend.unknowns().len()
+            },
+            m_contact,
+            mumps.map_or(matrix_bytes, |m| m.this_rank_mb as f64 * 1e6),
+        ));
     let memory = predict(
         &sim,
         &backend,
@@ -111,6 +124,7 @@ fn check_dim<const D: usize>(
         matrix_bytes,
         mumps.map(|m| m.this_rank_mb),
         factors,
+        responses,
     );
     // Every rank's prediction on rank 0.
     let parts = [
@@ -177,7 +191,7 @@ fn check_dim<const D: usize>(
     }
     let _ = writeln!(
         out,
-        "  base = this process now (mesh, scene, partition: VmRSS); matrices = the step matrix as assembled × {} (step matrices, K_A, K_B) + PETSc's copy for MUMPS (2/3 of it per factor); factor = MUMPS's INFO(15) × factors; contact = W's right-hand-side blocks, W and its inverse on rank 0",
+        "  base = this process now (mesh, scene, partition: VmRSS); matrices = the step matrix as assembled × {} (step matrices, K_A, K_B) + PETSc's copy for MUMPS (2/3 of it per factor); factor = MUMPS's INFO(15) × factors; contact = W's right-hand-side blocks, the stored responses (if kept), W and its inverse on rank 0",
         matrices_held(&sim, factors)
     );
     if let Some(c) = &sim.contact {
@@ -185,6 +199,15 @@ fn check_dim<const D: usize>(
             out,
             "contact: {} nodes (the active-set solve runs on rank 0; the smallness condition needs a serial factor: run `hvi check` without --backend)",
             c.nodes.len()
+        );
+        let _ = writeln!(
+            out,
+            "  recovery: {}",
+            if responses {
+                "the stored responses Z = K⁻¹Cᵀ (each rank its rows, in contact), one solve per step"
+            } else {
+                "a second solve per step (Z = K⁻¹Cᵀ would take more than half of the solver's memory on a rank; solver.condensation = \"stored_responses\" keeps it anyway)"
+            }
         );
     }
     for w in crate::solver::advice::warnings(scene, &sim) {
@@ -227,6 +250,7 @@ fn predict<const D: usize>(
     matrix_bytes: f64,
     mumps_mb: Option<i64>,
     factors: usize,
+    responses: bool,
 ) -> RankMemory {
     use crate::solver::Backend;
     let local = backend.unknowns().len() as f64;
@@ -251,7 +275,13 @@ fn predict<const D: usize>(
         matrices: matrix_bytes * (matrices_held(sim, factors) as f64 + 2.0 / 3.0 * factors as f64),
         factor: mumps_mb.map_or(0.0, |mb| mb as f64 * 1e6) * factors as f64,
         contact: if m > 0.0 {
-            2.0 * 8.0 * super::backend::BLOCK as f64 * local + if rank == 0 { 4.0 * 8.0 * m * m } else { 0.0 }
+            2.0 * 8.0 * super::backend::BLOCK as f64 * local
+                + if responses {
+                    8.0 * local * m * factors as f64
+                } else {
+                    0.0
+                }
+                + if rank == 0 { 4.0 * 8.0 * m * m } else { 0.0 }
         } else {
             0.0
         },

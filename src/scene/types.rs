@@ -610,6 +610,10 @@ pub enum CondensationKind {
     SplitSweeps,
     /// Stored responses Z = K⁻¹Cᵀ and a whole solve per step.
     StoredResponses,
+    /// Z = K⁻¹Cᵀ only while W = C Z is formed; per step a free and a recovery solve (nothing of
+    /// size n·m is held: the memory-light path, which the PETSc backend takes by itself when Z
+    /// does not fit its budget, docs/method.md §13).
+    RecoverySolve,
 }
 
 fn default_tolerance() -> f64 {

@@ -173,6 +173,10 @@ impl Plan {
                         "condensation by stored responses: Z = K⁻¹ Cᵀ ({m} solves, {:.1} MiB) and W = C Z once; per step one whole solve, a dense active-set solve of size {m} and u = u_free − Z λ",
                         (n * m * 8) as f64 / 1048576.0
                     ),
+                    crate::scene::CondensationKind::RecoverySolve => format!(
+                        "condensation by a recovery solve: Z = K⁻¹ Cᵀ ({m} solves, {:.1} MiB while W = C Z is formed); per step a free solve, a dense active-set solve of size {m} and a recovery solve",
+                        (n * m * 8) as f64 / 1048576.0
+                    ),
                 },
             });
         }

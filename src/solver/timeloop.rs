@@ -220,9 +220,10 @@ impl StepOperator {
                             CondensationKind::SplitSweeps => {
                                 Box::new(SplitSweeps::new(&c.nodes, factor.clone(), counters)?)
                             }
-                            CondensationKind::StoredResponses => {
+                            kind @ (CondensationKind::StoredResponses | CondensationKind::RecoverySolve) => {
                                 let solver: Arc<dyn LinearSolver> = factor.clone();
-                                Box::new(StoredResponses::new(&c.nodes, solver, counters)?)
+                                let keep = kind == CondensationKind::StoredResponses;
+                                Box::new(StoredResponses::new(&c.nodes, solver, keep, counters)?)
                             }
                         })
                     },
