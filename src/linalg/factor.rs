@@ -72,6 +72,10 @@ pub struct Analysis {
     pub(super) schedule: Option<Arc<Schedule>>,
     /// How many unknowns were ordered after all others ([`Factor::analyse_with_last`]).
     ordered_last: usize,
+    /// The unknowns whose column had no non-zero coupling (the identity rows of prescribed
+    /// components, docs/method.md §7.2): left out of the factor's pattern and ordered first
+    /// (empty: none). A matrix factored on this analysis must have no coupling there either.
+    decoupled: Arc<Vec<bool>>,
 }
 
 impl Analysis {
@@ -171,16 +175,28 @@ impl Factor {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
             ..Default::default()
         };
-        let pattern = matrix.pattern.symbolic();
         let node_order = match ordering {
             NodeOrdering::Amd => amd_ordering(&matrix.pattern),
             NodeOrdering::NestedDissection => Some(
                 nested_dissection(&matrix.pattern).ok_or_else(|| FactorError::Other("METIS NodeND failed".into()))?,
             ),
         };
-        let node_order = match (node_order, last.is_empty()) {
-            (Some((fwd, _)), false) => Some(move_last(&fwd, last)),
-            (order, _) => order,
+        // The identity rows of prescribed components couple with nothing but their zeros: out of
+        // the factor's pattern and first in the order they cost no fill (docs/method.md §9.1).
+        let decoupled = decoupled_unknowns(matrix);
+        let filtered =
+            (node_order.is_some() && decoupled.iter().any(|&b| b)).then(|| without_couplings(matrix, &decoupled));
+        let node_order = match node_order {
+            Some((fwd, _)) if !last.is_empty() || filtered.is_some() => {
+                Some(reorder(&fwd, filtered.as_ref().map(|_| &decoupled[..]), last))
+            }
+            order => order,
+        };
+        let pattern = match &filtered {
+            Some((col_ptr, row_idx)) => {
+                faer::sparse::SymbolicSparseColMatRef::new_checked(matrix.n(), matrix.n(), col_ptr, None, row_idx)
+            }
+            None => matrix.pattern.symbolic(),
         };
         let ordering_used = ordering;
         let ordering = match &node_order {
@@ -201,6 +217,7 @@ impl Factor {
             schedule: Schedule::new(&supernodes).map(Arc::new),
             supernodes: Arc::new(supernodes),
             ordered_last: last.len(),
+            decoupled: Arc::new(if filtered.is_some() { decoupled } else { Vec::new() }),
         })
     }
 
@@ -388,10 +405,21 @@ impl PermutedLower {
         }
         let sym = matrix.pattern.symbolic();
         let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+        let decoupled = &analysis.decoupled[..];
+        // entries the analysis left out: the couplings of a decoupled unknown
+        let out = |i: usize, j: usize| i != j && !decoupled.is_empty() && (decoupled[i] || decoupled[j]);
         let mut col_ptr = vec![0usize; n + 1];
         for j in 0..n {
-            for &i in &ri[cp[j]..cp[j + 1]] {
+            for (&i, &v) in ri[cp[j]..cp[j + 1]].iter().zip(&matrix.values[cp[j]..cp[j + 1]]) {
                 if i >= j {
+                    if out(i, j) {
+                        if v != 0.0 {
+                            return Err(FactorError::Other(format!(
+                                "entry ({i}, {j}) = {v:e} couples an unknown the symbolic analysis found decoupled"
+                            )));
+                        }
+                        continue;
+                    }
                     col_ptr[inv[i].min(inv[j]) + 1] += 1;
                 }
             }
@@ -405,7 +433,7 @@ impl PermutedLower {
         for j in 0..n {
             for k in cp[j]..cp[j + 1] {
                 let i = ri[k];
-                if i >= j {
+                if i >= j && !out(i, j) {
                     let (p, q) = (inv[i], inv[j]);
                     let (row, col) = (p.max(q), p.min(q));
                     row_idx[next[col]] = row;
@@ -431,13 +459,46 @@ pub enum NodeOrdering {
     NestedDissection,
 }
 
-/// The ordering `fwd` (new → old) with the unknowns of `last` moved to the end, in their order.
-fn move_last(fwd: &[usize], last: &[usize]) -> (Vec<usize>, Vec<usize>) {
+/// Unknowns whose column holds no non-zero off the diagonal (in a stiffness matrix: the
+/// identity rows of prescribed components, docs/method.md §7.2).
+fn decoupled_unknowns(matrix: &SymmetricMatrix) -> Vec<bool> {
+    let sym = matrix.pattern.symbolic();
+    let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+    (0..matrix.n())
+        .map(|j| (cp[j]..cp[j + 1]).all(|k| ri[k] == j || matrix.values[k] == 0.0))
+        .collect()
+}
+
+/// The pattern of `matrix` (full storage) without the couplings of the `decoupled` unknowns
+/// (their diagonal kept): (col_ptr, row_idx).
+fn without_couplings(matrix: &SymmetricMatrix, decoupled: &[bool]) -> (Vec<usize>, Vec<usize>) {
+    let sym = matrix.pattern.symbolic();
+    let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+    let mut col_ptr = Vec::with_capacity(matrix.n() + 1);
+    let mut row_idx = Vec::with_capacity(ri.len());
+    col_ptr.push(0);
+    for j in 0..matrix.n() {
+        row_idx.extend(
+            ri[cp[j]..cp[j + 1]]
+                .iter()
+                .copied()
+                .filter(|&i| i == j || !(decoupled[i] || decoupled[j])),
+        );
+        col_ptr.push(row_idx.len());
+    }
+    (col_ptr, row_idx)
+}
+
+/// The ordering `fwd` (new → old) with the `first` unknowns (if given) moved to the front and
+/// the unknowns of `last` to the end, in their order.
+fn reorder(fwd: &[usize], first: Option<&[bool]>, last: &[usize]) -> (Vec<usize>, Vec<usize>) {
     let mut is_last = vec![false; fwd.len()];
     for &i in last {
         is_last[i] = true;
     }
-    let mut out: Vec<usize> = fwd.iter().copied().filter(|&i| !is_last[i]).collect();
+    let is_first = |i: usize| first.is_some_and(|f| f[i]) && !is_last[i];
+    let mut out: Vec<usize> = fwd.iter().copied().filter(|&i| is_first(i)).collect();
+    out.extend(fwd.iter().copied().filter(|&i| !is_last[i] && !is_first(i)));
     out.extend_from_slice(last);
     let mut inv = vec![0; out.len()];
     for (k, &i) in out.iter().enumerate() {
