@@ -105,6 +105,32 @@ impl Schedule {
             });
         }
         pieces.sort_by_key(|p| p.columns.start);
+        // Adjacent small pieces that are whole trees of the forest (e.g. the thousands of 1 × 1
+        // roots of decoupled prescribed components, factor.rs) become one: each piece costs a
+        // task and a private vector over the top rows, and a whole tree updates no top row, so
+        // merging them changes no arithmetic.
+        let whole_tree = |p: &Piece| sn.parent[p.supernodes.end - 1] == usize::MAX;
+        let mut merged: Vec<Piece> = Vec::with_capacity(pieces.len());
+        for p in pieces {
+            match merged.last_mut() {
+                Some(q)
+                    if whole_tree(q)
+                        && whole_tree(&p)
+                        && q.columns.end == p.columns.start
+                        && q.supernodes.end == p.supernodes.start
+                        && (q.entries + p.entries) * PIECES <= total =>
+                {
+                    q.columns.end = p.columns.end;
+                    q.supernodes.end = p.supernodes.end;
+                    q.entries += p.entries;
+                }
+                _ => merged.push(p),
+            }
+        }
+        let pieces = merged;
+        if pieces.len() < 2 {
+            return None;
+        }
         top.sort_unstable();
         let n = sn.supernode_of.len();
         let mut top_slot = vec![u32::MAX; n];
