@@ -123,8 +123,7 @@ fn check_dim<const D: usize>(
         base,
         matrix_bytes,
         mumps.map(|m| m.this_rank_mb),
-        factors,
-        responses,
+        Held { factors, responses },
     );
     // Every rank's prediction on rank 0.
     let parts = [
@@ -241,6 +240,12 @@ fn matrices_held<const D: usize>(sim: &Simulation<D>, factors: usize) -> usize {
     factors + usize::from(elastic) + usize::from(sim.memory.is_some())
 }
 
+/// What a run holds at once: its factors, and whether its condensation keeps its rows of Z.
+struct Held {
+    factors: usize,
+    responses: bool,
+}
+
 /// The memory rank `rank` will need (docs/method.md §13.4).
 fn predict<const D: usize>(
     sim: &Simulation<D>,
@@ -249,8 +254,7 @@ fn predict<const D: usize>(
     base: f64,
     matrix_bytes: f64,
     mumps_mb: Option<i64>,
-    factors: usize,
-    responses: bool,
+    Held { factors, responses }: Held,
 ) -> RankMemory {
     use crate::solver::Backend;
     let local = backend.unknowns().len() as f64;
