@@ -276,6 +276,31 @@ impl Condensation for SplitSweeps {
     }
 }
 
+/// u = u_free − Z λ for the responses Z (column-major, a column of `u_free.len()` numbers per
+/// row of C): only the columns of non-zero forces are read. Shared by every condensation that
+/// stores Z (here and the PETSc backend's rows of it).
+pub fn subtract_responses(u_free: &[f64], z: &[f64], lambda: &[f64], u: &mut [f64]) {
+    let n = u_free.len();
+    u.copy_from_slice(u_free);
+    for (p, &l) in lambda.iter().enumerate() {
+        if l != 0.0 {
+            for (ui, zi) in u.iter_mut().zip(&z[p * n..(p + 1) * n]) {
+                *ui -= l * zi;
+            }
+        }
+    }
+}
+
+/// r ← r − Cᵀ λ for the rows of C as (unknown, coefficient): the right-hand side of a recovery
+/// solve u = K⁻¹ (r − Cᵀ λ).
+pub fn subtract_normal_forces(rhs: &mut [f64], rows: &[Vec<(usize, f64)>], lambda: &[f64]) {
+    for (&l, row) in lambda.iter().zip(rows) {
+        for &(i, c) in row {
+            rhs[i] -= c * l;
+        }
+    }
+}
+
 /// The simple path for any linear solver: stored responses Z = K⁻¹ Cᵀ (n × m), or, without
 /// `keep`, Z only while W is formed and a recovery solve per step.
 pub struct StoredResponses {
@@ -358,22 +383,10 @@ impl Condensation for StoredResponses {
 
     fn recover(&mut self, lambda: &[f64], u: &mut [f64], counters: &Counters) {
         if self.z.is_empty() {
-            for (&l, row) in lambda.iter().zip(&self.rows) {
-                for &(i, c) in row {
-                    self.rhs[i] -= c * l;
-                }
-            }
+            subtract_normal_forces(&mut self.rhs, &self.rows, lambda);
             self.solver.solve(&self.rhs, u, counters);
-            return;
-        }
-        let n = self.u_free.len();
-        u.copy_from_slice(&self.u_free);
-        for (p, &l) in lambda.iter().enumerate() {
-            if l != 0.0 {
-                for (ui, zi) in u.iter_mut().zip(&self.z[p * n..(p + 1) * n]) {
-                    *ui -= l * zi;
-                }
-            }
+        } else {
+            subtract_responses(&self.u_free, &self.z, lambda, u);
         }
     }
 }

@@ -146,9 +146,10 @@ impl Factor {
         if matrix.pattern.block == 3 {
             choices.push(NodeOrdering::NestedDissection);
         }
+        let decoupling = Decoupling::of(matrix);
         let mut best: Option<Analysis> = None;
         for ordering in choices {
-            let Ok(a) = Self::analyse_ordered(matrix, ordering, last) else {
+            let Ok(a) = Self::analyse_ordered(matrix, ordering, last, &decoupling) else {
                 continue;
             };
             if best.as_ref().is_none_or(|b| a.factor_entries() < b.factor_entries()) {
@@ -157,19 +158,20 @@ impl Factor {
         }
         match best {
             Some(a) => Ok(a),
-            None => Self::analyse_ordered(matrix, NodeOrdering::Amd, last),
+            None => Self::analyse_ordered(matrix, NodeOrdering::Amd, last, &decoupling),
         }
     }
 
     /// Symbolic analysis with a given ordering of the node graph.
     pub fn analyse_with(matrix: &SymmetricMatrix, ordering: NodeOrdering) -> Result<Analysis, FactorError> {
-        Self::analyse_ordered(matrix, ordering, &[])
+        Self::analyse_ordered(matrix, ordering, &[], &Decoupling::of(matrix))
     }
 
     fn analyse_ordered(
         matrix: &SymmetricMatrix,
         ordering: NodeOrdering,
         last: &[usize],
+        decoupling: &Decoupling,
     ) -> Result<Analysis, FactorError> {
         let params = CholeskySymbolicParams {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
@@ -182,18 +184,21 @@ impl Factor {
             ),
         };
         // The identity rows of prescribed components couple with nothing but their zeros: out of
-        // the factor's pattern and first in the order they cost no fill (docs/method.md §9.1).
-        let decoupled = decoupled_unknowns(matrix);
-        let filtered =
-            (node_order.is_some() && decoupled.iter().any(|&b| b)).then(|| without_couplings(matrix, &decoupled));
+        // the factor's pattern and first in the order they cost no fill (docs/method.md §9.1);
+        // only with hvi's own node order (faer's fallback AMD orders the whole pattern).
+        let decoupling = decoupling
+            .pattern
+            .as_ref()
+            .filter(|_| node_order.is_some())
+            .map(|p| (decoupling, p));
         let node_order = match node_order {
-            Some((fwd, _)) if !last.is_empty() || filtered.is_some() => {
-                Some(reorder(&fwd, filtered.as_ref().map(|_| &decoupled[..]), last))
+            Some((fwd, _)) if !last.is_empty() || decoupling.is_some() => {
+                Some(reorder(&fwd, decoupling.map(|(d, _)| &d.decoupled[..]), last))
             }
             order => order,
         };
-        let pattern = match &filtered {
-            Some((col_ptr, row_idx)) => {
+        let pattern = match decoupling {
+            Some((_, (col_ptr, row_idx))) => {
                 faer::sparse::SymbolicSparseColMatRef::new_checked(matrix.n(), matrix.n(), col_ptr, None, row_idx)
             }
             None => matrix.pattern.symbolic(),
@@ -217,7 +222,7 @@ impl Factor {
             schedule: Schedule::new(&supernodes).map(Arc::new),
             supernodes: Arc::new(supernodes),
             ordered_last: last.len(),
-            decoupled: Arc::new(if filtered.is_some() { decoupled } else { Vec::new() }),
+            decoupled: decoupling.map_or_else(Default::default, |(d, _)| d.decoupled.clone()),
         })
     }
 
@@ -459,14 +464,31 @@ pub enum NodeOrdering {
     NestedDissection,
 }
 
-/// Unknowns whose column holds no non-zero off the diagonal (in a stiffness matrix: the
-/// identity rows of prescribed components, docs/method.md §7.2).
-fn decoupled_unknowns(matrix: &SymmetricMatrix) -> Vec<bool> {
-    let sym = matrix.pattern.symbolic();
-    let (cp, ri) = (sym.col_ptr(), sym.row_idx());
-    (0..matrix.n())
-        .map(|j| (cp[j]..cp[j + 1]).all(|k| ri[k] == j || matrix.values[k] == 0.0))
-        .collect()
+/// The unknowns whose column holds no non-zero off the diagonal (in a stiffness matrix: the
+/// identity rows of prescribed components, docs/method.md §7.2) and the matrix's pattern without
+/// their couplings; found once per matrix for every ordering tried.
+struct Decoupling {
+    decoupled: Arc<Vec<bool>>,
+    /// (col_ptr, row_idx) of the pattern without the couplings; None if no unknown is decoupled.
+    pattern: Option<(Vec<usize>, Vec<usize>)>,
+}
+
+impl Decoupling {
+    fn of(matrix: &SymmetricMatrix) -> Self {
+        let sym = matrix.pattern.symbolic();
+        let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+        let decoupled: Vec<bool> = (0..matrix.n())
+            .map(|j| (cp[j]..cp[j + 1]).all(|k| ri[k] == j || matrix.values[k] == 0.0))
+            .collect();
+        let pattern = decoupled
+            .iter()
+            .any(|&b| b)
+            .then(|| without_couplings(matrix, &decoupled));
+        Decoupling {
+            decoupled: Arc::new(decoupled),
+            pattern,
+        }
+    }
 }
 
 /// The pattern of `matrix` (full storage) without the couplings of the `decoupled` unknowns

@@ -6,6 +6,7 @@
 use super::partition::Partition;
 use super::SolverChoice;
 use crate::contact::active_set::{ContactOutcome, ContactState};
+use crate::contact::condensed::{subtract_normal_forces, subtract_responses};
 use crate::contact::{Condensation, ContactNodes, DenseNormalStiffness};
 use crate::fem::assembly::local_stiffness;
 use crate::linalg::{Counters, LinearSolver};
@@ -29,19 +30,20 @@ pub const GAMG_RTOL: f64 = 1e-10;
 /// once to 32 columns of the local rows).
 pub(super) const BLOCK: usize = 32;
 
-/// Whether the condensation keeps this rank's rows of Z = K⁻¹Cᵀ (8 · local unknowns · m bytes), so
-/// that a step recovers u = u_free − Zλ instead of a second distributed solve (docs/method.md §13):
-/// always with `solver.condensation = "stored_responses"`; otherwise when Z takes at most half of
-/// what the rank's solver holds already (`solver_bytes`: MUMPS's memory on the rank, or the step
-/// matrix under GAMG, whose hierarchy is about as large again). Below that budget the product
-/// also reads fewer bytes than the solve it replaces (a forward and a backward pass over the
-/// rank's share of L). The answer on every rank is the AND over the ranks ([`agree_all`]).
-pub(super) fn keeps_responses(forced: bool, local_unknowns: usize, m: usize, solver_bytes: f64) -> bool {
-    forced || 8.0 * local_unknowns as f64 * m as f64 <= 0.5 * solver_bytes
-}
-
-/// True on every rank if `mine` is true on every rank (collective).
-pub(super) fn agree_all(mine: bool) -> bool {
+/// Whether the condensation keeps each rank's rows of Z = K⁻¹Cᵀ (8 · local unknowns · m bytes),
+/// so that a step recovers u = u_free − Zλ instead of a second distributed solve (docs/method.md
+/// §13) — decided here for the run and for `hvi check --backend petsc` (collective): never with
+/// `solver.condensation = "recovery_solve"`, always with `"stored_responses"`; otherwise when on
+/// every rank Z takes at most half of what the rank's solver holds already (`solver_bytes`:
+/// MUMPS's memory on the rank, or the step matrix under GAMG, whose hierarchy is about as large
+/// again). Below that budget the product also reads fewer bytes than the solve it replaces (a
+/// forward and a backward pass over the rank's share of L).
+pub(super) fn keeps_responses(kind: CondensationKind, local_unknowns: usize, m: usize, solver_bytes: f64) -> bool {
+    let mine = match kind {
+        CondensationKind::RecoverySolve => return false,
+        CondensationKind::StoredResponses => true,
+        CondensationKind::SplitSweeps => 8.0 * local_unknowns as f64 * m as f64 <= 0.5 * solver_bytes,
+    };
     let world = SimpleCommunicator::world();
     let mut all = 0u8;
     world.all_reduce_into(&u8::from(mine), &mut all, SystemOperation::min());
@@ -386,13 +388,7 @@ impl<const D: usize> Backend<D> for PetscBackend<'_, D> {
         })?;
         let condensed: Option<Box<dyn Condensation>> = match &sim.contact {
             Some(c) if !c.nodes.is_empty() => {
-                let keep = sim.condensation != CondensationKind::RecoverySolve
-                    && agree_all(keeps_responses(
-                        sim.condensation == CondensationKind::StoredResponses,
-                        solver.n(),
-                        c.nodes.len(),
-                        self.solver_bytes(&solver),
-                    ));
+                let keep = keeps_responses(sim.condensation, solver.n(), c.nodes.len(), self.solver_bytes(&solver));
                 Some(Box::new(
                     DistributedCondensation::new(&c.nodes, solver.clone(), self.petsc.rank() == 0, keep, counters)
                         .map_err(|e| match e {
@@ -750,23 +746,12 @@ impl Condensation for DistributedCondensation {
     }
 
     fn recover(&mut self, lambda: &[f64], u: &mut [f64], counters: &Counters) {
-        if let Some(z) = &self.responses {
-            let n = self.u_free.len();
-            u.copy_from_slice(&self.u_free);
-            for (p, &l) in lambda.iter().enumerate() {
-                if l != 0.0 {
-                    for (ui, zi) in u.iter_mut().zip(&z[p * n..(p + 1) * n]) {
-                        *ui -= l * zi;
-                    }
-                }
-            }
-            return;
-        }
-        for (&l, row) in lambda.iter().zip(&self.rows) {
-            for &(k, c) in row {
-                self.rhs[k] -= c * l;
+        match &self.responses {
+            Some(z) => subtract_responses(&self.u_free, z, lambda, u),
+            None => {
+                subtract_normal_forces(&mut self.rhs, &self.rows, lambda);
+                self.solver.solve(&self.rhs, u, counters);
             }
         }
-        self.solver.solve(&self.rhs, u, counters);
     }
 }

@@ -106,16 +106,12 @@ fn check_dim<const D: usize>(
     let factors = factors_held(&sim);
     let m_contact = sim.contact.as_ref().map_or(0, |c| c.nodes.len());
     let responses = m_contact > 0
-        && sim.condensation != crate::scene::CondensationKind::RecoverySolve
-        && super::backend::agree_all(super::backend::keeps_responses(
-            sim.condensation == crate::scene::CondensationKind::StoredResponses,
-            {
-                use crate::solver::Backend;
-                backend.unknowns().len()
-            },
+        && super::backend::keeps_responses(
+            sim.condensation,
+            crate::solver::Backend::unknowns(&backend).len(),
             m_contact,
             mumps.map_or(matrix_bytes, |m| m.this_rank_mb as f64 * 1e6),
-        ));
+        );
     let memory = predict(
         &sim,
         &backend,
