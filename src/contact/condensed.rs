@@ -204,11 +204,23 @@ impl NormalStiffness for DenseNormalStiffness {
         self.m
     }
 
+    /// faer's SIMD product, on two threads from m = 512 on: the contact solve's products by Q
+    /// were its largest cost at m in the thousands (docs/method.md §9.2).
     fn apply_q(&self, x: &[f64], y: &mut [f64]) {
-        for (p, yp) in y.iter_mut().enumerate() {
-            let row = &self.q[p * self.m..(p + 1) * self.m];
-            *yp = row.iter().zip(x).map(|(a, b)| a * b).sum();
-        }
+        let q = faer::MatRef::from_row_major_slice(&self.q, self.m, self.m);
+        let par = if self.m >= 512 {
+            faer::Par::rayon(0)
+        } else {
+            faer::Par::Seq
+        };
+        faer::linalg::matmul::matmul(
+            faer::ColMut::from_slice_mut(y),
+            faer::Accum::Replace,
+            q,
+            faer::ColRef::from_slice(x),
+            1.0,
+            par,
+        );
     }
 
     fn q(&self, p: usize, r: usize) -> f64 {
