@@ -64,8 +64,9 @@ impl NodeStatus {
     }
 }
 
-/// The contact unknowns of one step, kept between steps as the warm start.
-#[derive(Clone, Debug)]
+/// The contact unknowns of one step, kept between steps as the warm start. A clone (a step
+/// recorded by a sink) leaves out the kept Newton factorisation, a cache of up to m² numbers.
+#[derive(Debug)]
 pub struct ContactState {
     /// r = u_ν at the contact nodes.
     pub normal_displacement: Vec<f64>,
@@ -80,6 +81,19 @@ pub struct ContactState {
     /// The last factorisation of the Newton matrix, kept above `dense_limit` free nodes as the
     /// preconditioner of later Newton systems (docs/method.md §9.2).
     pub newton_factor: Option<ReusedFactor>,
+}
+
+impl Clone for ContactState {
+    fn clone(&self) -> Self {
+        ContactState {
+            normal_displacement: self.normal_displacement.clone(),
+            force: self.force.clone(),
+            compliance_force: self.compliance_force.clone(),
+            bound_force: self.bound_force.clone(),
+            status: self.status.clone(),
+            newton_factor: None,
+        }
+    }
 }
 
 impl ContactState {
