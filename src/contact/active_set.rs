@@ -64,9 +64,8 @@ impl NodeStatus {
     }
 }
 
-/// The contact unknowns of one step, kept between steps as the warm start. A clone (a step
-/// recorded by a sink) leaves out the kept Newton factorisation, a cache of up to m² numbers.
-#[derive(Debug)]
+/// The contact unknowns of one step, kept between steps as the warm start.
+#[derive(Clone, Debug)]
 pub struct ContactState {
     /// r = u_ν at the contact nodes.
     pub normal_displacement: Vec<f64>,
@@ -80,20 +79,7 @@ pub struct ContactState {
     pub status: Vec<NodeStatus>,
     /// The last factorisation of the Newton matrix, kept above `dense_limit` free nodes as the
     /// preconditioner of later Newton systems (docs/method.md §9.2).
-    pub newton_factor: Option<ReusedFactor>,
-}
-
-impl Clone for ContactState {
-    fn clone(&self) -> Self {
-        ContactState {
-            normal_displacement: self.normal_displacement.clone(),
-            force: self.force.clone(),
-            compliance_force: self.compliance_force.clone(),
-            bound_force: self.bound_force.clone(),
-            status: self.status.clone(),
-            newton_factor: None,
-        }
-    }
+    pub newton_factor: KeptFactor,
 }
 
 impl ContactState {
@@ -105,15 +91,26 @@ impl ContactState {
             compliance_force: vec![0.0; m],
             bound_force: vec![0.0; m],
             status: vec![NodeStatus::Separated; m],
-            newton_factor: None,
+            newton_factor: KeptFactor::default(),
         }
+    }
+}
+
+/// The kept factorisation of [`ContactState`]: a cache of up to m² numbers, so a clone (a step
+/// recorded by a sink) starts without it.
+#[derive(Debug, Default)]
+pub struct KeptFactor(Option<ReusedFactor>);
+
+impl Clone for KeptFactor {
+    fn clone(&self) -> Self {
+        KeptFactor(None)
     }
 }
 
 /// The dense Cholesky factor of a Newton matrix Q_ℱℱ + diag(e) on the free set ℱ it was formed
 /// on, kept above `dense_limit` free nodes to precondition later Newton systems (docs/method.md
 /// §9.2). Only a preconditioner: a stale one costs iterations, never accuracy.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct ReusedFactor {
     /// m and the bits of Σ_p Q_pp of the operator it was formed with.
     fingerprint: (usize, u64),
@@ -144,6 +141,37 @@ pub struct ContactOutcome {
     pub active: usize,
 }
 
+impl ContactOutcome {
+    /// How many numbers [`Self::to_numbers`] gives (a broadcast of the outcome, src/petsc).
+    pub const NUMBERS: usize = 7;
+
+    /// The outcome as numbers, in the order [`Self::from_numbers`] reads them.
+    pub fn to_numbers(&self) -> [f64; Self::NUMBERS] {
+        [
+            self.iterations as f64,
+            self.residual,
+            self.line_search_cuts as f64,
+            self.convexified as f64,
+            self.iterative as f64,
+            self.factorisations as f64,
+            self.active as f64,
+        ]
+    }
+
+    /// The outcome of [`Self::to_numbers`]'s numbers.
+    pub fn from_numbers(n: &[f64]) -> Self {
+        ContactOutcome {
+            iterations: n[0] as usize,
+            residual: n[1],
+            line_search_cuts: n[2] as usize,
+            convexified: n[3] as usize,
+            iterative: n[4] as usize,
+            factorisations: n[5] as usize,
+            active: n[6] as usize,
+        }
+    }
+}
+
 /// Why a contact solve stopped without converging.
 #[derive(Clone, Debug)]
 pub struct ContactFailure {
@@ -166,6 +194,11 @@ pub struct ActiveSetSolver<'a> {
 }
 
 const ARMIJO: f64 = 1e-4;
+
+/// HVI_TRACE_CONTACT set: the solve prints its iterations to stderr.
+fn tracing() -> bool {
+    std::env::var_os("HVI_TRACE_CONTACT").is_some()
+}
 const MIN_STEP: f64 = 1e-12;
 
 impl ActiveSetSolver<'_> {
@@ -294,7 +327,7 @@ impl ActiveSetSolver<'_> {
             let residual = self.complementarity_residual(r, &grad);
             best_residual = best_residual.min(residual);
             outcome.residual = residual / scale;
-            if std::env::var_os("HVI_TRACE_CONTACT").is_some() {
+            if tracing() {
                 eprintln!(
                     "  contact it {} residual {:.3e} cuts {}",
                     outcome.iterations,
@@ -434,7 +467,7 @@ impl ActiveSetSolver<'_> {
         curvature: &[f64],
         grad: &[f64],
         outcome: &mut ContactOutcome,
-        kept: &mut Option<ReusedFactor>,
+        kept: &mut KeptFactor,
         fingerprint: (usize, u64),
     ) -> Vec<f64> {
         let nf = free.len();
@@ -442,13 +475,12 @@ impl ActiveSetSolver<'_> {
             return Vec::new();
         }
         let reuse = nf > self.settings.dense_limit;
-        if reuse {
-            if let Some(factor) = kept.as_ref().filter(|k| k.fingerprint == fingerprint) {
-                if let Some(x) = self.preconditioned_cg(factor, free, curvature, grad) {
-                    outcome.iterative += 1;
-                    return x;
-                }
-            }
+        let reused = (kept.0.as_ref())
+            .filter(|k| reuse && k.fingerprint == fingerprint)
+            .and_then(|k| self.preconditioned_cg(k, free, curvature, grad));
+        if let Some(x) = reused {
+            outcome.iterative += 1;
+            return x;
         }
         outcome.factorisations += 1;
         let rhs = Mat::<f64>::from_fn(nf, 1, |i, _| grad[free[i]]);
@@ -482,7 +514,7 @@ impl ActiveSetSolver<'_> {
             for (i, &p) in free.iter().enumerate() {
                 row[p] = i;
             }
-            *kept = Some(ReusedFactor {
+            kept.0 = Some(ReusedFactor {
                 fingerprint,
                 row,
                 diagonal,
@@ -584,7 +616,7 @@ impl ActiveSetSolver<'_> {
                 r[i] -= alpha * ad[i];
             }
             if r.iter().map(|v| v * v).sum::<f64>().sqrt() <= 1e-13 * norm_b {
-                if std::env::var_os("HVI_TRACE_CONTACT").is_some() {
+                if tracing() {
                     eprintln!("  reused factor: {} conjugate-gradient iterations", k + 1);
                 }
                 return Some(x);
@@ -597,7 +629,7 @@ impl ActiveSetSolver<'_> {
                 dir[i] = z[i] + beta * dir[i];
             }
         }
-        if std::env::var_os("HVI_TRACE_CONTACT").is_some() {
+        if tracing() {
             eprintln!("  reused factor: no convergence in {iterations} iterations, refactoring");
         }
         None
@@ -648,6 +680,22 @@ mod tests {
             })
             .collect();
         DenseNormalStiffness::from_w(w, m).unwrap()
+    }
+
+    /// The numbers a PETSc run broadcasts give back the outcome, field by field.
+    #[test]
+    fn outcome_numbers_round_trip() {
+        let o = ContactOutcome {
+            iterations: 1,
+            residual: 2.5e-11,
+            line_search_cuts: 3,
+            convexified: 4,
+            iterative: 5,
+            factorisations: 6,
+            active: 7,
+        };
+        let back = ContactOutcome::from_numbers(&o.to_numbers());
+        assert_eq!(format!("{back:?}"), format!("{o:?}"));
     }
 
     /// Steps of a growing load that pushes a moving middle part onto the bound: the active set

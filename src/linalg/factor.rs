@@ -149,16 +149,14 @@ impl Factor {
         // 3D from 10 000 nodes on: nested dissection alone. It gave the smaller factor on every
         // 3D mesh measured (box 96x48x12: 192 M entries against AMD's 333 M), and AMD's
         // analysis took 0.6 s of the 11.7 s factorisation there (docs/method.md §9.1).
-        let mut choices = vec![NodeOrdering::Amd];
-        if matrix.pattern.block == 3 {
-            if matrix.n() >= 3 * ND_ONLY_NODES {
-                choices.clear();
-            }
-            choices.push(NodeOrdering::NestedDissection);
-        }
+        let choices: &[NodeOrdering] = match matrix.pattern.block {
+            3 if matrix.n() / 3 >= ND_ONLY_NODES => &[NodeOrdering::NestedDissection],
+            3 => &[NodeOrdering::Amd, NodeOrdering::NestedDissection],
+            _ => &[NodeOrdering::Amd],
+        };
         let decoupling = Decoupling::of(matrix);
         let mut best: Option<Analysis> = None;
-        for ordering in choices {
+        for &ordering in choices {
             let Ok(a) = Self::analyse_ordered(matrix, ordering, last, &decoupling) else {
                 continue;
             };

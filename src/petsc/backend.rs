@@ -438,33 +438,18 @@ impl<const D: usize> Backend<D> for PetscBackend<'_, D> {
                 ))),
             };
         }
-        let mut numbers = vec![0.0f64; 7 + m];
+        const N: usize = ContactOutcome::NUMBERS;
+        let mut numbers = vec![0.0f64; N + m];
         if let (true, Ok(o)) = (self.solves_contact(), &local) {
-            numbers[..7].copy_from_slice(&[
-                o.iterations as f64,
-                o.residual,
-                o.line_search_cuts as f64,
-                o.convexified as f64,
-                o.iterative as f64,
-                o.active as f64,
-                o.factorisations as f64,
-            ]);
-            numbers[7..].copy_from_slice(&state.force);
+            numbers[..N].copy_from_slice(&o.to_numbers());
+            numbers[N..].copy_from_slice(&state.force);
         }
         root.broadcast_into(&mut numbers[..]);
         if self.solves_contact() {
             return local;
         }
-        state.force.copy_from_slice(&numbers[7..]);
-        Ok(ContactOutcome {
-            iterations: numbers[0] as usize,
-            residual: numbers[1],
-            line_search_cuts: numbers[2] as usize,
-            convexified: numbers[3] as usize,
-            iterative: numbers[4] as usize,
-            active: numbers[5] as usize,
-            factorisations: numbers[6] as usize,
-        })
+        state.force.copy_from_slice(&numbers[N..]);
+        Ok(ContactOutcome::from_numbers(&numbers[..N]))
     }
 
     fn unknowns(&self) -> &[usize] {
