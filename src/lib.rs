@@ -25,6 +25,7 @@
 
 pub mod app;
 pub mod contact;
+pub mod expr;
 pub mod fem;
 pub mod history;
 pub mod linalg;

@@ -3,7 +3,7 @@
 
 mod common;
 
-use hvi::study::plot::{node_tiles, project_surface};
+use hvi::plot::surface::{node_tiles, project_surface};
 use std::path::Path;
 fn root(name: &str) -> String {
     format!("{}/{name}", env!("CARGO_MANIFEST_DIR"))

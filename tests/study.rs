@@ -6,8 +6,8 @@ mod common;
 
 use common::{distort_interior, manufactured_exact, manufactured_scene, rectangle_with_sides};
 
-use hvi::fem::element::shape_at;
 use hvi::fem::norms::errors;
+use hvi::mesh::element::shape_at;
 use hvi::mesh::structured::{rectangle, CellShape};
 use hvi::mesh::Mesh;
 use hvi::scene::Scene;

@@ -10,7 +10,7 @@
 //! A rigid motion a(t) of the obstacle changes the gap to first order through the tangent plane at
 //! the foot: gap(t) = gap₀ + (n·a(t)) / (n·d), exact for a plane.
 
-use crate::scene::Expr;
+use crate::expr::Expr;
 
 /// A rigid obstacle in D dimensions.
 #[derive(Clone, Debug)]

@@ -4,9 +4,9 @@
 //! precomputed positions.
 
 use super::dofs::DofMap;
-use super::element::{shape_at, stiffness_rule};
-use super::pattern::{Pattern, SymmetricMatrix};
+use crate::linalg::sparse::{Pattern, SymmetricMatrix};
 use crate::material::Isotropic;
+use crate::mesh::element::{shape_at, stiffness_rule};
 use crate::mesh::Cell;
 use rayon::prelude::*;
 use std::sync::Arc;

@@ -95,3 +95,9 @@ impl<const D: usize> DofMap<D> {
         nodal.iter().flatten().copied().collect()
     }
 }
+
+impl<const D: usize> crate::linalg::sparse::Prescribed for DofMap<D> {
+    fn is_prescribed(&self, i: usize) -> bool {
+        self.prescribed[i]
+    }
+}

@@ -1,15 +1,15 @@
 //! Load vectors F(t) = ∫_Ω f₀·v dx + Σ_groups ∫_Γ f₂·v ds (docs/method.md §1), from expressions
 //! in (x, y, z, t) and, for tractions, the facet's outward normal (nx, ny, nz) (the variables
-//! of [`crate::scene::TRACTION_VARIABLES`]). A pressure p is the traction f₂ = −p ν
+//! of [`crate::expr::TRACTION_VARIABLES`]). A pressure p is the traction f₂ = −p ν
 //! (docs/method.md §11.2). Quadrature points and shape values are computed
 //! once; each time step only evaluates the expressions, and a load that does not depend on t is
 //! assembled once.
 
 use super::dofs::DofMap;
-use super::element::{load_rule, reference, shape_at};
-use super::quadrature::{EDGE_GAUSS_3, QUAD_GAUSS_2X2, TRI_3POINT};
+use crate::expr::Expr;
+use crate::mesh::element::{load_rule, reference, shape_at};
+use crate::mesh::quadrature::{EDGE_GAUSS_3, QUAD_GAUSS_2X2, TRI_3POINT};
 use crate::mesh::{BoundaryPart, Cell, Facet};
-use crate::scene::Expr;
 
 /// One quadrature point of a load integral: position, outward normal, weight (with the
 /// Jacobian), and the nodes × shape values it contributes to.

@@ -6,7 +6,7 @@
 //! and row index), this form 9 per stored entry (four values share one 4-byte index) over
 //! about half the entries. It also leaves more of the cache to the factor's sweeps.
 
-use super::pattern::SymmetricMatrix;
+use crate::linalg::sparse::SymmetricMatrix;
 
 /// The upper-triangular D × D blocks of a symmetric matrix whose pattern is made of node
 /// blocks (unknowns D·k + c of node k), in block-row order.

@@ -1,7 +1,7 @@
 //! Error norms of a finite-element displacement against a known field: the L² norm and the
-//! H¹ seminorm, by cell quadrature (rules of [`super::element::error_rule`]), in any dimension.
+//! H¹ seminorm, by cell quadrature (rules of [`crate::mesh::element::error_rule`]), in any dimension.
 
-use super::element::{error_rule, shape_at};
+use crate::mesh::element::{error_rule, shape_at};
 use crate::mesh::Cell;
 
 /// Errors of a nodal field u_h against an exact field.

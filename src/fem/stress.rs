@@ -2,8 +2,8 @@
 //! m_n^j = h_n^j + (k/2) b_j(0) u_n is the memory displacement of memory channel j with tensor
 //! T_j (docs/method.md §3, §15), and the von Mises equivalent stress, in any dimension.
 
-use super::element::{reference_centroid, shape_at, strain};
 use crate::material::{Elasticity, Isotropic, PlaneModel};
+use crate::mesh::element::{reference_centroid, shape_at, strain};
 use crate::mesh::Cell;
 use rayon::prelude::*;
 
@@ -123,7 +123,7 @@ pub fn cell_measures<const D: usize>(cells: &[Cell], points: &[[f64; D]]) -> Vec
     cells
         .iter()
         .map(|c| {
-            super::element::stiffness_rule(c)
+            crate::mesh::element::stiffness_rule(c)
                 .iter()
                 .map(|q| q.weight * shape_at(c, points, q.xi).det_j)
                 .sum()

@@ -206,8 +206,8 @@ fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::expr::{Expr, KERNEL_VARIABLES};
     use crate::material::{Elasticity, MemoryTensor, MemoryTerm, PlaneModel};
-    use crate::scene::{Expr, KERNEL_VARIABLES};
 
     /// The reference: h_n by its definition, for scalar "displacements".
     fn direct(kernel: &dyn Fn(f64) -> f64, us: &[f64], n: usize, k: f64) -> f64 {

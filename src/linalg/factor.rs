@@ -10,8 +10,8 @@
 //! factor with the kernels of `supernodes.rs` on the schedule of `schedule.rs`.
 
 use super::schedule::{backward_sequential, forward_sequential, forward_supernode, Schedule};
+use super::sparse::SymmetricMatrix;
 use super::supernodes::Supernodes;
-use crate::fem::SymmetricMatrix;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltError;
 use faer::sparse::linalg::cholesky::{
@@ -549,7 +549,7 @@ fn expand(fwd: &[usize], d: usize) -> (Vec<usize>, Vec<usize>) {
 
 /// Nested dissection of the node graph by METIS (written by hand only as the unsafe call: the
 /// `metis` crate wraps partitioning but not NodeND), expanded to the unknowns.
-fn nested_dissection(pattern: &crate::fem::pattern::Pattern) -> Option<(Vec<usize>, Vec<usize>)> {
+fn nested_dissection(pattern: &super::sparse::Pattern) -> Option<(Vec<usize>, Vec<usize>)> {
     use metis_sys::idx_t;
     let graph = pattern.node_graph();
     let n = graph.len();
@@ -591,7 +591,7 @@ fn nested_dissection(pattern: &crate::fem::pattern::Pattern) -> Option<(Vec<usiz
 
 /// AMD on the node graph of the pattern, expanded to the D unknowns of each node, kept
 /// together: a graph D² times smaller to order, and supernodes that never split a node.
-fn amd_ordering(pattern: &crate::fem::pattern::Pattern) -> Option<(Vec<usize>, Vec<usize>)> {
+fn amd_ordering(pattern: &super::sparse::Pattern) -> Option<(Vec<usize>, Vec<usize>)> {
     let d = pattern.block;
     let n = pattern.n;
     let graph = pattern.node_graph();
@@ -616,4 +616,44 @@ fn amd_ordering(pattern: &crate::fem::pattern::Pattern) -> Option<(Vec<usize>, V
     .ok()?;
     let _ = n;
     Some(expand(&fwd, d))
+}
+
+#[cfg(test)]
+mod schedule_tests {
+    //! The parallel sweeps of `schedule.rs` against the sequential ones on a factor large
+    //! enough to be split.
+    use super::super::sparse::test_matrices::{grid_stiffness, relative_difference};
+    use super::*;
+
+    #[test]
+    fn parallel_sweeps_agree_with_sequential_sweeps() {
+        for quads in [true, false] {
+            let k = grid_stiffness(96, 48, quads);
+            let analysis = Factor::analyse(&k).unwrap();
+            let schedule = analysis.schedule.as_deref().expect("a factor this size is split");
+            assert!(schedule.pieces() >= 2);
+            let factor = Factor::new(&analysis, &k, &Counters::default()).unwrap();
+            let (sn, values) = (analysis.supernodes(), factor.values());
+            let r: Vec<f64> = (0..k.n())
+                .map(|i| ((i as f64) * 0.618_033_988_7).fract() - 0.5)
+                .collect();
+            let (mut serial, mut parallel) = (r.clone(), r.clone());
+            forward_sequential(sn, values, &mut serial);
+            schedule.forward(sn, values, &mut parallel);
+            // Only the order of the additions into top rows differs: round-off.
+            let diff = relative_difference(&parallel, &serial);
+            assert!(diff <= 1e-13, "forward: {diff:e}");
+            backward_sequential(sn, values, &mut serial);
+            schedule.backward(sn, values, &mut parallel);
+            let diff = relative_difference(&parallel, &serial);
+            assert!(diff <= 1e-12, "backward: {diff:e}");
+            // and the solve is a solve: K x = r
+            let mut x = r.clone();
+            factor.solve_in_place(&mut x, &Counters::default());
+            let mut kx = vec![0.0; k.n()];
+            k.matvec(&x, &mut kx);
+            let residual = kx.iter().zip(&r).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            assert!(residual < 1e-9, "residual {residual:e}");
+        }
+    }
 }

@@ -227,22 +227,10 @@ fn sparse_forward_sweep(
 mod tests {
     //! G = L⁻¹ P Cᵀ against whole solves: Gᵀ (L⁻¹ P r) = C K⁻¹ r, Gᵀ G = C K⁻¹ Cᵀ, and
     //! backward(forward(r) − G λ) = K⁻¹ (r − Cᵀ λ), for rows with one and two entries
-    //! anywhere in the mesh, on P1 and Q1 stiffness matrices.
+    //! anywhere in the mesh, on matrices of P1 and Q1 patterns.
+    use super::super::sparse::test_matrices::{grid_stiffness, relative_difference as rel};
     use super::*;
-    use crate::fem::assembly::{rectangle_stiffness, relative_difference as rel};
-    use crate::material::{Elasticity, PlaneModel};
-    use crate::mesh::structured::CellShape;
     use proptest::prelude::*;
-
-    fn stiffness(shape: CellShape) -> crate::fem::SymmetricMatrix {
-        let e = Elasticity {
-            youngs_modulus: 3.0,
-            poisson_ratio: 0.3,
-            plane: Some(PlaneModel::Strain),
-        };
-        let [k] = rectangle_stiffness(12, 7, shape, &[e.tensor()]);
-        k
-    }
 
     fn solve(factor: &Factor, r: &[f64]) -> Vec<f64> {
         let mut x = r.to_vec();
@@ -258,7 +246,7 @@ mod tests {
             picks in proptest::collection::vec((0usize..10_000, 0usize..10_000, -1.0f64..1.0, -1.0f64..1.0, any::<bool>()), 1..12),
             seed in 0u64..1000,
         ) {
-            let k = stiffness(if quad { CellShape::Quad } else { CellShape::Tri });
+            let k = grid_stiffness(12, 7, quad);
             let n = k.n();
             let counters = Counters::default();
             let factor = Factor::new(&Factor::analyse(&k).unwrap(), &k, &counters).unwrap();

@@ -37,6 +37,7 @@
 mod factor;
 mod forward_columns;
 mod schedule;
+pub mod sparse;
 mod supernodes;
 
 pub use factor::{set_parallelism, Analysis, Counters, Factor, FactorError, Forward, NodeOrdering};

@@ -164,6 +164,12 @@ impl Schedule {
         out
     }
 
+    /// How many subtrees the sweeps run in parallel.
+    #[cfg(test)]
+    pub fn pieces(&self) -> usize {
+        self.pieces.len()
+    }
+
     /// The forward sweep y ← L⁻¹ y on the pieces in parallel, then the top.
     pub fn forward(&self, sn: &Supernodes, values: &[f64], y: &mut [f64]) {
         let n_top = self.top_rows.len();
@@ -278,52 +284,5 @@ pub(super) fn backward_sequential(sn: &Supernodes, values: &[f64], y: &mut [f64]
     let mut local = vec![0.0; sn.max_rows];
     for s in (0..sn.len()).rev() {
         backward_supernode(sn, values, s, y, &mut local);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    //! The parallel sweeps against the sequential ones on a factor large enough to be split.
-    use super::super::{Counters, Factor};
-    use super::*;
-    use crate::fem::assembly::{rectangle_stiffness, relative_difference};
-    use crate::material::{Elasticity, PlaneModel};
-    use crate::mesh::structured::CellShape;
-
-    #[test]
-    fn parallel_sweeps_agree_with_sequential_sweeps() {
-        let e = Elasticity {
-            youngs_modulus: 1.0,
-            poisson_ratio: 0.3,
-            plane: Some(PlaneModel::Stress),
-        };
-        for shape in [CellShape::Quad, CellShape::Tri] {
-            let [k] = rectangle_stiffness(96, 48, shape, &[e.tensor()]);
-            let analysis = Factor::analyse(&k).unwrap();
-            let schedule = analysis.schedule.as_deref().expect("a factor this size is split");
-            assert!(schedule.pieces.len() >= 2);
-            let factor = Factor::new(&analysis, &k, &Counters::default()).unwrap();
-            let (sn, values) = (analysis.supernodes(), factor.values());
-            let r: Vec<f64> = (0..k.n())
-                .map(|i| ((i as f64) * 0.618_033_988_7).fract() - 0.5)
-                .collect();
-            let (mut serial, mut parallel) = (r.clone(), r.clone());
-            forward_sequential(sn, values, &mut serial);
-            schedule.forward(sn, values, &mut parallel);
-            // Only the order of the additions into top rows differs: round-off.
-            let diff = relative_difference(&parallel, &serial);
-            assert!(diff <= 1e-13, "forward: {diff:e}");
-            backward_sequential(sn, values, &mut serial);
-            schedule.backward(sn, values, &mut parallel);
-            let diff = relative_difference(&parallel, &serial);
-            assert!(diff <= 1e-12, "backward: {diff:e}");
-            // and the solve is a solve: K x = r
-            let mut x = r.clone();
-            factor.solve_in_place(&mut x, &Counters::default());
-            let mut kx = vec![0.0; k.n()];
-            k.matvec(&x, &mut kx);
-            let residual = kx.iter().zip(&r).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-            assert!(residual < 1e-9, "residual {residual:e}");
-        }
     }
 }

@@ -5,7 +5,7 @@
 //! exponentials separate in (t_n − t_i) and admit exact O(1)-per-step recursions; anything
 //! else uses the exact direct sum.
 
-use crate::scene::Expr;
+use crate::expr::Expr;
 
 /// A scalar relaxation kernel b(s), s ≥ 0.
 #[derive(Clone, Debug)]

@@ -40,6 +40,13 @@ const HEX_FACES: [[usize; 4]; 6] = [
     [1, 2, 6, 5],
 ];
 
+/// A cell as an element of a sparse pattern: its node list.
+impl AsRef<[usize]> for Cell {
+    fn as_ref(&self) -> &[usize] {
+        self.nodes()
+    }
+}
+
 impl Cell {
     /// The cell's node indices, in gmsh's order.
     pub fn nodes(&self) -> &[usize] {

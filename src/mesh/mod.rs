@@ -22,11 +22,13 @@
 //! the first of them.
 
 mod cell;
+pub mod element;
 mod error;
 mod group;
 mod msh22;
 mod msh41;
 mod physical_names;
+pub mod quadrature;
 pub mod structured;
 mod topology;
 
@@ -236,9 +238,9 @@ impl<const D: usize> Mesh<D> {
         self.cells
             .iter()
             .map(|c| {
-                crate::fem::element::stiffness_rule(c)
+                crate::mesh::element::stiffness_rule(c)
                     .iter()
-                    .map(|q| q.weight * crate::fem::element::shape_at(c, &self.points, q.xi).det_j)
+                    .map(|q| q.weight * crate::mesh::element::shape_at(c, &self.points, q.xi).det_j)
                     .sum::<f64>()
             })
             .sum()
@@ -660,7 +662,10 @@ fn fmt_point<const D: usize>(p: [f64; D]) -> String {
 /// The smallest det J of a 3D cell over its stiffness quadrature points and its corners, and
 /// where it is (reference coordinates).
 fn min_det_3d(points: &[[f64; 3]], cell: &Cell) -> (f64, [f64; 3]) {
-    let mut at: Vec<[f64; 3]> = crate::fem::element::stiffness_rule(cell).iter().map(|q| q.xi).collect();
+    let mut at: Vec<[f64; 3]> = crate::mesh::element::stiffness_rule(cell)
+        .iter()
+        .map(|q| q.xi)
+        .collect();
     if let Cell::Hex8(_) = cell {
         for &x in &[-1.0, 1.0] {
             for &y in &[-1.0, 1.0] {
@@ -671,7 +676,7 @@ fn min_det_3d(points: &[[f64; 3]], cell: &Cell) -> (f64, [f64; 3]) {
         }
     }
     at.iter()
-        .map(|&xi| (crate::fem::element::shape_at(cell, points, xi).det_j, xi))
+        .map(|&xi| (crate::mesh::element::shape_at(cell, points, xi).det_j, xi))
         .fold((f64::INFINITY, [0.0; 3]), |a, b| if b.0 < a.0 { b } else { a })
 }
 
@@ -1050,7 +1055,7 @@ fn orient_3d(at: &CellPlaces<'_, '_>, points: &[[f64; 3]], cells: &mut [Cell]) -
     }
     for (c, &(det, xi, h)) in dets.iter().enumerate() {
         if det <= 1e-12 * h * h * h {
-            let s = crate::fem::element::shape_at(&cells[c], points, xi);
+            let s = crate::mesh::element::shape_at(&cells[c], points, xi);
             return Err(at.invalid(
                 c,
                 format!(

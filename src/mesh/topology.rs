@@ -2,7 +2,7 @@
 //! facets with outward normals and nodal quadrature weights (docs/method.md §2, §8).
 
 use super::{fmt_point, Facet, Mesh, MeshError, PhysicalGroup};
-use crate::fem::quadrature::QUAD_GAUSS_2X2;
+use crate::mesh::quadrature::QUAD_GAUSS_2X2;
 use std::collections::HashMap;
 
 /// A group of facets as a part of the boundary of the body.

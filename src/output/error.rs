@@ -170,3 +170,10 @@ mod tests {
         assert_send_sync::<OutputError>();
     }
 }
+
+/// A sink's write failing stops the run with the write's own message.
+impl From<OutputError> for crate::solver::SolveError {
+    fn from(e: OutputError) -> Self {
+        crate::solver::SolveError::Sink(Box::new(e))
+    }
+}

@@ -94,9 +94,9 @@ fn check_dim<const D: usize>(
 ) -> Result<String, SolveError> {
     let world = petsc.world();
     let (rank, ranks) = (petsc.rank(), petsc.size());
-    let mut out = app::check_mesh_report(mesh_path, &mesh);
+    let mut out = app::check::check_mesh_report(mesh_path, &mesh);
     let (sim, partition) = simulation_and_partition(world, scene_path, scene, mesh)?;
-    out.push_str(&app::check_scene_report(scene_path, &sim));
+    out.push_str(&app::check::check_scene_report(scene_path, &sim));
     let shares = RankShare::all(&sim, &partition);
     let backend = PetscBackend::new(petsc, &sim, partition, choice);
     let base = resident_bytes();

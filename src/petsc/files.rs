@@ -11,7 +11,7 @@
 
 use super::agree;
 use super::partition::Partition;
-use crate::app::{body_fields, cell_groups, displacement_3, mark_active, wants_stress, FileSink};
+use crate::app::sink::{body_fields, cell_groups, displacement_3, mark_active, wants_stress, FileSink};
 use crate::fem::stress::{cell_measures, cell_stresses, nodal_stress_sums, nodal_stresses_from_sums};
 use crate::mesh::{Cell, GroupSelector};
 use crate::output::{Field, Frame, SeriesWriter, CELL_IDS, NODE_IDS};

@@ -3,8 +3,8 @@
 //! sections, or from a relaxation modulus; and the time-step bound a relaxing memory sets. Used
 //! by the scene's checks (so that an error names the scene file) and by the solver's set-up.
 
-use super::expr::Expr;
 use super::types::{MemoryKernelSpec, PronySeriesSpec, Scene, TensorSpec};
+use crate::expr::Expr;
 use crate::material::{Elasticity, Isotropic, Memory, MemoryTensor, MemoryTerm, PlaneModel, Prony, RelaxationKernel};
 
 /// What is wrong with the material of a scene: the key, its value and the fix.

@@ -2,16 +2,15 @@
 //! name the file, the key and the fix, and the embedded default (the paper's example).
 
 mod error;
-mod expr;
 mod material;
 mod overrides;
 mod types;
 mod validate;
 
-pub use error::SceneError;
-pub use expr::{
+pub use crate::expr::{
     Expr, BINARY_FUNCTIONS, BODY_FORCE_VARIABLES, CONSTANTS, FUNCTIONS, KERNEL_VARIABLES, TRACTION_VARIABLES,
 };
+pub use error::SceneError;
 pub use material::MaterialError;
 pub use types::*;
 

@@ -2,11 +2,11 @@
 //! range, every expression compiling and finite at a probe point.
 
 use super::error::SceneError;
-use super::expr::Expr;
 use super::types::{
     BoundSpec, ContactDirection, ContactLawSpec, LawKind, MemoryKernelSpec, MemorySpec, ObstacleSpec, Scene,
     TensorSpec, BOUND_VARIABLES,
 };
+use crate::expr::Expr;
 use toml::Value;
 
 /// The keys allowed in a table, given its path and contents.

@@ -1,7 +1,6 @@
 //! Errors of setting up and running a simulation.
 
 use crate::mesh::MeshError;
-use crate::output::OutputError;
 use crate::scene::SceneError;
 
 /// What can stop a run, each with what to do about it.
@@ -11,8 +10,10 @@ pub enum SolveError {
     Mesh(#[from] MeshError),
     #[error(transparent)]
     Scene(#[from] SceneError),
-    #[error(transparent)]
-    Output(#[from] OutputError),
+    /// A [`FrameSink`](super::FrameSink) could not take a frame (the output layer's errors
+    /// convert into this; the solver does not know them).
+    #[error("{0}")]
+    Sink(Box<dyn std::error::Error + Send + Sync>),
     #[error("{mesh}: the clamped group {group} has no nodes, so the body can move freely and the problem is singular; tag the clamped boundary (Γ₁) in the mesh or set `groups.clamped` in the scene")]
     NoClampedNodes { mesh: String, group: String },
     #[error("{mesh}: {detail}")]

@@ -10,7 +10,7 @@
 //! Carrying is nodal interpolation: exact for nested meshes (a coarse Q1/P1 field is itself
 //! in the fine space) and for linear fields on any meshes.
 
-use crate::fem::element::{invert, map_at, reference, shape_at, MAX_NODES};
+use crate::mesh::element::{invert, map_at, reference, shape_at, MAX_NODES};
 use crate::mesh::{Cell, Mesh};
 
 /// Relative tolerance (of the mesh diameter) for points on or just outside the boundary.

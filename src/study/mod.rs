@@ -25,6 +25,7 @@
 //! println!("{}", study::report::markdown(&s.rows()));
 //! ```
 
+mod format;
 pub mod interpolate;
 pub mod plot;
 pub mod report;

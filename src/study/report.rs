@@ -1,5 +1,6 @@
 //! A study's rows as a Markdown table and as CSV.
 
+use super::format::fraction;
 use super::runner::{Refinement, Row};
 use std::fmt::Write;
 
@@ -24,16 +25,6 @@ pub const CSV_COLUMNS: [&str; 18] = [
     "newton",
     "peak_rss_mb",
 ];
-
-/// `1/n` when 1/x is within 1e-9 of an integer n ≥ 1, else x in scientific notation.
-pub fn fraction(x: f64) -> String {
-    let n = 1.0 / x;
-    if n >= 1.0 && (n - n.round()).abs() <= 1e-9 * n {
-        format!("1/{}", n.round() as u64)
-    } else {
-        format!("{x:.4e}")
-    }
-}
 
 fn mb(bytes: Option<u64>) -> Option<f64> {
     bytes.map(|b| b as f64 / (1024.0 * 1024.0))

@@ -515,7 +515,7 @@ pub fn run_plan<const D: usize>(
             .map(|&n| index(&mut study, n, *steps, progress))
             .collect::<Result<Vec<_>, _>>()?;
         let k = study.runs[runs[0]].summary.k;
-        study.add_path(format!("h (k={})", super::report::fraction(k)), Refinement::H, runs)?;
+        study.add_path(format!("h (k={})", super::format::fraction(k)), Refinement::H, runs)?;
     }
     for (n, all_steps) in plan.k_paths.iter().filter(|(_, s)| !s.is_empty()) {
         let runs = all_steps

@@ -4,7 +4,8 @@
 //! print beside ours. It writes `study.md`, `study.csv`, `error_vs_h.svg`, `error_vs_k.svg`,
 //! `work_precision.svg` and `gamma3.svg` (u_ν on Γ₃ of the reference at the compared times).
 
-use super::report::{self, fraction, Published};
+use super::format::fraction;
+use super::report::{self, Published};
 use super::target::{self, Candidate, CostModel, CostSample, ErrorModel, ErrorSample};
 use super::{plot, run_plan, Keep, Refinement, RunErrors, RunOptions, RunRecord, Study, StudyPlan};
 use crate::mesh::structured::{block, rectangle, CellShape, SolidShape};

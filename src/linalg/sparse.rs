@@ -1,5 +1,6 @@
 //! A symmetric sparse matrix in compressed-column form whose pattern is built once from the
-//! mesh, with a precomputed scatter map from each cell's local matrix into the value array.
+//! elements (the node lists of a mesh's cells), with a precomputed scatter map from each
+//! element's local matrix into the value array.
 //! Every matrix of a run (K_A, K_B, K = K_A + c·K_B) shares the pattern, so re-assembly and
 //! linear combinations are plain loops over values.
 //!
@@ -7,8 +8,6 @@
 //! k, docs/method.md §7): the block size is part of the pattern, so the ordering and the
 //! node-block product know it without guessing.
 
-use super::dofs::DofMap;
-use crate::mesh::Cell;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use std::sync::Arc;
 
@@ -31,14 +30,14 @@ impl Pattern {
     /// Builds the pattern of the element couplings of `cells` on `n_nodes` nodes with `block`
     /// unknowns each: column D·k + c holds the rows D·q … D·q + D − 1 of every node q coupled
     /// with k, in order.
-    pub fn new(cells: &[Cell], n_nodes: usize, block: usize) -> Self {
+    pub fn new<E: AsRef<[usize]>>(cells: &[E], n_nodes: usize, block: usize) -> Self {
         let d = block;
         let n = d * n_nodes;
         // Node adjacency (including the node itself), sorted.
         let mut adjacency: Vec<Vec<usize>> = vec![Vec::new(); n_nodes];
         for cell in cells {
-            for &a in cell.nodes() {
-                adjacency[a].extend_from_slice(cell.nodes());
+            for &a in cell.as_ref() {
+                adjacency[a].extend_from_slice(cell.as_ref());
             }
         }
         for list in &mut adjacency {
@@ -63,11 +62,11 @@ impl Pattern {
         }
         // Scatter: local entry (i, j) = (node b comp c', node a comp c) sits at
         // col_ptr[D·a + c] + D·(position of b in adjacency[a]) + c'.
-        let mut scatter = Vec::with_capacity(cells.iter().map(|c| d * d * c.nodes().len().pow(2)).sum());
+        let mut scatter = Vec::with_capacity(cells.iter().map(|c| d * d * c.as_ref().len().pow(2)).sum());
         let mut scatter_offset = Vec::with_capacity(cells.len() + 1);
         scatter_offset.push(0);
         for cell in cells {
-            let local = cell.nodes();
+            let local = cell.as_ref();
             let nl = d * local.len();
             let start = scatter.len();
             scatter.resize(start + nl * nl, usize::MAX);
@@ -157,6 +156,13 @@ impl NodeGraph {
     }
 }
 
+/// Which unknowns are prescribed (Dirichlet data): their rows and columns become the
+/// identity's in [`SymmetricMatrix::with_identity_rows`].
+pub trait Prescribed {
+    /// True if unknown `i` is prescribed.
+    fn is_prescribed(&self, i: usize) -> bool;
+}
+
 /// A symmetric matrix on a shared [`Pattern`].
 #[derive(Clone, Debug)]
 pub struct SymmetricMatrix {
@@ -224,7 +230,7 @@ impl SymmetricMatrix {
     /// whose every component is prescribed is decoupled from the others in the pattern of the
     /// result (its couplings would be explicit zeros, and would cost fill in the factor); a
     /// partly prescribed node keeps its D × D blocks, with explicit zeros.
-    pub fn with_identity_rows<const D: usize>(&self, dofs: &DofMap<D>) -> SymmetricMatrix {
+    pub fn with_identity_rows(&self, dofs: &impl Prescribed) -> SymmetricMatrix {
         let d = self.pattern.block;
         let old = self.pattern.node_graph();
         let n_nodes = old.len();
@@ -305,5 +311,75 @@ impl SymmetricMatrix {
                     .map_or(0.0, |k| self.values[sym.col_ptr()[j] + k])
             })
             .collect()
+    }
+}
+
+/// Test matrices for the linear algebra's own tests, without the finite-element layer above it:
+/// the pattern of a P1 or Q1 mesh of a rectangle with two unknowns per node, and values that
+/// share a stiffness matrix's structure (a Laplacian with rigid modes in every element,
+/// condition number ~ h⁻², components coupled in every block), clamped on the left side.
+#[cfg(test)]
+pub(crate) mod test_matrices {
+    use super::{Pattern, Prescribed, SymmetricMatrix};
+    use std::sync::Arc;
+
+    /// The clamped unknowns: both components of the nodes on x = 0.
+    struct LeftSide {
+        nx: usize,
+    }
+
+    impl Prescribed for LeftSide {
+        fn is_prescribed(&self, i: usize) -> bool {
+            (i / 2) % (self.nx + 1) == 0
+        }
+    }
+
+    /// K = L ⊗ A on an `nx × ny` grid of unit squares (split into two triangles each unless
+    /// `quads`), A = [[2, ½], [½, 1]], with identity rows on the left side.
+    pub(crate) fn grid_stiffness(nx: usize, ny: usize, quads: bool) -> SymmetricMatrix {
+        let node = |i: usize, j: usize| j * (nx + 1) + i;
+        let mut cells: Vec<Vec<usize>> = Vec::new();
+        for j in 0..ny {
+            for i in 0..nx {
+                let (a, b, c, d) = (node(i, j), node(i + 1, j), node(i + 1, j + 1), node(i, j + 1));
+                if quads {
+                    cells.push(vec![a, b, c, d]);
+                } else {
+                    cells.push(vec![a, b, c]);
+                    cells.push(vec![a, c, d]);
+                }
+            }
+        }
+        // the Laplacian's element matrices on a unit square and on its two halves
+        const Q1: [[f64; 4]; 4] = [
+            [4.0, -1.0, -2.0, -1.0],
+            [-1.0, 4.0, -1.0, -2.0],
+            [-2.0, -1.0, 4.0, -1.0],
+            [-1.0, -2.0, -1.0, 4.0],
+        ];
+        const P1_LOWER: [[f64; 3]; 3] = [[1.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0]];
+        const P1_UPPER: [[f64; 3]; 3] = [[1.0, 0.0, -1.0], [0.0, 1.0, -1.0], [-1.0, -1.0, 2.0]];
+        const A: [[f64; 2]; 2] = [[2.0, 0.5], [0.5, 1.0]];
+        let pattern = Arc::new(Pattern::new(&cells, (nx + 1) * (ny + 1), 2));
+        let mut k = SymmetricMatrix::zeros(pattern.clone());
+        for (e, cell) in cells.iter().enumerate() {
+            let laplacian = |a: usize, b: usize| match (quads, e % 2) {
+                (true, _) => Q1[a][b] / 6.0,
+                (false, 0) => P1_LOWER[a][b] / 2.0,
+                (false, _) => P1_UPPER[a][b] / 2.0,
+            };
+            let n = 2 * cell.len();
+            for (p, &at) in pattern.cell_scatter(e).iter().enumerate() {
+                let (r, c) = (p / n, p % n);
+                k.values[at] += laplacian(r / 2, c / 2) * A[r % 2][c % 2];
+            }
+        }
+        k.with_identity_rows(&LeftSide { nx })
+    }
+
+    /// max |a − b| / max |b|.
+    pub(crate) fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
+        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
+        a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / scale
     }
 }

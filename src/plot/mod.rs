@@ -12,15 +12,18 @@
 //!
 //! Everything is read from the run directory: `solution.pvd` and its last `.vtu`,
 //! `gamma3.csv`, `scene.toml` (the effective scene) and `summary.json`. Text in the PNG files is
-//! drawn with the pixel glyphs of [`crate::study::plot`] (no system font is needed).
+//! drawn with the pixel glyphs of `kit.rs` (no system font is needed).
 
 use crate::mesh::{Cell, Mesh};
 use crate::output;
 use crate::scene::Scene;
 use crate::solver::SolveError;
-use crate::study::plot::{
-    colour_map, draw_text, draw_x_ticks, err, field_range, linear_ticks, minus_sign, sci, tick_label, Lettering,
-};
+pub mod kit;
+pub mod surface;
+
+pub use kit::{colour_map, sci};
+
+use kit::{draw_text, draw_x_ticks, err, field_range, linear_ticks, minus_sign, tick_label, Lettering};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::HPos;
@@ -996,7 +999,7 @@ fn draw_gamma3<DB: DrawingBackend>(
 /// `gamma3.csv`, as two colour maps of the nodes projected onto the plane of the two coordinates
 /// with the largest spread (Γ₃ is flat in the shipped examples), nodes on the bound outlined.
 fn plot_3d(run_dir: &Path, last: &str) -> Result<Vec<PathBuf>, SolveError> {
-    use crate::study::plot::{project_surface, render_surface_map, MapPanel, SurfaceMap};
+    use surface::{project_surface, render_surface_map, MapPanel, SurfaceMap};
     let fail = |what: String| SolveError::Setup(format!("{}: {what}", run_dir.display()));
     let csv = std::fs::read_to_string(run_dir.join("gamma3.csv")).map_err(|e| {
         fail(format!(

@@ -1,0 +1,197 @@
+//! `hvi check`: what a run would do and cost, without running it (README "Checking a setup").
+
+use super::solve::read_mesh;
+use crate::mesh::{AnyMesh, Mesh};
+use crate::scene::Scene;
+use crate::solver::{Plan, Simulation, SolveError};
+use std::path::Path;
+
+/// The report of `hvi check`.
+pub fn check(mesh_path: &Path, scene_path: Option<&Path>, overrides: &[String]) -> Result<String, SolveError> {
+    let scene = Scene::load(scene_path, overrides)?;
+    match read_mesh(mesh_path)? {
+        AnyMesh::Two(m) => check_dim(mesh_path, scene_path, &scene, m),
+        AnyMesh::Three(m) => check_dim(mesh_path, scene_path, &scene, m),
+    }
+}
+
+/// [`check`] on a mesh of dimension D.
+fn check_dim<const D: usize>(
+    mesh_path: &Path,
+    scene_path: Option<&Path>,
+    scene: &Scene,
+    mesh: Mesh<D>,
+) -> Result<String, SolveError> {
+    use std::fmt::Write;
+    let mut out = check_mesh_report(mesh_path, &mesh);
+    let sim = Simulation::new(scene, mesh)?;
+    out.push_str(&check_scene_report(scene_path, &sim));
+    // The factor: symbolic analysis only (cheap), so its size is known before solving.
+    let [k_a] =
+        crate::fem::assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.tensor()]);
+    let analysis =
+        crate::linalg::Factor::analyse_with_last(&k_a.with_identity_rows(&sim.dofs), &sim.unknowns_ordered_last())
+            .map_err(|e| SolveError::Setup(e.to_string()))?;
+    let factor_bytes = 8 * analysis.factor_entries() as u64;
+    let _ = writeln!(
+        out,
+        "factor: {} ordering, nnz(L) = {} ({:.1} MiB per factor, at most 2 factors)",
+        analysis.ordering(),
+        analysis.factor_entries(),
+        factor_bytes as f64 / 1048576.0
+    );
+    if let Some(available) = available_memory_bytes() {
+        if 2 * factor_bytes > available {
+            return Err(SolveError::Setup(format!(
+                "{}: the factor needs {:.1} GiB ({} entries, twice with memory) but {:.1} GiB are available; use a \
+                 coarser mesh (fewer unknowns) or a machine with more memory",
+                mesh_path.display(),
+                2.0 * factor_bytes as f64 / 1073741824.0,
+                analysis.factor_entries(),
+                available as f64 / 1073741824.0
+            )));
+        }
+    }
+    if let Some(c) = &sim.contact {
+        // rows per group (a corner node counts once per wall, docs/method.md §14.3)
+        let per_group: Vec<String> = c
+            .groups
+            .iter()
+            .enumerate()
+            .map(|(i, g)| format!("\"{g}\" ({})", c.row_group.iter().filter(|&&r| r == i).count()))
+            .collect();
+        let _ = writeln!(out, "contact: {} rows on {}", c.nodes.len(), per_group.join(", "));
+        if !c.laws.is_empty() {
+            let ratio = smallness_ratio(&sim)?;
+            let _ = writeln!(
+                out,
+                "  smallness condition (discrete, energy norm of A): α_j·c² = {:.3} ({})",
+                ratio,
+                if ratio < 1.0 && softening_memory(&sim) {
+                    "holds with A; but b(0) < 0 makes the step matrix K softer than K_A, so the step energy is convex \
+                     only if it also holds with K: see `smallness` in the run's summary.json (docs/method.md §15.3)"
+                } else if ratio < 1.0 {
+                    "holds: every step's energy is convex"
+                } else {
+                    "FAILS: the step energy is non-convex; the globalised solver handles it, but uniqueness is not guaranteed"
+                }
+            );
+        }
+    }
+    let warnings = crate::solver::advice::warnings(scene, &sim);
+    for w in &warnings {
+        let _ = writeln!(out, "warning: {w}");
+    }
+    Ok(out)
+}
+
+/// The mesh part of `hvi check`'s report: counts, cell sizes, physical groups.
+pub(crate) fn check_mesh_report<const D: usize>(mesh_path: &Path, mesh: &Mesh<D>) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
+    let _ = writeln!(out, "mesh {}", mesh_path.display());
+    let count = |name: &str| mesh.cells.iter().filter(|c| c.name() == name).count();
+    let kinds: Vec<String> = if D == 2 {
+        vec![
+            format!("{} triangles", count("triangle")),
+            format!("{} quadrilaterals", count("quadrangle")),
+        ]
+    } else {
+        vec![
+            format!("{} tetrahedra", count("tetrahedron")),
+            format!("{} hexahedra", count("hexahedron")),
+        ]
+    };
+    let _ = writeln!(
+        out,
+        "  {D}D: {} nodes, {} cells ({})",
+        mesh.points.len(),
+        mesh.cells.len(),
+        kinds.join(", ")
+    );
+    let (hmin, hmax) = mesh.cell_size();
+    let _ = writeln!(out, "  cell size h: {hmin:.4e} … {hmax:.4e}");
+    let _ = writeln!(out, "  physical groups:");
+    for g in &mesh.groups {
+        let _ = writeln!(
+            out,
+            "    dim {} tag {:>3} {:<14} {} facets, {} cells",
+            g.dim,
+            g.tag,
+            g.name.as_deref().unwrap_or("(no name)"),
+            g.facets.len(),
+            g.cells.len()
+        );
+    }
+    out
+}
+
+/// The scene part of `hvi check`'s report: unknowns, time steps and the plan.
+pub(crate) fn check_scene_report<const D: usize>(scene_path: Option<&Path>, sim: &Simulation<D>) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "scene {}",
+        scene_path.map_or("<embedded default: examples/paper.toml>".to_string(), |p| p
+            .display()
+            .to_string())
+    );
+    let _ = writeln!(
+        out,
+        "  unknowns: {} free ({} prescribed components kept as identity rows)",
+        sim.dofs.n_free(),
+        sim.dofs.n_prescribed()
+    );
+    let _ = writeln!(
+        out,
+        "  time: T = {}, {} steps of k = {:.4e}",
+        sim.time.final_time,
+        sim.time.steps,
+        sim.time.step()
+    );
+    let _ = writeln!(out, "plan:");
+    let _ = write!(out, "{}", Plan::new(sim));
+    out
+}
+
+/// True when the memory's share of the step matrix, Σ_j (k/2) b_j(0) T_j, has a negative
+/// eigenvalue (b(0) < 0, a relaxing material): K is then softer than K_A in some strain.
+fn softening_memory<const D: usize>(sim: &Simulation<D>) -> bool {
+    sim.memory.as_ref().is_some_and(|m| {
+        let s = m.step_share(sim.time.step());
+        s.mu < 0.0 || 2.0 * s.mu + D as f64 * s.lambda < 0.0
+    })
+}
+
+/// MemAvailable of /proc/meminfo (Linux), in bytes.
+fn available_memory_bytes() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// α_j λ_max(D^{1/2} C K_A⁻¹ Cᵀ D^{1/2}) (see
+/// [`crate::contact::DenseNormalStiffness::trace_constant`]).
+pub fn smallness_ratio<const D: usize>(sim: &Simulation<D>) -> Result<f64, SolveError> {
+    let c = sim
+        .contact
+        .as_ref()
+        .ok_or_else(|| SolveError::Setup("no contact".into()))?;
+    let [k_a] =
+        crate::fem::assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.tensor()]);
+    let k_a = k_a.with_identity_rows(&sim.dofs);
+    let counters = crate::linalg::Counters::default();
+    let symbolic = crate::linalg::Factor::analyse(&k_a).map_err(|e| SolveError::Setup(e.to_string()))?;
+    let factor = crate::linalg::Factor::new(&symbolic, &k_a, &counters).map_err(|e| SolveError::Singular {
+        mesh: sim.mesh.path.display().to_string(),
+        detail: e.to_string(),
+    })?;
+    let op = crate::contact::SplitSweeps::new(&c.nodes, std::sync::Arc::new(factor), &counters)
+        .map_err(SolveError::Setup)?;
+    use crate::contact::Condensation;
+    Ok(op
+        .stiffness()
+        .trace_constant(&c.laws.monotonicity_weights(c.nodes.len())))
+}

@@ -1,0 +1,15 @@
+//! The options of `hvi solve`.
+
+use std::path::PathBuf;
+
+/// Options of `hvi solve`.
+pub struct SolveOptions {
+    pub mesh: PathBuf,
+    pub scene: Option<PathBuf>,
+    pub out: PathBuf,
+    pub overrides: Vec<String>,
+    pub progress: bool,
+    /// Replace an earlier run in `out` (remove exactly the files its manifest lists) instead
+    /// of refusing to write there.
+    pub overwrite: bool,
+}
