@@ -1,4 +1,4 @@
-//! `hvi plot` on 2D runs (docs of src/plot.rs): PNG and SVG of the deformed mesh and of Γ₃, the
+//! `hvi plot` on 2D runs (docs of src/plot/mod.rs): PNG and SVG of the deformed mesh and of Γ₃, the
 //! text drawn on them (colour bar, field, time, magnification), the default magnification, the
 //! foundation, the Γ₃ plot against arc length (a vertical Γ₃ too) at chosen times.
 

@@ -155,6 +155,13 @@ fn file_fix(e: &io::Error) -> &'static str {
     }
 }
 
+/// A sink's write failing stops the run with the write's own message.
+impl From<OutputError> for crate::solver::SolveError {
+    fn from(e: OutputError) -> Self {
+        crate::solver::SolveError::Sink(Box::new(e))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -168,12 +175,5 @@ mod tests {
         );
         fn assert_send_sync<T: Send + Sync + 'static>() {}
         assert_send_sync::<OutputError>();
-    }
-}
-
-/// A sink's write failing stops the run with the write's own message.
-impl From<OutputError> for crate::solver::SolveError {
-    fn from(e: OutputError) -> Self {
-        crate::solver::SolveError::Sink(Box::new(e))
     }
 }

@@ -12,7 +12,7 @@ use crate::fem::assembly::local_stiffness;
 use crate::linalg::{Counters, LinearSolver};
 use crate::material::{Isotropic, IDENTITY_TENSOR};
 use crate::scene::CondensationKind;
-use crate::solver::timeloop::{self, Backend, Stiffness};
+use crate::solver::{singularity_verdict, Backend, Stiffness};
 use crate::solver::{Simulation, SolveError};
 use hvi_petsc::mpi::collective::SystemOperation;
 use hvi_petsc::mpi::topology::SimpleCommunicator;
@@ -382,7 +382,7 @@ impl<const D: usize> Backend<D> for PetscBackend<'_, D> {
         let solver = Arc::new(self.build(sim, memory).map_err(|e| self.error(sim, e))?);
         counters.factorisations.fetch_add(1, Ordering::Relaxed);
         let error = solver.probe().map_err(|e| self.error(sim, e))?;
-        timeloop::singularity_verdict(error).map_err(|detail| SolveError::Singular {
+        singularity_verdict(error).map_err(|detail| SolveError::Singular {
             mesh: sim.mesh.path.display().to_string(),
             detail,
         })?;

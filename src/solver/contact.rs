@@ -149,7 +149,7 @@ fn vector<const D: usize>(v: &[f64], key: &str, origin: &str) -> Result<[f64; D]
     })
 }
 
-/// The obstacle of a `[[contact]]` section (also drawn by `hvi plot`, src/plot.rs).
+/// The obstacle of a `[[contact]]` section (also drawn by `hvi plot`, src/plot/mod.rs).
 pub(crate) fn obstacle_of<const D: usize>(
     o: &ObstacleSpec,
     key: &str,

@@ -3,17 +3,22 @@
 //! and [`timeloop`] is the short driver of docs/method.md §3–4.
 
 pub mod advice;
+pub mod backend;
 pub mod bound;
 pub mod contact;
 pub mod dirichlet;
 pub mod error;
 pub mod plan;
+mod reactions;
 pub mod setup;
 pub mod stats;
+mod step;
 pub mod timeloop;
 
+pub use backend::{Backend, Stiffness};
 pub use error::SolveError;
 pub use plan::Plan;
 pub use setup::{ContactSetup, Simulation, TimeGrid};
 pub use stats::{PhaseTimes, Reaction, RunStats};
-pub use timeloop::{Backend, FrameSink, StepView};
+pub use step::singularity_verdict;
+pub use timeloop::{FrameSink, StepView};

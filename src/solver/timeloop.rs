@@ -11,24 +11,24 @@
 //! ```
 //!
 //! with K = K_A + (k/2) b(0) K_B factored once (identity rows at prescribed components). The
-//! solve goes through the [`LinearSolver`] and [`Condensation`] seams; the default condensation
+//! solve goes through the [`crate::linalg::LinearSolver`] and [`crate::contact::Condensation`] seams; the default condensation
 //! is the faer factor's split sweeps (docs/method.md §4.5): a step costs one solve, contact or
 //! not. Step 0 has no history and uses K_A alone; when its solution is not trivially zero and
 //! K ≠ K_A, K_A gets a factor of its own.
 
+use super::backend::{any, Backend, Stiffness};
 use super::error::SolveError;
-use super::setup::{ContactSetup, Simulation};
+use super::reactions::Reactions;
+use super::setup::Simulation;
 use super::stats::{timed, Reaction, RunStats};
-use crate::contact::active_set::{ActiveSetSolver, ContactOutcome, ContactState};
-use crate::contact::{Condensation, SplitSweeps, StoredResponses};
+use super::step::{lift, system_matrix, StepOperator};
+use crate::contact::active_set::{ContactOutcome, ContactState};
 use crate::fem::assembly::assemble_stiffness;
 use crate::fem::{NodeBlockMatrix, SymmetricMatrix};
 use crate::history::History;
-use crate::linalg::{Analysis, Counters, Factor, LinearSolver};
+use crate::linalg::{Analysis, Counters, Factor};
 use crate::material::Isotropic;
-use crate::scene::CondensationKind;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::Instant;
 
 /// What the driver shows a sink after a step. The vectors are over the unknowns this process
@@ -50,7 +50,6 @@ pub struct StepView<'a> {
     /// (output steps with contact only; docs/method.md §14.4).
     pub contact_forces: Option<&'a [f64]>,
 }
-
 /// Receives the steps of a run (the output layer implements this; tests collect in memory).
 pub trait FrameSink<const D: usize> {
     /// Called after every step (for progress reporting).
@@ -58,343 +57,6 @@ pub trait FrameSink<const D: usize> {
     /// Called for every output step.
     fn write_frame(&mut self, sim: &Simulation<D>, view: &StepView) -> Result<(), SolveError>;
 }
-
-/// The columns of the prescribed unknowns of an unmodified matrix (all rows): what the
-/// prescribed part of the system contributes (docs/method.md §7).
-struct PrescribedColumns {
-    /// (prescribed unknown j, its column entries (i, K_ij)).
-    columns: Vec<(usize, Vec<(usize, f64)>)>,
-}
-
-impl PrescribedColumns {
-    fn new<const D: usize>(matrix: &SymmetricMatrix, dofs: &crate::fem::DofMap<D>) -> Self {
-        let columns = (0..matrix.n())
-            .filter(|&j| dofs.is_prescribed(j))
-            .map(|j| (j, matrix.column(j).collect()))
-            .collect();
-        PrescribedColumns { columns }
-    }
-
-    /// rhs_i −= Σ_j K_ij g_j at the free rows i.
-    fn lift<const D: usize>(&self, g: &[f64], dofs: &crate::fem::DofMap<D>, rhs: &mut [f64]) {
-        for (j, col) in &self.columns {
-            if g[*j] != 0.0 {
-                for &(i, v) in col {
-                    if !dofs.is_prescribed(i) {
-                        rhs[i] -= v * g[*j];
-                    }
-                }
-            }
-        }
-    }
-
-    /// (K x)_j at each prescribed j, added into `out` (indexed like the columns).
-    fn add_product(&self, x: &[f64], out: &mut [f64]) {
-        for ((_, col), o) in self.columns.iter().zip(out.iter_mut()) {
-            *o += col.iter().map(|&(i, v)| v * x[i]).sum::<f64>();
-        }
-    }
-}
-
-/// Which unmodified stiffness matrix (no identity rows) a [`Backend::product`] applies.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Stiffness {
-    /// K_A, the elastic stiffness.
-    Elastic,
-    /// K_B, the stiffness of the memory's one channel tensor (B₀ = I for the paper; docs/method.md
-    /// §3, §15.1). A backend runs memory of one channel only ([`Stepper::prepare_with`]).
-    Memory,
-}
-
-/// A linear-algebra backend other than the cached faer factor (docs/method.md §13): it builds
-/// the solver and the condensation of each distinct step matrix, and may run the contact solve
-/// on one process only and share its forces with the others. The time loop, the history, the
-/// loads and the contact law stay the same.
-///
-/// A backend may hold only a share of the unknowns on this process ([`Backend::unknowns`]):
-/// the time loop then keeps every step vector (loads, history, displacement) over that share,
-/// multiplies by K_A and K_B through [`Backend::product`], and makes the decisions that must be
-/// the same everywhere (a non-finite solution, a zero step) through [`Backend::sum`]
-/// (docs/method.md §13.2).
-pub trait Backend<const D: usize>: Sync {
-    /// A solver (and, with contact nodes, a condensation) for the step matrix
-    /// K = K_A + c K_B with identity rows at the prescribed unknowns, c = `memory` (None: K_A).
-    #[allow(clippy::type_complexity)]
-    fn operator(
-        &self,
-        sim: &Simulation<D>,
-        memory: Option<f64>,
-        counters: &Counters,
-    ) -> Result<(Arc<dyn LinearSolver>, Option<Box<dyn Condensation>>), SolveError>;
-    /// True if this process runs the active-set solve of a step (the others receive its result).
-    fn solves_contact(&self) -> bool {
-        true
-    }
-    /// Gives every process the result of the process that solved the contact problem: on that
-    /// one, `local` is its result and `state` its state; on the others both are overwritten.
-    fn share_contact(
-        &self,
-        _state: &mut ContactState,
-        local: Result<ContactOutcome, SolveError>,
-    ) -> Result<ContactOutcome, SolveError> {
-        local
-    }
-    /// The unknowns (hvi's numbers D·p + c) this process holds, in the order of every vector
-    /// the time loop passes to the backend's solvers and products and shows its sink.
-    fn unknowns(&self) -> &[usize];
-    /// y = K x over this process's unknowns for the unmodified K_A or K_B (collective). A
-    /// failure fills y with NaN, which the collective checks then see on every process.
-    fn product(&self, sim: &Simulation<D>, matrix: Stiffness, x: &[f64], y: &mut [f64]);
-    /// Replaces `values` by their sum over all processes (collective; NaN stays NaN).
-    fn sum(&self, values: &mut [f64]);
-}
-
-/// True on every process if `local` is true on any (collective with a backend).
-fn any<const D: usize>(backend: Option<&dyn Backend<D>>, local: bool) -> bool {
-    match backend {
-        None => local,
-        Some(b) => {
-            let mut v = [f64::from(u8::from(local))];
-            b.sum(&mut v);
-            v[0] != 0.0
-        }
-    }
-}
-
-/// How a step operator lifts non-zero prescribed values (docs/method.md §7.2).
-enum Lifting {
-    /// The unmodified columns of the prescribed unknowns (serial).
-    Columns(PrescribedColumns),
-    /// rhs −= (K_A + c K_B) g at the free unknowns through [`Backend::product`] (c = `memory`).
-    Products { memory: Option<f64> },
-}
-
-/// A factor of a step matrix and, with contact, its condensation.
-struct StepOperator {
-    solver: Arc<dyn LinearSolver>,
-    condensed: Option<Box<dyn Condensation>>,
-    /// How non-zero prescribed values are lifted (None when they are all zero).
-    lifting: Option<Lifting>,
-}
-
-/// The matrix a factor is built from (identity rows at the prescribed unknowns, docs/method.md
-/// §7) and, when some prescribed value is non-zero, the unmodified columns that lift them.
-fn system_matrix<const D: usize>(sim: &Simulation<D>, matrix: &SymmetricMatrix) -> (SymmetricMatrix, Option<Lifting>) {
-    let lifting = sim
-        .dirichlet
-        .is_nonzero()
-        .then(|| Lifting::Columns(PrescribedColumns::new(matrix, &sim.dofs)));
-    (matrix.with_identity_rows(&sim.dofs), lifting)
-}
-
-impl StepOperator {
-    /// Factors `matrix` (from [`system_matrix`]) and condenses the contact normals.
-    fn new<const D: usize>(
-        sim: &Simulation<D>,
-        symbolic: &Analysis,
-        (matrix, lifting): (SymmetricMatrix, Option<Lifting>),
-        counters: &Counters,
-        stats: &mut RunStats,
-    ) -> Result<Self, SolveError> {
-        // The probe's product K v is taken before the factorisation, which consumes the matrix:
-        // K is not held next to its factor (docs/method.md §9.3).
-        let probe = timed(&mut stats.phases.factorisation, || Probe::new(&matrix));
-        let factor = timed(&mut stats.phases.factorisation, || {
-            Factor::new_consuming(symbolic, matrix, counters)
-        })
-        .map_err(|e| SolveError::Singular {
-            mesh: sim.mesh.path.display().to_string(),
-            detail: e.to_string(),
-        })?;
-        timed(&mut stats.phases.factorisation, || probe.verdict(&factor)).map_err(|detail| SolveError::Singular {
-            mesh: sim.mesh.path.display().to_string(),
-            detail,
-        })?;
-        let factor = Arc::new(factor);
-        let condensed: Option<Box<dyn Condensation>> = match &sim.contact {
-            Some(c) if !c.nodes.is_empty() => Some(
-                timed(
-                    &mut stats.phases.condensation,
-                    || -> Result<Box<dyn Condensation>, String> {
-                        Ok(match sim.condensation {
-                            CondensationKind::SplitSweeps => {
-                                Box::new(SplitSweeps::new(&c.nodes, factor.clone(), counters)?)
-                            }
-                            kind @ (CondensationKind::StoredResponses | CondensationKind::RecoverySolve) => {
-                                let solver: Arc<dyn LinearSolver> = factor.clone();
-                                let keep = kind == CondensationKind::StoredResponses;
-                                Box::new(StoredResponses::new(&c.nodes, solver, keep, counters)?)
-                            }
-                        })
-                    },
-                )
-                .map_err(SolveError::Setup)?,
-            ),
-            _ => None,
-        };
-        if let Some(c) = &condensed {
-            stats.condensation = Some(c.name().to_string());
-        }
-        Ok(StepOperator {
-            solver: factor,
-            condensed,
-            lifting,
-        })
-    }
-
-    /// The operator of a [`Backend`] for K = K_A + c K_B (c = `memory`), lifting through the
-    /// backend's products.
-    fn with_backend<const D: usize>(
-        sim: &Simulation<D>,
-        backend: &dyn Backend<D>,
-        memory: Option<f64>,
-        counters: &Counters,
-        stats: &mut RunStats,
-    ) -> Result<Self, SolveError> {
-        let lifting = sim.dirichlet.is_nonzero().then_some(Lifting::Products { memory });
-        let (solver, condensed) = timed(&mut stats.phases.factorisation, || {
-            backend.operator(sim, memory, counters)
-        })?;
-        if let Some(c) = &condensed {
-            stats.condensation = Some(c.name().to_string());
-        }
-        Ok(StepOperator {
-            solver,
-            condensed,
-            lifting,
-        })
-    }
-
-    /// Solves one step: d = C K⁻¹ rhs, contact → λ, u_n = K⁻¹ (rhs − Cᵀ λ). `offset` is the
-    /// prescribed part of u_ν (None when it is zero); `u` receives u_n.
-    #[allow(clippy::too_many_arguments)]
-    fn solve<const D: usize>(
-        &mut self,
-        sim: &Simulation<D>,
-        step: usize,
-        rhs: &[f64],
-        offset: Option<&[f64]>,
-        u: &mut [f64],
-        state: Option<&mut ContactState>,
-        backend: Option<&dyn Backend<D>>,
-        counters: &Counters,
-        stats: &mut RunStats,
-    ) -> Result<Option<ContactOutcome>, SolveError> {
-        match (&sim.contact, self.condensed.as_mut(), state) {
-            (Some(setup), Some(op), Some(state)) => {
-                let mut d = vec![0.0; setup.nodes.len()];
-                timed(&mut stats.phases.forward_sweep, || {
-                    op.free_normal(rhs, &mut d, counters)
-                });
-                if let Some(g) = offset {
-                    setup.nodes.prescribed_offset(g, &mut d);
-                }
-                let outcome = timed(&mut stats.phases.contact, || match backend {
-                    None => contact_solve(sim, setup, op.as_ref(), step, &d, state),
-                    Some(b) => {
-                        let local = if b.solves_contact() {
-                            contact_solve(sim, setup, op.as_ref(), step, &d, state)
-                        } else {
-                            Ok(ContactOutcome::default())
-                        };
-                        b.share_contact(state, local)
-                    }
-                })?;
-                stats.contact_solves += 1;
-                timed(&mut stats.phases.backward_sweep, || {
-                    op.recover(&state.force, u, counters)
-                });
-                Ok(Some(outcome))
-            }
-            _ => {
-                timed(&mut stats.phases.backward_sweep, || self.solver.solve(rhs, u, counters));
-                Ok(None)
-            }
-        }
-    }
-}
-
-/// A Cholesky factorisation of a singular matrix can succeed on round-off pivots (a body held
-/// at a single point can still rotate about it). One probe solve, K⁻¹(K v) against v for a fixed
-/// pseudo-random v, tells: an error far above round-off means the matrix is (nearly) singular.
-/// The probe is not counted among the run's solves.
-struct Probe {
-    v: Vec<f64>,
-    /// K v.
-    product: Vec<f64>,
-}
-
-impl Probe {
-    /// The probe vector v and K v.
-    fn new(matrix: &SymmetricMatrix) -> Self {
-        let n = matrix.n();
-        let v: Vec<f64> = (0..n)
-            .map(|i| ((i as f64 + 1.0) * 0.618_033_988_749_895).fract() - 0.5)
-            .collect();
-        let mut product = vec![0.0; n];
-        matrix.matvec(&v, &mut product);
-        Probe { v, product }
-    }
-
-    /// K⁻¹(K v) against v with the factor of K.
-    fn verdict(mut self, factor: &Factor) -> Result<(), String> {
-        factor.solve_in_place(&mut self.product, &Counters::default());
-        let scale = self.v.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-        let error = self
-            .product
-            .iter()
-            .zip(&self.v)
-            .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()))
-            / scale;
-        singularity_verdict(error)
-    }
-}
-
-/// The verdict of a probe solve whose relative error is `error` (any backend's probe).
-pub fn singularity_verdict(error: f64) -> Result<(), String> {
-    if error.is_finite() && error <= 1e-6 {
-        Ok(())
-    } else {
-        Err(format!(
-            "the stiffness matrix is singular or nearly so (a probe solve is off by {error:.1e} relative): the body is not held against rigid motions; clamp a part of the boundary (groups.clamped) that stops translations and rotations"
-        ))
-    }
-}
-
-fn contact_solve<const D: usize>(
-    sim: &Simulation<D>,
-    setup: &ContactSetup<D>,
-    op: &dyn Condensation,
-    step: usize,
-    d: &[f64],
-    state: &mut ContactState,
-) -> Result<ContactOutcome, SolveError> {
-    // a moving obstacle moves the laws' origins and the bounds (docs/method.md §14.2)
-    let t = sim.time.time(step);
-    let moved = setup
-        .gaps_at(t)
-        .map_err(|detail| SolveError::NonFiniteLoad { step, time: t, detail })?;
-    let (offset, bound) = match &moved {
-        Some((o, g)) => (Some(&o[..]), Some(&g[..])),
-        None => (setup.gap.as_deref(), setup.bound.as_deref()),
-    };
-    let solver = ActiveSetSolver {
-        operator: op.stiffness(),
-        laws: &setup.laws,
-        offset,
-        bound,
-        settings: setup.settings,
-    };
-    solver.solve(d, state).map_err(|f| SolveError::ContactFailed {
-        step,
-        time: sim.time.time(step),
-        iterations: f.outcome.iterations,
-        residual: f.outcome.residual,
-        tolerance: setup.settings.tolerance,
-        reason: f.reason,
-    })
-}
-
 /// K_B as the time loop multiplies it: in node blocks (a third of the memory traffic) when
 /// its pattern allows, else as assembled. Unmodified: the memory load includes the history of
 /// prescribed displacements (docs/method.md §7).
@@ -402,7 +64,6 @@ enum MemoryStiffness<const D: usize> {
     NodeBlocks(NodeBlockMatrix<D>),
     Full(SymmetricMatrix),
 }
-
 impl<const D: usize> MemoryStiffness<D> {
     fn matvec(&self, x: &[f64], y: &mut [f64]) {
         match self {
@@ -411,129 +72,6 @@ impl<const D: usize> MemoryStiffness<D> {
         }
     }
 }
-
-/// The reaction forces at the prescribed components (docs/method.md §7):
-/// R = K_A u_n + K_B m_n − F_n + Cᵀ λ at each prescribed unknown.
-struct Reactions {
-    /// K_A's and K_B's unmodified columns of the prescribed unknowns (serial; with a backend,
-    /// its products).
-    k_a: Option<PrescribedColumns>,
-    /// One per memory channel (serial).
-    k_b: Vec<PrescribedColumns>,
-    /// Per reaction group: positions of its unknowns in the prescribed columns (serial), or in
-    /// this process's vectors (only the unknowns it holds, with a backend).
-    groups: Vec<Vec<usize>>,
-    totals: Vec<f64>,
-}
-
-impl Reactions {
-    fn new<const D: usize>(sim: &Simulation<D>, k_a: &SymmetricMatrix, k_b: &[SymmetricMatrix]) -> Self {
-        let k_a = PrescribedColumns::new(k_a, &sim.dofs);
-        let position: std::collections::HashMap<usize, usize> =
-            k_a.columns.iter().enumerate().map(|(k, (j, _))| (*j, k)).collect();
-        let groups = sim
-            .dirichlet
-            .reaction_groups
-            .iter()
-            .map(|g| g.unknowns.iter().map(|d| position[d]).collect())
-            .collect();
-        Reactions {
-            k_b: k_b.iter().map(|m| PrescribedColumns::new(m, &sim.dofs)).collect(),
-            groups,
-            totals: vec![0.0; sim.dirichlet.reaction_groups.len()],
-            k_a: Some(k_a),
-        }
-    }
-
-    /// The reactions of the unknowns a backend holds (`unknowns`, its order).
-    fn held<const D: usize>(sim: &Simulation<D>, unknowns: &[usize]) -> Self {
-        let position: std::collections::HashMap<usize, usize> =
-            unknowns.iter().enumerate().map(|(k, &d)| (d, k)).collect();
-        let groups = sim
-            .dirichlet
-            .reaction_groups
-            .iter()
-            .map(|g| g.unknowns.iter().filter_map(|d| position.get(d).copied()).collect())
-            .collect();
-        Reactions {
-            k_a: None,
-            k_b: Vec::new(),
-            groups,
-            totals: vec![0.0; sim.dirichlet.reaction_groups.len()],
-        }
-    }
-
-    /// [`Reactions::compute`] with a backend: R over the unknowns this process holds, the
-    /// group totals summed over all processes (collective).
-    fn compute_held<const D: usize>(
-        &mut self,
-        sim: &Simulation<D>,
-        backend: &dyn Backend<D>,
-        u: &[f64],
-        memory: Option<&[f64]>,
-        load: &[f64],
-        contact: Option<&ContactState>,
-    ) -> &[f64] {
-        let unknowns = backend.unknowns();
-        let mut r = vec![0.0; u.len()];
-        backend.product(sim, Stiffness::Elastic, u, &mut r);
-        if let Some(m) = memory {
-            let mut y = vec![0.0; u.len()];
-            backend.product(sim, Stiffness::Memory, m, &mut y);
-            r.iter_mut().zip(&y).for_each(|(a, b)| *a += b);
-        }
-        // Cᵀλ at the prescribed unknowns: the prescribed parts of the contact rows.
-        let mut force: std::collections::HashMap<usize, f64> = std::collections::HashMap::new();
-        if let (Some(c), Some(state)) = (&sim.contact, contact) {
-            for (l, fixed) in state.force.iter().zip(c.nodes.prescribed_rows()) {
-                for &(d, coefficient) in fixed {
-                    *force.entry(d).or_insert(0.0) += l * coefficient;
-                }
-            }
-        }
-        for (total, members) in self.totals.iter_mut().zip(&self.groups) {
-            *total = members
-                .iter()
-                .map(|&k| r[k] + force.get(&unknowns[k]).copied().unwrap_or(0.0) - load[k])
-                .sum();
-        }
-        backend.sum(&mut self.totals);
-        &self.totals
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    fn compute<const D: usize>(
-        &mut self,
-        sim: &Simulation<D>,
-        u: &[f64],
-        memory: Option<&[f64]>,
-        load: &[f64],
-        contact: Option<&ContactState>,
-    ) -> &[f64] {
-        let Some(k_a) = &self.k_a else {
-            return &self.totals;
-        };
-        let mut r = vec![0.0; k_a.columns.len()];
-        k_a.add_product(u, &mut r);
-        if let Some(m) = memory {
-            for (kb, m) in self.k_b.iter().zip(m.chunks_exact(u.len())) {
-                kb.add_product(m, &mut r);
-            }
-        }
-        let mut force = vec![0.0; u.len()];
-        if let (Some(c), Some(state)) = (&sim.contact, contact) {
-            c.nodes.add_forces(&state.force, &mut force);
-        }
-        for (rk, (j, _)) in r.iter_mut().zip(&k_a.columns) {
-            *rk += force[*j] - load[*j];
-        }
-        for (total, members) in self.totals.iter_mut().zip(&self.groups) {
-            *total = members.iter().map(|&k| r[k]).sum();
-        }
-        &self.totals
-    }
-}
-
 /// The state of a run between steps: the assembled matrices, the cached factor, the history
 /// and the contact warm start. [`Stepper::prepare`] does the one-off work, [`Stepper::advance`]
 /// one time step (docs/method.md §3–4).
@@ -572,7 +110,6 @@ pub struct Stepper<'s, const D: usize> {
     outcome: Option<ContactOutcome>,
     next: usize,
 }
-
 impl<'s, const D: usize> Stepper<'s, D> {
     /// Assembles K_A (and K_B with memory), factorises K = K_A + (k/2) b(0) K_B once, and
     /// condenses the contact normals.
@@ -977,45 +514,6 @@ impl<'s, const D: usize> Stepper<'s, D> {
         self.stats
     }
 }
-
-/// The prescribed components in a right-hand side (docs/method.md §7): rhs_f −= K_fp g at the
-/// free rows, rhs_p = g_p at the prescribed ones (zero without non-zero values). `g` is over
-/// all unknowns, `rhs` over this process's ([`Backend::unknowns`] with a backend).
-fn lift<const D: usize>(
-    op: &StepOperator,
-    sim: &Simulation<D>,
-    g: Option<&[f64]>,
-    rhs: &mut [f64],
-    backend: Option<&dyn Backend<D>>,
-) {
-    match (g, &op.lifting, backend) {
-        (Some(g), Some(Lifting::Columns(columns)), _) => columns.lift(g, &sim.dofs, rhs),
-        (Some(g), Some(Lifting::Products { memory }), Some(b)) => {
-            // K g with g zero at the free unknowns is Σ_j K_ij g_j over the prescribed j.
-            let held: Vec<f64> = b.unknowns().iter().map(|&d| g[d]).collect();
-            let mut kg = vec![0.0; held.len()];
-            b.product(sim, Stiffness::Elastic, &held, &mut kg);
-            if let Some(c) = memory {
-                let mut y = vec![0.0; held.len()];
-                b.product(sim, Stiffness::Memory, &held, &mut y);
-                kg.iter_mut().zip(&y).for_each(|(a, v)| *a += c * v);
-            }
-            for ((r, &d), v) in rhs.iter_mut().zip(b.unknowns()).zip(&kg) {
-                if !sim.dofs.is_prescribed(d) {
-                    *r -= v;
-                }
-            }
-        }
-        _ => {}
-    }
-    for (k, r) in rhs.iter_mut().enumerate() {
-        let d = backend.map_or(k, |b| b.unknowns()[k]);
-        if sim.dofs.is_prescribed(d) {
-            *r = g.map_or(0.0, |g| g[d]);
-        }
-    }
-}
-
 /// True if u_0 = 0 solves step 0 exactly, so that K_A gets no factor of its own: no load
 /// (`rhs_zero`), no prescribed value (`prescribed_zero`), no fixed obstacle motion or negative
 /// bound, and a contact law that exerts no force at its origin.
@@ -1031,7 +529,6 @@ pub fn zero_solves_step_zero<const D: usize>(sim: &Simulation<D>, rhs_zero: bool
         .is_none_or(|c| c.motion.is_none() && c.bound.as_ref().is_none_or(|g| g.iter().all(|v| *v >= 0.0)));
     rhs_zero && law_at_zero == 0.0 && bound_ok && prescribed_zero
 }
-
 /// Runs the whole time series, handing every step to `sink`. `stop` is polled once per step.
 pub fn run<const D: usize>(
     sim: &Simulation<D>,
@@ -1040,7 +537,6 @@ pub fn run<const D: usize>(
 ) -> Result<RunStats, SolveError> {
     run_with(sim, sink, stop, None)
 }
-
 /// [`run`] with the step matrices solved by `backend` (None: the faer factor).
 pub fn run_with<const D: usize>(
     sim: &Simulation<D>,
