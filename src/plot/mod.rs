@@ -538,7 +538,8 @@ pub fn read_gamma3(csv: &str, mesh: &Mesh) -> Result<Gamma3, String> {
 pub fn arc_length(mesh: &Mesh, nodes: &[usize]) -> (Vec<f64>, Vec<usize>, Vec<[f64; 2]>) {
     let index: HashMap<usize, usize> = nodes.iter().enumerate().map(|(k, &p)| (p, k)).collect();
     // boundary edges (used by one cell), with the centroid of their cell for the outward side
-    let mut edges: HashMap<[usize; 2], (usize, [f64; 2])> = HashMap::new();
+    // (ordered: the normals' sums are added in the same order on every run)
+    let mut edges: std::collections::BTreeMap<[usize; 2], (usize, [f64; 2])> = std::collections::BTreeMap::new();
     for c in &mesh.cells {
         let n = c.nodes();
         let centroid = n.iter().fold([0.0; 2], |a, &p| {
@@ -699,8 +700,9 @@ fn draw_deformed<DB: DrawingBackend>(
     };
     let (vmin, vmax) = (quantile(0.02), quantile(0.98));
     let range = if vmax > vmin { vmax - vmin } else { 1.0 };
-    // the undeformed outline (boundary edges)
-    let mut edges: HashMap<[usize; 2], usize> = HashMap::new();
+    // the undeformed outline (boundary edges), drawn in the edges' order: the same picture,
+    // byte for byte, from the same run
+    let mut edges: std::collections::BTreeMap<[usize; 2], usize> = std::collections::BTreeMap::new();
     for c in &mesh.cells {
         for [a, b] in c.edges() {
             *edges.entry([a.min(b), a.max(b)]).or_default() += 1;
