@@ -437,12 +437,16 @@ fn structured_rectangle_equals_the_gmsh_mesh() {
             );
         }
         // Same cells (also the same triangle diagonals), compared by centroid.
+        assert_eq!(r.cells.len(), g.cells.len(), "{file}: cell count");
+        assert!(!r.cells.is_empty());
         for (p, q) in centroids(&r).iter().zip(&centroids(&g)) {
             assert!(
                 close(p[0], q[0], 1e-9) && close(p[1], q[1], 1e-9),
                 "{file}: cell at {p:?} vs {q:?}"
             );
         }
+        assert_eq!(r.groups.len(), g.groups.len(), "{file}: group count");
+        assert!(!r.groups.is_empty());
         for (gr, gg) in r.groups.iter().zip(&g.groups) {
             assert_eq!((gr.dim, gr.tag, &gr.name), (gg.dim, gg.tag, &gg.name));
             assert_eq!(
@@ -680,6 +684,8 @@ fn inverted_cell_is_reported_and_all_clockwise_is_flipped() {
     let orig = read("rect_q1_h8.msh");
     assert_eq!(flipped.points, orig.points);
     assert_eq!(flipped.groups, orig.groups);
+    assert_eq!(flipped.cells.len(), orig.cells.len());
+    assert!(!orig.cells.is_empty());
     for (a, b) in flipped.cells.iter().zip(&orig.cells) {
         // The same cycle, reversed twice: [a, b, c, d] → [a, d, c, b] → [a, b, c, d].
         assert_eq!(a, b);
