@@ -117,11 +117,13 @@ fn run(what: &str, scene: &Scene, mesh: Mesh) -> (Simulation, RunStats, MemorySi
 /// max over frames of ‖u_a − u_b‖∞ / max over frames of ‖u_a‖∞ (frames must match).
 fn relative_difference(a: &MemorySink, b: &MemorySink) -> f64 {
     assert_eq!(a.steps.len(), b.steps.len(), "different numbers of frames");
+    assert!(!a.steps.is_empty(), "no frame: nothing compared");
     let mut diff = 0.0f64;
     let mut scale = 0.0f64;
     for (fa, fb) in a.steps.iter().zip(&b.steps) {
         assert_eq!(fa.step, fb.step);
         assert_eq!(fa.time, fb.time);
+        assert_eq!(fa.displacement.len(), fb.displacement.len());
         for (x, y) in fa.displacement.iter().zip(&fb.displacement) {
             diff = diff.max((x - y).abs());
             scale = scale.max(x.abs());
@@ -140,12 +142,17 @@ fn contact_force_difference(sim: &Simulation, a: &MemorySink, b: &MemorySink) ->
     let mut load = vec![0.0; sim.dofs.n()];
     let mut scale = 0.0f64;
     let mut diff = 0.0f64;
+    assert_eq!(a.steps.len(), b.steps.len(), "different numbers of frames");
+    assert!(!a.steps.is_empty(), "no frame: nothing compared");
     for (fa, fb) in a.steps.iter().zip(&b.steps) {
         sim.loads.assemble(fa.time, &sim.dofs, &mut load).unwrap();
         scale = scale.max(load.iter().fold(0.0f64, |m, v| m.max(v.abs())));
         let force = |f: &hvi::app::StoredStep| f.contact.as_ref().map(|c| c.force.clone());
         match (force(fa), force(fb)) {
-            (Some(x), Some(y)) => x.iter().zip(&y).for_each(|(p, q)| diff = diff.max((p - q).abs())),
+            (Some(x), Some(y)) => {
+                assert_eq!(x.len(), y.len(), "different contact nodes");
+                x.iter().zip(&y).for_each(|(p, q)| diff = diff.max((p - q).abs()));
+            }
             (Some(x), None) | (None, Some(x)) => x.iter().for_each(|p| diff = diff.max(p.abs())),
             (None, None) => {}
         }

@@ -567,6 +567,12 @@ fn case4_contact_configurations() {
         .map(|s| max_abs(&s.displacement))
         .fold(0.0, f64::max);
     let mut rel = 0.0f64;
+    assert_eq!(
+        lifted.sink.steps.len(),
+        free.sink.steps.len(),
+        "different numbers of frames"
+    );
+    assert!(!free.sink.steps.is_empty(), "no frame: nothing compared");
     for (a, b) in lifted.sink.steps.iter().zip(&free.sink.steps) {
         rel = rel.max(max_abs_diff(&a.displacement, &b.displacement) / size);
         let st = a.contact.as_ref().unwrap();
@@ -703,6 +709,8 @@ fn case5_incompressible_and_scaled() {
         30,
     );
     let mut rel = 0.0f64;
+    assert_eq!(a.sink.steps.len(), b.sink.steps.len(), "different numbers of frames");
+    assert!(!a.sink.steps.is_empty(), "no frame: nothing compared");
     for (sa, sb) in a.sink.steps.iter().zip(&b.sink.steps) {
         rel = rel.max(max_abs_diff(&sa.displacement, &sb.displacement) / max_abs(&sa.displacement).max(1e-300));
     }

@@ -98,6 +98,8 @@ fn exponential_kernel_converges_at_order_two() {
 fn polynomial_and_expression_kernels_agree() {
     let a = amplitude_ratios("kind = \"polynomial\"\ncoefficients = [0.25, 1.0, 1.0]", 16);
     let b = amplitude_ratios("kind = \"expression\"\nexpression = \"(0.5 + s)^2\"", 16);
+    assert_eq!(a.len(), b.len());
+    assert!(!a.is_empty(), "no step: nothing compared");
     for (x, y) in a.iter().zip(&b) {
         assert!((x - y).abs() < 1e-12, "{x} vs {y}");
     }

@@ -144,6 +144,7 @@ fn tiles_of_a_grid_are_the_squares_of_its_spacing() {
         .flat_map(|i| (0..3).map(move |j| [1.0 + i as f64 * h, j as f64 * h]))
         .collect();
     let tiles = node_tiles(&pts);
+    assert_eq!(tiles.len(), pts.len(), "one tile per node");
     for (p, t) in pts.iter().zip(&tiles) {
         assert!((area(t) - h * h).abs() < 1e-12, "{p:?}: {t:?}");
         for q in t {

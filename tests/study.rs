@@ -30,6 +30,8 @@ fn linear(x: [f64; 2]) -> [f64; 2] {
 }
 
 fn max_diff(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
+    assert_eq!(a.len(), b.len(), "fields of different lengths");
+    assert!(!a.is_empty(), "empty fields: nothing compared");
     a.iter()
         .zip(b)
         .map(|(u, v)| (u[0] - v[0]).abs().max((u[1] - v[1]).abs()))

@@ -23,6 +23,8 @@ fn rough_field(mesh: &Mesh<3>) -> Vec<[f64; 3]> {
 }
 
 fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    assert_eq!(a.len(), b.len(), "fields of different lengths");
+    assert!(!a.is_empty(), "empty fields: nothing compared");
     a.iter()
         .zip(b)
         .flat_map(|(x, y)| (0..3).map(move |d| (x[d] - y[d]).abs()))

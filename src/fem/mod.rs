@@ -2,8 +2,12 @@
 //! cells, and global assembly of stiffness matrices, load vectors and stresses. The reference
 //! cells, their maps and quadrature live beside [`crate::mesh::Cell`] in [`crate::mesh::element`].
 //!
-//! docs/method.md §2: P1 on triangles, Q1 on quadrilaterals, nodal basis; Γ₁ (clamped) is
-//! eliminated from the unknowns so the assembled matrices stay symmetric positive definite.
+//! docs/method.md §2: P1 on triangles, Q1 on quadrilaterals, nodal basis. Every component of
+//! every node stays an unknown, Γ₁'s (clamped) and other prescribed ones included (chosen in
+//! `solver::dirichlet`): the solver lifts them (docs/method.md §7.2), setting their rows and
+//! columns to the identity's and moving their values to the right-hand side, so the matrices
+//! keep their pattern and are symmetric positive definite once the prescribed components stop
+//! every rigid motion.
 
 pub mod assembly;
 pub mod dofs;

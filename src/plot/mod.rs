@@ -106,9 +106,15 @@ pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, S
         .ok_or_else(|| fail("solution.pvd lists no frame".into()))?;
     let vtu = output::read_vtu_arrays(&run_dir.join(&last))?;
     let csv = std::fs::read_to_string(run_dir.join("gamma3.csv")).ok();
-    let csv_3d = csv
-        .as_ref()
-        .and_then(|csv| csv.lines().next().map(|h| h.split(',').any(|c| c.trim() == "z")));
+    let csv_3d = match &csv {
+        Some(text) => Some(
+            read_csv_header("gamma3.csv", text)
+                .map_err(fail)?
+                .iter()
+                .any(|c| c == "z"),
+        ),
+        None => None,
+    };
     if csv_3d == Some(true) || vtu.points.iter().any(|p| p[2] != 0.0) {
         return plot_3d(run_dir, &last);
     }
@@ -458,10 +464,62 @@ pub struct Gamma3 {
     pub times: Vec<(f64, Vec<(f64, f64)>)>,
 }
 
-/// Reads `gamma3.csv` (`time,x,y,u_nu,force,pressure,status`) and places its nodes on the mesh.
+/// A CSV reader of hvi's tables (`csv` crate: quoted cells, cells trimmed); rows of any length,
+/// checked by [`read_numeric_csv`].
+fn csv_reader(text: &str) -> csv::Reader<&[u8]> {
+    csv::ReaderBuilder::new()
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes())
+}
+
+/// The header of the CSV table `text` (read from the file `name`, which messages name).
+fn read_csv_header(name: &str, text: &str) -> Result<Vec<String>, String> {
+    let mut reader = csv_reader(text);
+    let header = reader
+        .headers()
+        .map_err(|e| format!("{name}: cannot read the header: {e}"))?;
+    Ok(header.iter().map(str::to_string).collect())
+}
+
+/// The header and the rows of the all-numeric CSV table `text` (read from the file `name`): a
+/// row that is not valid CSV, has another length than the header or holds a cell that is not a
+/// number is an error naming the file and the line.
+fn read_numeric_csv(name: &str, text: &str) -> Result<(Vec<String>, Vec<Vec<f64>>), String> {
+    let header = read_csv_header(name, text)?;
+    let mut reader = csv_reader(text);
+    let mut rows = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(|e| match e.position() {
+            Some(p) => format!("{name} line {}: {e}", p.line()),
+            None => format!("{name}: {e}"),
+        })?;
+        let line = record.position().map_or(0, |p| p.line());
+        if record.len() != header.len() {
+            return Err(format!(
+                "{name} line {line}: {} fields, but the header `{}` has {} columns",
+                record.len(),
+                header.join(","),
+                header.len()
+            ));
+        }
+        let row = record
+            .iter()
+            .zip(&header)
+            .map(|(cell, column)| {
+                cell.parse::<f64>()
+                    .map_err(|_| format!("{name} line {line}: `{cell}` in column `{column}` is not a number"))
+            })
+            .collect::<Result<Vec<f64>, String>>()?;
+        rows.push(row);
+    }
+    Ok((header, rows))
+}
+
+/// Reads `gamma3.csv` (`time,x,y,u_nu,force,pressure,status`) and places its nodes on the mesh;
+/// a row that does not parse is an error naming its line.
 pub fn read_gamma3(csv: &str, mesh: &Mesh) -> Result<Gamma3, String> {
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap_or("").split(',').map(str::trim).collect();
+    let (header, rows) = read_numeric_csv("gamma3.csv", csv)?;
     let column = |name: &str| {
         header.iter().position(|c| *c == name).ok_or_else(|| {
             format!(
@@ -479,11 +537,7 @@ pub fn read_gamma3(csv: &str, mesh: &Mesh) -> Result<Gamma3, String> {
     ];
     let mut times: Vec<(f64, Vec<(f64, f64)>)> = Vec::new();
     let mut positions: Vec<[f64; 2]> = Vec::new();
-    for line in lines {
-        let v: Vec<f64> = line.split(',').filter_map(|s| s.trim().parse().ok()).collect();
-        if v.len() != header.len() {
-            continue;
-        }
+    for v in rows {
         let [t, x, y, un, p] = cols.map(|c| v[c]);
         if times.last().is_none_or(|(s, _)| *s != t) {
             times.push((t, Vec::new()));
@@ -1010,8 +1064,7 @@ fn plot_3d(run_dir: &Path, last: &str) -> Result<Vec<PathBuf>, SolveError> {
              by von_mises)"
         ))
     })?;
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap_or("").split(',').map(str::trim).collect();
+    let (header, table) = read_numeric_csv("gamma3.csv", &csv).map_err(fail)?;
     let column = |name: &str| {
         header.iter().position(|c| *c == name).ok_or_else(|| {
             fail(format!(
@@ -1032,11 +1085,7 @@ fn plot_3d(run_dir: &Path, last: &str) -> Result<Vec<PathBuf>, SolveError> {
     ];
     // the rows of the last time (rows are written time by time)
     let mut rows: Vec<[f64; 7]> = Vec::new();
-    for line in lines {
-        let v: Vec<f64> = line.split(',').filter_map(|s| s.trim().parse().ok()).collect();
-        if v.len() != header.len() {
-            continue;
-        }
+    for v in table {
         let row = cols.map(|c| v[c]);
         if rows.first().is_some_and(|r| r[0] != row[0]) {
             rows.clear();
