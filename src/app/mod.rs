@@ -6,13 +6,21 @@
 //! * [`summary`]: `summary.json` and the closing report; [`options`]: [`SolveOptions`].
 
 pub mod check;
+
 pub mod options;
+
 pub mod sink;
+
 pub mod solve;
+
 pub mod summary;
 
 pub use check::{check, smallness_ratio};
+
 pub use options::SolveOptions;
+
 pub use sink::{FileSink, MemorySink, StoredStep};
+
 pub use solve::{read_mesh, solve, solve_in_memory};
+
 pub use summary::{report, Summary};

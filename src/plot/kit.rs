@@ -6,9 +6,11 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 pub(crate) const FONT: &str = "sans-serif";
+
 pub(crate) fn err<E: std::fmt::Display>(e: E) -> String {
     e.to_string()
 }
+
 /// Tick label of a log axis: `1e-3`, `2e-3`, `2.5e-3`, or plain for 0.01 ≤ |v| < 1000.
 pub fn sci(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
@@ -36,6 +38,7 @@ pub fn sci(v: f64) -> String {
     }
     format!("{m}e{e}")
 }
+
 /// A perceptual blue–green–yellow colour map (viridis, 9 stops) at s ∈ [0, 1].
 pub fn colour_map(s: f64) -> RGBColor {
     const STOPS: [(u8, u8, u8); 9] = [
@@ -60,6 +63,7 @@ pub fn colour_map(s: f64) -> RGBColor {
 
 // ---------------------------------------------------------------------------------------------
 // Γ₃ of a 3D run: colour maps of nodal values over the contact surface, projected onto a plane
+
 /// Ticks at 1, 2 or 5 × 10^k covering [lo, hi] with at most about `count` intervals.
 pub(crate) fn linear_ticks(lo: f64, hi: f64, count: usize) -> (Vec<f64>, f64) {
     let span = hi - lo;
@@ -77,6 +81,7 @@ pub(crate) fn linear_ticks(lo: f64, hi: f64, count: usize) -> (Vec<f64>, f64) {
     let last = (hi / step + 1e-9).floor() as i64;
     ((first..=last).map(|k| k as f64 * step).collect(), step)
 }
+
 /// A tick label for a multiple of `step`: as many decimals as the step needs, no trailing zeros.
 pub(crate) fn tick_label(v: f64, step: f64) -> String {
     let decimals = (-step.log10().floor()).max(0.0) as usize;
@@ -88,10 +93,12 @@ pub(crate) fn tick_label(v: f64, step: f64) -> String {
     };
     minus_sign(if s == "-0" { "0".into() } else { s })
 }
+
 /// `-` as the minus sign −.
 pub(crate) fn minus_sign(s: String) -> String {
     s.replace('-', "−")
 }
+
 /// 5×7 pixel glyphs (rows top down, `#` set, rows 7 and 8 the descender) for text on the bitmap
 /// backend, which has no font without the `ttf`/`ab_glyph` features (and no system font here).
 const GLYPHS: &[(char, &str)] = &[
@@ -190,16 +197,19 @@ const GLYPHS: &[(char, &str)] = &[
     ('|', "..#.. ..#.. ..#.. ..#.. ..#.. ..#.. ..#.."),
     ('≈', "..... .#..# #.##. ..... .#..# #.##. ....."),
 ];
+
 /// How text is drawn: with the pixel glyphs (bitmap) or as the backend's text (SVG).
 #[derive(Clone, Copy, PartialEq)]
 pub(crate) enum Lettering {
     Pixels,
     Native,
 }
+
 /// Width in pixels of `text` in the pixel glyphs at `scale` (6 columns a character).
 pub(crate) fn text_width(text: &str, scale: i32) -> i32 {
     (text.chars().count() as i32 * 6 - 1).max(0) * scale
 }
+
 /// Tick marks hanging below a horizontal axis at pixel row `y`, and their labels: one per
 /// (pixel column, value) of `ticks`, labelled by [`tick_label`] at the ticks' `step`.
 pub(crate) fn draw_x_ticks<DB: DrawingBackend>(
@@ -226,6 +236,7 @@ pub(crate) fn draw_x_ticks<DB: DrawingBackend>(
     }
     Ok(())
 }
+
 /// Draws `text` with its top (the top of a capital) at `y`, anchored at `x` by `h`; the
 /// glyph cell is 5×7 `scale`-pixel squares (about 12·scale-point text in SVG).
 pub(crate) fn draw_text<DB: DrawingBackend>(
@@ -268,6 +279,7 @@ pub(crate) fn draw_text<DB: DrawingBackend>(
     }
     Ok(())
 }
+
 /// The colour range of a field: its min and max, values within 1e-9 of the largest magnitude
 /// of 0 counted as 0 (round-off such as a pressure of −1e-17 where there is no contact).
 pub(crate) fn field_range(values: &[f64]) -> (f64, f64) {

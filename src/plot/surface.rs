@@ -31,12 +31,14 @@ pub fn project_surface(points: &[[f64; 3]]) -> ([usize; 2], Vec<[f64; 2]>) {
     let projected = points.iter().map(|p| [p[axes[0]], p[axes[1]]]).collect();
     (axes, projected)
 }
+
 /// One panel of a surface map: a nodal field with its title and its name on the colour bar.
 pub struct MapPanel {
     pub title: String,
     pub name: String,
     pub values: Vec<f64>,
 }
+
 /// Nodal fields over a surface projected onto a plane: node `i` at `points[i]`, drawn as its
 /// tile (the part of the plane nearer to it than to any other node, within the node spacing:
 /// on a structured grid, the square of the spacing around the node),
@@ -50,6 +52,7 @@ pub struct SurfaceMap {
     pub marked_meaning: String,
     pub panels: Vec<MapPanel>,
 }
+
 /// Clips the convex polygon to the half-plane {q : (q − m)·n ≤ 0} (Sutherland–Hodgman).
 fn clip_half_plane(poly: &[[f64; 2]], m: [f64; 2], n: [f64; 2]) -> Vec<[f64; 2]> {
     let side = |q: [f64; 2]| (q[0] - m[0]) * n[0] + (q[1] - m[1]) * n[1];
@@ -67,6 +70,7 @@ fn clip_half_plane(poly: &[[f64; 2]], m: [f64; 2], n: [f64; 2]) -> Vec<[f64; 2]>
     }
     out
 }
+
 /// The tile of every node (see [`SurfaceMap`]): its Voronoi cell clipped to the square of
 /// half-width R around it and to the bounding box of the nodes widened by R/2 each way, R the
 /// largest distance from a node to its nearest neighbour (on a grid of spacing h, R = h and
@@ -144,6 +148,7 @@ pub fn node_tiles(points: &[[f64; 2]]) -> Vec<Vec<[f64; 2]>> {
         })
         .collect()
 }
+
 /// Pixel geometry of a surface map (every panel alike).
 struct MapLayout {
     /// Lower-left corner of the plotted region (data units) and pixels per unit.
@@ -155,15 +160,21 @@ struct MapLayout {
     columns: i32,
     rows: i32,
 }
+
 const MAP_LEFT: i32 = 110;
+
 const MAP_RIGHT: i32 = 40;
+
 const MAP_TOP: i32 = 44;
+
 const BAR_WIDTH: i32 = 300;
+
 /// The legend of the outlines.
 fn marked_legend(map: &SurfaceMap) -> String {
     let count = map.marked.iter().filter(|m| **m).count();
     format!("{}, {count} of {}", map.marked_meaning, map.points.len())
 }
+
 fn map_layout(tiles: &[Vec<[f64; 2]>], panels: usize, legend: &str) -> MapLayout {
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     for q in tiles.iter().flatten() {
@@ -194,6 +205,7 @@ fn map_layout(tiles: &[Vec<[f64; 2]>], panels: usize, legend: &str) -> MapLayout
         rows,
     }
 }
+
 fn draw_surface_map<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     map: &SurfaceMap,
@@ -363,6 +375,7 @@ fn draw_surface_map<DB: DrawingBackend>(
     }
     Ok(())
 }
+
 /// Draws the panels of a surface map side by side (or stacked, for a wide strip), each with a
 /// colour bar (viridis between the field's min and max), to a PNG and, if given, an SVG file.
 pub fn render_surface_map(png: &Path, svg: Option<&Path>, map: &SurfaceMap) -> Result<(), String> {

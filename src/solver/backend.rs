@@ -17,6 +17,7 @@ pub enum Stiffness {
     /// §3, §15.1). A backend runs memory of one channel only ([`Stepper::prepare_with`]).
     Memory,
 }
+
 /// A linear-algebra backend other than the cached faer factor (docs/method.md §13): it builds
 /// the solver and the condensation of each distinct step matrix, and may run the contact solve
 /// on one process only and share its forces with the others. The time loop, the history, the
@@ -59,6 +60,7 @@ pub trait Backend<const D: usize>: Sync {
     /// Replaces `values` by their sum over all processes (collective; NaN stays NaN).
     fn sum(&self, values: &mut [f64]);
 }
+
 /// True on every process if `local` is true on any (collective with a backend).
 pub(super) fn any<const D: usize>(backend: Option<&dyn Backend<D>>, local: bool) -> bool {
     match backend {

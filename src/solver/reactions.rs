@@ -20,6 +20,7 @@ pub(super) struct Reactions {
     groups: Vec<Vec<usize>>,
     totals: Vec<f64>,
 }
+
 impl Reactions {
     pub(super) fn new<const D: usize>(sim: &Simulation<D>, k_a: &SymmetricMatrix, k_b: &[SymmetricMatrix]) -> Self {
         let k_a = PrescribedColumns::new(k_a, &sim.dofs);

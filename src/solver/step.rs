@@ -19,6 +19,7 @@ pub(super) struct PrescribedColumns {
     /// (prescribed unknown j, its column entries (i, K_ij)).
     pub(super) columns: Vec<(usize, Vec<(usize, f64)>)>,
 }
+
 impl PrescribedColumns {
     pub(super) fn new<const D: usize>(matrix: &SymmetricMatrix, dofs: &crate::fem::DofMap<D>) -> Self {
         let columns = (0..matrix.n())
@@ -48,6 +49,7 @@ impl PrescribedColumns {
         }
     }
 }
+
 /// How a step operator lifts non-zero prescribed values (docs/method.md §7.2).
 pub(super) enum Lifting {
     /// The unmodified columns of the prescribed unknowns (serial).
@@ -55,6 +57,7 @@ pub(super) enum Lifting {
     /// rhs −= (K_A + c K_B) g at the free unknowns through [`Backend::product`] (c = `memory`).
     Products { memory: Option<f64> },
 }
+
 /// A factor of a step matrix and, with contact, its condensation.
 pub(super) struct StepOperator {
     pub(super) solver: Arc<dyn LinearSolver>,
@@ -62,6 +65,7 @@ pub(super) struct StepOperator {
     /// How non-zero prescribed values are lifted (None when they are all zero).
     pub(super) lifting: Option<Lifting>,
 }
+
 /// The matrix a factor is built from (identity rows at the prescribed unknowns, docs/method.md
 /// §7) and, when some prescribed value is non-zero, the unmodified columns that lift them.
 pub(super) fn system_matrix<const D: usize>(
@@ -74,6 +78,7 @@ pub(super) fn system_matrix<const D: usize>(
         .then(|| Lifting::Columns(PrescribedColumns::new(matrix, &sim.dofs)));
     (matrix.with_identity_rows(&sim.dofs), lifting)
 }
+
 impl StepOperator {
     /// Factors `matrix` (from [`system_matrix`]) and condenses the contact normals.
     pub(super) fn new<const D: usize>(
@@ -200,6 +205,7 @@ impl StepOperator {
         }
     }
 }
+
 /// A Cholesky factorisation of a singular matrix can succeed on round-off pivots (a body held
 /// at a single point can still rotate about it). One probe solve, K⁻¹(K v) against v for a fixed
 /// pseudo-random v, tells: an error far above round-off means the matrix is (nearly) singular.
@@ -209,6 +215,7 @@ struct Probe {
     /// K v.
     product: Vec<f64>,
 }
+
 impl Probe {
     /// The probe vector v and K v.
     fn new(matrix: &SymmetricMatrix) -> Self {
@@ -234,6 +241,7 @@ impl Probe {
         singularity_verdict(error)
     }
 }
+
 /// The verdict of a probe solve whose relative error is `error` (any backend's probe).
 pub fn singularity_verdict(error: f64) -> Result<(), String> {
     if error.is_finite() && error <= 1e-6 {
@@ -244,6 +252,7 @@ pub fn singularity_verdict(error: f64) -> Result<(), String> {
         ))
     }
 }
+
 fn contact_solve<const D: usize>(
     sim: &Simulation<D>,
     setup: &ContactSetup<D>,
@@ -277,6 +286,7 @@ fn contact_solve<const D: usize>(
         reason: f.reason,
     })
 }
+
 /// The prescribed components in a right-hand side (docs/method.md §7): rhs_f −= K_fp g at the
 /// free rows, rhs_p = g_p at the prescribed ones (zero without non-zero values). `g` is over
 /// all unknowns, `rhs` over this process's ([`Backend::unknowns`] with a backend).

@@ -50,6 +50,7 @@ pub struct StepView<'a> {
     /// (output steps with contact only; docs/method.md §14.4).
     pub contact_forces: Option<&'a [f64]>,
 }
+
 /// Receives the steps of a run (the output layer implements this; tests collect in memory).
 pub trait FrameSink<const D: usize> {
     /// Called after every step (for progress reporting).
@@ -57,6 +58,7 @@ pub trait FrameSink<const D: usize> {
     /// Called for every output step.
     fn write_frame(&mut self, sim: &Simulation<D>, view: &StepView) -> Result<(), SolveError>;
 }
+
 /// K_B as the time loop multiplies it: in node blocks (a third of the memory traffic) when
 /// its pattern allows, else as assembled. Unmodified: the memory load includes the history of
 /// prescribed displacements (docs/method.md §7).
@@ -64,6 +66,7 @@ enum MemoryStiffness<const D: usize> {
     NodeBlocks(NodeBlockMatrix<D>),
     Full(SymmetricMatrix),
 }
+
 impl<const D: usize> MemoryStiffness<D> {
     fn matvec(&self, x: &[f64], y: &mut [f64]) {
         match self {
@@ -72,6 +75,7 @@ impl<const D: usize> MemoryStiffness<D> {
         }
     }
 }
+
 /// The state of a run between steps: the assembled matrices, the cached factor, the history
 /// and the contact warm start. [`Stepper::prepare`] does the one-off work, [`Stepper::advance`]
 /// one time step (docs/method.md §3–4).
@@ -110,6 +114,7 @@ pub struct Stepper<'s, const D: usize> {
     outcome: Option<ContactOutcome>,
     next: usize,
 }
+
 impl<'s, const D: usize> Stepper<'s, D> {
     /// Assembles K_A (and K_B with memory), factorises K = K_A + (k/2) b(0) K_B once, and
     /// condenses the contact normals.
@@ -514,6 +519,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
         self.stats
     }
 }
+
 /// True if u_0 = 0 solves step 0 exactly, so that K_A gets no factor of its own: no load
 /// (`rhs_zero`), no prescribed value (`prescribed_zero`), no fixed obstacle motion or negative
 /// bound, and a contact law that exerts no force at its origin.
@@ -529,6 +535,7 @@ pub fn zero_solves_step_zero<const D: usize>(sim: &Simulation<D>, rhs_zero: bool
         .is_none_or(|c| c.motion.is_none() && c.bound.as_ref().is_none_or(|g| g.iter().all(|v| *v >= 0.0)));
     rhs_zero && law_at_zero == 0.0 && bound_ok && prescribed_zero
 }
+
 /// Runs the whole time series, handing every step to `sink`. `stop` is polled once per step.
 pub fn run<const D: usize>(
     sim: &Simulation<D>,
@@ -537,6 +544,7 @@ pub fn run<const D: usize>(
 ) -> Result<RunStats, SolveError> {
     run_with(sim, sink, stop, None)
 }
+
 /// [`run`] with the step matrices solved by `backend` (None: the faer factor).
 pub fn run_with<const D: usize>(
     sim: &Simulation<D>,

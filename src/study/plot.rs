@@ -11,18 +11,21 @@ use plotters::prelude::*;
 use std::path::Path;
 
 const SIZE: (u32, u32) = (820, 600);
+
 /// One polyline of a log–log plot, optionally with a text label at each point.
 pub struct Series {
     pub name: String,
     pub points: Vec<(f64, f64)>,
     pub labels: Vec<String>,
 }
+
 /// A dashed guide line e = c·x^slope through the anchor point, named in the legend.
 pub struct Guide {
     pub name: String,
     pub slope: f64,
     pub anchor: (f64, f64),
 }
+
 /// Tick values m·10^e in [lo, hi]: every m = 1…9 if `light`, else the decades, with 2 and 5
 /// added when the range spans less than two decades and every m when less than one.
 pub fn log_ticks(lo: f64, hi: f64, light: bool) -> Vec<f64> {
@@ -48,6 +51,7 @@ pub fn log_ticks(lo: f64, hi: f64, light: bool) -> Vec<f64> {
     }
     ticks
 }
+
 fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     let (lo, hi) = values
         .filter(|v| v.is_finite() && *v > 0.0)
@@ -58,6 +62,7 @@ fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
         (lo / pad, hi * pad)
     })
 }
+
 /// Draws a log–log plot of the series, with guide lines, to an SVG file.
 pub fn loglog_svg(
     path: &Path,
@@ -71,6 +76,7 @@ pub fn loglog_svg(
     loglog(&root, title, x_desc, y_desc, series, guides)?;
     root.present().map_err(err)
 }
+
 fn loglog<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
@@ -185,6 +191,7 @@ fn loglog<DB: DrawingBackend>(
         .map_err(err)?;
     Ok(())
 }
+
 /// Unique runs of the rows (a run may sit on two paths).
 fn unique_runs(rows: &[Row]) -> Vec<&Row> {
     let mut seen = Vec::new();
@@ -196,6 +203,7 @@ fn unique_runs(rows: &[Row]) -> Vec<&Row> {
         })
         .collect()
 }
+
 /// Groups runs by a parameter (to a relative 1e-9), each group sorted by the other.
 fn group_by(rows: &[Row], key: impl Fn(&Row) -> f64, along: impl Fn(&Row) -> f64) -> Vec<(f64, Vec<&Row>)> {
     let mut groups: Vec<(f64, Vec<&Row>)> = Vec::new();
@@ -213,6 +221,7 @@ fn group_by(rows: &[Row], key: impl Fn(&Row) -> f64, along: impl Fn(&Row) -> f64
     groups.retain(|(_, v)| v.len() >= 2);
     groups
 }
+
 /// H¹-seminorm error at T against h, one line per k (groups of ≥ 2 runs), with an O(h) guide.
 /// Returns false (and writes nothing) when no two runs share a k: nothing to draw.
 pub fn plot_error_vs_h(path: &Path, rows: &[Row]) -> Result<bool, String> {
@@ -225,6 +234,7 @@ pub fn plot_error_vs_h(path: &Path, rows: &[Row]) -> Result<bool, String> {
         "the mesh size",
     )
 }
+
 /// H¹-seminorm error at T against k, one line per h, with an O(k²) guide; false (nothing
 /// written) when no two runs share an h.
 pub fn plot_error_vs_k(path: &Path, rows: &[Row]) -> Result<bool, String> {
@@ -237,6 +247,7 @@ pub fn plot_error_vs_k(path: &Path, rows: &[Row]) -> Result<bool, String> {
         "the time step",
     )
 }
+
 /// The H¹ error at T against the parameter `param(row).0`, one line per value of `param(row).1`.
 fn plot_error_against(
     path: &Path,
@@ -271,6 +282,7 @@ fn plot_error_against(
     )?;
     Ok(true)
 }
+
 /// Work–precision: H¹ error at T against wall time, one line per refinement path, each point
 /// labelled with its h and k, with a guide of slope −1/2 (error ∝ h ∝ work^(−1/2) in 2D);
 /// false (nothing written) without a row.
@@ -323,6 +335,7 @@ pub fn plot_work_precision(path: &Path, rows: &[Row]) -> Result<bool, String> {
     )?;
     Ok(true)
 }
+
 fn guide_at_finest(series: &[Series], name: &str, slope: f64) -> Option<Guide> {
     // through the finest point of the line whose finest point has the smallest error, shifted
     // down by a factor 2 so it does not hide the data
@@ -336,6 +349,7 @@ fn guide_at_finest(series: &[Series], name: &str, slope: f64) -> Option<Guide> {
         anchor: (finest.0, finest.1 / 2.0),
     })
 }
+
 /// The normal displacement u_ν along Γ₃ at several times: `series` holds (t, [(s, u_ν)]), s the
 /// arc length along Γ₃ (see [`crate::plot::arc_length`]).
 pub fn plot_gamma3(path: &Path, title: &str, series: &[(f64, Vec<(f64, f64)>)]) -> Result<(), String> {
