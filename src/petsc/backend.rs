@@ -12,6 +12,9 @@ use crate::fem::assembly::local_stiffness;
 use crate::linalg::{Counters, LinearSolver};
 use crate::material::{Isotropic, IDENTITY_TENSOR};
 use crate::scene::CondensationKind;
+use crate::solver::operator::StepOperator;
+use crate::solver::reactions::Reactions;
+use crate::solver::stats::{timed, RunStats};
 use crate::solver::{singularity_verdict, Backend, Stiffness};
 use crate::solver::{Simulation, SolveError};
 use hvi_petsc::mpi::collective::SystemOperation;
@@ -372,8 +375,16 @@ pub(super) fn method_name(m: Method) -> &'static str {
     }
 }
 
-impl<const D: usize> Backend<D> for PetscBackend<'_, D> {
-    fn operator(
+impl<const D: usize> PetscBackend<'_, D> {
+    /// The unknowns this rank holds, in the order of every vector of the time loop.
+    pub fn unknowns(&self) -> &[usize] {
+        &self.layout.unknowns
+    }
+
+    /// A solver (and, with contact nodes, a condensation) for the step matrix
+    /// K = K_A + c K_B with identity rows at the prescribed unknowns, c = `memory` (None: K_A).
+    #[allow(clippy::type_complexity)]
+    fn distributed_operator(
         &self,
         sim: &Simulation<D>,
         memory: Option<f64>,
@@ -400,6 +411,39 @@ impl<const D: usize> Backend<D> for PetscBackend<'_, D> {
             _ => None,
         };
         Ok((solver, condensed))
+    }
+}
+
+impl<const D: usize> Backend<D> for PetscBackend<'_, D> {
+    fn operator(
+        &mut self,
+        sim: &Simulation<D>,
+        memory: &[f64],
+        counters: &Counters,
+        stats: &mut RunStats,
+    ) -> Result<StepOperator, SolveError> {
+        if memory.len() > 1 {
+            return Err(SolveError::Setup(
+                "this memory has two channels (tensors that are not proportional, docs/method.md §15.1), and the \
+                 PETSc backend runs memory of one channel only: run it without --backend petsc, or give memory \
+                 terms whose tensors are proportional (e.g. all \"identity\" or all \"elasticity\", or bulk and \
+                 shear relaxing proportionally)"
+                    .into(),
+            ));
+        }
+        let c = memory.first().copied();
+        let (solver, condensed) = timed(&mut stats.phases.factorisation, || {
+            self.distributed_operator(sim, c, counters)
+        })?;
+        Ok(StepOperator::distributed(sim, solver, condensed, memory, stats))
+    }
+
+    fn reactions(&mut self, sim: &Simulation<D>) -> Reactions {
+        Reactions::over_products(sim, Some(&self.layout.unknowns))
+    }
+
+    fn held_unknowns(&self) -> Option<&[usize]> {
+        Some(&self.layout.unknowns)
     }
 
     fn solves_contact(&self) -> bool {
@@ -452,10 +496,6 @@ impl<const D: usize> Backend<D> for PetscBackend<'_, D> {
         Ok(ContactOutcome::from_numbers(&numbers[..N]))
     }
 
-    fn unknowns(&self) -> &[usize] {
-        &self.layout.unknowns
-    }
-
     fn product(&self, _sim: &Simulation<D>, matrix: Stiffness, x: &[f64], y: &mut [f64]) {
         let mut guard = self.products.lock().unwrap_or_else(|e| e.into_inner());
         let result = match guard.as_mut() {
@@ -464,14 +504,16 @@ impl<const D: usize> Backend<D> for PetscBackend<'_, D> {
                 message: "K_A and K_B were not assembled (prepare_products)".into(),
             }),
             Some(p) => {
-                let m = match matrix {
-                    Stiffness::Elastic => p.elastic.as_ref(),
-                    Stiffness::Memory => p.memory.as_ref(),
+                // one memory channel only (operator refuses two)
+                let (m, name) = match matrix {
+                    Stiffness::Elastic => (p.elastic.as_ref(), "Elastic"),
+                    Stiffness::Memory(0) => (p.memory.as_ref(), "Memory"),
+                    Stiffness::Memory(_) => (None, "a second memory channel's"),
                 };
                 match m {
                     None => Err(hvi_petsc::Error {
                         code: -1,
-                        message: format!("{matrix:?} stiffness was not assembled"),
+                        message: format!("{name} stiffness was not assembled"),
                     }),
                     Some(m) => {
                         p.x.set_local(x)

@@ -108,7 +108,7 @@ fn check_dim<const D: usize>(
     let responses = m_contact > 0
         && super::backend::keeps_responses(
             sim.condensation,
-            crate::solver::Backend::unknowns(&backend).len(),
+            backend.unknowns().len(),
             m_contact,
             mumps.map_or(matrix_bytes, |m| m.this_rank_mb as f64 * 1e6),
         );
@@ -252,7 +252,6 @@ fn predict<const D: usize>(
     mumps_mb: Option<i64>,
     Held { factors, responses }: Held,
 ) -> RankMemory {
-    use crate::solver::Backend;
     let local = backend.unknowns().len() as f64;
     let all = sim.dofs.n() as f64;
     let m = sim.contact.as_ref().map_or(0, |c| c.nodes.len()) as f64;

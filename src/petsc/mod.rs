@@ -306,7 +306,7 @@ fn run_dim<const D: usize>(
     let collective = |r: Result<(), String>| agree(world, r).map_err(SolveError::Setup);
     let (sim, partition) = simulation_and_partition(world, opts.scene.as_deref(), scene, mesh)?;
     let shares = RankShare::all(&sim, &partition);
-    let backend = PetscBackend::new(petsc, &sim, partition, choice);
+    let mut backend = PetscBackend::new(petsc, &sim, partition, choice);
     collective(backend.prepare_products(&sim).map_err(|e| e.to_string()))?;
     // Rank 0 prepares the output directory (checked writable before any solving) and its
     // tables; then every rank its pieces.
@@ -350,7 +350,7 @@ fn run_dim<const D: usize>(
         tables,
     );
     let mut sink = sink?.with_active_scalar(scene.output.active_scalar_name());
-    let result = timeloop::run_with(&sim, &mut sink, stop, Some(&backend));
+    let result = timeloop::run_with(&sim, &mut sink, stop, Box::new(&mut backend));
     if let Some(t) = &sink.tables {
         t.finish();
     }

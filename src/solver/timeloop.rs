@@ -10,30 +10,30 @@
 //!   history.push(u_n); reactions and the frame if it is an output step
 //! ```
 //!
-//! with K = K_A + (k/2) b(0) K_B factored once (identity rows at prescribed components). The
-//! solve goes through the [`crate::linalg::LinearSolver`] and [`crate::contact::Condensation`] seams; the default condensation
-//! is the faer factor's split sweeps (docs/method.md §4.5): a step costs one solve, contact or
-//! not. Step 0 has no history and uses K_A alone; when its solution is not trivially zero and
-//! K ≠ K_A, K_A gets a factor of its own.
+//! with K = K_A + Σ_j (k/2) b_j(0) K_j factored once (identity rows at prescribed components).
+//! Every piece of linear algebra comes from a [`Backend`]: the cached faer factor
+//! ([`FaerBackend`], the default) or PETSc over MPI; the loop has one path for both. The default
+//! condensation is the faer factor's split sweeps (docs/method.md §4.5): a step costs one solve,
+//! contact or not. Step 0 has no history and uses K_A alone; when its solution is not trivially
+//! zero and K ≠ K_A, K_A gets an operator of its own.
 
-use super::backend::{any, Backend, Stiffness};
+use super::backend::{Backend, Stiffness};
 use super::error::SolveError;
+use super::faer::FaerBackend;
+use super::operator::StepOperator;
 use super::reactions::Reactions;
 use super::setup::Simulation;
 use super::stats::{timed, Reaction, RunStats};
-use super::step::{lift, system_matrix, StepOperator};
+use super::step::{lift, StepSolve};
 use crate::contact::active_set::{ContactOutcome, ContactState};
-use crate::fem::assembly::assemble_stiffness;
-use crate::fem::{NodeBlockMatrix, SymmetricMatrix};
 use crate::history::History;
-use crate::linalg::{Analysis, Counters, Factor};
-use crate::material::Isotropic;
+use crate::linalg::Counters;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// What the driver shows a sink after a step. The vectors are over the unknowns this process
 /// holds: all of them (D per node) in a serial run, a [`Backend`]'s share
-/// ([`Backend::unknowns`]) otherwise.
+/// ([`Backend::held_unknowns`]) otherwise.
 pub struct StepView<'a> {
     pub step: usize,
     pub time: f64,
@@ -59,23 +59,6 @@ pub trait FrameSink<const D: usize> {
     fn write_frame(&mut self, sim: &Simulation<D>, view: &StepView) -> Result<(), SolveError>;
 }
 
-/// K_B as the time loop multiplies it: in node blocks (a third of the memory traffic) when
-/// its pattern allows, else as assembled. Unmodified: the memory load includes the history of
-/// prescribed displacements (docs/method.md §7).
-enum MemoryStiffness<const D: usize> {
-    NodeBlocks(NodeBlockMatrix<D>),
-    Full(SymmetricMatrix),
-}
-
-impl<const D: usize> MemoryStiffness<D> {
-    fn matvec(&self, x: &[f64], y: &mut [f64]) {
-        match self {
-            MemoryStiffness::NodeBlocks(m) => m.matvec(x, y),
-            MemoryStiffness::Full(m) => m.matvec(x, y),
-        }
-    }
-}
-
 /// The state of a run between steps: the assembled matrices, the cached factor, the history
 /// and the contact warm start. [`Stepper::prepare`] does the one-off work, [`Stepper::advance`]
 /// one time step (docs/method.md §3–4).
@@ -83,13 +66,9 @@ pub struct Stepper<'s, const D: usize> {
     sim: &'s Simulation<D>,
     pub counters: Counters,
     pub stats: RunStats,
-    /// K_A (serial; a backend holds its own).
-    k_a: Option<SymmetricMatrix>,
-    /// K_B for the memory load K_B h_n of every step (serial; a backend multiplies by its own).
-    k_b: Vec<MemoryStiffness<D>>,
-    /// The faer factor's symbolic analysis (None with a [`Backend`]).
-    symbolic: Option<Analysis>,
-    backend: Option<&'s dyn Backend<D>>,
+    /// The linear algebra: operators, products by K_A and K_j, collective decisions.
+    backend: Box<dyn Backend<D> + 's>,
+    /// The operator of the step matrix K.
     main: StepOperator,
     /// (k/2) b(0), the memory term's share of K.
     memory_diagonal: Vec<f64>,
@@ -116,14 +95,14 @@ pub struct Stepper<'s, const D: usize> {
 }
 
 impl<'s, const D: usize> Stepper<'s, D> {
-    /// Assembles K_A (and K_B with memory), factorises K = K_A + (k/2) b(0) K_B once, and
-    /// condenses the contact normals.
+    /// Assembles K_A (and the K_j with memory), factorises K = K_A + Σ_j (k/2) b_j(0) K_j once
+    /// with the faer backend, and condenses the contact normals.
     pub fn prepare(sim: &'s Simulation<D>) -> Result<Self, SolveError> {
-        Self::prepare_with(sim, None)
+        Self::prepare_with(sim, Box::new(FaerBackend::default()))
     }
 
-    /// [`Stepper::prepare`] with the step matrices solved by `backend` (None: the faer factor).
-    pub fn prepare_with(sim: &'s Simulation<D>, backend: Option<&'s dyn Backend<D>>) -> Result<Self, SolveError> {
+    /// [`Stepper::prepare`] with the step matrices solved by `backend`.
+    pub fn prepare_with(sim: &'s Simulation<D>, mut backend: Box<dyn Backend<D> + 's>) -> Result<Self, SolveError> {
         crate::linalg::set_parallelism(sim.threads);
         let counters = Counters::default();
         let mut stats = RunStats {
@@ -138,119 +117,16 @@ impl<'s, const D: usize> Stepper<'s, D> {
             ..Default::default()
         };
         let k = sim.time.step();
-        // The vectors of a step: over all unknowns, or the share a backend holds here.
-        let n_dof = backend.map_or(sim.dofs.n(), |b| b.unknowns().len());
         // (k/2) b_j(0) of each memory channel (docs/method.md §15.1)
         let memory_diagonal: Vec<f64> = sim.memory.as_ref().map_or(Vec::new(), |m| {
             (0..m.channels().len())
                 .map(|j| 0.5 * k * m.kernel_value(j, 0.0))
                 .collect()
         });
-        if let Some(b) = backend {
-            if memory_diagonal.len() > 1 {
-                return Err(SolveError::Setup(
-                    "this memory has two channels (tensors that are not proportional, docs/method.md §15.1), and the \
-                     PETSc backend runs memory of one channel only: run it without --backend petsc, or give memory \
-                     terms whose tensors are proportional (e.g. all \"identity\" or all \"elasticity\", or bulk and \
-                     shear relaxing proportionally)"
-                        .into(),
-                ));
-            }
-            // The backend assembles and multiplies its own (distributed) matrices.
-            let c = memory_diagonal.first().copied();
-            let main = StepOperator::with_backend(sim, b, c, &counters, &mut stats)?;
-            let reactions = (!sim.dirichlet.reaction_groups.is_empty()).then(|| Reactions::held(sim, b.unknowns()));
-            return Ok(Self::with_parts(
-                sim,
-                counters,
-                stats,
-                (None, Vec::new(), None),
-                backend,
-                main,
-                memory_diagonal,
-                reactions,
-                n_dof,
-            ));
-        }
-        let (points, cells) = (&sim.mesh.points, &sim.mesh.cells);
-        let a = sim.elasticity.tensor();
-        let channels: Vec<Isotropic> = sim
-            .memory
-            .as_ref()
-            .map_or(Vec::new(), |m| m.channels().iter().map(|c| c.tensor).collect());
-        let (k_a, k_b) = timed(&mut stats.phases.assembly, || match channels[..] {
-            [] => {
-                let [a] = assemble_stiffness(cells, points, &sim.dofs, &[a]);
-                (a, Vec::new())
-            }
-            [t] => {
-                let [a, b] = assemble_stiffness(cells, points, &sim.dofs, &[a, t]);
-                (a, vec![b])
-            }
-            [t, v] => {
-                let [a, b, c] = assemble_stiffness(cells, points, &sim.dofs, &[a, t, v]);
-                (a, vec![b, c])
-            }
-            _ => unreachable!("a memory term has one or two channels"),
-        });
-        stats.matrix_nonzeros = k_a.values.len();
-        // The pattern the factors have: identity rows, fully prescribed nodes decoupled. In 3D the
-        // contact normals' unknowns go last (docs/method.md §4.5): G and W then live in the
-        // factor's trailing block (measured: box 96x48x12, m = 1248, condensation 12.4 s before).
-        let last = sim.unknowns_ordered_last();
-        // K = K_A + Σ_j (k/2) b_j(0) K_j (unmodified: before the identity rows)
-        let k_step = timed(&mut stats.phases.assembly, || {
-            let mut sum: Option<SymmetricMatrix> = None;
-            for (kb, c) in k_b.iter().zip(&memory_diagonal) {
-                sum = Some(sum.as_ref().unwrap_or(&k_a).plus_scaled(*c, kb));
-            }
-            sum
-        });
-        let system = system_matrix(sim, k_step.as_ref().unwrap_or(&k_a));
-        drop(k_step);
-        // K_B's prescribed columns and its node blocks are taken before the factorisation, and
-        // the assembled K_B dropped: it is not held next to the factor (docs/method.md §9.3).
-        let reactions = (!sim.dirichlet.reaction_groups.is_empty()).then(|| Reactions::new(sim, &k_a, &k_b));
-        let k_b: Vec<MemoryStiffness<D>> = k_b
-            .into_iter()
-            .map(|kb| match NodeBlockMatrix::new(&kb) {
-                Some(blocks) => MemoryStiffness::NodeBlocks(blocks),
-                None => MemoryStiffness::Full(kb),
-            })
-            .collect();
-        let symbolic = timed(&mut stats.phases.factorisation, || {
-            Factor::analyse_with_last(&system.0, &last)
-        })
-        .map_err(|e| SolveError::Setup(e.to_string()))?;
-        stats.ordering = Some(symbolic.ordering().to_string());
-        stats.factor_entries = symbolic.factor_entries();
-        let main = StepOperator::new(sim, &symbolic, system, &counters, &mut stats)?;
-        Ok(Self::with_parts(
-            sim,
-            counters,
-            stats,
-            (Some(k_a), k_b, Some(symbolic)),
-            None,
-            main,
-            memory_diagonal,
-            reactions,
-            n_dof,
-        ))
-    }
-
-    /// The Stepper of prepared parts; `n_dof` the length of its vectors.
-    #[allow(clippy::too_many_arguments)]
-    fn with_parts(
-        sim: &'s Simulation<D>,
-        counters: Counters,
-        mut stats: RunStats,
-        (k_a, k_b, symbolic): (Option<SymmetricMatrix>, Vec<MemoryStiffness<D>>, Option<Analysis>),
-        backend: Option<&'s dyn Backend<D>>,
-        main: StepOperator,
-        memory_diagonal: Vec<f64>,
-        reactions: Option<Reactions>,
-        n_dof: usize,
-    ) -> Self {
+        let main = backend.operator(sim, &memory_diagonal, &counters, &mut stats)?;
+        let reactions = (!sim.dirichlet.reaction_groups.is_empty()).then(|| backend.reactions(sim));
+        // The vectors of a step: over all unknowns, or the share a backend holds here.
+        let n_dof = backend.held_len(sim);
         if let (Some(op), Some(c)) = (&main.condensed, &sim.contact) {
             if !c.laws.is_empty() {
                 let weights = c.laws.monotonicity_weights(c.nodes.len());
@@ -261,13 +137,10 @@ impl<'s, const D: usize> Stepper<'s, D> {
         let n_channels = memory_diagonal.len();
         let contact = sim.contact.as_ref().map(|c| ContactState::new(c.nodes.len()));
         let time_dependent_loads = sim.loads.is_time_dependent();
-        Stepper {
+        Ok(Stepper {
             sim,
             counters,
             stats,
-            k_a,
-            k_b,
-            symbolic,
             backend,
             main,
             memory_diagonal,
@@ -288,7 +161,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
             memory_displacement: None,
             outcome: None,
             next: 0,
-        }
+        })
     }
 
     /// The index of the step [`Stepper::advance`] will solve next.
@@ -296,20 +169,54 @@ impl<'s, const D: usize> Stepper<'s, D> {
         self.next
     }
 
-    /// Solves the next step: loads, memory load, lifting, contact, recovery, history update.
+    /// Solves the next step (docs/method.md §3–4): the loads and prescribed values at t_n, the
+    /// step's solve (history load, lifting, free solve, contact, recovery), the history update,
+    /// and on an output step the reactions and contact forces.
     pub fn advance(&mut self) -> Result<StepView<'_>, SolveError> {
         let n = self.next;
+        let t = self.sim.time.time(n);
+        self.update_data(n, t)?;
+        if self.single_solve && n > 0 {
+            // Nothing changes: the state of step 0 stands for every step.
+            if let Some(o) = self.outcome {
+                self.stats.newton_iterations.push(0);
+                self.stats.contact.push(ContactOutcome { iterations: 0, ..o });
+            }
+        } else {
+            self.solve_step(n, t)?;
+        }
+        self.update_history(n);
+        let output = self.sim.is_output_step(n);
+        if output {
+            self.record_reactions(n, t);
+            self.record_contact_forces(n, t)?;
+        }
+        self.next += 1;
+        let with_forces = output && self.contact.is_some();
+        Ok(StepView {
+            step: n,
+            time: t,
+            displacement: &self.displacement,
+            memory_displacement: self.memory_displacement.as_deref(),
+            contact: self.contact.as_ref(),
+            outcome: self.outcome,
+            reactions: (self.reactions.is_some() && output).then_some(&self.reaction_values[..]),
+            contact_forces: with_forces.then_some(&self.contact_forces[..]),
+        })
+    }
+
+    /// F_n (once when no load depends on t) and g(t_n) (once when no prescribed value does).
+    fn update_data(&mut self, n: usize, t: f64) -> Result<(), SolveError> {
         let sim = self.sim;
-        let t = sim.time.time(n);
         if n == 0 || self.time_dependent_loads {
-            let (load, backend) = (&mut self.load, self.backend);
-            timed(&mut self.stats.phases.loads, || match backend {
+            let (load, held) = (&mut self.load, self.backend.held_unknowns());
+            timed(&mut self.stats.phases.loads, || match held {
                 None => sim.loads.assemble(t, &sim.dofs, load),
-                Some(b) => {
+                Some(held) => {
                     // assembled whole (every process holds the mesh), kept over its share
                     let mut full = vec![0.0; sim.dofs.n()];
                     let assembled = sim.loads.assemble(t, &sim.dofs, &mut full);
-                    load.iter_mut().zip(b.unknowns()).for_each(|(l, &d)| *l = full[d]);
+                    load.iter_mut().zip(held).for_each(|(l, &d)| *l = full[d]);
                     assembled
                 }
             })
@@ -328,98 +235,97 @@ impl<'s, const D: usize> Stepper<'s, D> {
                 })?;
             }
         }
-        if self.single_solve && n > 0 {
-            // Nothing changes: the state of step 0 stands for every step.
-            if let Some(o) = self.outcome {
-                self.stats.newton_iterations.push(0);
-                self.stats.contact.push(ContactOutcome { iterations: 0, ..o });
-            }
+        Ok(())
+    }
+
+    /// rhs = F_n − Σ_j K_j h_n^j, lifted; d = C K⁻¹ rhs; λ from the contact law; u_n recovered.
+    fn solve_step(&mut self, n: usize, t: f64) -> Result<(), SolveError> {
+        let sim = self.sim;
+        let mut rhs = std::mem::take(&mut self.rhs);
+        rhs.copy_from_slice(&self.load);
+        self.subtract_memory_load(n, &mut rhs);
+        let outcome = if n == 0 && self.history.is_some() {
+            self.step_zero(&mut rhs)?
         } else {
-            let mut rhs = std::mem::take(&mut self.rhs);
-            rhs.copy_from_slice(&self.load);
-            self.subtract_memory_load(n, &mut rhs);
-            let outcome = if n == 0 && self.history.is_some() {
-                self.step_zero(&mut rhs)?
-            } else {
-                lift(&self.main, sim, self.prescribed.as_deref(), &mut rhs, self.backend);
-                self.main.solve(
-                    sim,
-                    n,
-                    &rhs,
-                    self.prescribed.as_deref(),
-                    &mut self.displacement,
-                    self.contact.as_mut(),
-                    self.backend,
-                    &self.counters,
-                    &mut self.stats,
-                )?
+            lift(&self.main, sim, self.prescribed.as_deref(), &mut rhs, &*self.backend);
+            let step = StepSolve {
+                step: n,
+                rhs: &rhs,
+                offset: self.prescribed.as_deref(),
+                u: &mut self.displacement,
+                state: self.contact.as_mut(),
             };
-            self.rhs = rhs;
-            if any(self.backend, self.displacement.iter().any(|v| !v.is_finite())) {
-                return Err(SolveError::NonFinite { step: n, time: t });
-            }
-            self.outcome = outcome;
-            if let Some(o) = outcome {
-                self.stats.newton_iterations.push(o.iterations);
-                self.stats.max_contact_residual = self.stats.max_contact_residual.max(o.residual);
-                self.stats.contact.push(o);
-            }
+            self.main
+                .solve(sim, &*self.backend, step, &self.counters, &mut self.stats)?
+        };
+        self.rhs = rhs;
+        if self.backend.any(self.displacement.iter().any(|v| !v.is_finite())) {
+            return Err(SolveError::NonFinite { step: n, time: t });
         }
-        self.update_history(n);
-        let output = sim.is_output_step(n);
-        if let (Some(r), true) = (&mut self.reactions, output) {
-            let memory = if n == 0 {
-                None
-            } else {
-                self.memory_displacement.as_deref()
-            };
-            let values = match self.backend {
-                None => r.compute(sim, &self.displacement, memory, &self.load, self.contact.as_ref()),
-                Some(b) => r.compute_held(sim, b, &self.displacement, memory, &self.load, self.contact.as_ref()),
-            };
-            self.reaction_values.clear();
-            self.reaction_values.extend_from_slice(values);
-            for (g, &force) in sim.dirichlet.reaction_groups.iter().zip(values) {
-                self.stats.reactions.push(Reaction {
+        self.outcome = outcome;
+        if let Some(o) = outcome {
+            self.stats.newton_iterations.push(o.iterations);
+            self.stats.max_contact_residual = self.stats.max_contact_residual.max(o.residual);
+            self.stats.contact.push(o);
+        }
+        Ok(())
+    }
+
+    /// The reactions of the scene's groups at an output step (docs/method.md §7).
+    fn record_reactions(&mut self, n: usize, t: f64) {
+        let sim = self.sim;
+        let Some(r) = &mut self.reactions else {
+            return;
+        };
+        let memory = if n == 0 {
+            None
+        } else {
+            self.memory_displacement.as_deref()
+        };
+        let values = r.compute(
+            sim,
+            &*self.backend,
+            &self.displacement,
+            memory,
+            &self.load,
+            self.contact.as_ref(),
+        );
+        self.reaction_values.clear();
+        self.reaction_values.extend_from_slice(values);
+        for (g, &force) in sim.dirichlet.reaction_groups.iter().zip(values) {
+            self.stats.reactions.push(Reaction {
+                time: t,
+                group: g.group.clone(),
+                component: ["x", "y", "z"][g.component],
+                force,
+            });
+        }
+    }
+
+    /// The total contact force of each contact group at an output step (docs/method.md §14.4).
+    fn record_contact_forces(&mut self, n: usize, t: f64) -> Result<(), SolveError> {
+        let (Some(setup), Some(state)) = (&self.sim.contact, &self.contact) else {
+            return Ok(());
+        };
+        let moved = setup.gaps_at(t).map_err(|detail| SolveError::NonFiniteLoad {
+            step: n,
+            time: t,
+            detail,
+        })?;
+        let forces = setup.group_forces(state, moved.as_ref().map(|(o, _)| &o[..]));
+        self.contact_forces.clear();
+        for (group, f) in setup.groups.iter().zip(&forces) {
+            self.contact_forces.extend_from_slice(f);
+            for (c, &force) in f.iter().enumerate() {
+                self.stats.contact_forces.push(Reaction {
                     time: t,
-                    group: g.group.clone(),
-                    component: ["x", "y", "z"][g.component],
+                    group: group.clone(),
+                    component: ["x", "y", "z"][c],
                     force,
                 });
             }
         }
-        let with_forces = output && self.contact.is_some();
-        if let (Some(setup), Some(state), true) = (&sim.contact, &self.contact, with_forces) {
-            let moved = setup.gaps_at(t).map_err(|detail| SolveError::NonFiniteLoad {
-                step: n,
-                time: t,
-                detail,
-            })?;
-            let forces = setup.group_forces(state, moved.as_ref().map(|(o, _)| &o[..]));
-            self.contact_forces.clear();
-            for (group, f) in setup.groups.iter().zip(&forces) {
-                self.contact_forces.extend_from_slice(f);
-                for (c, &force) in f.iter().enumerate() {
-                    self.stats.contact_forces.push(Reaction {
-                        time: t,
-                        group: group.clone(),
-                        component: ["x", "y", "z"][c],
-                        force,
-                    });
-                }
-            }
-        }
-        self.next += 1;
-        Ok(StepView {
-            step: n,
-            time: t,
-            displacement: &self.displacement,
-            memory_displacement: self.memory_displacement.as_deref(),
-            contact: self.contact.as_ref(),
-            outcome: self.outcome,
-            reactions: (self.reactions.is_some() && output).then_some(&self.reaction_values[..]),
-            contact_forces: with_forces.then_some(&self.contact_forces[..]),
-        })
+        Ok(())
     }
 
     /// Step 0 with a memory kernel: K_A u_0 + Cᵀλ = F_0 (no history term). When u_0 = 0 solves
@@ -428,7 +334,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
     fn step_zero(&mut self, rhs: &mut [f64]) -> Result<Option<ContactOutcome>, SolveError> {
         let sim = self.sim;
         let prescribed_zero = self.prescribed.as_ref().is_none_or(|g| g.iter().all(|v| *v == 0.0));
-        let rhs_zero = !any(self.backend, rhs.iter().any(|v| *v != 0.0));
+        let rhs_zero = !self.backend.any(rhs.iter().any(|v| *v != 0.0));
         if zero_solves_step_zero(sim, rhs_zero, prescribed_zero) {
             let outcome = self.contact.as_mut().map(|s| {
                 let m = s.force.len();
@@ -438,25 +344,17 @@ impl<'s, const D: usize> Stepper<'s, D> {
             self.displacement.fill(0.0);
             return Ok(outcome);
         }
-        let mut op = match (&self.symbolic, &self.k_a, self.backend) {
-            (Some(symbolic), Some(k_a), _) => {
-                StepOperator::new(sim, symbolic, system_matrix(sim, k_a), &self.counters, &mut self.stats)?
-            }
-            (_, _, Some(b)) => StepOperator::with_backend(sim, b, None, &self.counters, &mut self.stats)?,
-            _ => unreachable!("a Stepper has a symbolic analysis and K_A, or a backend"),
-        };
-        lift(&op, sim, self.prescribed.as_deref(), rhs, self.backend);
-        op.solve(
-            sim,
-            0,
+        // K_A alone: an operator of its own
+        let mut op = self.backend.operator(sim, &[], &self.counters, &mut self.stats)?;
+        lift(&op, sim, self.prescribed.as_deref(), rhs, &*self.backend);
+        let step = StepSolve {
+            step: 0,
             rhs,
-            self.prescribed.as_deref(),
-            &mut self.displacement,
-            self.contact.as_mut(),
-            self.backend,
-            &self.counters,
-            &mut self.stats,
-        )
+            offset: self.prescribed.as_deref(),
+            u: &mut self.displacement,
+            state: self.contact.as_mut(),
+        };
+        op.solve(sim, &*self.backend, step, &self.counters, &mut self.stats)
     }
 
     /// rhs ← rhs − Σ_j K_j h_n^j (docs/method.md §3, §15); h_0 = 0.
@@ -464,18 +362,13 @@ impl<'s, const D: usize> Stepper<'s, D> {
         let Some(history) = &self.history else {
             return;
         };
-        let (sim, k_b, backend) = (self.sim, &self.k_b, self.backend);
+        let (sim, backend) = (self.sim, &self.backend);
         let (loads, kb_h) = (&mut self.memory_load, &mut self.memory_rhs);
         timed(&mut self.stats.phases.history, || {
             for (j, h) in loads.chunks_exact_mut(rhs.len()).enumerate() {
                 history.memory_load(j, h);
                 if n > 0 {
-                    match (k_b.get(j), backend) {
-                        (Some(k_b), _) => k_b.matvec(h, kb_h),
-                        // one channel only with a backend (prepare_with)
-                        (None, Some(b)) => b.product(sim, Stiffness::Memory, h, kb_h),
-                        (None, None) => return,
-                    }
+                    backend.product(sim, Stiffness::Memory(j), h, kb_h);
                     rhs.iter_mut().zip(kb_h.iter()).for_each(|(r, v)| *r -= v);
                 }
             }
@@ -536,21 +429,23 @@ pub fn zero_solves_step_zero<const D: usize>(sim: &Simulation<D>, rhs_zero: bool
     rhs_zero && law_at_zero == 0.0 && bound_ok && prescribed_zero
 }
 
-/// Runs the whole time series, handing every step to `sink`. `stop` is polled once per step.
+/// Runs the whole time series on the faer backend, handing every step to `sink`. `stop` is
+/// polled once per step.
 pub fn run<const D: usize>(
     sim: &Simulation<D>,
     sink: &mut dyn FrameSink<D>,
     stop: Option<&AtomicBool>,
 ) -> Result<RunStats, SolveError> {
-    run_with(sim, sink, stop, None)
+    run_with(sim, sink, stop, Box::new(FaerBackend::default()))
 }
 
-/// [`run`] with the step matrices solved by `backend` (None: the faer factor).
-pub fn run_with<const D: usize>(
-    sim: &Simulation<D>,
+/// [`run`] with the step matrices solved by `backend` (docs/method.md §3–4): prepare once, then
+/// per step advance (history, free solve, contact, recovery) and hand the step to the sink.
+pub fn run_with<'s, const D: usize>(
+    sim: &'s Simulation<D>,
     sink: &mut dyn FrameSink<D>,
     stop: Option<&AtomicBool>,
-    backend: Option<&dyn Backend<D>>,
+    backend: Box<dyn Backend<D> + 's>,
 ) -> Result<RunStats, SolveError> {
     let started = Instant::now();
     let mut stepper = Stepper::prepare_with(sim, backend)?;
@@ -558,8 +453,8 @@ pub fn run_with<const D: usize>(
     let mut frames = 0;
     let mut last_written = None;
     for n in 0..=sim.time.steps {
-        // (with a backend, a stop on any process stops every process at the same step)
-        if stop.is_some() && any(backend, stop.is_some_and(|s| s.load(Ordering::Relaxed))) {
+        // (a stop on any process stops every process at the same step)
+        if stop.is_some() && stepper.backend.any(stop.is_some_and(|s| s.load(Ordering::Relaxed))) {
             return Err(SolveError::Interrupted { last_written });
         }
         let view = stepper.advance()?;

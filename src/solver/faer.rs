@@ -1,0 +1,170 @@
+//! The time loop's backend on one machine (docs/method.md §3, §9): K_A and the memory channels'
+//! K_j assembled once, the step matrix's symbolic analysis and one cached faer Cholesky factor,
+//! the contact normals condensed by split sweeps (or stored responses).
+
+use super::backend::{Backend, Stiffness};
+use super::error::SolveError;
+use super::operator::{system_matrix, StepOperator};
+use super::reactions::Reactions;
+use super::setup::Simulation;
+use super::stats::{timed, RunStats};
+use crate::fem::assembly::assemble_stiffness;
+use crate::fem::{NodeBlockMatrix, SymmetricMatrix};
+use crate::linalg::{Analysis, Counters, Factor};
+use crate::material::Isotropic;
+
+/// K_j as the time loop multiplies it: in node blocks (a third of the memory traffic) when
+/// its pattern allows, else as assembled. Unmodified: the memory load includes the history of
+/// prescribed displacements (docs/method.md §7).
+enum MemoryStiffness<const D: usize> {
+    NodeBlocks(NodeBlockMatrix<D>),
+    Full(SymmetricMatrix),
+}
+
+impl<const D: usize> MemoryStiffness<D> {
+    fn matvec(&self, x: &[f64], y: &mut [f64]) {
+        match self {
+            MemoryStiffness::NodeBlocks(m) => m.matvec(x, y),
+            MemoryStiffness::Full(m) => m.matvec(x, y),
+        }
+    }
+}
+
+/// The serial backend: what it has assembled and analysed, once its first operator is built.
+pub struct FaerBackend<const D: usize> {
+    /// K_A, unmodified (step 0's own factor and the products).
+    k_a: Option<SymmetricMatrix>,
+    /// K_j of each memory channel, for the memory load K_j h_n of every step.
+    k_b: Vec<MemoryStiffness<D>>,
+    /// The symbolic analysis every factor of the run shares.
+    symbolic: Option<Analysis>,
+    /// The prescribed columns for the reactions, taken before the factorisation.
+    reactions: Option<Reactions>,
+}
+
+impl<const D: usize> Default for FaerBackend<D> {
+    fn default() -> Self {
+        FaerBackend {
+            k_a: None,
+            k_b: Vec::new(),
+            symbolic: None,
+            reactions: None,
+        }
+    }
+}
+
+impl<const D: usize> FaerBackend<D> {
+    /// Assembles K_A and the K_j, analyses and factors K = K_A + Σ_j c_j K_j (c = `memory`),
+    /// and condenses the contact normals.
+    fn first_operator(
+        &mut self,
+        sim: &Simulation<D>,
+        memory: &[f64],
+        counters: &Counters,
+        stats: &mut RunStats,
+    ) -> Result<StepOperator, SolveError> {
+        let (points, cells) = (&sim.mesh.points, &sim.mesh.cells);
+        let a = sim.elasticity.tensor();
+        let channels: Vec<Isotropic> = sim
+            .memory
+            .as_ref()
+            .map_or(Vec::new(), |m| m.channels().iter().map(|c| c.tensor).collect());
+        if channels.len() != memory.len() {
+            return Err(SolveError::Setup(format!(
+                "the step matrix names {} memory channels and the memory term has {}",
+                memory.len(),
+                channels.len()
+            )));
+        }
+        let (k_a, k_b) = timed(&mut stats.phases.assembly, || {
+            // one assembly pass for K_A and every channel's K_j (one or two, docs/method.md §15.1)
+            let mut tensors = vec![a];
+            tensors.extend_from_slice(&channels);
+            let assembled = match tensors[..] {
+                [a] => Vec::from(assemble_stiffness(cells, points, &sim.dofs, &[a])),
+                [a, t] => Vec::from(assemble_stiffness(cells, points, &sim.dofs, &[a, t])),
+                [a, t, v] => Vec::from(assemble_stiffness(cells, points, &sim.dofs, &[a, t, v])),
+                _ => Vec::new(),
+            };
+            let mut assembled = assembled.into_iter();
+            (assembled.next(), assembled.collect::<Vec<_>>())
+        });
+        let Some(k_a) = k_a else {
+            return Err(SolveError::Setup(format!(
+                "a memory term has one or two channels, this one {}",
+                channels.len()
+            )));
+        };
+        stats.matrix_nonzeros = k_a.values.len();
+        // The pattern the factors have: identity rows, fully prescribed nodes decoupled. In 3D the
+        // contact normals' unknowns go last (docs/method.md §4.5): G and W then live in the
+        // factor's trailing block (measured: box 96x48x12, m = 1248, condensation 12.4 s before).
+        let last = sim.unknowns_ordered_last();
+        // K = K_A + Σ_j (k/2) b_j(0) K_j (unmodified: before the identity rows)
+        let k_step = timed(&mut stats.phases.assembly, || {
+            let mut sum: Option<SymmetricMatrix> = None;
+            for (kb, c) in k_b.iter().zip(memory) {
+                sum = Some(sum.as_ref().unwrap_or(&k_a).plus_scaled(*c, kb));
+            }
+            sum
+        });
+        let system = system_matrix(sim, k_step.as_ref().unwrap_or(&k_a));
+        drop(k_step);
+        // K_j's prescribed columns and its node blocks are taken before the factorisation, and
+        // the assembled K_j dropped: it is not held next to the factor (docs/method.md §9.3).
+        self.reactions = (!sim.dirichlet.reaction_groups.is_empty()).then(|| Reactions::from_columns(sim, &k_a, &k_b));
+        self.k_b = k_b
+            .into_iter()
+            .map(|kb| match NodeBlockMatrix::new(&kb) {
+                Some(blocks) => MemoryStiffness::NodeBlocks(blocks),
+                None => MemoryStiffness::Full(kb),
+            })
+            .collect();
+        let symbolic = timed(&mut stats.phases.factorisation, || {
+            Factor::analyse_with_last(&system.0, &last)
+        })
+        .map_err(|e| SolveError::Setup(e.to_string()))?;
+        stats.ordering = Some(symbolic.ordering().to_string());
+        stats.factor_entries = symbolic.factor_entries();
+        let operator = StepOperator::factored(sim, &symbolic, system, counters, stats)?;
+        self.k_a = Some(k_a);
+        self.symbolic = Some(symbolic);
+        Ok(operator)
+    }
+}
+
+impl<const D: usize> Backend<D> for FaerBackend<D> {
+    fn operator(
+        &mut self,
+        sim: &Simulation<D>,
+        memory: &[f64],
+        counters: &Counters,
+        stats: &mut RunStats,
+    ) -> Result<StepOperator, SolveError> {
+        match (&self.k_a, &self.symbolic) {
+            (Some(k_a), Some(symbolic)) if memory.is_empty() => {
+                StepOperator::factored(sim, symbolic, system_matrix(sim, k_a), counters, stats)
+            }
+            (Some(_), _) => Err(SolveError::Setup(
+                "the faer backend factors one step matrix with memory per run (its K_j are held in node blocks only)"
+                    .into(),
+            )),
+            (None, _) => self.first_operator(sim, memory, counters, stats),
+        }
+    }
+
+    fn reactions(&mut self, sim: &Simulation<D>) -> Reactions {
+        self.reactions
+            .take()
+            .unwrap_or_else(|| Reactions::over_products(sim, None))
+    }
+
+    fn product(&self, _sim: &Simulation<D>, matrix: Stiffness, x: &[f64], y: &mut [f64]) {
+        match (matrix, &self.k_a) {
+            (Stiffness::Elastic, Some(k_a)) => k_a.matvec(x, y),
+            (Stiffness::Memory(j), _) if j < self.k_b.len() => self.k_b[j].matvec(x, y),
+            // nothing assembled to multiply by: NaN, which the loop's checks report
+            _ => y.fill(f64::NAN),
+        }
+    }
+}

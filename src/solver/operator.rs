@@ -1,0 +1,205 @@
+//! The operator of a step matrix (docs/method.md §3, §7, §9): its solver, the condensation of
+//! the contact normals, how it lifts prescribed values, and the probe that tells a singular
+//! matrix. Built by a backend; `step.rs` solves with it.
+
+use super::error::SolveError;
+use super::setup::Simulation;
+use super::stats::{timed, RunStats};
+use crate::contact::{Condensation, SplitSweeps, StoredResponses};
+use crate::fem::SymmetricMatrix;
+use crate::linalg::{Analysis, Counters, Factor, LinearSolver};
+use crate::scene::CondensationKind;
+use std::sync::Arc;
+
+/// The columns of the prescribed unknowns of an unmodified matrix (all rows): what the
+/// prescribed part of the system contributes (docs/method.md §7).
+pub(super) struct PrescribedColumns {
+    /// (prescribed unknown j, its column entries (i, K_ij)).
+    pub(super) columns: Vec<(usize, Vec<(usize, f64)>)>,
+}
+
+impl PrescribedColumns {
+    pub(super) fn new<const D: usize>(matrix: &SymmetricMatrix, dofs: &crate::fem::DofMap<D>) -> Self {
+        let columns = (0..matrix.n())
+            .filter(|&j| dofs.is_prescribed(j))
+            .map(|j| (j, matrix.column(j).collect()))
+            .collect();
+        PrescribedColumns { columns }
+    }
+
+    /// rhs_i −= Σ_j K_ij g_j at the free rows i.
+    pub(super) fn lift<const D: usize>(&self, g: &[f64], dofs: &crate::fem::DofMap<D>, rhs: &mut [f64]) {
+        for (j, col) in &self.columns {
+            if g[*j] != 0.0 {
+                for &(i, v) in col {
+                    if !dofs.is_prescribed(i) {
+                        rhs[i] -= v * g[*j];
+                    }
+                }
+            }
+        }
+    }
+
+    /// (K x)_j at each prescribed j, added into `out` (indexed like the columns).
+    pub(super) fn add_product(&self, x: &[f64], out: &mut [f64]) {
+        for ((_, col), o) in self.columns.iter().zip(out.iter_mut()) {
+            *o += col.iter().map(|&(i, v)| v * x[i]).sum::<f64>();
+        }
+    }
+}
+
+/// How a step operator lifts non-zero prescribed values (docs/method.md §7.2).
+pub(super) enum Lifting {
+    /// The unmodified columns of the prescribed unknowns (the faer factor's).
+    Columns(PrescribedColumns),
+    /// rhs −= (K_A + Σ_j c_j K_j) g at the free unknowns through the backend's products
+    /// (c = `memory`).
+    Products { memory: Vec<f64> },
+}
+
+/// The operator of a step matrix: its solver and, with contact, its condensation, and how it
+/// lifts non-zero prescribed values.
+pub struct StepOperator {
+    pub(super) solver: Arc<dyn LinearSolver>,
+    pub(super) condensed: Option<Box<dyn Condensation>>,
+    /// How non-zero prescribed values are lifted (None when they are all zero).
+    pub(super) lifting: Option<Lifting>,
+}
+
+/// The matrix a factor is built from (identity rows at the prescribed unknowns, docs/method.md
+/// §7) and, when some prescribed value is non-zero, the unmodified columns that lift them.
+pub(super) fn system_matrix<const D: usize>(
+    sim: &Simulation<D>,
+    matrix: &SymmetricMatrix,
+) -> (SymmetricMatrix, Option<Lifting>) {
+    let lifting = sim
+        .dirichlet
+        .is_nonzero()
+        .then(|| Lifting::Columns(PrescribedColumns::new(matrix, &sim.dofs)));
+    (matrix.with_identity_rows(&sim.dofs), lifting)
+}
+
+impl StepOperator {
+    /// Factors `matrix` (from [`system_matrix`]) and condenses the contact normals.
+    pub(super) fn factored<const D: usize>(
+        sim: &Simulation<D>,
+        symbolic: &Analysis,
+        (matrix, lifting): (SymmetricMatrix, Option<Lifting>),
+        counters: &Counters,
+        stats: &mut RunStats,
+    ) -> Result<Self, SolveError> {
+        // The probe's product K v is taken before the factorisation, which consumes the matrix:
+        // K is not held next to its factor (docs/method.md §9.3).
+        let probe = timed(&mut stats.phases.factorisation, || Probe::new(&matrix));
+        let factor = timed(&mut stats.phases.factorisation, || {
+            Factor::new_consuming(symbolic, matrix, counters)
+        })
+        .map_err(|e| SolveError::Singular {
+            mesh: sim.mesh.path.display().to_string(),
+            detail: e.to_string(),
+        })?;
+        timed(&mut stats.phases.factorisation, || probe.verdict(&factor)).map_err(|detail| SolveError::Singular {
+            mesh: sim.mesh.path.display().to_string(),
+            detail,
+        })?;
+        let factor = Arc::new(factor);
+        let condensed: Option<Box<dyn Condensation>> = match &sim.contact {
+            Some(c) if !c.nodes.is_empty() => Some(
+                timed(
+                    &mut stats.phases.condensation,
+                    || -> Result<Box<dyn Condensation>, String> {
+                        Ok(match sim.condensation {
+                            CondensationKind::SplitSweeps => {
+                                Box::new(SplitSweeps::new(&c.nodes, factor.clone(), counters)?)
+                            }
+                            kind @ (CondensationKind::StoredResponses | CondensationKind::RecoverySolve) => {
+                                let solver: Arc<dyn LinearSolver> = factor.clone();
+                                let keep = kind == CondensationKind::StoredResponses;
+                                Box::new(StoredResponses::new(&c.nodes, solver, keep, counters)?)
+                            }
+                        })
+                    },
+                )
+                .map_err(SolveError::Setup)?,
+            ),
+            _ => None,
+        };
+        if let Some(c) = &condensed {
+            stats.condensation = Some(c.name().to_string());
+        }
+        Ok(StepOperator {
+            solver: factor,
+            condensed,
+            lifting,
+        })
+    }
+
+    /// The operator of a backend's own solver and condensation for K = K_A + Σ_j c_j K_j
+    /// (c = `memory`), lifting through the backend's products.
+    pub fn distributed<const D: usize>(
+        sim: &Simulation<D>,
+        solver: Arc<dyn LinearSolver>,
+        condensed: Option<Box<dyn Condensation>>,
+        memory: &[f64],
+        stats: &mut RunStats,
+    ) -> Self {
+        if let Some(c) = &condensed {
+            stats.condensation = Some(c.name().to_string());
+        }
+        let lifting = sim.dirichlet.is_nonzero().then(|| Lifting::Products {
+            memory: memory.to_vec(),
+        });
+        StepOperator {
+            solver,
+            condensed,
+            lifting,
+        }
+    }
+}
+
+/// A Cholesky factorisation of a singular matrix can succeed on round-off pivots (a body held
+/// at a single point can still rotate about it). One probe solve, K⁻¹(K v) against v for a fixed
+/// pseudo-random v, tells: an error far above round-off means the matrix is (nearly) singular.
+/// The probe is not counted among the run's solves.
+struct Probe {
+    v: Vec<f64>,
+    /// K v.
+    product: Vec<f64>,
+}
+
+impl Probe {
+    /// The probe vector v and K v.
+    fn new(matrix: &SymmetricMatrix) -> Self {
+        let n = matrix.n();
+        let v: Vec<f64> = (0..n)
+            .map(|i| ((i as f64 + 1.0) * 0.618_033_988_749_895).fract() - 0.5)
+            .collect();
+        let mut product = vec![0.0; n];
+        matrix.matvec(&v, &mut product);
+        Probe { v, product }
+    }
+
+    /// K⁻¹(K v) against v with the factor of K.
+    fn verdict(mut self, factor: &Factor) -> Result<(), String> {
+        factor.solve_in_place(&mut self.product, &Counters::default());
+        let scale = self.v.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        let error = self
+            .product
+            .iter()
+            .zip(&self.v)
+            .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()))
+            / scale;
+        singularity_verdict(error)
+    }
+}
+
+/// The verdict of a probe solve whose relative error is `error` (any backend's probe).
+pub fn singularity_verdict(error: f64) -> Result<(), String> {
+    if error.is_finite() && error <= 1e-6 {
+        Ok(())
+    } else {
+        Err(format!(
+            "the stiffness matrix is singular or nearly so (a probe solve is off by {error:.1e} relative): the body is not held against rigid motions; clamp a part of the boundary (groups.clamped) that stops translations and rotations"
+        ))
+    }
+}
