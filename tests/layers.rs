@@ -214,6 +214,16 @@ struct Import {
 /// The crate-relative paths a file refers to, from `use` statements and from paths in code.
 fn imports(module: &[String], code: &str) -> Vec<Import> {
     let line_of = |offset: usize| code[..offset].matches('\n').count() + 1;
+    // the file's child modules (`mod name;`): a path `name::…` in it reaches into that child
+    let children: Vec<String> = code
+        .split(';')
+        .filter_map(|statement| {
+            let words: Vec<&str> = statement.split_whitespace().collect();
+            let at = words.iter().rposition(|w| *w == "mod")?;
+            (at + 2 == words.len()).then(|| words[at + 1].to_string())
+        })
+        .filter(|name| name.chars().all(|c| c.is_alphanumeric() || c == '_'))
+        .collect();
     // `super` of a file `a/b.rs` (module a::b) is `a`; of `a/mod.rs` (module a) it is the crate
     let parent = |m: &[String]| m[..m.len().saturating_sub(1)].to_vec();
     let absolute = |p: &[String], module: &[String]| -> Option<Vec<String>> {
@@ -222,6 +232,11 @@ fn imports(module: &[String], code: &str) -> Vec<Import> {
             "crate" => Vec::new(),
             "self" => module.to_vec(),
             "super" => parent(module),
+            child if children.iter().any(|c| c == child) => {
+                let mut m = module.to_vec();
+                m.push(child.to_string());
+                return Some(m.into_iter().chain(p[1..].iter().cloned()).collect());
+            }
             _ => return None,
         };
         let mut rest = &p[1..];
@@ -301,7 +316,10 @@ fn imports(module: &[String], code: &str) -> Vec<Import> {
         i = end;
     }
     // paths in code: crate::a::b, super::a, self::a
-    for root in ["crate", "super", "self"] {
+    let roots = ["crate", "super", "self"]
+        .into_iter()
+        .chain(children.iter().map(String::as_str));
+    for root in roots {
         let pattern = format!("{root}::");
         let mut i = 0;
         while let Some(n) = code[i..].find(&pattern) {
@@ -433,11 +451,15 @@ fn imports_run_down_the_layers_and_no_files_import_each_other() {
             continue;
         }
         let mut at = 0;
-        while let Some(n) = s.code[at..].find("pub use ") {
-            let start = at + n + 8;
+        while let Some(n) = s.code[at..].find("use ") {
+            let start = at + n + 4;
             let Some(end) = s.code[start..].find(';').map(|e| start + e) else {
                 break;
             };
+            at = end;
+            if !is_reexport(&s.code[..start - 4]) {
+                continue;
+            }
             let tree: String = s.code[start..end].split_whitespace().collect::<Vec<_>>().join(" ");
             for path in expand_use_tree(&tree) {
                 let mut full = if path[0] == "self" {
@@ -482,7 +504,7 @@ fn imports_run_down_the_layers_and_no_files_import_each_other() {
             // a module's mod.rs declaring and re-exporting its children is not an import
             let is_child = to.len() > s.module.len() && to[..s.module.len()] == s.module[..];
             let reexport_line = s.code.lines().nth(import.line - 1).unwrap_or("");
-            if is_child && reexport_line.trim_start().starts_with("pub use") {
+            if is_child && is_reexport(&reexport_line[..reexport_line.find("use ").unwrap_or(0)]) {
                 continue;
             }
             if let (Some(a), Some(b)) = (from_layer, layer_of(&to[0])) {
@@ -527,6 +549,14 @@ fn imports_run_down_the_layers_and_no_files_import_each_other() {
         problems.len(),
         problems.join("\n")
     );
+}
+
+/// True if the text before a `use` ends in a visibility (`pub`, `pub(crate)`, `pub(super)`): a
+/// re-export.
+fn is_reexport(before: &str) -> bool {
+    let before = before.trim_end();
+    before.ends_with("pub")
+        || (before.ends_with(')') && before.rfind("pub(").is_some_and(|p| !before[p..].contains('\n')))
 }
 
 fn rel(src: &Path, file: &Path) -> String {

@@ -1,7 +1,7 @@
 //! Boundary parts: a group of facets (curves in 2D, surfaces in 3D: Γ₁, Γ₂, Γ₃) as oriented
 //! facets with outward normals and nodal quadrature weights (docs/method.md §2, §8).
 
-use super::{fmt_point, Facet, Mesh, MeshError, PhysicalGroup};
+use super::{fmt_point, Facet, GroupSelector, Mesh, MeshError, PhysicalGroup};
 use crate::mesh::quadrature::QUAD_GAUSS_2X2;
 use std::collections::HashMap;
 
@@ -59,6 +59,15 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 
 fn norm(v: [f64; 3]) -> f64 {
     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+impl<const D: usize> Mesh<D> {
+    /// A group of facets (dimension D − 1) as an oriented boundary part (see [`BoundaryPart`]).
+    /// Every facet of the group must be a facet of exactly one cell.
+    pub fn boundary(&self, sel: &GroupSelector) -> Result<BoundaryPart<D>, MeshError> {
+        let group = self.group(sel, (D - 1) as u8)?;
+        boundary_part(self, group)
+    }
 }
 
 /// Quadrature of one facet: for each node, ∫ N_a ds and ∫ N_a n ds (n the outward unit normal,
