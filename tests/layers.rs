@@ -390,6 +390,7 @@ fn resolve(
     path: &[String],
     modules: &BTreeMap<Vec<String>, usize>,
     reexports: &BTreeMap<(usize, String), Vec<String>>,
+    sources: &[Source],
 ) -> Option<usize> {
     let mut depth = 0;
     for k in (1..=path.len()).rev() {
@@ -405,7 +406,18 @@ fn resolve(
     let mut file = modules[&path[..depth]];
     let mut guard = 0;
     while let Some(name) = path.get(depth) {
-        let Some(target) = reexports.get(&(file, name.clone())) else {
+        // an explicit re-export, else a glob re-export (`pub use child::*`) of a module that
+        // defines the name
+        let glob = || {
+            reexports
+                .range((file, "*".to_string())..)
+                .take_while(|((f, n), _)| *f == file && n.starts_with('*'))
+                .find_map(|(_, target)| {
+                    let defines = modules.get(target).is_some_and(|&t| defines(&sources[t].code, name));
+                    defines.then_some(target)
+                })
+        };
+        let Some(target) = reexports.get(&(file, name.clone())).or_else(glob) else {
             break;
         };
         let Some(&next) = modules.get(target) else {
@@ -478,7 +490,14 @@ fn imports_run_down_the_layers_and_no_files_import_each_other() {
                     m
                 };
                 let name = full.pop().unwrap();
-                if name != "*" {
+                if name == "*" {
+                    // globs keyed "*0", "*1", … so that a module may have several
+                    let k = reexports
+                        .range((i, "*".to_string())..)
+                        .take_while(|((f, n), _)| *f == i && n.starts_with('*'))
+                        .count();
+                    reexports.insert((i, format!("*{k}")), full);
+                } else {
                     reexports.insert((i, name), full);
                 }
             }
@@ -494,7 +513,7 @@ fn imports_run_down_the_layers_and_no_files_import_each_other() {
             if import.path.is_empty() {
                 continue;
             }
-            let Some(j) = resolve(&import.path, &modules, &reexports) else {
+            let Some(j) = resolve(&import.path, &modules, &reexports, &sources) else {
                 continue;
             };
             if j == i {
@@ -549,6 +568,21 @@ fn imports_run_down_the_layers_and_no_files_import_each_other() {
         problems.len(),
         problems.join("\n")
     );
+}
+
+/// True if `code` defines an item called `name` at any depth (struct, enum, fn, …).
+fn defines(code: &str, name: &str) -> bool {
+    [
+        "struct", "enum", "fn", "const", "static", "type", "trait", "mod", "union",
+    ]
+    .iter()
+    .any(|kind| {
+        let pattern = format!("{kind} {name}");
+        code.match_indices(&pattern).any(|(at, _)| {
+            let end = at + pattern.len();
+            !ident_char(code.as_bytes(), end) && !ident_char(code.as_bytes(), at.wrapping_sub(1))
+        })
+    })
 }
 
 /// True if the text before a `use` ends in a visibility (`pub`, `pub(crate)`, `pub(super)`): a

@@ -3,8 +3,8 @@
 //! of the contact normals: one distributed solve per step with the stored responses Z = K⁻¹Cᵀ
 //! when they fit the budget of [`keeps_responses`], two otherwise.
 
+use super::common::SolverChoice;
 use super::partition::Partition;
-use super::SolverChoice;
 use crate::contact::active_set::{ContactOutcome, ContactState};
 use crate::contact::condensed::{subtract_normal_forces, subtract_responses};
 use crate::contact::{Condensation, ContactNodes, DenseNormalStiffness};

@@ -6,7 +6,7 @@
 //! Nothing is factorised.
 
 use super::backend::{method_name, PetscBackend};
-use super::{agree, read_everywhere, simulation_and_partition, start, RankShare, SolverChoice};
+use super::common::{agree, read_everywhere, simulation_and_partition, start, RankShare, SolverChoice};
 use crate::app;
 use crate::history::History;
 use crate::mesh::{AnyMesh, Mesh};

@@ -9,7 +9,7 @@
 //! of them exists); every rank writes its piece; rank 0 writes the `.pvtu` and then the index and
 //! the tables. Nothing lists a frame before all of its pieces are in place.
 
-use super::agree;
+use super::common::agree;
 use super::partition::Partition;
 use crate::app::sink::{body_fields, cell_groups, displacement_3, mark_active, wants_stress, FileSink};
 use crate::fem::stress::{cell_measures, cell_stresses, nodal_stress_sums, nodal_stresses_from_sums};
