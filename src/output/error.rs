@@ -63,13 +63,6 @@ pub enum OutputError {
     /// path separator, ...).
     #[error("{}: {detail}", path.display())]
     InvalidArgument { path: PathBuf, detail: String },
-    /// vtkio failed to encode or decode a VTK file.
-    #[error("{}: VTK {action} failed: {detail}", path.display())]
-    Vtk {
-        path: PathBuf,
-        action: &'static str,
-        detail: String,
-    },
     /// A value could not be serialised as JSON.
     #[error("{}: cannot serialise as JSON: {source}", path.display())]
     Json {
@@ -80,8 +73,9 @@ pub enum OutputError {
     /// The output directory holds an earlier run that may not (or cannot) be replaced.
     #[error("cannot write into {}: {detail}", dir.display())]
     EarlierRun { dir: PathBuf, detail: String },
-    /// A `.vtu` file that was read back does not have the expected structure.
-    #[error("{}: not a .vtu written by hvi: {detail}", path.display())]
+    /// A `.vtu` (`.vtp`, `.pvtu`, `.pvd`) file that was read back does not have the expected
+    /// structure.
+    #[error("{}: not a {} written by hvi: {detail}", path.display(), kind(path))]
     Format { path: PathBuf, detail: String },
 }
 
@@ -119,6 +113,14 @@ impl OutputError {
             path: path.to_path_buf(),
             detail: detail.into(),
         }
+    }
+}
+
+/// `.vtu`, `.pvd`, ... as the extension of `path` says (`.vtu` without one).
+fn kind(path: &Path) -> String {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(e @ ("vtu" | "vtp" | "pvtu" | "pvd")) => format!(".{e}"),
+        _ => ".vtu".into(),
     }
 }
 

@@ -44,13 +44,14 @@ mod error;
 mod manifest;
 mod pvd;
 mod vtu;
+mod xml;
 
 pub use atomic::{is_temporary_name, write_atomic, write_json_atomic};
 pub use boundary::ContactBoundary;
 pub use csv::CsvTable;
 pub use error::OutputError;
 pub use manifest::{read_manifest, record_in_run, RunManifest, MANIFEST_NAME};
-pub use pvd::pvd_text;
+pub use pvd::{pvd_text, read_pvd};
 pub use vtu::{pvtu_pieces, read_pvtu_arrays, read_vtu_arrays, VtuContents, CELL_IDS, NODE_IDS};
 
 /// The largest zlib level of [`SeriesWriter::with_compression`].

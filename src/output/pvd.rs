@@ -1,8 +1,10 @@
 //! The two index files ParaView reads for a time series: the `.pvd` collection (XML) and the
-//! `.vtu.series` file (JSON). vtkio writes neither, so they are written here; both list file
+//! `.vtu.series` file (JSON), written here; both list file
 //! names relative to their own directory, in the order written, with each frame's real time.
+//! [`read_pvd`] reads a `.pvd` back (its markup by quick-xml, [`super::xml`]).
 
 use super::atomic::{write_atomic, write_json_atomic};
+use super::xml::parse_tags;
 use super::{format_number, OutputError};
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -47,6 +49,32 @@ pub fn pvd_text(frames: &[(f64, PathBuf)]) -> String {
     s
 }
 
+/// The frames a `.pvd` collection lists: (time, file name as written, escapes undone), in
+/// order. A missing file, markup that is not well-formed, a file that is not a `Collection`, or
+/// a `<DataSet>` without a `file` or a numeric `timestep` is an error naming the file.
+pub fn read_pvd(path: &Path) -> Result<Vec<(f64, String)>, OutputError> {
+    let bytes = std::fs::read(path).map_err(|e| OutputError::read(path, e))?;
+    let fail = |detail: String| OutputError::format(path, detail);
+    let (tags, _) = parse_tags(&bytes, None).map_err(fail)?;
+    let root = tags.iter().find(|t| t.name == "VTKFile" && !t.closing);
+    if root.and_then(|t| t.attr("type")) != Some("Collection") {
+        return Err(fail("its root is not a <VTKFile type=\"Collection\">".into()));
+    }
+    tags.iter()
+        .filter(|t| t.name == "DataSet" && !t.closing)
+        .map(|t| {
+            let file = t.attr("file").ok_or_else(|| fail("a <DataSet> without file".into()))?;
+            let time = t.attr("timestep").unwrap_or("(none)");
+            let time = time.trim().parse::<f64>().map_err(|_| {
+                fail(format!(
+                    "the <DataSet> of {file:?} has the timestep {time:?}, not a number"
+                ))
+            })?;
+            Ok((time, file.to_string()))
+        })
+        .collect()
+}
+
 #[derive(Serialize)]
 struct SeriesEntry {
     name: String,
@@ -85,5 +113,60 @@ mod tests {
         let text = pvd_text(&[(0.0, "d/a_00000.vtu".into()), (0.25, "d/a&b_00001.vtu".into())]);
         assert!(text.contains("<DataSet timestep=\"0\" group=\"\" part=\"0\" file=\"a_00000.vtu\"/>"));
         assert!(text.contains("timestep=\"0.25\" group=\"\" part=\"0\" file=\"a&amp;b_00001.vtu\""));
+    }
+
+    /// A series whose name needs every escape reads back with the names written, in a
+    /// directory whose name needs them too (it is not in the `.pvd`, which lists bare names).
+    #[test]
+    fn pvd_reads_back_the_names_written() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("run &<\"'>");
+        let basename = "a&b \"q\" <x>'";
+        let mut series = super::super::SeriesWriter::create(&dir, basename).unwrap();
+        let points = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+        let cells = [crate::mesh::Cell::Tri3([0, 1, 2])];
+        for (step, time) in [(0, 0.0), (1, 0.1 + 0.2), (2, 5e-324)] {
+            let frame = super::super::Frame {
+                step,
+                time,
+                points: &points,
+                cells: &cells,
+                point_fields: vec![],
+                cell_fields: vec![],
+            };
+            series.write_frame(&frame).unwrap();
+        }
+        let text = std::fs::read_to_string(series.pvd_path()).unwrap();
+        assert!(
+            text.contains("file=\"a&amp;b &quot;q&quot; &lt;x&gt;&apos;_00000.vtu\""),
+            "{text}"
+        );
+        let frames = read_pvd(series.pvd_path()).unwrap();
+        let expected: Vec<(f64, String)> = series
+            .frames()
+            .iter()
+            .map(|(t, p)| (*t, p.file_name().unwrap().to_string_lossy().into_owned()))
+            .collect();
+        assert_eq!(frames, expected);
+        assert_eq!(frames[1], (0.1 + 0.2, format!("{basename}_00001.vtu")));
+        for (_, name) in &frames {
+            assert!(dir.join(name).is_file(), "{name}");
+        }
+
+        // what is wrong is named with the file
+        let pvd = dir.join("bad.pvd");
+        for (text, what) in [
+            (text.replace("timestep=\"0\"", "timestep=\"zero\""), "\"zero\""),
+            (text.replace("</Collection>", ""), "malformed XML"),
+            (text[..text.len() / 2].to_string(), "truncated"),
+            (text.replace("Collection", "PolyData"), "not a .pvd written by hvi"),
+            (text.replacen(" file=", " name=", 1), "without file"),
+        ] {
+            std::fs::write(&pvd, text).unwrap();
+            let e = read_pvd(&pvd).unwrap_err().to_string();
+            assert!(e.contains("bad.pvd") && e.contains(what), "{what}: {e}");
+        }
+        let e = read_pvd(&dir.join("none.pvd")).unwrap_err();
+        assert!(matches!(e, OutputError::Read { .. }), "{e}");
     }
 }

@@ -63,22 +63,6 @@ pub fn default_scale(max_displacement: f64, diagonal: f64) -> f64 {
         .max(1.0)
 }
 
-/// The frames listed in a `.pvd`: (time, file) in order.
-fn pvd_frames(pvd: &str) -> Vec<(f64, String)> {
-    let attr = |item: &str, name: &str| -> Option<String> {
-        let at = item.find(&format!("{name}=\""))? + name.len() + 2;
-        Some(item[at..].split('"').next()?.to_string())
-    };
-    pvd.split("<DataSet")
-        .skip(1)
-        .filter_map(|item| {
-            let file = attr(item, "file")?;
-            let t = attr(item, "timestep").and_then(|t| t.parse().ok()).unwrap_or(f64::NAN);
-            Some((t, file))
-        })
-        .collect()
-}
-
 /// `hvi plot RUN_DIR`: draws the run (see the module documentation); returns the files written.
 pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, SolveError> {
     let fail = |what: String| SolveError::Setup(format!("{}: {what}", run_dir.display()));
@@ -94,12 +78,12 @@ pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, S
             "--times: {bad} is not a time; give output times, e.g. --times 0.25,0.5,1"
         )));
     }
-    let pvd = std::fs::read_to_string(run_dir.join("solution.pvd")).map_err(|e| {
-        fail(format!(
-            "cannot read solution.pvd ({e}); is this an hvi output directory?"
-        ))
+    let frames = output::read_pvd(&run_dir.join("solution.pvd")).map_err(|e| match e {
+        output::OutputError::Read { source, .. } => fail(format!(
+            "cannot read solution.pvd ({source}); is this an hvi output directory?"
+        )),
+        e => e.into(),
     })?;
-    let frames = pvd_frames(&pvd);
     let (time, last) = frames
         .last()
         .cloned()

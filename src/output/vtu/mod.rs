@@ -16,17 +16,15 @@
 //!   buffers kept across frames ([`VtuBuffer`]), and [`write_vtu`], which encodes and writes the
 //!   bytes atomically;
 //! - [`raw`]: the layout, written by hand, and why it is not written through vtkio;
-//! - [`read`]: [`read_vtu_arrays`] and [`VtuContents`]; raw appended files (compressed or not)
-//!   by a small parser of exactly the layout [`raw`] writes, inline ones (hvi's earlier layout)
-//!   through vtkio;
+//! - [`read`]: [`read_vtu_arrays`] and [`VtuContents`]: the markup by quick-xml, the arrays of
+//!   the raw appended block (compressed or not) and inline ones (hvi's earlier layout, base64
+//!   through vtkio, or ASCII) decoded there;
 //! - [`pvtu`]: frames in pieces (one per process of a PETSc run) and their `.pvtu`, and
 //!   [`read_pvtu_arrays`], which puts the pieces back together.
 
 pub(crate) mod pvtu;
 mod raw;
 mod read;
-#[cfg(test)]
-mod vtkio_writer;
 
 pub use pvtu::{pvtu_pieces, read_pvtu_arrays, CELL_IDS, NODE_IDS};
 pub use read::{read_vtu_arrays, VtuContents};

@@ -12,10 +12,10 @@
 //! run that stops leaves every frame the index lists whole.
 
 use super::raw::{open_section, start_array, vtk_type};
-use super::read::parse_tags;
 use super::{read_vtu_arrays, write_vtu, VtuContents};
 use crate::output::atomic::write_atomic;
 use crate::output::pvd::{write_index, xml_escape};
+use crate::output::xml::parse_tags;
 use crate::output::{Field, Frame, OutputError, SeriesWriter};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -117,8 +117,8 @@ fn pvtu_text(point_fields: &[Field], cell_fields: &[Field], pieces: &[String]) -
 
 /// The pieces a `.pvtu` lists, as paths (relative names resolved against its directory).
 pub fn pvtu_pieces(path: &Path) -> Result<Vec<PathBuf>, OutputError> {
-    let text = std::fs::read_to_string(path).map_err(|e| OutputError::read(path, e))?;
-    let tags = parse_tags(&text).map_err(|e| OutputError::format(path, e))?;
+    let bytes = std::fs::read(path).map_err(|e| OutputError::read(path, e))?;
+    let (tags, _) = parse_tags(&bytes, None).map_err(|e| OutputError::format(path, e))?;
     if !tags.iter().any(|t| t.name == "PUnstructuredGrid" && !t.closing) {
         return Err(OutputError::format(path, "not a .pvtu (no <PUnstructuredGrid>)"));
     }

@@ -1,17 +1,15 @@
-//! Reading a `.vtu` back into [`VtuContents`].
+//! Reading a `.vtu` (`.vtp`) back into [`VtuContents`].
 //!
-//! Reading ([`read_vtu_arrays`]): vtkio 0.7.0-rc2 cannot read raw appended data (its support
-//! sits behind a `binary` cfg feature its manifest does not declare; it rejects
-//! `encoding="raw"` with "unknown variant `raw`, expected `base64`"), so files with raw
-//! appended data are read by a small parser of exactly the layout [`super::raw`] writes, which
-//! reports a truncated or foreign file as an error; inline base64 files (hvi's earlier
-//! uncompressed layout, and the compressed one) are still read through vtkio.
+//! Reading ([`read_vtu_arrays`]): the markup by quick-xml ([`crate::output::xml`]), the arrays
+//! here: raw appended data (the layout [`super::raw`] writes, compressed or not), which no XML
+//! crate decodes, and inline base64 (hvi's earlier layout, written through vtkio, compressed or
+//! not) or ASCII arrays. A truncated or foreign file is an error naming the file.
 
+use crate::output::xml::{parse_tags, Tag};
 use crate::output::OutputError;
+use base64::Engine as _;
 use std::collections::BTreeMap;
 use std::path::Path;
-use vtkio::model::{Attribute, DataSet, Vtk};
-use vtkio::xml::VTKFile;
 
 /// The arrays of a `.vtu` file read back by [`read_vtu_arrays`]; every numeric array as `f64`
 /// (integer arrays convert exactly).
@@ -38,92 +36,9 @@ pub struct VtuContents {
 /// error.
 pub fn read_vtu_arrays(path: &Path) -> Result<VtuContents, OutputError> {
     let bytes = std::fs::read(path).map_err(|e| OutputError::read(path, e))?;
-    match find_bytes(&bytes, b"<AppendedData") {
-        Some(at) => read_raw_appended(path, &bytes, at),
-        // A raw-appended file cut before its data block: report that, not vtkio's confusion.
-        None if find_bytes(&bytes, b"format=\"appended\"").is_some() => Err(OutputError::format(
-            path,
-            "the arrays are declared as appended data but the file has no <AppendedData> block; it is truncated",
-        )),
-        None => read_vtkio(path, &bytes),
-    }
-}
-
-/// Reads an inline (base64 or ASCII, possibly compressed) `.vtu` through vtkio.
-fn read_vtkio(path: &Path, bytes: &[u8]) -> Result<VtuContents, OutputError> {
-    use vtkio::xml;
-    // vtkio silently drops arrays it fails to decode: count what the file announces.
-    let text = String::from_utf8_lossy(bytes);
-    let announced = (
-        count_data_arrays(&text, "PointData"),
-        count_data_arrays(&text, "CellData"),
-    );
-    let file = VTKFile::parse(bytes).map_err(|e| match e {
-        xml::Error::IO(source) => OutputError::read(path, source),
-        e => OutputError::Vtk {
-            path: path.to_path_buf(),
-            action: "parsing",
-            detail: e.to_string(),
-        },
-    })?;
-    let vtk = Vtk::try_from(file).map_err(|e| OutputError::Vtk {
-        path: path.to_path_buf(),
-        action: "decoding",
-        detail: e.to_string(),
-    })?;
-    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
-        return Err(OutputError::format(path, "not an UnstructuredGrid"));
-    };
-    if pieces.len() != 1 {
-        return Err(OutputError::format(
-            path,
-            format!("expected exactly one piece, found {}", pieces.len()),
-        ));
-    }
-    let piece = pieces
-        .into_iter()
-        .next()
-        .ok_or_else(|| OutputError::format(path, "no piece"))?
-        .into_loaded_piece_data(None)
-        .map_err(|e| OutputError::Vtk {
-            path: path.to_path_buf(),
-            action: "loading the piece",
-            detail: e.to_string(),
-        })?;
-
-    let coords = piece
-        .points
-        .cast_into::<f64>()
-        .ok_or_else(|| OutputError::format(path, "points are not numeric"))?;
-    if coords.len() % 3 != 0 {
-        return Err(OutputError::format(path, "point coordinates are not triples"));
-    }
-    let points: Vec<[f64; 3]> = coords.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-
-    let cell_types: Vec<u8> = piece.cells.types.iter().map(|t| *t as u8).collect();
-    let n_cells = cell_types.len();
-    let (conn, mut offsets) = piece.cells.cell_verts.into_xml();
-    if offsets.len() == n_cells + 1 && offsets.first() == Some(&0) {
-        offsets.remove(0);
-    }
-    if offsets.len() != n_cells {
-        return Err(OutputError::format(
-            path,
-            format!("{} cell offsets for {} cell types", offsets.len(), n_cells),
-        ));
-    }
-    let connectivity = split_connectivity(path, &conn, &offsets, points.len())?;
-
-    let point_data = collect_arrays(path, "point", piece.data.point, points.len(), announced.0)?;
-    let cell_data = collect_arrays(path, "cell", piece.data.cell, n_cells, announced.1)?;
-    Ok(VtuContents {
-        points,
-        cell_types,
-        connectivity,
-        point_data,
-        cell_data,
-        field_data: BTreeMap::new(),
-    })
+    // The markup up to the raw appended data, if any; the rest is not XML.
+    let (tags, appended) = parse_tags(&bytes, Some("AppendedData")).map_err(|e| OutputError::format(path, e))?;
+    read_tags(path, &bytes, &tags, appended)
 }
 
 /// Splits `conn` at the cell end `offsets` into the node lists of the cells, checking that the
@@ -155,65 +70,6 @@ fn split_connectivity(
         start = end;
     }
     Ok(connectivity)
-}
-
-fn collect_arrays(
-    path: &Path,
-    location: &str,
-    attributes: Vec<Attribute>,
-    count: usize,
-    announced: usize,
-) -> Result<BTreeMap<String, (usize, Vec<f64>)>, OutputError> {
-    let mut out = BTreeMap::new();
-    for a in attributes {
-        let Attribute::DataArray(a) = a else { continue };
-        let components = a.elem.num_comp() as usize;
-        let values = a
-            .data
-            .cast_into::<f64>()
-            .ok_or_else(|| OutputError::format(path, format!("{location} array \"{}\" is not numeric", a.name)))?;
-        if values.len() != components * count {
-            return Err(OutputError::format(
-                path,
-                format!(
-                    "{location} array \"{}\" has {} values, expected {components} × {count}",
-                    a.name,
-                    values.len()
-                ),
-            ));
-        }
-        out.insert(a.name, (components, values));
-    }
-    if out.len() != announced {
-        return Err(OutputError::format(
-            path,
-            format!(
-                "the file announces {announced} {location} arrays but {} could be decoded",
-                out.len()
-            ),
-        ));
-    }
-    Ok(out)
-}
-
-/// The number of `<DataArray` elements inside the first `<tag>` element of `text` (0 if the
-/// element is absent or empty).
-fn count_data_arrays(text: &str, tag: &str) -> usize {
-    let Some(start) = text.find(&format!("<{tag}")) else {
-        return 0;
-    };
-    let rest = &text[start..];
-    let open_end = rest.find('>').unwrap_or(rest.len());
-    if rest[..open_end].ends_with('/') {
-        return 0;
-    }
-    let end = rest.find(&format!("</{tag}>")).unwrap_or(rest.len());
-    rest[..end].matches("<DataArray").count()
-}
-
-/// The first position of `needle` in `hay`.
-fn find_bytes(hay: &[u8], needle: &[u8]) -> Option<usize> {
-    hay.windows(needle.len()).position(|w| w == needle)
 }
 
 /// The scalar types of VTK XML data arrays.
@@ -301,90 +157,6 @@ impl Scalar {
     }
 }
 
-/// One tag of the XML header: `<name a="v" ...>`, `<name .../>` or `</name>`.
-pub(super) struct Tag<'a> {
-    pub(super) name: &'a str,
-    attrs: Vec<(&'a str, String)>,
-    pub(super) closing: bool,
-    self_closing: bool,
-}
-
-impl Tag<'_> {
-    pub(super) fn attr(&self, key: &str) -> Option<&str> {
-        self.attrs.iter().find(|(k, _)| *k == key).map(|(_, v)| v.as_str())
-    }
-}
-
-/// Undoes the escapes [`xml_escape`] makes (other entities are kept as they are).
-///
-/// [`xml_escape`]: crate::output::pvd::xml_escape
-fn xml_unescape(s: &str) -> String {
-    if !s.contains('&') {
-        return s.to_string();
-    }
-    s.replace("&lt;", "<")
-        .replace("&gt;", ">")
-        .replace("&quot;", "\"")
-        .replace("&apos;", "'")
-        .replace("&amp;", "&")
-}
-
-/// Parses the inside of a tag (between `<` and `>`); `None` if it is not a well-formed tag.
-fn parse_tag(inner: &str) -> Option<Tag<'_>> {
-    let (closing, inner) = match inner.strip_prefix('/') {
-        Some(rest) => (true, rest),
-        None => (false, inner),
-    };
-    let (self_closing, inner) = match inner.strip_suffix('/') {
-        Some(rest) => (true, rest),
-        None => (false, inner),
-    };
-    let name_end = inner.find(|c: char| c.is_ascii_whitespace()).unwrap_or(inner.len());
-    let name = &inner[..name_end];
-    if name.is_empty() {
-        return None;
-    }
-    let mut attrs = Vec::new();
-    let mut rest = inner[name_end..].trim_start();
-    while !rest.is_empty() {
-        let eq = rest.find('=')?;
-        let key = rest[..eq].trim_end();
-        let value = rest[eq + 1..].trim_start();
-        let quote = value.chars().next().filter(|&q| q == '"' || q == '\'')?;
-        let len = value[1..].find(quote)?;
-        attrs.push((key, xml_unescape(&value[1..1 + len])));
-        rest = value[len + 2..].trim_start();
-    }
-    Some(Tag {
-        name,
-        attrs,
-        closing,
-        self_closing,
-    })
-}
-
-/// The tags of `text` in order, skipping the XML declaration, comments and text between tags.
-pub(super) fn parse_tags(text: &str) -> Result<Vec<Tag<'_>>, String> {
-    let mut tags = Vec::new();
-    let mut rest = text;
-    while let Some(open) = rest.find('<') {
-        rest = &rest[open + 1..];
-        if let Some(comment) = rest.strip_prefix("!--") {
-            let end = comment.find("-->").ok_or("an unterminated XML comment")?;
-            rest = &comment[end + 3..];
-            continue;
-        }
-        let close = rest.find('>').ok_or("an unterminated XML tag")?;
-        let inner = &rest[..close];
-        rest = &rest[close + 1..];
-        if inner.starts_with('?') {
-            continue;
-        }
-        tags.push(parse_tag(inner).ok_or_else(|| format!("a malformed XML tag <{inner}>"))?);
-    }
-    Ok(tags)
-}
-
 /// Where a `DataArray` of the header belongs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Section {
@@ -397,16 +169,26 @@ enum Section {
     Polys,
 }
 
-/// A `DataArray` declared in the header of a raw-appended file.
-struct AppendedArray {
+/// A `DataArray` declared in the header.
+struct DeclaredArray {
     section: Section,
     name: String,
     scalar: Scalar,
     components: usize,
-    /// Offset of the array's byte count in the appended block.
-    offset: usize,
+    /// Where its bytes are.
+    source: Source,
     /// `NumberOfTuples` (field data).
     tuples: Option<usize>,
+}
+
+/// Where the bytes of a `DataArray` are.
+enum Source {
+    /// In the appended block, at this offset (of its byte count or its compression header).
+    Appended(usize),
+    /// Inline, base64 (`format="binary"`): the text of the element.
+    Base64(String),
+    /// Inline, ASCII (`format="ascii"`): the text of the element.
+    Ascii(String),
 }
 
 /// The bytes of one array of the appended block `data` at `offset`: a byte count and the bytes,
@@ -452,39 +234,108 @@ fn appended_bytes(data: &[u8], offset: usize, zlib: bool) -> Result<(Vec<u8>, us
     Ok((out, at))
 }
 
-/// Reads a `.vtu` whose arrays are in a raw `<AppendedData>` block (the layout written by
-/// [`encode_vtu_raw`]); `at` is the position of `<AppendedData`.
-///
-/// [`encode_vtu_raw`]: super::raw::encode_vtu_raw
-fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents, OutputError> {
-    let fail = |detail: String| OutputError::format(path, detail);
-    let truncated = || fail("the file ends inside its appended data; it is truncated".into());
-    let header = std::str::from_utf8(&bytes[..at]).map_err(|_| fail("the XML header is not UTF-8".into()))?;
-    let tags = parse_tags(header).map_err(|e| fail(format!("the XML header has {e}")))?;
+/// The bytes of an inline base64 array (VTK's `format="binary"`, header type `UInt64`): one
+/// base64 stream of a byte count and the bytes, or (zlib) VTK's block header in a base64 stream
+/// of its own followed by the compressed blocks in another.
+fn base64_bytes(text: &str, zlib: bool) -> Result<Vec<u8>, String> {
+    let b64: Vec<u8> = text.bytes().filter(|b| !b.is_ascii_whitespace()).collect();
+    let decode = |s: &[u8]| {
+        base64::engine::general_purpose::STANDARD
+            .decode(s)
+            .map_err(|e| format!("its base64 data do not decode ({e})"))
+    };
+    let buffer = if zlib {
+        // the header's first three words (24 bytes, 32 characters) give its length
+        let first = decode(
+            b64.get(..32)
+                .ok_or("its base64 data end inside the compression header")?,
+        )?;
+        let blocks = u64::from_le_bytes(first[..8].try_into().expect("8 bytes"));
+        let header_chars = usize::try_from(blocks)
+            .ok()
+            .and_then(|n| n.checked_add(3))
+            .and_then(|n| n.checked_mul(8))
+            .map(|n| n.div_ceil(3) * 4)
+            .filter(|&n| n <= b64.len())
+            .ok_or_else(|| format!("its compression header announces {blocks} blocks, more than its data hold"))?;
+        let mut header = decode(&b64[..header_chars])?;
+        header.extend(decode(&b64[header_chars..])?);
+        header
+    } else {
+        decode(&b64)?
+    };
+    let (bytes, end) = appended_bytes(&buffer, 0, zlib).map_err(|e| {
+        if e == "truncated" {
+            "its base64 data are shorter than its header announces".to_string()
+        } else {
+            e
+        }
+    })?;
+    if end != buffer.len() {
+        return Err("its base64 data are longer than its header announces".into());
+    }
+    Ok(bytes)
+}
 
-    // The <AppendedData ...> tag, then whitespace and the '_' that starts the block.
-    let tag_len = bytes[at..].iter().position(|&b| b == b'>').ok_or_else(truncated)?;
-    let tag_text = std::str::from_utf8(&bytes[at + 1..at + tag_len])
-        .map_err(|_| fail("the <AppendedData> tag is not UTF-8".into()))?;
-    let appended_tag = parse_tag(tag_text).ok_or_else(|| fail("a malformed <AppendedData> tag".into()))?;
-    match appended_tag.attr("encoding") {
-        Some("raw") => {}
-        other => {
-            return Err(fail(format!(
-                "appended data with encoding {other:?} is not supported; only raw appended data is"
-            )))
+/// The values of an inline ASCII array as little-endian bytes of `scalar` (so that they decode
+/// as a binary array does).
+fn ascii_bytes(text: &str, scalar: Scalar) -> Result<Vec<u8>, String> {
+    let mut out = Vec::with_capacity(text.len());
+    for word in text.split_ascii_whitespace() {
+        let bad = || format!("its value {word:?} is not a value of its type");
+        let integer = || word.parse::<i128>().map_err(|_| bad());
+        macro_rules! int {
+            ($t:ty) => {
+                out.extend(<$t>::try_from(integer()?).map_err(|_| bad())?.to_le_bytes())
+            };
+        }
+        match scalar {
+            Scalar::I8 => int!(i8),
+            Scalar::U8 => int!(u8),
+            Scalar::I16 => int!(i16),
+            Scalar::U16 => int!(u16),
+            Scalar::I32 => int!(i32),
+            Scalar::U32 => int!(u32),
+            Scalar::I64 => int!(i64),
+            Scalar::U64 => int!(u64),
+            Scalar::F32 => out.extend(word.parse::<f32>().map_err(|_| bad())?.to_le_bytes()),
+            Scalar::F64 => out.extend(word.parse::<f64>().map_err(|_| bad())?.to_le_bytes()),
         }
     }
-    let mut start = at + tag_len + 1;
-    while bytes.get(start).is_some_and(u8::is_ascii_whitespace) {
-        start += 1;
-    }
-    match bytes.get(start) {
-        Some(b'_') => {}
-        Some(_) => return Err(fail("the appended data does not start with '_'".into())),
-        None => return Err(truncated()),
-    }
-    let data = &bytes[start + 1..];
+    Ok(out)
+}
+
+/// Reads the arrays of a `.vtu` (`.vtp`) from its `tags`; `appended` is the position after the
+/// `<AppendedData>` start tag, whose raw block (the layout written by [`super::raw`]) follows.
+fn read_tags(path: &Path, bytes: &[u8], tags: &[Tag], appended: Option<usize>) -> Result<VtuContents, OutputError> {
+    let fail = |detail: String| OutputError::format(path, detail);
+    let truncated = || fail("the file ends inside its appended data; it is truncated".into());
+
+    // The <AppendedData ...> tag, then whitespace and the '_' that starts the block.
+    let data = match appended {
+        None => None,
+        Some(after) => {
+            // parsing stopped at the <AppendedData> tag
+            match tags.last().and_then(|t| t.attr("encoding")) {
+                Some("raw") => {}
+                other => {
+                    return Err(fail(format!(
+                        "appended data with encoding {other:?} is not supported; only raw appended data is"
+                    )))
+                }
+            }
+            let mut start = after;
+            while bytes.get(start).is_some_and(u8::is_ascii_whitespace) {
+                start += 1;
+            }
+            match bytes.get(start) {
+                Some(b'_') => {}
+                Some(_) => return Err(fail("the appended data does not start with '_'".into())),
+                None => return Err(truncated()),
+            }
+            Some(&bytes[start + 1..])
+        }
+    };
 
     // The header: one UnstructuredGrid piece and its arrays.
     let mut grid = false;
@@ -493,17 +344,17 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
     let mut piece: Option<(usize, usize)> = None;
     let mut section = None;
     let mut arrays = Vec::new();
-    for tag in &tags {
+    for tag in tags {
         if tag.closing {
             if matches!(
-                tag.name,
+                tag.name.as_str(),
                 "FieldData" | "PointData" | "CellData" | "Points" | "Cells" | "Lines" | "Polys"
             ) {
                 section = None;
             }
             continue;
         }
-        match tag.name {
+        match tag.name.as_str() {
             "VTKFile" => {
                 poly = match tag.attr("type") {
                     Some("UnstructuredGrid") => false,
@@ -526,7 +377,7 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
                 match tag.attr("compressor") {
                     None => {}
                     Some("vtkZLibDataCompressor") => zlib = true,
-                    Some(c) => return Err(fail(format!("raw appended data compressed by {c} is not supported"))),
+                    Some(c) => return Err(fail(format!("data compressed by {c} are not supported"))),
                 }
             }
             "UnstructuredGrid" | "PolyData" => grid = true,
@@ -567,12 +418,6 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
                 let name = tag.attr("Name").unwrap_or("").to_string();
                 let section =
                     section.ok_or_else(|| fail(format!("the DataArray \"{name}\" is outside the piece's data")))?;
-                if tag.attr("format") != Some("appended") {
-                    return Err(fail(format!(
-                        "the DataArray \"{name}\" is not in the appended data (format {:?})",
-                        tag.attr("format").unwrap_or("(none)")
-                    )));
-                }
                 let ty = tag.attr("type").unwrap_or("(none)");
                 let scalar = Scalar::parse(ty)
                     .ok_or_else(|| fail(format!("the DataArray \"{name}\" has the unknown type {ty:?}")))?;
@@ -585,10 +430,21 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
                         .filter(|&c| c > 0)
                         .ok_or_else(|| fail(format!("the DataArray \"{name}\" has {c:?} components")))?,
                 };
-                let offset = tag
-                    .attr("offset")
-                    .and_then(|o| o.trim().parse::<usize>().ok())
-                    .ok_or_else(|| fail(format!("the DataArray \"{name}\" has no valid offset")))?;
+                let source = match tag.attr("format") {
+                    Some("appended") => Source::Appended(
+                        tag.attr("offset")
+                            .and_then(|o| o.trim().parse::<usize>().ok())
+                            .ok_or_else(|| fail(format!("the DataArray \"{name}\" has no valid offset")))?,
+                    ),
+                    Some("binary") => Source::Base64(tag.text.clone()),
+                    Some("ascii") => Source::Ascii(tag.text.clone()),
+                    other => {
+                        return Err(fail(format!(
+                            "the DataArray \"{name}\" has the unknown format {:?}",
+                            other.unwrap_or("(none)")
+                        )))
+                    }
+                };
                 let tuples = match tag.attr("NumberOfTuples") {
                     None => None,
                     Some(t) => Some(
@@ -597,12 +453,12 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
                             .map_err(|_| fail(format!("the DataArray \"{name}\" has {t:?} tuples")))?,
                     ),
                 };
-                arrays.push(AppendedArray {
+                arrays.push(DeclaredArray {
                     section,
                     name,
                     scalar,
                     components,
-                    offset,
+                    source,
                     tuples,
                 });
             }
@@ -614,16 +470,30 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
     }
     let (n_points, n_cells) = piece.ok_or_else(|| fail("no piece".into()))?;
 
-    // The bytes of each array (decompressed), all inside `data`.
+    // The bytes of each array (decompressed); those of the appended block all inside `data`.
     let mut data_end = 0;
-    let mut array_bytes = |a: &AppendedArray, count: Option<usize>| -> Result<Vec<u8>, OutputError> {
-        let (bytes, end) = appended_bytes(data, a.offset, zlib).map_err(|e| {
-            if e == "truncated" {
-                truncated()
-            } else {
-                fail(format!("the array \"{}\": {e}", a.name))
+    let mut array_bytes = |a: &DeclaredArray, count: Option<usize>| -> Result<Vec<u8>, OutputError> {
+        let in_array = |e: String| fail(format!("the array \"{}\": {e}", a.name));
+        let bytes = match (&a.source, data) {
+            (Source::Appended(offset), Some(data)) => {
+                let (bytes, end) = appended_bytes(data, *offset, zlib).map_err(|e| {
+                    if e == "truncated" {
+                        truncated()
+                    } else {
+                        in_array(e)
+                    }
+                })?;
+                data_end = data_end.max(end);
+                bytes
             }
-        })?;
+            // A raw-appended file cut before its data block.
+            (Source::Appended(_), None) => return Err(fail(
+                "the arrays are declared as appended data but the file has no <AppendedData> block; it is truncated"
+                    .into(),
+            )),
+            (Source::Base64(text), _) => base64_bytes(text, zlib).map_err(in_array)?,
+            (Source::Ascii(text), _) => ascii_bytes(text, a.scalar).map_err(in_array)?,
+        };
         let len = bytes.len();
         let expected = count.map(|n| n.saturating_mul(a.components).saturating_mul(a.scalar.size()));
         if expected.is_some_and(|e| e != len) || len % (a.components * a.scalar.size()) != 0 {
@@ -635,7 +505,6 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
                 a.scalar.size()
             )));
         }
-        data_end = data_end.max(end);
         Ok(bytes)
     };
     let find = |section: Section, name: &str| {
@@ -655,7 +524,7 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
     let coords = points_array.scalar.to_f64(&array_bytes(points_array, Some(n_points))?);
     let points: Vec<[f64; 3]> = coords.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
 
-    let integers = |a: &AppendedArray, bytes: &[u8]| {
+    let integers = |a: &DeclaredArray, bytes: &[u8]| {
         a.scalar.to_u64(bytes).ok_or_else(|| {
             fail(format!(
                 "the cell array \"{}\" is not a non-negative integer array",
@@ -708,15 +577,17 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
         }
     }
 
-    // Nothing but the end tags may follow the last array.
-    let tail = std::str::from_utf8(&data[data_end..]).unwrap_or("");
-    let tail: Vec<&str> = tail.split_ascii_whitespace().collect();
-    if tail != ["</AppendedData>", "</VTKFile>"] {
-        return Err(if "</AppendedData></VTKFile>".starts_with(&tail.concat()) {
-            truncated()
-        } else {
-            fail("unexpected bytes after the last array of the appended data".into())
-        });
+    // Nothing but the end tags may follow the last array of the appended data.
+    if let Some(data) = data {
+        let tail = std::str::from_utf8(&data[data_end..]).unwrap_or("");
+        let tail: Vec<&str> = tail.split_ascii_whitespace().collect();
+        if tail != ["</AppendedData>", "</VTKFile>"] {
+            return Err(if "</AppendedData></VTKFile>".starts_with(&tail.concat()) {
+                truncated()
+            } else {
+                fail("unexpected bytes after the last array of the appended data".into())
+            });
+        }
     }
     Ok(VtuContents {
         points,
@@ -730,13 +601,13 @@ fn read_raw_appended(path: &Path, bytes: &[u8], at: usize) -> Result<VtuContents
 
 #[cfg(test)]
 mod tests {
-    use super::super::vtkio_writer::encode_vtu_vtkio;
     use super::super::{write_vtu, Parts, VtuBuffer};
     use super::*;
     use crate::output::{Field, Frame};
 
-    /// Files in hvi's earlier layout (inline base64 through vtkio, uncompressed) still read,
-    /// and give what the raw layout gives.
+    /// Files in hvi's earlier layout (inline base64, uncompressed and zlib-compressed at level 6,
+    /// written through vtkio 0.7.0-rc2 from this frame and kept in `testdata/`) still read, and
+    /// give what the raw layout gives.
     #[test]
     fn earlier_base64_files_read_as_the_raw_layout() {
         let p = Parts::new();
@@ -752,35 +623,52 @@ mod tests {
             cell_fields: vec![Field::f64("stress", 9, &p.stress)],
         };
         let dir = tempfile::tempdir().unwrap();
-        let (old, new) = (dir.path().join("old.vtu"), dir.path().join("new.vtu"));
-        let bytes = encode_vtu_vtkio(&old, &frame, 0).unwrap();
-        assert!(String::from_utf8_lossy(&bytes).contains("format=\"binary\""));
-        std::fs::write(&old, bytes).unwrap();
+        let new = dir.path().join("new.vtu");
         write_vtu(&new, &frame.view(), 0, &mut VtuBuffer::default()).unwrap();
-        let (a, mut b) = (read_vtu_arrays(&old).unwrap(), read_vtu_arrays(&new).unwrap());
+        let mut b = read_vtu_arrays(&new).unwrap();
         // the earlier layout had no field data
         assert_eq!(b.field_data["TimeValue"], (1, vec![0.0]));
         b.field_data.clear();
-        assert_eq!(a, b);
         assert_eq!(
             b.point_data["contact_status"],
             (1, vec![-1.0, 0.0, 1.0, 2.0, i32::MAX as f64])
         );
+        for (name, bytes) in [
+            ("old.vtu", &include_bytes!("testdata/vtkio_base64.vtu")[..]),
+            ("old_zlib.vtu", &include_bytes!("testdata/vtkio_base64_zlib.vtu")[..]),
+        ] {
+            assert!(String::from_utf8_lossy(bytes).contains("format=\"binary\""));
+            let old = dir.path().join(name);
+            std::fs::write(&old, bytes).unwrap();
+            assert_eq!(read_vtu_arrays(&old).unwrap(), b, "{name}");
+            // cut anywhere, or with a byte of the data changed, it is an error naming the file
+            for len in 0..bytes.len() - 1 {
+                std::fs::write(&old, &bytes[..len]).unwrap();
+                let e = read_vtu_arrays(&old).unwrap_err().to_string();
+                assert!(e.contains(name), "{e}");
+            }
+            let at = bytes.windows(4).position(|w| w == b"eAAA" || w == b"AQAA").unwrap();
+            let mut bad = bytes.to_vec();
+            bad[at] = b'B';
+            std::fs::write(&old, &bad).unwrap();
+            let e = read_vtu_arrays(&old).unwrap_err().to_string();
+            assert!(e.contains(name) && e.contains("displacement"), "{e}");
+        }
     }
 
+    /// The same arrays written inline as ASCII read as the binary ones.
     #[test]
-    fn tags_parse_with_escapes() {
-        let tags =
-            parse_tags("<?xml version=\"1.0\"?>\n<!-- c > d --><A x=\"1\" y='a&amp;b &quot;q&quot; &lt;&gt;'/></A>")
-                .unwrap();
-        assert_eq!(tags.len(), 2);
-        assert_eq!(
-            (tags[0].name, tags[0].self_closing, tags[0].closing),
-            ("A", true, false)
-        );
-        assert_eq!(tags[0].attr("y"), Some("a&b \"q\" <>"));
-        assert!(tags[1].closing);
-        assert!(parse_tags("<A x=\"1>").is_err());
-        assert!(parse_tags("<A x=1>").is_err());
+    fn ascii_arrays_read() {
+        let text = "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<UnstructuredGrid><Piece NumberOfPoints=\"3\" NumberOfCells=\"1\">\n<PointData><DataArray type=\"Int32\" Name=\"s&amp;t\" format=\"ascii\">-1 0\n 7</DataArray></PointData>\n<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">0 0 0 1 0 0 0 1.5 0</DataArray></Points>\n<Cells><DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">0 1 2</DataArray><DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">3</DataArray><DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">5</DataArray></Cells>\n</Piece></UnstructuredGrid></VTKFile>\n";
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("ascii.vtu");
+        std::fs::write(&path, text).unwrap();
+        let c = read_vtu_arrays(&path).unwrap();
+        assert_eq!(c.points, vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.5, 0.0]]);
+        assert_eq!((c.cell_types, c.connectivity), (vec![5], vec![vec![0, 1, 2]]));
+        assert_eq!(c.point_data["s&t"], (1, vec![-1.0, 0.0, 7.0]));
+        std::fs::write(&path, text.replace("-1 0", "-1 x")).unwrap();
+        let e = read_vtu_arrays(&path).unwrap_err().to_string();
+        assert!(e.contains("ascii.vtu") && e.contains("\"x\""), "{e}");
     }
 }
