@@ -31,6 +31,7 @@ pub(crate) struct RawMesh<'a> {
     pub names: Vec<physical_names::PhysicalName>,
     pub places: Places<'a>,
 }
+
 impl RawMesh<'_> {
     fn node_place(&self, i: usize, coordinates: bool) -> String {
         match &self.places.node_lines {
@@ -51,11 +52,13 @@ impl RawMesh<'_> {
         }
     }
 }
+
 /// Node tag → dense index, by a table when the tags are dense enough, else a hash map.
 enum TagIndex {
     Dense { min: u64, index: Vec<usize> },
     Sparse(HashMap<u64, usize>),
 }
+
 impl TagIndex {
     fn new(tags: &[u64], rank: &[usize]) -> Self {
         let min = tags.iter().copied().min().unwrap_or(0);
@@ -85,6 +88,7 @@ impl TagIndex {
         }
     }
 }
+
 fn signed_area(points: &[[f64; 2]], nodes: &[usize]) -> f64 {
     let n = nodes.len();
     let mut a = 0.0;
@@ -95,6 +99,7 @@ fn signed_area(points: &[[f64; 2]], nodes: &[usize]) -> f64 {
     }
     0.5 * a
 }
+
 /// The smallest det J of a 3D cell over its stiffness quadrature points and its corners, and
 /// where it is (reference coordinates).
 fn min_det_3d(points: &[[f64; 3]], cell: &Cell) -> (f64, [f64; 3]) {
@@ -115,6 +120,7 @@ fn min_det_3d(points: &[[f64; 3]], cell: &Cell) -> (f64, [f64; 3]) {
         .map(|&xi| (crate::mesh::element::shape_at(cell, points, xi).det_j, xi))
         .fold((f64::INFINITY, [0.0; 3]), |a, b| if b.0 < a.0 { b } else { a })
 }
+
 /// Turns what a reader found into a [`Mesh`] of dimension D, validating it.
 pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Result<Mesh<D>, MeshError> {
     let invalid = |place: String, detail: String| MeshError::Invalid {
@@ -389,6 +395,7 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
         groups: groups.into_values().collect(),
     })
 }
+
 /// Where the cells of a file are, for the orientation checks' messages.
 struct CellPlaces<'a, 'b> {
     pub(super) path: &'a Path,
@@ -397,6 +404,7 @@ struct CellPlaces<'a, 'b> {
     pub(super) tags: &'a [usize],
     pub(super) elements: &'a [usize],
 }
+
 impl CellPlaces<'_, '_> {
     /// An invalid-mesh error at cell c.
     fn invalid(&self, c: usize, detail: String) -> MeshError {
@@ -407,6 +415,7 @@ impl CellPlaces<'_, '_> {
         }
     }
 }
+
 /// 2D orientation: all counter-clockwise, or all clockwise (then flipped), else an error; no
 /// zero-area cells; convex quadrangles.
 fn orient_2d(at: &CellPlaces<'_, '_>, points: &[[f64; 2]], cells: &mut [Cell]) -> Result<(), MeshError> {
@@ -461,6 +470,7 @@ fn orient_2d(at: &CellPlaces<'_, '_>, points: &[[f64; 2]], cells: &mut [Cell]) -
     }
     Ok(())
 }
+
 /// 3D orientation: det J > 0 at every stiffness quadrature point (and hexahedron corner) of
 /// every cell, or < 0 everywhere in every cell (then all are flipped); else an error naming the
 /// element and the point.

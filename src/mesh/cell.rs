@@ -26,9 +26,12 @@ pub enum Cell {
 
 /// Edges of a triangle and a quadrilateral (counter-clockwise cells: outward = (dy, −dx)).
 const TRI_EDGES: [[usize; 2]; 3] = [[0, 1], [1, 2], [2, 0]];
+
 const QUAD_EDGES: [[usize; 2]; 4] = [[0, 1], [1, 2], [2, 3], [3, 0]];
+
 /// Faces of a tetrahedron, counter-clockwise seen from outside (opposite nodes 3, 2, 1, 0).
 const TET_FACES: [[usize; 3]; 4] = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+
 /// Faces of a hexahedron, counter-clockwise seen from outside: ζ = −1, ζ = +1, η = −1, η = +1,
 /// ξ = −1, ξ = +1.
 const HEX_FACES: [[usize; 4]; 6] = [
@@ -215,11 +218,13 @@ impl From<[usize; 2]> for Facet {
         Facet::from_slice(&n)
     }
 }
+
 impl From<[usize; 3]> for Facet {
     fn from(n: [usize; 3]) -> Self {
         Facet::from_slice(&n)
     }
 }
+
 impl From<[usize; 4]> for Facet {
     fn from(n: [usize; 4]) -> Self {
         Facet::from_slice(&n)

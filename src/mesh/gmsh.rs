@@ -10,6 +10,7 @@ pub(crate) enum Version {
     V2,
     V41,
 }
+
 /// The `$MeshFormat` section.
 #[derive(Clone, Debug)]
 pub(crate) struct Header {
@@ -21,6 +22,7 @@ pub(crate) struct Header {
     /// Byte offset just after `$EndMeshFormat`.
     pub body: usize,
 }
+
 impl Header {
     pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Header, MeshError> {
         let unsupported = |detail: String| MeshError::UnsupportedFormat {
@@ -171,15 +173,18 @@ impl Header {
         })
     }
 }
+
 /// 1-based line number of byte `offset`.
 pub(crate) fn line_of(bytes: &[u8], offset: usize) -> usize {
     1 + bytes[..offset.min(bytes.len())].iter().filter(|&&b| b == b'\n').count()
 }
+
 pub(crate) fn trim(l: &[u8]) -> &[u8] {
     let s = l.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(l.len());
     let e = l.iter().rposition(|b| !b.is_ascii_whitespace()).map_or(s, |e| e + 1);
     &l[s..e.max(s)]
 }
+
 /// Line-by-line reading with 1-based line numbers.
 pub(crate) struct Lines<'a> {
     pub(super) bytes: &'a [u8],
@@ -188,6 +193,7 @@ pub(crate) struct Lines<'a> {
     /// Number of the next line.
     pub line: usize,
 }
+
 impl<'a> Lines<'a> {
     pub fn new(bytes: &'a [u8], pos: usize) -> Self {
         Lines {
@@ -229,6 +235,7 @@ impl<'a> Lines<'a> {
         self.bytes.len().saturating_sub(self.pos)
     }
 }
+
 /// Name, node count and dimension of a gmsh element type (the common ones; `None` if unknown).
 pub(crate) fn element_type_info(t: i32) -> Option<(&'static str, usize, u8)> {
     Some(match t {
@@ -271,6 +278,7 @@ pub(crate) fn element_type_info(t: i32) -> Option<(&'static str, usize, u8)> {
         _ => return None,
     })
 }
+
 /// Where the physical tags of a run of elements come from.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Origin {
@@ -279,6 +287,7 @@ pub(crate) struct Origin {
     /// The elementary entity (dim, tag), for messages.
     pub entity: Option<(i32, i32)>,
 }
+
 /// Where things are in the file, for messages.
 pub(crate) struct Places<'a> {
     /// Per node (file order): line of its tag and line of its coordinates (ASCII only).

@@ -22,29 +22,51 @@
 //! the first of them.
 
 mod build;
+
 mod cell;
+
 pub mod element;
+
 mod error;
+
 mod gmsh;
+
 mod group;
+
 mod model;
+
 mod msh22;
+
 mod msh41;
+
 mod physical_names;
+
 pub mod quadrature;
+
 mod read;
+
 pub mod structured;
+
 mod topology;
 
 pub use cell::{Cell, Facet};
+
 pub use error::MeshError;
+
 pub use group::GroupSelector;
+
 pub use model::{AnyMesh, Mesh, PhysicalGroup};
+
 pub use read::{parse_mesh, parse_msh, read_mesh, read_msh};
+
 pub(crate) use topology::facet_integrals;
+
 pub use topology::BoundaryPart;
 
 // what the MSH readers share (msh22.rs, msh41.rs, physical_names.rs read them through here)
+
 pub(crate) use build::RawMesh;
+
 pub(crate) use gmsh::{element_type_info, line_of, trim, Header, Lines, Origin, Places};
+
 pub(crate) use model::fmt_point;

@@ -23,12 +23,14 @@ pub struct Mesh<const D: usize = 2> {
     /// The physical groups, sorted by (dimension, tag).
     pub groups: Vec<PhysicalGroup>,
 }
+
 /// A mesh of either dimension, as read from a file: the caller dispatches once on it.
 #[derive(Clone, Debug, PartialEq)]
 pub enum AnyMesh {
     Two(Mesh<2>),
     Three(Mesh<3>),
 }
+
 impl AnyMesh {
     /// The spatial dimension.
     pub fn dim(&self) -> usize {
@@ -38,6 +40,7 @@ impl AnyMesh {
         }
     }
 }
+
 /// A physical group: a `Physical Point` (dim 0), `Physical Curve` (dim 1), `Physical Surface`
 /// (dim 2) or `Physical Volume` (dim 3) of the `.geo`.
 #[derive(Clone, Debug, PartialEq)]
@@ -54,6 +57,7 @@ pub struct PhysicalGroup {
     /// Dim 0: the group's point elements (node indices).
     pub nodes: Vec<usize>,
 }
+
 impl PhysicalGroup {
     /// How messages name the group: `Gamma3 (tag 3)`, or `tag 7` for an unnamed group.
     pub fn label(&self) -> String {
@@ -70,6 +74,7 @@ impl PhysicalGroup {
         }
     }
 }
+
 impl<const D: usize> Mesh<D> {
     /// The physical group of dimension `dim` that `sel` names. A name that is not found but
     /// reads as an integer is also tried as a tag. If there is none, the error lists every
@@ -169,9 +174,11 @@ impl<const D: usize> Mesh<D> {
         }
     }
 }
+
 pub(super) fn distance<const D: usize>(p: &[f64; D], q: &[f64; D]) -> f64 {
     (0..D).map(|k| (q[k] - p[k]).powi(2)).sum::<f64>().sqrt()
 }
+
 pub(super) fn longest_edge<const D: usize>(points: &[[f64; D]], c: &Cell) -> f64 {
     c.edges()
         .iter()
@@ -182,6 +189,7 @@ pub(super) fn longest_edge<const D: usize>(points: &[[f64; D]], c: &Cell) -> f64
 // ---------------------------------------------------------------------------------------------
 // Shared by the readers: the $MeshFormat header, line/token scanning, the element type table,
 // and the raw data a reader hands to `build`.
+
 pub(crate) fn fmt_point<const D: usize>(p: [f64; D]) -> String {
     let parts: Vec<String> = p.iter().map(|v| format!("{v:?}")).collect();
     format!("({})", parts.join(", "))

@@ -49,6 +49,7 @@ pub const TRI_CENTROID: [QuadPoint; 1] = [qp(1.0 / 3.0, 1.0 / 3.0, 0.0, 0.5)];
 pub const TET_CENTROID: [QuadPoint; 1] = [qp(0.25, 0.25, 0.25, 1.0 / 6.0)];
 
 const TA: f64 = 0.585_410_196_624_968_5; // (5 + 3√5)/20
+
 const TB: f64 = 0.138_196_601_125_010_5; // (5 − √5)/20
 
 /// 4-point rule on the reference tetrahedron: exact for quadratics.

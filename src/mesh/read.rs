@@ -20,11 +20,13 @@ pub fn read_msh(path: &Path) -> Result<AnyMesh, MeshError> {
     })?;
     parse_msh(path, &bytes)
 }
+
 /// Reads a gmsh MSH file that must hold a D-dimensional body; a file of the other dimension is
 /// an error that says so.
 pub fn read_mesh<const D: usize>(path: &Path) -> Result<Mesh<D>, MeshError> {
     into_dim(read_msh(path)?, path)
 }
+
 /// Parses the bytes of an MSH file already in memory; `path` is used in messages only.
 pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<AnyMesh, MeshError> {
     let header = Header::parse(path, bytes)?;
@@ -38,10 +40,12 @@ pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<AnyMesh, MeshError> {
         build_mesh::<2>(path, raw).map(AnyMesh::Two)
     }
 }
+
 /// [`parse_msh`] for a body of dimension D.
 pub fn parse_mesh<const D: usize>(path: &Path, bytes: &[u8]) -> Result<Mesh<D>, MeshError> {
     into_dim(parse_msh(path, bytes)?, path)
 }
+
 fn into_dim<const D: usize>(mesh: AnyMesh, path: &Path) -> Result<Mesh<D>, MeshError> {
     let got = mesh.dim();
     let any: Box<dyn std::any::Any> = match mesh {

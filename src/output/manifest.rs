@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 
 /// The manifest's file name.
 pub const MANIFEST_NAME: &str = ".hvi-run";
+
 const FIRST_LINE: &str = "hvi run manifest v1";
 
 /// The manifest of the run being written.

@@ -104,6 +104,7 @@ pub struct PetscBackend<'p, const D: usize> {
 
 // SAFETY: the backend is used from the time loop's thread only; `Sync` is required because the
 // Stepper holds it by reference.
+
 unsafe impl<const D: usize> Sync for PetscBackend<'_, D> {}
 
 /// The tensor of K_B: the memory's one channel tensor T (B₀ = I for the paper; the time loop

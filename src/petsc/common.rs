@@ -21,6 +21,7 @@ pub enum SolverChoice {
     /// CG preconditioned by GAMG to the relative residual [`GAMG_RTOL`].
     Gamg,
 }
+
 /// Every rank's outcome of a phase, agreed on by all (collective): Ok on every rank, or on
 /// every rank the message of the lowest rank that failed.
 pub(super) fn agree(world: &SimpleCommunicator, local: Result<(), String>) -> Result<(), String> {
@@ -47,6 +48,7 @@ pub(super) fn agree(world: &SimpleCommunicator, local: Result<(), String>) -> Re
         text
     })
 }
+
 /// What identifies a mesh for the ranks' agreement that they all read the same one.
 pub(super) fn fingerprint<const D: usize>(mesh: &Mesh<D>) -> [u64; 3] {
     use std::hash::{Hash, Hasher};
@@ -61,6 +63,7 @@ pub(super) fn fingerprint<const D: usize>(mesh: &Mesh<D>) -> [u64; 3] {
     }
     [mesh.points.len() as u64, mesh.cells.len() as u64, h.finish()]
 }
+
 /// Every rank reads the scene and the mesh and checks that it holds the mesh rank 0 holds
 /// (collective).
 pub(super) fn read_everywhere(
@@ -95,6 +98,7 @@ pub(super) fn read_everywhere(
     })?;
     Ok((scene, mesh))
 }
+
 /// What the PETSc backend does not run, refused before anything is assembled, naming the scene
 /// file (`scene_path`, or the embedded default), what is not supported and the fix: memory of two
 /// channels (docs/method.md §15.1: the backend assembles one K_B, from the one channel's tensor).
@@ -117,6 +121,7 @@ pub(super) fn unsupported<const D: usize>(
         _ => Ok(()),
     }
 }
+
 /// The scene on the mesh on every rank, and the partition rank 0 computes (collective).
 /// `scene_path` names the scene in a refusal ([`unsupported`]).
 pub(super) fn simulation_and_partition<const D: usize>(
@@ -144,6 +149,7 @@ pub(super) fn simulation_and_partition<const D: usize>(
     let partition = Partition::from_owners(&sim.mesh, ranks, owner.into_iter().map(|v| v as usize).collect());
     Ok((sim, partition))
 }
+
 /// What one rank holds of the problem (summary.json's `per_rank`, `hvi check --backend petsc`).
 #[derive(Clone, Copy, Debug, Default, Serialize)]
 pub struct RankShare {
@@ -153,6 +159,7 @@ pub struct RankShare {
     pub unknowns: usize,
     pub contact_nodes: usize,
 }
+
 impl RankShare {
     /// The share of every rank.
     pub(super) fn all<const D: usize>(sim: &Simulation<D>, partition: &Partition) -> Vec<RankShare> {
@@ -172,12 +179,14 @@ impl RankShare {
         shares
     }
 }
+
 /// Gathers one number of every rank onto every rank (collective).
 pub(super) fn all_gather(world: &SimpleCommunicator, mine: f64) -> Vec<f64> {
     let mut all = vec![0.0; world.size() as usize];
     world.all_gather_into(&mine, &mut all[..]);
     all
 }
+
 /// Starts MPI and PETSc for one command; a panic on any rank then ends all of them.
 pub(super) fn start() -> Result<Petsc, String> {
     let petsc = Petsc::init(&[]).map_err(|e| format!("could not start PETSc over MPI: {e}"))?;

@@ -29,14 +29,23 @@
 //! aborts all ranks through MPI_Abort. Nothing waits forever on a rank that has stopped.
 
 mod backend;
+
 mod check;
+
 mod common;
+
 mod files;
+
 mod partition;
+
 mod run;
 
 pub use backend::{PetscBackend, GAMG_RTOL};
+
 pub use check::check;
+
 pub use common::{RankShare, SolverChoice};
+
 pub use partition::Partition;
+
 pub use run::{solve, MpiRun};

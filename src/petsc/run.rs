@@ -28,6 +28,7 @@ struct RankSummary {
     /// PETSc's K_A and K_B held for the products (MatGetInfo).
     product_matrix_bytes: f64,
 }
+
 /// What `summary.json` holds for a PETSc run.
 #[derive(Serialize)]
 struct MpiSummary<'a> {
@@ -38,12 +39,14 @@ struct MpiSummary<'a> {
     petsc_solver: &'static str,
     per_rank: Vec<RankSummary>,
 }
+
 /// The outcome of `hvi solve --backend petsc` on one rank.
 pub struct MpiRun {
     pub rank: usize,
     pub ranks: usize,
     pub result: Result<RunStats, SolveError>,
 }
+
 /// `hvi solve --backend petsc`: initialises MPI and PETSc, runs the scene on every rank, and
 /// finalises. Only rank 0 should print the result (every rank holds the same error). `stop`
 /// (Ctrl-C on any rank) ends the run after the step every rank agrees on.
@@ -53,6 +56,7 @@ pub fn solve(opts: &SolveOptions, choice: SolverChoice, stop: Option<&AtomicBool
     let result = run(&petsc, opts, choice, stop);
     Ok(MpiRun { rank, ranks, result })
 }
+
 fn run(
     petsc: &Petsc,
     opts: &SolveOptions,
@@ -67,6 +71,7 @@ fn run(
         AnyMesh::Three(m) => run_dim(petsc, opts, &scene, m, mesh_seconds, choice, stop),
     }
 }
+
 fn run_dim<const D: usize>(
     petsc: &Petsc,
     opts: &SolveOptions,

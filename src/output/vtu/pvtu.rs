@@ -23,6 +23,7 @@ use std::path::{Path, PathBuf};
 
 /// The point array of a piece holding each point's mesh node number.
 pub const NODE_IDS: &str = "node";
+
 /// The cell array of a piece holding each cell's mesh cell number.
 pub const CELL_IDS: &str = "cell";
 
