@@ -39,7 +39,7 @@ fn scene(names: &[String]) -> Scene {
 
 /// The rectangle (0, 2) × (0, 1) at h = 1/128 with Γ₃ also split into `parts` groups C0, C1, …
 /// of equal length.
-fn mesh(parts: usize) -> (Mesh, Vec<String>) {
+fn mesh(parts: usize) -> (Mesh<2>, Vec<String>) {
     let mut mesh = rectangle(2.0, 1.0, 2 * N, N, CellShape::Quad);
     if parts == 1 {
         return (mesh, vec!["Gamma3".into()]);

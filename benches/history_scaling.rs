@@ -27,7 +27,7 @@ fn root() -> PathBuf {
 }
 
 /// `examples/scenes/<name>` with N steps, writing only the last frame, on h = 1/16.
-fn simulation(name: &str, n: usize) -> Simulation {
+fn simulation(name: &str, n: usize) -> Simulation<2> {
     let scene = Scene::load(
         Some(&root().join("examples/scenes").join(name)),
         &[format!("time.steps={n}"), format!("output.every={n}")],
@@ -37,13 +37,13 @@ fn simulation(name: &str, n: usize) -> Simulation {
     Simulation::new(&scene, mesh).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
-fn whole_run(sim: &Simulation) -> hvi::solver::RunStats {
+fn whole_run(sim: &Simulation<2>) -> hvi::solver::RunStats {
     let mut sink = MemorySink::default();
     run(sim, &mut sink, None).expect("run")
 }
 
 /// Seconds per step of the time loop (after the one-off setup of `Stepper::prepare`).
-fn seconds_per_step(sim: &Simulation) -> f64 {
+fn seconds_per_step(sim: &Simulation<2>) -> f64 {
     let mut stepper = Stepper::prepare(sim).expect("prepare");
     let start = Instant::now();
     for _ in 0..=sim.time.steps {

@@ -19,7 +19,7 @@ use hvi::solver::timeloop::{run, Stepper};
 use hvi::solver::Simulation;
 use std::time::Duration;
 
-fn paper(n: usize, steps: usize) -> Simulation {
+fn paper(n: usize, steps: usize) -> Simulation<2> {
     // only the last frame is kept (output.every = steps)
     let scene =
         Scene::load(None, &[format!("time.steps={steps}"), format!("output.every={steps}")]).expect("embedded scene");

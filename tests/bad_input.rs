@@ -48,7 +48,7 @@ fn run_cli(args: &[&str]) -> (i32, String) {
 
 /// MSH 2.2 text of a mesh with its groups: dim-0 groups as points (type 15), dim-1 groups as
 /// lines, cells in the dim-2 group (tag 5 if there is none), all named in `$PhysicalNames`.
-fn msh22(mesh: &Mesh) -> String {
+fn msh22(mesh: &Mesh<2>) -> String {
     let mut s = String::from("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n");
     s += &format!("{}\n", mesh.groups.len());
     for g in &mesh.groups {
@@ -89,7 +89,7 @@ fn msh22(mesh: &Mesh) -> String {
 }
 
 /// The paper's domain with 4 × 2 cells (15 nodes, Gamma1 = left, Gamma3 = bottom, …).
-fn small() -> Mesh {
+fn small() -> Mesh<2> {
     rectangle(2.0, 1.0, 4, 2, CellShape::Quad)
 }
 

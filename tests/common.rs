@@ -25,7 +25,7 @@ pub fn scene(toml: &str) -> Scene {
 
 /// The rectangle (0, lx) × (0, ly) with nx × ny cells and its groups (Gamma1 left, Gamma2
 /// right+top, Gamma3 bottom, Gamma2_top top) plus a "Right" group for the right side.
-pub fn rectangle_with_sides(lx: f64, ly: f64, nx: usize, ny: usize, shape: CellShape) -> Mesh {
+pub fn rectangle_with_sides(lx: f64, ly: f64, nx: usize, ny: usize, shape: CellShape) -> Mesh<2> {
     let mut mesh = rectangle(lx, ly, nx, ny, shape);
     let right: Vec<Facet> = mesh
         .groups
@@ -49,7 +49,7 @@ pub fn rectangle_with_sides(lx: f64, ly: f64, nx: usize, ny: usize, shape: CellS
 }
 
 /// Moves interior nodes by a smooth, deterministic perturbation of amplitude `amp`·h.
-pub fn distort_interior(mesh: &mut Mesh, lx: f64, ly: f64, h: f64, amp: f64) {
+pub fn distort_interior(mesh: &mut Mesh<2>, lx: f64, ly: f64, h: f64, amp: f64) {
     for (k, p) in mesh.points.iter_mut().enumerate() {
         let on_boundary =
             p[0].abs() < 1e-12 || p[1].abs() < 1e-12 || (p[0] - lx).abs() < 1e-12 || (p[1] - ly).abs() < 1e-12;

@@ -96,13 +96,13 @@ fn load(name: &str, overrides: &[String]) -> Scene {
     Scene::load(Some(&path), overrides).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
-fn mesh(name: &str) -> Mesh {
+fn mesh(name: &str) -> Mesh<2> {
     let path = root().join("meshes").join(name);
     read_mesh::<2>(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 /// A tiny mesh of the paper's domain (4 × 2 Q1 cells: 30 unknowns, 5 contact nodes).
-fn tiny_mesh() -> Mesh {
+fn tiny_mesh() -> Mesh<2> {
     rectangle(2.0, 1.0, 4, 2, CellShape::Quad)
 }
 
@@ -110,7 +110,7 @@ fn steps(n: usize) -> Vec<String> {
     vec![format!("time.steps={n}")]
 }
 
-fn run(what: &str, scene: &Scene, mesh: Mesh) -> (Simulation, RunStats, MemorySink) {
+fn run(what: &str, scene: &Scene, mesh: Mesh<2>) -> (Simulation<2>, RunStats, MemorySink) {
     solve_in_memory(scene, mesh).unwrap_or_else(|e| panic!("{what}: {e}"))
 }
 
@@ -138,7 +138,7 @@ fn relative_difference(a: &MemorySink, b: &MemorySink) -> f64 {
 
 /// max over frames of ‖λ_a − λ_b‖∞ (nodal contact forces; a run without contact counts as λ = 0),
 /// relative to max over frames of ‖F_n‖∞ (the nodal load) — the force scale of the problem.
-fn contact_force_difference(sim: &Simulation, a: &MemorySink, b: &MemorySink) -> f64 {
+fn contact_force_difference(sim: &Simulation<2>, a: &MemorySink, b: &MemorySink) -> f64 {
     let mut load = vec![0.0; sim.dofs.n()];
     let mut scale = 0.0f64;
     let mut diff = 0.0f64;
@@ -378,7 +378,7 @@ fn with_neutral_effects(scene: &Scene) -> Scene {
     s
 }
 
-fn assert_equivalent(what: &str, off: &Scene, neutral: &Scene, mesh: &Mesh) -> (f64, f64) {
+fn assert_equivalent(what: &str, off: &Scene, neutral: &Scene, mesh: &Mesh<2>) -> (f64, f64) {
     let (sim_off, stats_off, a) = run(&format!("{what} (switched off)"), off, mesh.clone());
     let (sim_neutral, stats_neutral, b) = run(&format!("{what} (neutral twin)"), neutral, mesh.clone());
     // the switched-off run really has fewer effects than its twin

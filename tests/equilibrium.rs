@@ -97,7 +97,7 @@ fn slab_is_in_equilibrium_at_every_step() {
 /// The rectangle with its bottom split into two contact groups at x = 1/2 (one node shared):
 /// "Left" on the paper's layer, "Right" on a plane obstacle at a gap with a power law; the paper's
 /// memory and a downward traction on the top.
-pub fn two_zone_mesh() -> Mesh {
+pub fn two_zone_mesh() -> Mesh<2> {
     let mut mesh = rectangle(1.0, 0.5, 16, 8, CellShape::Quad);
     let bottom: Vec<Facet> = mesh
         .groups

@@ -31,7 +31,7 @@ fn scene(steps: usize) -> Scene {
 }
 
 /// The paper's mesh of (0, 2) × (0, 1) with h = 1/n (square Q1 cells).
-fn mesh(n: usize) -> Mesh {
+fn mesh(n: usize) -> Mesh<2> {
     rectangle(2.0, 1.0, 2 * n, n, CellShape::Quad)
 }
 

@@ -44,7 +44,7 @@ const ROUNDOFF: f64 = 1e-12;
 /// A solved run.
 struct Run {
     name: String,
-    sim: Simulation,
+    sim: Simulation<2>,
     stats: RunStats,
     sink: MemorySink,
     seconds: f64,
@@ -89,16 +89,16 @@ fn scene_with(text: &str, list: &[&str]) -> Scene {
     Scene::load(Some(file.path()), &overrides(list)).unwrap_or_else(|e| panic!("{e}"))
 }
 
-fn mesh_file(name: &str) -> Mesh {
+fn mesh_file(name: &str) -> Mesh<2> {
     hvi::mesh::read_mesh::<2>(&Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes").join(name)).unwrap()
 }
 
 /// The paper's domain (0,2)×(0,1) with nx × ny cells.
-fn rect(nx: usize, ny: usize, shape: CellShape) -> Mesh {
+fn rect(nx: usize, ny: usize, shape: CellShape) -> Mesh<2> {
     rectangle(2.0, 1.0, nx, ny, shape)
 }
 
-fn solve(name: &str, sc: &Scene, mesh: Mesh) -> Run {
+fn solve(name: &str, sc: &Scene, mesh: Mesh<2>) -> Run {
     let t0 = std::time::Instant::now();
     let (sim, stats, sink) = solve_in_memory(sc, mesh).unwrap_or_else(|e| panic!("{name}: {e}"));
     Run {
@@ -283,7 +283,7 @@ fn check(run: &Run, cap: usize) -> Report {
 }
 
 /// Solves and checks in one go.
-fn solve_checked(name: &str, sc: &Scene, mesh: Mesh, cap: usize) -> (Run, Report) {
+fn solve_checked(name: &str, sc: &Scene, mesh: Mesh<2>, cap: usize) -> (Run, Report) {
     let run = solve(name, sc, mesh);
     let rep = check(&run, cap);
     (run, rep)
@@ -726,7 +726,7 @@ fn case5_incompressible_and_scaled() {
 // 6. Graded, distorted, curved meshes; a clamped contact node.
 
 /// The rectangle with rows graded towards Γ₃: y ↦ y^p, the first row of height `first`.
-fn graded(nx: usize, ny: usize, shape: CellShape, first: f64) -> Mesh {
+fn graded(nx: usize, ny: usize, shape: CellShape, first: f64) -> Mesh<2> {
     let mut m = rect(nx, ny, shape);
     let p = first.ln() / (1.0 / ny as f64).ln();
     for x in &mut m.points {
@@ -738,7 +738,7 @@ fn graded(nx: usize, ny: usize, shape: CellShape, first: f64) -> Mesh {
 /// The rectangle with its bottom bent into a circular arc through (0, 0), (1, −sag), (2, 0)
 /// (points mapped y ↦ y + (1 − y) y_b(x), groups kept). Returns the mesh, the arc's centre
 /// and radius.
-fn arc_bottom(nx: usize, ny: usize, shape: CellShape, sag: f64) -> (Mesh, [f64; 2], f64) {
+fn arc_bottom(nx: usize, ny: usize, shape: CellShape, sag: f64) -> (Mesh<2>, [f64; 2], f64) {
     let r = (1.0 + sag * sag) / (2.0 * sag);
     let yc = r - sag;
     let mut m = rect(nx, ny, shape);
@@ -750,7 +750,7 @@ fn arc_bottom(nx: usize, ny: usize, shape: CellShape, sag: f64) -> (Mesh, [f64; 
 }
 
 /// (max cell aspect ratio = longest edge / (2 area / longest edge), min angle in degrees).
-fn cell_shape_stats(m: &Mesh) -> (f64, f64) {
+fn cell_shape_stats(m: &Mesh<2>) -> (f64, f64) {
     let (mut aspect, mut angle) = (0.0f64, 180.0f64);
     for c in &m.cells {
         let n = c.nodes();

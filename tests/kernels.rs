@@ -557,7 +557,7 @@ fn run_difference(a: &MemorySink, b: &MemorySink) -> (f64, f64) {
     (du, dl)
 }
 
-fn mesh() -> Mesh {
+fn mesh() -> Mesh<2> {
     rectangle(2.0, 1.0, 16, 8, CellShape::Quad)
 }
 

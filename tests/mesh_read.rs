@@ -10,7 +10,7 @@ fn meshes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes")
 }
 
-fn read(name: &str) -> Mesh {
+fn read(name: &str) -> Mesh<2> {
     let path = meshes_dir().join(name);
     read_mesh::<2>(&path).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -27,7 +27,7 @@ fn sel(s: &str) -> GroupSelector {
     GroupSelector::from(s)
 }
 
-fn signed_area(m: &Mesh, c: &Cell) -> f64 {
+fn signed_area(m: &Mesh<2>, c: &Cell) -> f64 {
     let n = c.nodes();
     (0..n.len())
         .map(|i| {
@@ -127,7 +127,7 @@ fn close(a: f64, b: f64, tol: f64) -> bool {
 }
 
 /// Checks a mesh of (0,2)×(0,1) with nx × ny grid cells and the groups of rectangle.geo.
-fn check_rectangle(m: &Mesh, nx: usize, ny: usize, kind: Kind) {
+fn check_rectangle(m: &Mesh<2>, nx: usize, ny: usize, kind: Kind) {
     let what = m.path.display().to_string();
     assert_eq!(m.points.len(), (nx + 1) * (ny + 1), "{what}: nodes");
     let tris = m.cells.iter().filter(|c| matches!(c, Cell::Tri3(_))).count();
@@ -401,7 +401,7 @@ fn sorted(points: impl Iterator<Item = [f64; 2]>) -> Vec<[f64; 2]> {
     v
 }
 
-fn centroids(m: &Mesh) -> Vec<[f64; 2]> {
+fn centroids(m: &Mesh<2>) -> Vec<[f64; 2]> {
     sorted(m.cells.iter().map(|c| {
         let n = c.nodes();
         let k = n.len() as f64;

@@ -54,7 +54,7 @@ impl FrameData {
         }
     }
 
-    fn frame(&self, step: usize, time: f64) -> Frame<'_> {
+    fn frame(&self, step: usize, time: f64) -> Frame<'_, 2> {
         Frame {
             step,
             time,
@@ -89,7 +89,7 @@ fn bits(v: &[f64]) -> Vec<u64> {
 }
 
 /// Compares every array of the `.vtu` at `path` with `frame`, bit for bit.
-fn assert_vtu_matches(path: &Path, frame: &Frame) {
+fn assert_vtu_matches(path: &Path, frame: &Frame<2>) {
     let vtu = read_vtu_arrays(path).unwrap_or_else(|e| panic!("{e}"));
     let expected_points: Vec<[f64; 3]> = frame.points.iter().map(|p| [p[0], p[1], 0.0]).collect();
     assert_eq!(vtu.points, expected_points);
@@ -495,7 +495,7 @@ impl MeshFields {
         }
     }
 
-    fn frame<'a>(&'a self, mesh: &'a hvi::mesh::Mesh, step: usize) -> Frame<'a> {
+    fn frame<'a>(&'a self, mesh: &'a hvi::mesh::Mesh<2>, step: usize) -> Frame<'a, 2> {
         Frame {
             step,
             time: 0.25 * step as f64,

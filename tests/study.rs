@@ -39,7 +39,7 @@ fn max_diff(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
 }
 
 /// A deterministic, non-polynomial nodal field.
-fn rough_field(mesh: &Mesh) -> Vec<[f64; 2]> {
+fn rough_field(mesh: &Mesh<2>) -> Vec<[f64; 2]> {
     mesh.points
         .iter()
         .enumerate()

@@ -8,7 +8,7 @@ use hvi::mesh::Mesh;
 use hvi::scene::{Scene, DEFAULT_SCENE_TOML};
 
 /// The paper's rectangle with only Gamma1, Gamma2, Gamma3 and Omega (no Gamma2_top).
-fn paper_groups_only(shape: CellShape) -> Mesh {
+fn paper_groups_only(shape: CellShape) -> Mesh<2> {
     let mut mesh = rectangle(2.0, 1.0, 16, 8, shape);
     mesh.groups
         .retain(|g| matches!(g.name.as_deref(), Some("Gamma1" | "Gamma2" | "Gamma3" | "Omega")));

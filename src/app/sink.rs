@@ -63,7 +63,7 @@ struct ContactSeries<const D: usize> {
 
 /// Writes the VTK series (the body's `solution.pvd`, Γ₃'s `contact.pvd`), `gamma3.csv`, and
 /// shows progress.
-pub struct FileSink<const D: usize = 2> {
+pub struct FileSink<const D: usize> {
     /// Every file this run writes, listed before it is created (`.hvi-run`).
     pub manifest: output::RunManifest,
     /// Steps computed so far, and the last step written.

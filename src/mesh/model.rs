@@ -10,7 +10,7 @@ use std::path::PathBuf;
 
 /// A mesh of a body in D = 2 or 3 dimensions with its physical groups.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Mesh<const D: usize = 2> {
+pub struct Mesh<const D: usize> {
     /// The file read (or a label such as `<rectangle 16x8>` for a generated mesh).
     pub path: PathBuf,
     /// Node coordinates, dense and 0-based (the file's node tags in ascending order); a 2D

@@ -28,7 +28,7 @@ pub enum CellShape {
 /// # Panics
 /// If `nx` or `ny` is 0, or `lx` or `ly` is not positive and finite (a programming error, not
 /// bad input).
-pub fn rectangle(lx: f64, ly: f64, nx: usize, ny: usize, kind: CellShape) -> Mesh {
+pub fn rectangle(lx: f64, ly: f64, nx: usize, ny: usize, kind: CellShape) -> Mesh<2> {
     assert!(
         nx > 0 && ny > 0,
         "rectangle: nx and ny must be positive (got {nx} x {ny})"

@@ -55,7 +55,7 @@ impl<'a> Field<'a> {
 
 /// One output step of a 2D solution.
 #[derive(Clone, Debug)]
-pub struct Frame<'a, const D: usize = 2> {
+pub struct Frame<'a, const D: usize> {
     /// Names the file: `<basename>_<step:05>.vtu`.
     pub step: usize,
     /// The physical time, listed in the `.pvd` and `.vtu.series`; must be finite.
@@ -73,7 +73,7 @@ pub struct Frame<'a, const D: usize = 2> {
 /// the part's nodes only, its cells the part's facets (lines in 2D, triangles or quadrilaterals
 /// in 3D), indexing into `points`.
 #[derive(Clone, Debug)]
-pub struct SurfaceFrame<'a, const D: usize = 2> {
+pub struct SurfaceFrame<'a, const D: usize> {
     /// Names the file: `<basename>_<step:05>.vtp`.
     pub step: usize,
     /// The physical time; must be finite.

@@ -259,7 +259,7 @@ pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, S
 #[allow(clippy::too_many_arguments)]
 fn obstacle_edges(
     scene: &Scene,
-    mesh: &Mesh,
+    mesh: &Mesh<2>,
     u: &[[f64; 2]],
     moved: &[[f64; 2]],
     foundation: Option<&[[f64; 2]]>,
@@ -502,7 +502,7 @@ fn read_numeric_csv(name: &str, text: &str) -> Result<(Vec<String>, Vec<Vec<f64>
 
 /// Reads `gamma3.csv` (`time,x,y,u_nu,force,pressure,status`) and places its nodes on the mesh;
 /// a row that does not parse is an error naming its line.
-pub fn read_gamma3(csv: &str, mesh: &Mesh) -> Result<Gamma3, String> {
+pub fn read_gamma3(csv: &str, mesh: &Mesh<2>) -> Result<Gamma3, String> {
     let (header, rows) = read_numeric_csv("gamma3.csv", csv)?;
     let column = |name: &str| {
         header.iter().position(|c| *c == name).ok_or_else(|| {
@@ -573,7 +573,7 @@ pub fn read_gamma3(csv: &str, mesh: &Mesh) -> Result<Gamma3, String> {
 /// end; any node of a closed curve), further pieces continuing the count. Returns each node's
 /// arc length, the nodes' order along the curve and each node's outward unit normal (the
 /// length-weighted mean of its edges' outward normals).
-pub fn arc_length(mesh: &Mesh, nodes: &[usize]) -> (Vec<f64>, Vec<usize>, Vec<[f64; 2]>) {
+pub fn arc_length(mesh: &Mesh<2>, nodes: &[usize]) -> (Vec<f64>, Vec<usize>, Vec<[f64; 2]>) {
     let index: HashMap<usize, usize> = nodes.iter().enumerate().map(|(k, &p)| (p, k)).collect();
     // boundary edges (used by one cell), with the centroid of their cell for the outward side
     // (ordered: the normals' sums are added in the same order on every run)
@@ -651,7 +651,7 @@ pub struct DeformedPicture<'a> {
     pub title: String,
     /// The colour bar's name.
     pub field: String,
-    pub mesh: &'a Mesh,
+    pub mesh: &'a Mesh<2>,
     pub displacement: &'a [[f64; 2]],
     pub cell_values: &'a [f64],
     pub scale: f64,

@@ -35,7 +35,7 @@ impl TimeGrid {
 pub use super::contact::ContactSetup;
 
 /// Everything a run needs, built once from scene + mesh.
-pub struct Simulation<const D: usize = 2> {
+pub struct Simulation<const D: usize> {
     pub mesh: Mesh<D>,
     pub dofs: DofMap<D>,
     /// The prescribed components and their values (docs/method.md §7).

@@ -17,7 +17,7 @@ use crate::mesh::{Cell, Mesh};
 pub const OUTSIDE_TOLERANCE: f64 = 1e-10;
 
 /// A bucket grid over the cells of one mesh (2D or 3D), for point location.
-pub struct Locator<'m, const D: usize = 2> {
+pub struct Locator<'m, const D: usize> {
     cells: &'m [Cell],
     points: &'m [[f64; D]],
     origin: [f64; D],

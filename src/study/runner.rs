@@ -66,7 +66,7 @@ impl RunOptions {
 }
 
 /// One solved run, with what a study compares and reports.
-pub struct RunRecord<const D: usize = 2> {
+pub struct RunRecord<const D: usize> {
     pub label: String,
     /// Mesh size (the longest cell edge unless set by [`RunOptions::h`]).
     pub h: f64,
@@ -225,10 +225,10 @@ pub fn reset_peak_rss() {
 }
 
 /// An exact displacement field: (t, x) ↦ (u, ∇u), (∇u)_ij = ∂u_i/∂x_j.
-pub type ExactField<const D: usize = 2> = Box<dyn Fn(f64, [f64; D]) -> ([f64; D], [[f64; D]; D])>;
+pub type ExactField<const D: usize> = Box<dyn Fn(f64, [f64; D]) -> ([f64; D], [[f64; D]; D])>;
 
 /// What the runs of a study are compared with.
-pub enum Reference<const D: usize = 2> {
+pub enum Reference<const D: usize> {
     /// A (finer) run: coarse fields are carried to its mesh by nodal interpolation.
     Run(Box<RunRecord<D>>),
     /// A known solution: errors are integrated on each run's own mesh.
@@ -295,7 +295,7 @@ pub struct Row {
 ///
 /// Runs are evaluated when added and their fields dropped, so a study holds only the
 /// reference's fields.
-pub struct Study<const D: usize = 2> {
+pub struct Study<const D: usize> {
     pub reference: Reference<D>,
     pub runs: Vec<EvaluatedRun>,
     pub paths: Vec<RefinementPath>,
