@@ -11,6 +11,7 @@
 //! the foot: gap(t) = gap₀ + (n·a(t)) / (n·d), exact for a plane.
 
 use crate::expr::Expr;
+use crate::mesh::vector::dot;
 
 /// A rigid obstacle in D dimensions.
 #[derive(Clone, Debug)]
@@ -32,10 +33,6 @@ pub struct Gap<const D: usize> {
     pub gap: f64,
     /// ∂gap/∂a: the change of the gap per unit rigid displacement a of the obstacle.
     pub motion: [f64; D],
-}
-
-fn dot<const D: usize>(a: &[f64; D], b: &[f64; D]) -> f64 {
-    (0..D).map(|k| a[k] * b[k]).sum()
 }
 
 fn unit<const D: usize>(v: [f64; D]) -> Option<[f64; D]> {

@@ -7,6 +7,7 @@
 
 use super::nodal::LawTerm;
 use super::obstacle::Obstacle;
+use crate::mesh::vector::dot;
 use crate::mesh::BoundaryPart;
 
 /// Directions closer than this (cos 45°) are one wall; farther apart, two.
@@ -57,10 +58,6 @@ struct Candidate<const D: usize> {
 fn unit<const D: usize>(v: [f64; 3]) -> [f64; D] {
     let n = v[..D].iter().map(|x| x * x).sum::<f64>().sqrt();
     std::array::from_fn(|k| v[k] / n)
-}
-
-fn dot<const D: usize>(a: &[f64; D], b: &[f64; D]) -> f64 {
-    (0..D).map(|k| a[k] * b[k]).sum()
 }
 
 /// The (weight, normal) clusters of a group's facets at each node: one per node unless the

@@ -48,6 +48,7 @@ mod read;
 pub mod structured;
 
 mod topology;
+pub mod vector;
 
 pub use cell::{Cell, Facet};
 

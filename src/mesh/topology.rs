@@ -1,6 +1,9 @@
 //! Boundary parts: a group of facets (curves in 2D, surfaces in 3D: Γ₁, Γ₂, Γ₃) as oriented
 //! facets with outward normals and nodal quadrature weights (docs/method.md §2, §8).
 
+use super::element::reference;
+use super::vector::{cross, norm};
+use super::Cell;
 use super::{fmt_point, Facet, GroupSelector, Mesh, MeshError, PhysicalGroup};
 use crate::mesh::quadrature::QUAD_GAUSS_2X2;
 use std::collections::HashMap;
@@ -49,18 +52,6 @@ fn sub<const D: usize>(a: &[f64; D], b: &[f64; D]) -> [f64; 3] {
     v
 }
 
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn norm(v: [f64; 3]) -> f64 {
-    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
-}
-
 impl<const D: usize> Mesh<D> {
     /// A group of facets (dimension D − 1) as an oriented boundary part (see [`BoundaryPart`]).
     /// Every facet of the group must be a facet of exactly one cell.
@@ -78,27 +69,26 @@ pub(crate) fn facet_integrals<const D: usize>(points: &[[f64; D]], f: &Facet) ->
         2 => {
             // (dy, −dx) is the outward normal times the length.
             let d = sub(&x(1), &x(0));
-            let len = norm(d);
+            let len = norm(&d);
             let n = [d[1] / 2.0, -d[0] / 2.0, 0.0];
             (vec![len / 2.0; 2], vec![n; 2], len)
         }
         3 => {
             let a = cross(sub(&x(1), &x(0)), sub(&x(2), &x(0)));
-            let area = 0.5 * norm(a);
+            let area = 0.5 * norm(&a);
             let share = [a[0] / 6.0, a[1] / 6.0, a[2] / 6.0];
             (vec![area / 3.0; 3], vec![share; 3], area)
         }
         _ => {
-            // bilinear face: 2×2 Gauss on [−1, 1]², tangents ∂x/∂ξ, ∂x/∂η
+            // bilinear face: the Q1 reference square's shape functions (element.rs), 2×2 Gauss on
+            // [−1, 1]², tangents ∂x/∂ξ, ∂x/∂η
             let (mut w, mut nv, mut area) = (vec![0.0; 4], vec![[0.0; 3]; 4], 0.0);
-            const C: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+            let square = Cell::Quad4([0, 1, 2, 3]);
             for q in &QUAD_GAUSS_2X2 {
-                let (xi, eta) = (q.xi[0], q.xi[1]);
                 let (mut t1, mut t2) = ([0.0; 3], [0.0; 3]);
-                let mut value = [0.0; 4];
-                for (a, c) in C.iter().enumerate() {
-                    value[a] = 0.25 * (1.0 + c[0] * xi) * (1.0 + c[1] * eta);
-                    let (g1, g2) = (0.25 * c[0] * (1.0 + c[1] * eta), 0.25 * c[1] * (1.0 + c[0] * xi));
+                let (_, value, grad) = reference(&square, q.xi);
+                for a in 0..4 {
+                    let (g1, g2) = (grad[a][0], grad[a][1]);
                     let p = x(a);
                     for k in 0..D {
                         t1[k] += g1 * p[k];
@@ -106,7 +96,7 @@ pub(crate) fn facet_integrals<const D: usize>(points: &[[f64; D]], f: &Facet) ->
                     }
                 }
                 let dn = cross(t1, t2);
-                let da = norm(dn) * q.weight;
+                let da = norm(&dn) * q.weight;
                 area += da;
                 for a in 0..4 {
                     w[a] += value[a] * da;
@@ -226,7 +216,7 @@ pub(crate) fn boundary_part<const D: usize>(
     }
     let mut normals = Vec::with_capacity(nodes.len());
     for (i, s) in sums.iter().enumerate() {
-        let len = norm(*s);
+        let len = norm(s);
         if len.is_nan() || len <= 1e-12 * weights[i] {
             return Err(not_boundary(format!(
                 "at node {} the outward normals of its facets cancel: the part folds back on itself",

@@ -264,24 +264,15 @@ pub fn interpolate_nodal<const D: usize>(
 }
 
 /// Reference coordinates of `x` in `cell` (3 components, the unused ones 0) and the physical
-/// distance from `x` to the cell (0 inside). 2D cells: [`planar_coordinates`]; 3D cells:
-/// [`solid_coordinates`].
+/// distance from `x` to the cell (0 inside), in any dimension: Newton on the cell's (affine,
+/// bilinear or trilinear) map from the cell's centre. The distance: for P1 the largest signed
+/// distance to a facet (−λ_i / |∇λ_i|); for a Q1 quadrilateral, whose edges are straight, the
+/// distance to the polygon; for a Q1 hexahedron 0 when ξ ∈ [−1, 1]³, else |x − x(clamp ξ)| (an
+/// upper bound, exact in the direction of one face). Far from the cell (farther than half its
+/// size from its bounding box) the distance to that box, without coordinates. Outside the cell
+/// the coordinates extrapolate the map (exactly for P1; for Q1 Newton's last iterate,
+/// meaningful only close to the cell).
 pub fn reference_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x: [f64; D]) -> ([f64; 3], f64) {
-    match cell {
-        Cell::Tri3(_) | Cell::Quad4(_) => {
-            let (xi, dist) = planar_coordinates(cell, &|p| [points[p][0], points[p][1]], [x[0], x[1]]);
-            ([xi[0], xi[1], 0.0], dist)
-        }
-        Cell::Tet4(_) | Cell::Hex8(_) => solid_coordinates(cell, points, x),
-    }
-}
-
-/// [`reference_coordinates`] of a tetrahedron or a hexahedron: Newton on the (affine or
-/// trilinear) map from the cell's centre. The distance: for P1 the largest signed distance to a
-/// face plane (−λ_i / |∇λ_i|); for Q1 0 when ξ ∈ [−1, 1]³, else |x − x(clamp ξ)| (an upper
-/// bound, exact in the direction of one face); far from the cell (farther than half its size
-/// from its bounding box) the distance to that box, without coordinates.
-pub fn solid_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x: [f64; D]) -> ([f64; 3], f64) {
     let nodes = cell.nodes();
     let (mut lo, mut hi) = ([f64::INFINITY; D], [f64::NEG_INFINITY; D]);
     for &p in nodes {
@@ -298,22 +289,73 @@ pub fn solid_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x: [f
     if outside_box > 0.5 * size {
         return ([f64::NAN; 3], outside_box);
     }
-    let simplex = matches!(cell, Cell::Tet4(_));
     let map = |xi: [f64; 3]| {
         let (n, v, g) = reference(cell, xi);
         map_at(cell, points, n, &v, &g)
     };
-    let mut xi = if simplex { [0.25; 3] } else { [0.0; 3] };
+    let simplex = matches!(cell, Cell::Tri3(_) | Cell::Tet4(_));
+    let start = match cell {
+        Cell::Tri3(_) => [1.0 / 3.0, 1.0 / 3.0, 0.0],
+        Cell::Tet4(_) => [0.25; 3],
+        Cell::Quad4(_) | Cell::Hex8(_) => [0.0; 3],
+    };
+    let Some(xi) = newton(&map, x, start, size) else {
+        return ([0.0; 3], f64::INFINITY);
+    };
+    let (y, _) = map(xi);
+    let residual = (0..D).map(|k| (x[k] - y[k]).powi(2)).sum::<f64>().sqrt();
+    if residual > 1e-10 * size {
+        // Newton failed (a degenerate cell): unusable
+        return (xi, f64::INFINITY);
+    }
+    let dist = if simplex {
+        let s = shape_at(cell, points, xi);
+        (0..nodes.len())
+            .map(|a| {
+                let g = s.grad[a].iter().map(|v| v * v).sum::<f64>().sqrt();
+                -s.value[a] / g
+            })
+            .fold(0.0, f64::max)
+    } else if D == 2 {
+        // the edges of a Q1 quadrilateral are straight: the distance to the polygon
+        let corner: Vec<[f64; 2]> = nodes.iter().map(|&p| [points[p][0], points[p][1]]).collect();
+        let at = [x[0], x[1]];
+        if polygon_contains(&corner, at) {
+            0.0
+        } else {
+            polygon_distance(&corner, at)
+        }
+    } else if xi.iter().all(|v| v.abs() <= 1.0) {
+        0.0
+    } else {
+        let (y, _) = map(xi.map(|v| v.clamp(-1.0, 1.0)));
+        (0..D).map(|k| (x[k] - y[k]).powi(2)).sum::<f64>().sqrt()
+    };
+    (xi, dist)
+}
+
+/// Newton on a cell's map x(ξ) (value and Jacobian) from `start` towards `x`: at most 50 steps,
+/// far-away iterates kept bounded; None when a step is not finite.
+fn newton<const D: usize>(
+    map: &dyn Fn([f64; 3]) -> ([f64; D], [[f64; D]; D]),
+    x: [f64; D],
+    start: [f64; 3],
+    size: f64,
+) -> Option<[f64; 3]> {
+    let mut xi = start;
     for _ in 0..50 {
         let (y, j) = map(xi);
+        let r: [f64; D] = std::array::from_fn(|k| x[k] - y[k]);
+        if r.iter().map(|v| v.abs()).sum::<f64>() <= 1e-15 * size {
+            break;
+        }
         let (inv, det) = invert(&j);
         if det.abs() <= f64::MIN_POSITIVE {
             break;
         }
-        let r: [f64; D] = std::array::from_fn(|k| x[k] - y[k]);
         let d: [f64; D] = std::array::from_fn(|k| (0..D).map(|c| inv[k][c] * r[c]).sum());
         if d.iter().any(|v| !v.is_finite()) {
-            return ([0.0; 3], f64::INFINITY);
+            return None;
         }
         let mut step = 0.0;
         for k in 0..D {
@@ -325,114 +367,7 @@ pub fn solid_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x: [f
             break;
         }
     }
-    let (y, _) = map(xi);
-    let residual = (0..D).map(|k| (x[k] - y[k]).powi(2)).sum::<f64>().sqrt();
-    if residual > 1e-10 * size {
-        // Newton failed (a degenerate cell): unusable
-        return (xi, f64::INFINITY);
-    }
-    let dist = if simplex {
-        let s = shape_at(cell, points, xi);
-        (0..4)
-            .map(|a| {
-                let g = s.grad[a].iter().map(|v| v * v).sum::<f64>().sqrt();
-                -s.value[a] / g
-            })
-            .fold(0.0, f64::max)
-    } else if xi.iter().all(|v| v.abs() <= 1.0) {
-        0.0
-    } else {
-        let (y, _) = map(xi.map(|v| v.clamp(-1.0, 1.0)));
-        (0..D).map(|k| (x[k] - y[k]).powi(2)).sum::<f64>().sqrt()
-    };
-    (xi, dist)
-}
-
-/// Reference coordinates of `x` in a triangle or quadrilateral `cell` (`point(p)`: the
-/// coordinates of node p) and the physical distance from `x` to the cell (0 inside; for P1 the
-/// largest signed distance to an edge line, for Q1 the distance to the quadrilateral, whose
-/// edges are straight). Outside the cell the reference coordinates extrapolate the map
-/// (exactly for P1; for Q1 Newton's last iterate, meaningful only close to the cell).
-fn planar_coordinates(cell: &Cell, point: &dyn Fn(usize) -> [f64; 2], x: [f64; 2]) -> ([f64; 2], f64) {
-    match cell {
-        Cell::Tri3(n) => {
-            let (a, b, c) = (point(n[0]), point(n[1]), point(n[2]));
-            let (e1, e2) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
-            let det = e1[0] * e2[1] - e1[1] * e2[0];
-            let r = [x[0] - a[0], x[1] - a[1]];
-            let xi = [(r[0] * e2[1] - r[1] * e2[0]) / det, (e1[0] * r[1] - e1[1] * r[0]) / det];
-            let lambda = [1.0 - xi[0] - xi[1], xi[0], xi[1]];
-            // λ_i × (height over the edge opposite vertex i) is the signed distance to that edge
-            let len = |p: [f64; 2], q: [f64; 2]| ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt();
-            let heights = [det.abs() / len(b, c), det.abs() / len(c, a), det.abs() / len(a, b)];
-            let dist = (0..3).map(|i| -lambda[i] * heights[i]).fold(0.0, f64::max);
-            (xi, dist)
-        }
-        Cell::Quad4(n) => {
-            let p = [point(n[0]), point(n[1]), point(n[2]), point(n[3])];
-            let map = |xi: [f64; 2]| {
-                const C: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
-                let mut y = [0.0; 2];
-                let mut j = [[0.0; 2]; 2];
-                for a in 0..4 {
-                    let (sx, sy) = (1.0 + C[a][0] * xi[0], 1.0 + C[a][1] * xi[1]);
-                    let (v, g) = (0.25 * sx * sy, [0.25 * C[a][0] * sy, 0.25 * C[a][1] * sx]);
-                    for r in 0..2 {
-                        y[r] += v * p[a][r];
-                        j[r][0] += p[a][r] * g[0];
-                        j[r][1] += p[a][r] * g[1];
-                    }
-                }
-                (y, j)
-            };
-            let size = p
-                .iter()
-                .map(|q| (q[0] - p[0][0]).abs() + (q[1] - p[0][1]).abs())
-                .fold(0.0, f64::max);
-            // the edges of a Q1 cell are straight: inside test and distance on the polygon
-            let dist = if polygon_contains(&p, x) {
-                0.0
-            } else {
-                polygon_distance(&p, x)
-            };
-            if dist > 0.5 * size {
-                // far outside: no reference coordinates needed
-                return ([f64::NAN; 2], dist);
-            }
-            let mut xi = [0.0; 2];
-            for _ in 0..50 {
-                let (y, j) = map(xi);
-                let r = [x[0] - y[0], x[1] - y[1]];
-                if r[0].abs() + r[1].abs() <= 1e-15 * size {
-                    break;
-                }
-                let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-                if det.abs() <= f64::MIN_POSITIVE {
-                    break;
-                }
-                let d = [
-                    (j[1][1] * r[0] - j[0][1] * r[1]) / det,
-                    (j[0][0] * r[1] - j[1][0] * r[0]) / det,
-                ];
-                if !(d[0].is_finite() && d[1].is_finite()) {
-                    return ([0.0; 2], f64::INFINITY);
-                }
-                // keep far-away iterates bounded (the point is outside then anyway)
-                xi = [(xi[0] + d[0]).clamp(-1e3, 1e3), (xi[1] + d[1]).clamp(-1e3, 1e3)];
-                if d[0].abs() + d[1].abs() <= 1e-15 {
-                    break;
-                }
-            }
-            let (y, _) = map(xi);
-            let residual = ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2)).sqrt();
-            if residual > 1e-10 * size {
-                // Newton failed (a degenerate cell): unusable
-                return (xi, f64::INFINITY);
-            }
-            (xi, dist)
-        }
-        Cell::Tet4(_) | Cell::Hex8(_) => unreachable!("3D cells take solid_coordinates"),
-    }
+    Some(xi)
 }
 
 /// True if `x` lies in the closed polygon `p` (crossing number; points on an edge count in).
