@@ -236,7 +236,9 @@ impl<'a> Lines<'a> {
     }
 }
 
-/// Name, node count and dimension of a gmsh element type (the common ones; `None` if unknown).
+/// Name, node count and dimension of a gmsh element type (points, lines, triangles, quadrangles
+/// up to order 10, the common 3D ones; `None` if unknown: the MSH 4.1 reader cannot read a block of
+/// an unknown type).
 pub(crate) fn element_type_info(t: i32) -> Option<(&'static str, usize, u8)> {
     Some(match t {
         1 => ("2-node line", 2, 1),
@@ -270,9 +272,39 @@ pub(crate) fn element_type_info(t: i32) -> Option<(&'static str, usize, u8)> {
         29 => ("20-node third-order tetrahedron", 20, 3),
         30 => ("35-node fourth-order tetrahedron", 35, 3),
         31 => ("56-node fifth-order tetrahedron", 56, 3),
+        32 => ("22-node fourth-order incomplete tetrahedron", 22, 3),
+        33 => ("28-node fifth-order incomplete tetrahedron", 28, 3),
         36 => ("16-node third-order quadrangle", 16, 2),
         37 => ("25-node fourth-order quadrangle", 25, 2),
         38 => ("36-node fifth-order quadrangle", 36, 2),
+        39 => ("12-node third-order incomplete quadrangle", 12, 2),
+        40 => ("16-node fourth-order incomplete quadrangle", 16, 2),
+        41 => ("20-node fifth-order incomplete quadrangle", 20, 2),
+        42 => ("28-node sixth-order triangle", 28, 2),
+        43 => ("36-node seventh-order triangle", 36, 2),
+        44 => ("45-node eighth-order triangle", 45, 2),
+        45 => ("55-node ninth-order triangle", 55, 2),
+        46 => ("66-node tenth-order triangle", 66, 2),
+        47 => ("49-node sixth-order quadrangle", 49, 2),
+        48 => ("64-node seventh-order quadrangle", 64, 2),
+        49 => ("81-node eighth-order quadrangle", 81, 2),
+        50 => ("100-node ninth-order quadrangle", 100, 2),
+        51 => ("121-node tenth-order quadrangle", 121, 2),
+        52 => ("18-node sixth-order incomplete triangle", 18, 2),
+        53 => ("21-node seventh-order incomplete triangle", 21, 2),
+        54 => ("24-node eighth-order incomplete triangle", 24, 2),
+        55 => ("27-node ninth-order incomplete triangle", 27, 2),
+        56 => ("30-node tenth-order incomplete triangle", 30, 2),
+        57 => ("24-node sixth-order incomplete quadrangle", 24, 2),
+        58 => ("28-node seventh-order incomplete quadrangle", 28, 2),
+        59 => ("32-node eighth-order incomplete quadrangle", 32, 2),
+        60 => ("36-node ninth-order incomplete quadrangle", 36, 2),
+        61 => ("40-node tenth-order incomplete quadrangle", 40, 2),
+        62 => ("7-node sixth-order line", 7, 1),
+        63 => ("8-node seventh-order line", 8, 1),
+        64 => ("9-node eighth-order line", 9, 1),
+        65 => ("10-node ninth-order line", 10, 1),
+        66 => ("11-node tenth-order line", 11, 1),
         92 => ("64-node third-order hexahedron", 64, 3),
         93 => ("125-node fourth-order hexahedron", 125, 3),
         _ => return None,

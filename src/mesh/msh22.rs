@@ -1,5 +1,4 @@
-//! MSH 2.2 ASCII (also 2.0 and 2.1, which have the same sections), read by hand: mshio reads
-//! only 4.1.
+//! MSH 2.2 ASCII (also 2.0 and 2.1, which have the same sections), read by hand.
 //!
 //! ```text
 //! $Nodes

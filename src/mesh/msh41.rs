@@ -1,829 +1,770 @@
-//! MSH 4.1, ASCII and binary, parsed by mshio 0.4.2 after a pre-scan of our own.
+//! MSH 4.1, ASCII and binary (either byte order, size_t of 4 or 8 bytes), read by hand in one
+//! pass that validates as it reads.
 //!
-//! mshio has traps this module works around:
-//! * Physical tags live on the entities (`$Entities`), not on elements: element blocks are
-//!   mapped through (entity dim, entity tag).
-//! * mshio ignores `$PhysicalNames` (parsed in [`super::physical_names`]).
-//! * When the node tags of a file form one contiguous range, mshio drops them and assumes they
-//!   are in order; with gaps it keeps per-block maps. Neither notices duplicate tags. So the
-//!   pre-scan reads the node tags itself (in file order, with their line numbers in ASCII
-//!   files) and mshio supplies only the coordinates, block by block.
-//! * mshio panics on some malformed headers (a zero node or element count, a binary data size
-//!   other than 1, 2, 4, 8, 16): the pre-scan rejects those first. It also checks every count
-//!   in a section header against the bytes that follow, so a corrupt header claiming 10¹² nodes
-//!   is a clean error.
+//! ```text
+//! $Entities
+//! numPoints numCurves numSurfaces numVolumes
+//! pointTag X Y Z numPhysicalTags physicalTag ...                       (each point)
+//! tag minX minY minZ maxX maxY maxZ numPhysicalTags physicalTag ...
+//!     numBoundingEntities boundingTag ...                              (each curve, surface, volume)
+//! $EndEntities
+//! $Nodes
+//! numEntityBlocks numNodes minNodeTag maxNodeTag
+//! entityDim entityTag parametric numNodesInBlock                       (each block)
+//! nodeTag ...                                                          (numNodesInBlock of them)
+//! x y z ...                                                            (numNodesInBlock of them)
+//! $EndNodes
+//! $Elements
+//! numEntityBlocks numElements minElementTag maxElementTag
+//! entityDim entityTag elementType numElementsInBlock                   (each block)
+//! elementTag nodeTag ...                                               (each element)
+//! $EndElements
+//! ```
+//!
+//! In binary files the numbers are raw: ints of 4 bytes, doubles of 8, size_t of the header's
+//! data size; `$PhysicalNames` is text in both (read by [`super::physical_names`]). ASCII is read
+//! token by token (line breaks do not matter, as in gmsh), binary item by item. Physical tags
+//! live on the entities: an element block gets those of its (entity dim, entity tag). Other
+//! sections are skipped.
+//!
+//! Every count in a header is checked against the bytes that follow before anything is
+//! allocated for it, so a corrupt header claiming 10¹² nodes is a clean error. Node tags are kept
+//! as written, in file order (duplicates are found by `build`).
 
 use super::physical_names::{self, find_section};
-use super::{element_type_info, line_of, trim, Header, Lines, MeshError, Origin, Places, RawMesh};
+use super::{element_type_info, line_of, trim, Header, MeshError, Origin, Places, RawMesh};
 use std::collections::HashMap;
 use std::path::Path;
 
-/// What the pre-scan learns: node tags in file order, block sizes, and where they are.
-struct Prescan {
-    node_tags: Vec<u64>,
-    block_sizes: Vec<usize>,
-    node_lines: Option<Vec<(usize, usize)>>,
-}
-
 pub(crate) fn parse<'a>(path: &Path, bytes: &'a [u8], header: &Header) -> Result<RawMesh<'a>, MeshError> {
     let names = physical_names::parse(path, bytes, header.body)?;
-    let pre = if header.binary {
-        prescan_binary(path, bytes, header)?
-    } else {
-        prescan_ascii(path, bytes, header.body)?
+    let mut r = Reader {
+        path,
+        bytes,
+        pos: header.body,
+        line: line_of(bytes, header.body),
+        binary: header.binary.then_some((header.data_size, header.little_endian)),
+        section: String::new(),
+        section_at: 0,
     };
-
-    let msh = match std::panic::catch_unwind(|| mshio::parse_msh_bytes(bytes)) {
-        Ok(Ok(m)) => m,
-        Ok(Err(e)) => return Err(mshio_error(path, bytes, header.binary, &e)),
-        Err(_) => {
-            return Err(MeshError::Syntax {
-                path: path.to_path_buf(),
-                place: "MSH 4.1 parser".into(),
-                detail: "the file is malformed (the parser stopped on it); re-export it from gmsh".into(),
-            })
+    let mut physical: Option<HashMap<(i32, i32), Vec<i32>>> = None;
+    let mut nodes: Option<NodesRead> = None;
+    let mut elements: Option<ElementsRead> = None;
+    while let Some((name, at)) = r.section_tag()? {
+        let seen = match name.as_str() {
+            "Entities" => physical.is_some(),
+            "Nodes" => nodes.is_some(),
+            "Elements" => elements.is_some(),
+            _ => false,
+        };
+        r.section = format!("${name}");
+        r.section_at = at;
+        if seen {
+            return Err(r.error(at, format!("a second ${name} section; hvi reads files with one")));
         }
-    };
-    let syntax = |place: &str, detail: String| MeshError::Syntax {
-        path: path.to_path_buf(),
-        place: place.into(),
-        detail,
-    };
-    let Some(nodes) = msh.data.nodes else {
-        return Err(syntax("$Nodes", "the file has no $Nodes section".into()));
-    };
-    let Some(elements) = msh.data.elements else {
-        return Err(syntax("$Elements", "the file has no $Elements section".into()));
-    };
-
-    // Coordinates from mshio, tags from the pre-scan, block by block.
-    if nodes.node_blocks.len() != pre.block_sizes.len() {
-        return Err(syntax(
-            "$Nodes",
-            format!(
-                "{} node blocks were parsed but the section lists {}",
-                nodes.node_blocks.len(),
-                pre.block_sizes.len()
-            ),
-        ));
-    }
-    let mut coords = Vec::with_capacity(pre.node_tags.len());
-    for (b, (block, &size)) in nodes.node_blocks.iter().zip(&pre.block_sizes).enumerate() {
-        if block.nodes.len() != size {
-            return Err(syntax(
-                "$Nodes",
-                format!(
-                    "node block {} holds {} nodes, expected {size}",
-                    b + 1,
-                    block.nodes.len()
-                ),
-            ));
-        }
-        coords.extend(block.nodes.iter().map(|n| [n.x, n.y, n.z]));
-    }
-
-    // Physical tags of each entity.
-    let mut physical: HashMap<(i32, i32), Vec<i32>> = HashMap::new();
-    if let Some(ent) = &msh.data.entities {
-        for p in &ent.points {
-            physical.insert((0, p.tag), p.physical_tags.clone());
-        }
-        for c in &ent.curves {
-            physical.insert((1, c.tag), c.physical_tags.clone());
-        }
-        for s in &ent.surfaces {
-            physical.insert((2, s.tag), s.physical_tags.clone());
-        }
-        for v in &ent.volumes {
-            physical.insert((3, v.tag), v.physical_tags.clone());
-        }
-    }
-
-    let mut element_tags = Vec::new();
-    let mut element_types = Vec::new();
-    let mut offsets = vec![0usize];
-    let mut element_nodes = Vec::new();
-    let mut element_origin = Vec::new();
-    let mut origins = Vec::new();
-    for block in &elements.element_blocks {
-        let ty = block.element_type as i32;
-        if let Some((name, _, dim)) = element_type_info(ty) {
-            if i32::from(dim) != block.entity_dim {
-                return Err(syntax(
-                    "$Elements",
-                    format!(
-                        "an element block of {name}s (type {ty}, dimension {dim}) is on an entity of dimension {}",
-                        block.entity_dim
-                    ),
-                ));
+        match name.as_str() {
+            "Entities" => {
+                physical = Some(read_entities(&mut r)?);
+            }
+            "Nodes" => {
+                nodes = Some(read_nodes(&mut r)?);
+            }
+            "Elements" => {
+                elements = Some(read_elements(&mut r)?);
+            }
+            _ => {
+                r.skip_section(&name)?;
+                continue;
             }
         }
-        let key = (block.entity_dim, block.entity_tag);
-        let o = origins.len() as u32;
-        origins.push(Origin {
+        r.end_tag(&name)?;
+    }
+    let end = if r.binary.is_some() {
+        bytes.len()
+    } else {
+        r.line.saturating_sub(1).max(1)
+    };
+    let Some(nodes) = nodes else {
+        return Err(r.error_at(
+            end,
+            "end of file",
+            "the file has no $Nodes section: it is truncated".into(),
+        ));
+    };
+    let Some(elements) = elements else {
+        return Err(r.error_at(
+            end,
+            "end of file",
+            "the file has no $Elements section: it is truncated".into(),
+        ));
+    };
+
+    // Each element block takes the physical tags of its entity.
+    let physical = physical.unwrap_or_default();
+    let origins = elements
+        .blocks
+        .iter()
+        .map(|&key| Origin {
             physical: physical.get(&key).cloned().unwrap_or_default(),
             entity: Some(key),
-        });
-        for el in &block.elements {
-            element_tags.push(el.element_tag);
-            element_types.push(ty);
-            element_nodes.extend_from_slice(&el.nodes);
-            offsets.push(element_nodes.len());
-            element_origin.push(o);
-        }
-    }
-
-    let element_line: Box<dyn Fn(usize, u64) -> Option<usize> + 'a> = if header.binary {
-        Box::new(|_, _| None)
-    } else {
-        let body = header.body;
-        Box::new(move |_, tag| element_line_ascii(bytes, body, tag))
+        })
+        .collect();
+    let element_line: Box<dyn Fn(usize, u64) -> Option<usize> + 'a> = match elements.lines {
+        Some(lines) => Box::new(move |e, _| lines.get(e).copied()),
+        None => Box::new(|_, _| None),
     };
     Ok(RawMesh {
-        node_tags: pre.node_tags,
-        coords,
-        element_tags,
-        element_types,
-        offsets,
-        element_nodes,
-        element_origin,
+        node_tags: nodes.tags,
+        coords: nodes.coords,
+        element_tags: elements.tags,
+        element_types: elements.types,
+        offsets: elements.offsets,
+        element_nodes: elements.nodes,
+        element_origin: elements.origin,
         origins,
         names,
         places: Places {
-            node_lines: pre.node_lines,
+            node_lines: nodes.lines,
             element_line,
         },
     })
 }
 
-/// Turns an mshio error into a [`MeshError::Syntax`] with a line number (ASCII) or byte offset
-/// (binary) and the chain of what was being parsed (never mshio's hex dump of the file).
-fn mshio_error(path: &Path, bytes: &[u8], binary: bool, e: &mshio::MshParserError<&[u8]>) -> MeshError {
-    let bt = e.filtered_backtrace();
-    let Some((input, kind)) = bt.first() else {
-        return MeshError::Syntax {
-            path: path.to_path_buf(),
-            place: "MSH 4.1".into(),
-            detail: "the file could not be parsed; re-export it from gmsh".into(),
-        };
-    };
-    let start = bytes.as_ptr() as usize;
-    let at = input.as_ptr() as usize;
-    let offset = if at >= start && at <= start + bytes.len() {
-        at - start
-    } else {
-        bytes.len()
-    };
-    let place = if binary {
-        format!("byte {offset}")
-    } else {
-        format!("line {}", line_of(bytes, offset))
-    };
-    let chain: Vec<String> = bt[1..]
-        .iter()
-        .rev()
-        .map(|(_, k)| k.context().map_or_else(|| k.to_string(), str::to_string))
-        .collect();
-    let mut detail = kind.to_string();
-    if !chain.is_empty() {
-        detail = format!("{detail} (while reading: {})", chain.join(" > "));
+/// The `$Entities` section: (dim, tag) → physical tags. A repeated entity keeps its last line.
+fn read_entities(r: &mut Reader<'_>) -> Result<HashMap<(i32, i32), Vec<i32>>, MeshError> {
+    let h = r.mark();
+    let mut counts = [0u64; 4];
+    for (c, what) in counts.iter_mut().zip([
+        "the number of points",
+        "the number of curves",
+        "the number of surfaces",
+        "the number of volumes",
+    ]) {
+        *c = r.size_t(what)?;
     }
-    if trim(input).is_empty() {
-        detail.push_str("; the file ends early: it is truncated, re-export it");
-    } else {
-        detail.push_str("; the file is malformed: re-export it from gmsh (gmsh -format msh41)");
-    }
-    MeshError::Syntax {
-        path: path.to_path_buf(),
-        place,
-        detail,
-    }
-}
-
-// ---------------------------------------------------------------------------------------------
-// ASCII pre-scan
-
-/// Whitespace-separated tokens with line numbers.
-struct Tokens<'a> {
-    bytes: &'a [u8],
-    pos: usize,
-    line: usize,
-}
-
-impl<'a> Tokens<'a> {
-    fn next(&mut self) -> Option<(&'a [u8], usize)> {
-        while self.pos < self.bytes.len() && self.bytes[self.pos].is_ascii_whitespace() {
-            if self.bytes[self.pos] == b'\n' {
-                self.line += 1;
+    let total = counts.iter().fold(0u64, |a, &c| a.saturating_add(c));
+    // the smallest entity, a point: tag, x, y, z, numPhysicalTags
+    let point = r.int_bytes() + 3 * r.float_bytes() + r.size_t_bytes();
+    r.check_fits(h, "entities", total, point)?;
+    let mut physical = HashMap::with_capacity(total as usize);
+    for (dim, &count) in counts.iter().enumerate() {
+        for _ in 0..count {
+            let tag = r.int("an entity tag")?;
+            let coordinates = if dim == 0 { 3 } else { 6 };
+            for _ in 0..coordinates {
+                r.float("a coordinate of an entity")?;
             }
-            self.pos += 1;
-        }
-        if self.pos >= self.bytes.len() {
-            return None;
-        }
-        let s = self.pos;
-        while self.pos < self.bytes.len() && !self.bytes[self.pos].is_ascii_whitespace() {
-            self.pos += 1;
-        }
-        Some((&self.bytes[s..self.pos], self.line))
-    }
-
-    fn remaining(&self) -> usize {
-        self.bytes.len() - self.pos
-    }
-}
-
-fn prescan_ascii(path: &Path, bytes: &[u8], body: usize) -> Result<Prescan, MeshError> {
-    let syntax = |line: usize, section: &str, detail: String| MeshError::Syntax {
-        path: path.to_path_buf(),
-        place: format!("line {line} ({section})"),
-        detail,
-    };
-    let mut lines = Lines::new(bytes, body);
-    let mut found: Option<Prescan> = None;
-    let mut seen_elements = false;
-    while let Some((line, l)) = lines.next_nonblank() {
-        let text = String::from_utf8_lossy(trim(l)).into_owned();
-        let Some(name) = text.strip_prefix('$') else {
-            return Err(MeshError::Syntax {
-                path: path.to_path_buf(),
-                place: format!("line {line}"),
-                detail: format!("expected a section such as $Nodes, found \"{text}\""),
-            });
-        };
-        let section = format!("${name}");
-        match name {
-            "Nodes" => {
-                if found.is_some() {
-                    return Err(syntax(
-                        line,
-                        &section,
-                        "a second $Nodes section; hvi reads files with one".into(),
-                    ));
-                }
-                let mut t = Tokens {
-                    bytes,
-                    pos: lines.pos,
-                    line: lines.line,
-                };
-                found = Some(scan_nodes_ascii(path, &mut t)?);
-                match t.next() {
-                    Some((tok, _)) if tok == b"$EndNodes" => {}
-                    Some((tok, l)) => {
-                        return Err(syntax(
-                            l,
-                            &section,
-                            format!(
-                                "expected $EndNodes, found \"{}\": the counts in the section do not match its content",
-                                String::from_utf8_lossy(tok)
-                            ),
-                        ))
-                    }
-                    None => {
-                        return Err(syntax(
-                            t.line,
-                            &section,
-                            "the file ends before $EndNodes: it is truncated".into(),
-                        ))
-                    }
-                }
-                lines = Lines {
-                    bytes,
-                    pos: t.pos,
-                    line: t.line,
-                };
-                continue;
+            let at = r.mark();
+            let n = r.size_t("the number of physical tags of an entity")?;
+            r.check_fits(at, "physical tags of an entity", n, r.int_bytes())?;
+            let mut tags = Vec::with_capacity(n as usize);
+            for _ in 0..n {
+                tags.push(r.int("a physical tag")?);
             }
-            "Elements" => {
-                seen_elements = true;
-                let (hline, counts) = header_numbers(&mut lines, path, &section)?;
-                let (blocks, count) = (counts[0], counts[1]);
-                if count == 0 {
-                    return Err(syntax(
-                        hline,
-                        &section,
-                        "the file has no elements; mesh the geometry (gmsh -2) before saving".into(),
-                    ));
-                }
-                check_fits(
-                    path,
-                    hline,
-                    &section,
-                    "element blocks",
-                    blocks,
-                    8,
-                    lines.remaining(),
-                    true,
-                )?;
-                check_fits(path, hline, &section, "elements", count, 4, lines.remaining(), true)?;
-                // The header's total must equal what the blocks hold (mshio does not check it).
-                let mut walk = Lines {
-                    bytes,
-                    pos: lines.pos,
-                    line: lines.line,
-                };
-                let mut held: u64 = 0;
-                let mut complete = true;
-                for _ in 0..blocks {
-                    let in_block = walk.next_nonblank().and_then(|(_, bh)| {
-                        String::from_utf8_lossy(bh)
-                            .split_whitespace()
-                            .nth(3)
-                            .and_then(|v| v.parse::<u64>().ok())
-                    });
-                    let Some(n) = in_block else {
-                        complete = false;
-                        break;
-                    };
-                    held = held.saturating_add(n);
-                    for _ in 0..n {
-                        if walk.next_nonblank().is_none() {
-                            complete = false;
-                            break;
-                        }
-                    }
-                }
-                if complete && held != count {
-                    return Err(syntax(
-                        hline,
-                        &section,
-                        format!("the section header says {count} elements but its blocks hold {held}; re-export the mesh from gmsh"),
-                    ));
+            if dim > 0 {
+                let at = r.mark();
+                let n = r.size_t("the number of bounding entities of an entity")?;
+                r.check_fits(at, "bounding entities of an entity", n, r.int_bytes())?;
+                for _ in 0..n {
+                    r.int("a bounding entity tag")?;
                 }
             }
-            "Entities" => {
-                let (hline, counts) = header_numbers(&mut lines, path, &section)?;
-                let total = counts.iter().fold(0u64, |a, &c| a.saturating_add(c));
-                check_fits(path, hline, &section, "entities", total, 10, lines.remaining(), true)?;
-            }
-            _ => {}
-        }
-        skip_to_end(&mut lines, path, name, line)?;
-    }
-    let Some(pre) = found else {
-        return Err(syntax(
-            lines.line.saturating_sub(1).max(1),
-            "end of file",
-            "the file has no $Nodes section: it is truncated".into(),
-        ));
-    };
-    if !seen_elements {
-        return Err(syntax(
-            lines.line.saturating_sub(1).max(1),
-            "end of file",
-            "the file has no $Elements section: it is truncated".into(),
-        ));
-    }
-    Ok(pre)
-}
-
-/// Skips lines up to and including `$End<name>`.
-fn skip_to_end(lines: &mut Lines<'_>, path: &Path, name: &str, start_line: usize) -> Result<(), MeshError> {
-    let end = format!("$End{name}");
-    loop {
-        match lines.next_line() {
-            Some((_, l)) if trim(l) == end.as_bytes() => return Ok(()),
-            Some(_) => {}
-            None => {
-                return Err(MeshError::Syntax {
-                    path: path.to_path_buf(),
-                    place: format!("line {start_line} (${name})"),
-                    detail: format!("the section ${name} has no {end}: the file is truncated; re-export it"),
-                })
-            }
+            physical.insert((dim as i32, tag), tags);
         }
     }
+    Ok(physical)
 }
 
-/// The four numbers of a section header line.
-fn header_numbers(lines: &mut Lines<'_>, path: &Path, section: &str) -> Result<(usize, [u64; 4]), MeshError> {
-    let Some((line, l)) = lines.next_nonblank() else {
-        return Err(MeshError::Syntax {
-            path: path.to_path_buf(),
-            place: format!("line {} ({section})", lines.line),
-            detail: format!("the file ends inside {section}: it is truncated"),
-        });
-    };
-    let text = String::from_utf8_lossy(l);
-    let numbers: Vec<u64> = text.split_whitespace().filter_map(|t| t.parse().ok()).collect();
-    if numbers.len() != 4 || text.split_whitespace().count() != 4 {
-        return Err(MeshError::Syntax {
-            path: path.to_path_buf(),
-            place: format!("line {line} ({section})"),
-            detail: format!(
-                "expected four non-negative integers (the section header), found \"{}\"",
-                text.trim()
-            ),
-        });
-    }
-    Ok((line, [numbers[0], numbers[1], numbers[2], numbers[3]]))
+/// What `$Nodes` holds, in file order.
+struct NodesRead {
+    tags: Vec<u64>,
+    coords: Vec<[f64; 3]>,
+    /// ASCII: line of each node's tag and of its coordinates.
+    lines: Option<Vec<(usize, usize)>>,
 }
 
-/// Errors if `count` items of at least `min_bytes` each cannot fit in `remaining` bytes.
-#[allow(clippy::too_many_arguments)]
-fn check_fits(
-    path: &Path,
-    where_: usize,
-    section: &str,
-    what: &str,
-    count: u64,
-    min_bytes: u64,
-    remaining: usize,
-    ascii: bool,
-) -> Result<(), MeshError> {
-    if count.saturating_mul(min_bytes) > remaining as u64 {
-        return Err(MeshError::Syntax {
-            path: path.to_path_buf(),
-            place: if ascii {
-                format!("line {where_} ({section})")
-            } else {
-                format!("byte {where_} ({section})")
-            },
-            detail: format!(
-                "the header says {count} {what}, but only {remaining} bytes follow (at least {min_bytes} per item): \
-                 the file is truncated or its header is corrupt; re-export it"
-            ),
-        });
-    }
-    Ok(())
-}
-
-fn scan_nodes_ascii(path: &Path, t: &mut Tokens<'_>) -> Result<Prescan, MeshError> {
-    let syntax = |line: usize, detail: String| MeshError::Syntax {
-        path: path.to_path_buf(),
-        place: format!("line {line} ($Nodes)"),
-        detail,
-    };
-    fn number<T: std::str::FromStr>(
-        t: &mut Tokens<'_>,
-        what: &str,
-        syntax: &dyn Fn(usize, String) -> MeshError,
-    ) -> Result<(T, usize), MeshError> {
-        match t.next() {
-            Some((tok, line)) => match std::str::from_utf8(tok).ok().and_then(|s| s.parse().ok()) {
-                Some(v) => Ok((v, line)),
-                None => Err(syntax(
-                    line,
-                    format!("expected {what}, found \"{}\"", String::from_utf8_lossy(tok)),
-                )),
-            },
-            None => Err(syntax(
-                t.line,
-                format!("the file ends where {what} was expected: it is truncated; re-export it"),
-            )),
-        }
-    }
-    let (blocks, hline) = number::<u64>(t, "the number of node blocks", &syntax)?;
-    let (count, _) = number::<u64>(t, "the number of nodes", &syntax)?;
-    let _ = number::<u64>(t, "the minimum node tag", &syntax)?;
-    let _ = number::<u64>(t, "the maximum node tag", &syntax)?;
+fn read_nodes(r: &mut Reader<'_>) -> Result<NodesRead, MeshError> {
+    let h = r.mark();
+    let blocks = r.size_t("the number of node blocks")?;
+    let count = r.size_t("the number of nodes")?;
+    r.size_t("the minimum node tag")?;
+    r.size_t("the maximum node tag")?;
     if count == 0 {
-        return Err(syntax(
-            hline,
+        return Err(r.error(
+            h,
             "the file has no nodes; mesh the geometry (gmsh -2) before saving".into(),
         ));
     }
-    check_fits(path, hline, "$Nodes", "node blocks", blocks, 8, t.remaining(), true)?;
-    check_fits(path, hline, "$Nodes", "nodes", count, 8, t.remaining(), true)?;
+    let block = 3 * r.int_bytes() + r.size_t_bytes();
+    let node = r.size_t_bytes() + 3 * r.float_bytes();
+    r.check_fits(h, "node blocks", blocks, block)?;
+    r.check_fits(h, "nodes", count, node)?;
     let count = count as usize;
-    let mut node_tags = Vec::with_capacity(count);
-    let mut node_lines = Vec::with_capacity(count);
-    let mut block_sizes = Vec::with_capacity(blocks as usize);
+    let mut tags = Vec::with_capacity(count);
+    let mut coords = Vec::with_capacity(count);
+    let mut lines = r.binary.is_none().then(|| Vec::with_capacity(count));
     for b in 0..blocks {
-        let (_, bline) = number::<i32>(t, "the entity dimension of a node block", &syntax)?;
-        let _ = number::<i32>(t, "the entity tag of a node block", &syntax)?;
-        let (parametric, _) = number::<i32>(t, "the parametric flag of a node block", &syntax)?;
-        let (n, _) = number::<u64>(t, "the number of nodes in a node block", &syntax)?;
+        let bh = r.mark();
+        r.int("the entity dimension of a node block")?;
+        r.int("the entity tag of a node block")?;
+        let parametric = r.int("the parametric flag of a node block")?;
+        let n = r.size_t("the number of nodes in a node block")?;
         if parametric != 0 {
             return Err(MeshError::UnsupportedFormat {
-                path: path.to_path_buf(),
+                path: r.path.to_path_buf(),
                 detail: format!(
-                    "line {bline}: node block {} has parametric coordinates, which hvi does not read; \
+                    "{}: node block {} has parametric coordinates, which hvi does not read; \
                      re-export with Mesh.SaveParametric = 0",
+                    r.place(bh),
                     b + 1
                 ),
             });
         }
-        check_fits(path, bline, "$Nodes", "nodes in a block", n, 8, t.remaining(), true)?;
-        if node_tags.len() as u64 + n > count as u64 {
-            return Err(syntax(
-                bline,
+        r.check_fits(bh, "nodes in a block", n, node)?;
+        if tags.len() as u64 + n > count as u64 {
+            return Err(r.error(
+                bh,
                 format!("the node blocks hold more than the {count} nodes the section header says"),
             ));
         }
-        let first = node_tags.len();
+        let first = tags.len();
         for _ in 0..n {
-            let (tag, line) = number::<u64>(t, "a node tag", &syntax)?;
+            let at = r.mark();
+            let tag = r.size_t("a node tag")?;
             if tag == 0 {
-                return Err(syntax(line, "node tag 0 is not allowed (tags start at 1)".into()));
+                return Err(r.error(at, "node tag 0 is not allowed (tags start at 1)".into()));
             }
-            node_tags.push(tag);
-            node_lines.push((line, 0));
+            tags.push(tag);
+            if let Some(l) = &mut lines {
+                l.push((at, 0));
+            }
         }
-        for lines in &mut node_lines[first..] {
-            let (_, line) = number::<f64>(t, "an x coordinate", &syntax)?;
-            let _ = number::<f64>(t, "a y coordinate", &syntax)?;
-            let _ = number::<f64>(t, "a z coordinate", &syntax)?;
-            lines.1 = line;
+        for k in first..tags.len() {
+            let at = r.mark();
+            let c = [
+                r.float("an x coordinate")?,
+                r.float("a y coordinate")?,
+                r.float("a z coordinate")?,
+            ];
+            coords.push(c);
+            if let Some(l) = &mut lines {
+                l[k].1 = at;
+            }
         }
-        block_sizes.push(n as usize);
     }
-    if node_tags.len() != count {
-        return Err(syntax(
-            hline,
+    if tags.len() != count {
+        return Err(r.error(
+            h,
             format!(
                 "the section header says {count} nodes but its blocks hold {}",
-                node_tags.len()
+                tags.len()
             ),
         ));
     }
-    Ok(Prescan {
-        node_tags,
-        block_sizes,
-        node_lines: Some(node_lines),
-    })
+    Ok(NodesRead { tags, coords, lines })
 }
 
-/// Line of the element with `tag` in an ASCII MSH 4.1 file (only computed for messages).
-fn element_line_ascii(bytes: &[u8], body: usize, tag: u64) -> Option<usize> {
-    let start = find_section(bytes, body, b"$Elements")?;
-    let mut lines = Lines::new(bytes, start);
-    lines.next_line()?;
-    let (_, h) = lines.next_nonblank()?;
-    let blocks: u64 = String::from_utf8_lossy(h).split_whitespace().next()?.parse().ok()?;
-    let want = tag.to_string();
-    for _ in 0..blocks {
-        let (_, bh) = lines.next_nonblank()?;
-        let count: u64 = String::from_utf8_lossy(bh).split_whitespace().nth(3)?.parse().ok()?;
-        for _ in 0..count {
-            let (n, l) = lines.next_nonblank()?;
-            if String::from_utf8_lossy(l).split_whitespace().next() == Some(want.as_str()) {
-                return Some(n);
+/// What `$Elements` holds, in file order, as [`RawMesh`] wants it.
+struct ElementsRead {
+    tags: Vec<u64>,
+    types: Vec<i32>,
+    offsets: Vec<usize>,
+    nodes: Vec<u64>,
+    /// The block of each element.
+    origin: Vec<u32>,
+    /// (entity dim, entity tag) of each block.
+    blocks: Vec<(i32, i32)>,
+    /// ASCII: line of each element.
+    lines: Option<Vec<usize>>,
+}
+
+fn read_elements(r: &mut Reader<'_>) -> Result<ElementsRead, MeshError> {
+    let h = r.mark();
+    let blocks = r.size_t("the number of element blocks")?;
+    let count = r.size_t("the number of elements")?;
+    r.size_t("the minimum element tag")?;
+    r.size_t("the maximum element tag")?;
+    if count == 0 {
+        return Err(r.error(
+            h,
+            "the file has no elements; mesh the geometry (gmsh -2) before saving".into(),
+        ));
+    }
+    let block = 3 * r.int_bytes() + r.size_t_bytes();
+    r.check_fits(h, "element blocks", blocks, block)?;
+    // the smallest element, a point: its tag and one node
+    r.check_fits(h, "elements", count, 2 * r.size_t_bytes())?;
+    let mut e = ElementsRead {
+        tags: Vec::new(),
+        types: Vec::new(),
+        offsets: vec![0],
+        nodes: Vec::new(),
+        origin: Vec::new(),
+        blocks: Vec::new(),
+        lines: r.binary.is_none().then(Vec::new),
+    };
+    // (where, entity dim, type) of each block, checked once the section is read
+    let mut headers = Vec::new();
+    for b in 0..blocks {
+        let bh = r.mark();
+        let dim = r.int("the entity dimension of an element block")?;
+        let entity = r.int("the entity tag of an element block")?;
+        let ty = r.int("the element type of an element block")?;
+        let n = r.size_t("the number of elements in an element block")?;
+        let Some((_, per, _)) = element_type_info(ty) else {
+            return Err(MeshError::UnsupportedElement {
+                path: r.path.to_path_buf(),
+                place: format!("{} ($Elements)", r.place(bh)),
+                element_type: ty,
+                detail: format!(
+                    "element block {} is of type {ty}, an element type hvi does not know (so its elements cannot \
+                     even be read); hvi reads only points (15), 2-node lines (1), 3-node triangles (2), 4-node \
+                     quadrangles (3), 4-node tetrahedra (4) and 8-node hexahedra (5): mesh with gmsh -2 -order 1 \
+                     (-3 for a volume)",
+                    b + 1
+                ),
+            });
+        };
+        // Nothing is reserved for the n elements: they are pushed as they are read, so a wrong n
+        // costs no more memory than the file holds (and the error is where the content stops
+        // matching it).
+        let o = e.blocks.len() as u32;
+        e.blocks.push((dim, entity));
+        headers.push((bh, dim, ty));
+        for k in 0..n {
+            let what = |item: String| format!("{item} of element {} of {n} in element block {}", k + 1, b + 1);
+            let at = r.mark();
+            let tag = r.element_item(&what("the tag".into()), at)?;
+            for j in 0..per {
+                let t = r.element_item(&what(format!("node {} of {per}", j + 1)), at)?;
+                e.nodes.push(t);
+            }
+            e.tags.push(tag);
+            e.types.push(ty);
+            e.offsets.push(e.nodes.len());
+            e.origin.push(o);
+            if let Some(l) = &mut e.lines {
+                l.push(at);
             }
         }
     }
-    None
+    let held = e.tags.len() as u64;
+    if held != count {
+        return Err(r.error(
+            h,
+            format!(
+                "the section header says {count} elements but its blocks hold {held}; re-export the mesh from gmsh"
+            ),
+        ));
+    }
+    for (at, dim, ty) in headers {
+        if let Some((name, _, d)) = element_type_info(ty) {
+            if i32::from(d) != dim {
+                return Err(r.error(
+                    at,
+                    format!(
+                        "an element block of {name}s (type {ty}, dimension {d}) is on an entity of dimension {dim}; \
+                         re-export the mesh from gmsh"
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(e)
 }
 
-// ---------------------------------------------------------------------------------------------
-// Binary pre-scan
-
-struct Binary<'a> {
+/// Reads the file after `$EndMeshFormat`: section tags as text lines, the content of the sections
+/// as whitespace-separated tokens (ASCII) or raw numbers (binary). Places are line numbers
+/// (ASCII) or byte offsets (binary).
+struct Reader<'a> {
+    path: &'a Path,
     bytes: &'a [u8],
     pos: usize,
-    size_t: usize,
-    little: bool,
+    /// ASCII: line number of `pos`.
+    line: usize,
+    /// Binary: (size of size_t, little endian).
+    binary: Option<(usize, bool)>,
+    /// The section being read (`$Nodes`) and where its tag is.
+    section: String,
+    section_at: usize,
 }
 
-impl Binary<'_> {
-    fn take<const N: usize>(&mut self) -> Option<[u8; N]> {
-        let s = self.bytes.get(self.pos..self.pos.checked_add(N)?)?;
-        self.pos += N;
-        let mut a = [0u8; N];
-        a.copy_from_slice(s);
-        Some(a)
-    }
-
-    fn size_t(&mut self) -> Option<u64> {
-        if self.size_t == 4 {
-            let a = self.take::<4>()?;
-            Some(u64::from(if self.little {
-                u32::from_le_bytes(a)
-            } else {
-                u32::from_be_bytes(a)
-            }))
+impl Reader<'_> {
+    fn place(&self, at: usize) -> String {
+        if self.binary.is_some() {
+            format!("byte {at}")
         } else {
-            let a = self.take::<8>()?;
-            Some(if self.little {
-                u64::from_le_bytes(a)
-            } else {
-                u64::from_be_bytes(a)
-            })
+            format!("line {at}")
         }
     }
 
-    fn int(&mut self) -> Option<i32> {
-        let a = self.take::<4>()?;
-        Some(if self.little {
-            i32::from_le_bytes(a)
-        } else {
-            i32::from_be_bytes(a)
-        })
+    fn error_at(&self, at: usize, section: &str, detail: String) -> MeshError {
+        MeshError::Syntax {
+            path: self.path.to_path_buf(),
+            place: format!("{} ({section})", self.place(at)),
+            detail,
+        }
     }
 
-    fn remaining(&self) -> usize {
-        self.bytes.len().saturating_sub(self.pos)
+    /// An error at `at` (a [`Reader::mark`]) in the current section.
+    fn error(&self, at: usize, detail: String) -> MeshError {
+        self.error_at(at, &self.section, detail)
+    }
+
+    /// Where the next item is: its line (ASCII), its byte offset (binary).
+    fn mark(&mut self) -> usize {
+        if self.binary.is_some() {
+            self.pos
+        } else {
+            self.skip_whitespace();
+            self.line
+        }
     }
 
     fn skip_whitespace(&mut self) {
-        while self.pos < self.bytes.len() && matches!(self.bytes[self.pos], b'\n' | b'\r' | b' ' | b'\t') {
+        while let Some(&b) = self.bytes.get(self.pos) {
+            if !b.is_ascii_whitespace() {
+                break;
+            }
+            if b == b'\n' {
+                self.line += 1;
+            }
             self.pos += 1;
         }
     }
 
-    /// The text line at `pos` (a section tag), and moves past it.
-    fn line(&mut self) -> &[u8] {
+    /// Moves to `to` (forward), counting lines.
+    fn seek(&mut self, to: usize) {
+        let to = to.min(self.bytes.len());
+        self.line += self.bytes[self.pos.min(to)..to].iter().filter(|&&b| b == b'\n').count();
+        self.pos = to;
+    }
+
+    /// The rest of the line from `pos` (trimmed), moving past its line break.
+    fn text_line(&mut self) -> &[u8] {
         let rest = &self.bytes[self.pos.min(self.bytes.len())..];
         let len = rest.iter().position(|&b| b == b'\n').unwrap_or(rest.len());
-        self.pos += (len + 1).min(rest.len());
+        self.seek(self.pos + (len + 1).min(rest.len()));
         trim(&rest[..len])
+    }
+
+    /// The next section tag (`$Nodes` → `Nodes`) and where it is; `None` at the end of the file.
+    fn section_tag(&mut self) -> Result<Option<(String, usize)>, MeshError> {
+        self.skip_whitespace();
+        if self.pos >= self.bytes.len() {
+            return Ok(None);
+        }
+        let at = if self.binary.is_some() { self.pos } else { self.line };
+        let text = String::from_utf8_lossy(self.text_line()).into_owned();
+        match text.strip_prefix('$') {
+            Some(name) => Ok(Some((name.to_string(), at))),
+            None => {
+                let shown: String = text.chars().take(40).collect();
+                let detail = format!("expected a section such as $Nodes, found \"{shown}\"");
+                Err(match self.binary {
+                    Some(_) => self.error_at(at, "between sections", detail),
+                    None => MeshError::Syntax {
+                        path: self.path.to_path_buf(),
+                        place: format!("line {at}"),
+                        detail,
+                    },
+                })
+            }
+        }
+    }
+
+    /// Skips a section hvi does not read, up to and including its `$End` line.
+    fn skip_section(&mut self, name: &str) -> Result<(), MeshError> {
+        let end = format!("$End{name}");
+        match find_section(self.bytes, self.pos, end.as_bytes()) {
+            Some(p) => {
+                self.seek(p);
+                self.text_line();
+                Ok(())
+            }
+            None => Err(self.error(
+                self.section_at,
+                format!("the section ${name} has no {end}: the file is truncated; re-export it"),
+            )),
+        }
+    }
+
+    /// The `$End` tag that must follow a section's content.
+    fn end_tag(&mut self, name: &str) -> Result<(), MeshError> {
+        let end = format!("$End{name}");
+        self.skip_whitespace();
+        let at = if self.binary.is_some() { self.pos } else { self.line };
+        if self.pos >= self.bytes.len() {
+            return Err(self.truncated(&end));
+        }
+        let found = self.text_line();
+        if found == end.as_bytes() {
+            return Ok(());
+        }
+        let shown: String = String::from_utf8_lossy(found).chars().take(40).collect();
+        Err(self.error(
+            at,
+            format!("expected {end}, found \"{shown}\": the counts in the section do not match its content"),
+        ))
+    }
+
+    /// The file ends where `what` was expected.
+    fn truncated(&self, what: &str) -> MeshError {
+        let s = &self.section;
+        let detail = if self.binary.is_some() {
+            format!(
+                "the file ends inside this section, where {what} was expected: it is truncated (or a count in the \
+                 section is wrong); re-export it"
+            )
+        } else {
+            let end = s.replacen('$', "$End", 1);
+            format!(
+                "the section {s} has no {end}: the file is truncated (it ends at line {}, where {what} was \
+                 expected); re-export it",
+                self.line
+            )
+        };
+        self.error(self.section_at, detail)
+    }
+
+    /// Errors if `count` items of at least `min_bytes` each cannot fit in the rest of the file.
+    fn check_fits(&self, at: usize, what: &str, count: u64, min_bytes: u64) -> Result<(), MeshError> {
+        let remaining = self.bytes.len().saturating_sub(self.pos);
+        if count.saturating_mul(min_bytes) > remaining as u64 {
+            return Err(self.error(
+                at,
+                format!(
+                    "the header says {count} {what}, but only {remaining} bytes follow (at least {min_bytes} per \
+                     item): the file is truncated or its header is corrupt; re-export it"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    // The least number of bytes an item takes: a digit and a separator in ASCII.
+    fn size_t_bytes(&self) -> u64 {
+        self.binary.map_or(2, |(s, _)| s as u64)
+    }
+
+    fn int_bytes(&self) -> u64 {
+        self.binary.map_or(2, |_| 4)
+    }
+
+    fn float_bytes(&self) -> u64 {
+        self.binary.map_or(2, |_| 8)
+    }
+
+    /// ASCII: the next token, parsed; the error says what was expected and what was found. In an
+    /// element (`element_at`: the line where it starts), the error is placed at its start.
+    fn token<T: std::str::FromStr>(&mut self, what: &str, element_at: Option<usize>) -> Result<T, MeshError> {
+        self.skip_whitespace();
+        let start = self.pos;
+        while self.pos < self.bytes.len() && !self.bytes[self.pos].is_ascii_whitespace() {
+            self.pos += 1;
+        }
+        let tok = &self.bytes[start..self.pos];
+        if tok.is_empty() {
+            return Err(self.truncated(what));
+        }
+        match std::str::from_utf8(tok).ok().and_then(|s| s.parse().ok()) {
+            Some(v) => Ok(v),
+            // a number cut off by the end of the file
+            None if self.pos == self.bytes.len() => Err(self.truncated(what)),
+            None => {
+                let shown: String = String::from_utf8_lossy(tok).chars().take(40).collect();
+                Err(match element_at {
+                    None => self.error(self.line, format!("expected {what}, found \"{shown}\"")),
+                    Some(at) => self.error(
+                        at,
+                        format!(
+                            "invalid element definition: expected {what}, found \"{shown}\" (line {}); the counts in \
+                             the section do not match its content, or the file is malformed: re-export it from gmsh \
+                             (gmsh -format msh41)",
+                            self.line
+                        ),
+                    ),
+                })
+            }
+        }
+    }
+
+    /// Binary: the next N bytes in file byte order.
+    fn raw<const N: usize>(&mut self, what: &str) -> Result<[u8; N], MeshError> {
+        let Some(s) = self.bytes.get(self.pos..self.pos.saturating_add(N)) else {
+            return Err(self.truncated(what));
+        };
+        let mut a = [0u8; N];
+        a.copy_from_slice(s);
+        if self.binary.is_some_and(|(_, little)| !little) {
+            a.reverse();
+        }
+        self.pos += N;
+        Ok(a)
+    }
+
+    /// A size_t (binary) or non-negative integer (ASCII).
+    fn size_t(&mut self, what: &str) -> Result<u64, MeshError> {
+        self.size_t_in(what, None)
+    }
+
+    fn size_t_in(&mut self, what: &str, element_at: Option<usize>) -> Result<u64, MeshError> {
+        match self.binary {
+            None => self.token(what, element_at),
+            Some((4, _)) => Ok(u64::from(u32::from_le_bytes(self.raw(what)?))),
+            Some(_) => Ok(u64::from_le_bytes(self.raw(what)?)),
+        }
+    }
+
+    /// The tag or a node tag of the element that starts at `at`.
+    fn element_item(&mut self, what: &str, at: usize) -> Result<u64, MeshError> {
+        self.size_t_in(what, Some(at))
+    }
+
+    fn int(&mut self, what: &str) -> Result<i32, MeshError> {
+        match self.binary {
+            None => self.token(what, None),
+            Some(_) => Ok(i32::from_le_bytes(self.raw(what)?)),
+        }
+    }
+
+    fn float(&mut self, what: &str) -> Result<f64, MeshError> {
+        match self.binary {
+            None => self.token(what, None),
+            Some(_) => Ok(f64::from_le_bytes(self.raw(what)?)),
+        }
     }
 }
 
-fn prescan_binary(path: &Path, bytes: &[u8], header: &Header) -> Result<Prescan, MeshError> {
-    let syntax = |at: usize, section: &str, detail: String| MeshError::Syntax {
-        path: path.to_path_buf(),
-        place: format!("byte {at} ({section})"),
-        detail,
-    };
-    let truncated = |at: usize, section: &str| {
-        syntax(
-            at,
-            section,
-            "the file ends inside this section: it is truncated; re-export it".into(),
-        )
-    };
-    let mut r = Binary {
-        bytes,
-        pos: header.body,
-        size_t: header.data_size,
-        little: header.little_endian,
-    };
-    let st = header.data_size as u64;
-    let mut found: Option<Prescan> = None;
-    let mut seen_elements = false;
-    loop {
-        r.skip_whitespace();
-        if r.remaining() == 0 {
-            break;
+#[cfg(test)]
+mod tests {
+    use crate::mesh::{parse_msh, AnyMesh};
+    use std::path::Path;
+
+    /// Two unit squares, Γ₃ (tag 3) the bottom curve, Ω (tag 5) the surface; node tags are given
+    /// in a shuffled order to check that they are kept.
+    const NODES: [(u64, [f64; 3]); 6] = [
+        (4, [0.0, 1.0, 0.0]),
+        (1, [0.0, 0.0, 0.0]),
+        (2, [1.0, 0.0, 0.0]),
+        (3, [2.0, 0.0, 0.0]),
+        (6, [2.0, 1.0, 0.0]),
+        (5, [1.0, 1.0, 0.0]),
+    ];
+    const LINES: [[u64; 3]; 2] = [[1, 1, 2], [2, 2, 3]];
+    const QUADS: [[u64; 5]; 2] = [[3, 1, 2, 5, 4], [4, 2, 3, 6, 5]];
+    const NAMES: &str = "$PhysicalNames\n2\n1 3 \"Gamma3\"\n2 5 \"Omega\"\n$EndPhysicalNames\n";
+
+    fn ascii() -> String {
+        let mut s = format!("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n{NAMES}");
+        s += "$Entities\n0 1 1 0\n1 0 0 0 2 0 0 1 3 0\n1 0 0 0 2 1 0 1 5 0\n$EndEntities\n";
+        s += "$Nodes\n1 6 1 6\n2 1 0 6\n";
+        for (t, _) in NODES {
+            s += &format!("{t}\n");
         }
-        let at = r.pos;
-        let tag = String::from_utf8_lossy(r.line()).into_owned();
-        let Some(name) = tag.strip_prefix('$').map(str::to_string) else {
-            let shown: String = tag.chars().take(40).collect();
-            return Err(syntax(
-                at,
-                "between sections",
-                format!("expected a section such as $Nodes, found \"{shown}\""),
-            ));
+        for (_, c) in NODES {
+            s += &format!("{:?} {:?} {:?}\n", c[0], c[1], c[2]);
+        }
+        s += "$EndNodes\n$Elements\n2 4 1 4\n1 1 1 2\n";
+        for l in LINES {
+            s += &format!("{} {} {}\n", l[0], l[1], l[2]);
+        }
+        s += "2 1 3 2\n";
+        for q in QUADS {
+            s += &format!("{} {} {} {} {}\n", q[0], q[1], q[2], q[3], q[4]);
+        }
+        s + "$EndElements\n"
+    }
+
+    /// The same mesh as binary MSH 4.1 with a size_t of `st` bytes in either byte order.
+    fn binary(st: usize, little: bool) -> Vec<u8> {
+        let mut b = format!("$MeshFormat\n4.1 1 {st}\n").into_bytes();
+        let order = |mut v: Vec<u8>| {
+            if !little {
+                v.reverse();
+            }
+            v
         };
-        let section = format!("${name}");
-        match name.as_str() {
-            "Nodes" => {
-                if found.is_some() {
-                    return Err(syntax(
-                        at,
-                        &section,
-                        "a second $Nodes section; hvi reads files with one".into(),
-                    ));
-                }
-                let h = r.pos;
-                let blocks = r.size_t().ok_or_else(|| truncated(h, &section))?;
-                let count = r.size_t().ok_or_else(|| truncated(h, &section))?;
-                let _min = r.size_t().ok_or_else(|| truncated(h, &section))?;
-                let _max = r.size_t().ok_or_else(|| truncated(h, &section))?;
-                if count == 0 {
-                    return Err(syntax(
-                        h,
-                        &section,
-                        "the file has no nodes; mesh the geometry (gmsh -2) before saving".into(),
-                    ));
-                }
-                check_fits(path, h, &section, "node blocks", blocks, 12 + st, r.remaining(), false)?;
-                check_fits(path, h, &section, "nodes", count, st + 24, r.remaining(), false)?;
-                let mut node_tags = Vec::with_capacity(count as usize);
-                let mut block_sizes = Vec::with_capacity(blocks as usize);
-                for b in 0..blocks {
-                    let bh = r.pos;
-                    let _dim = r.int().ok_or_else(|| truncated(bh, &section))?;
-                    let _tag = r.int().ok_or_else(|| truncated(bh, &section))?;
-                    let parametric = r.int().ok_or_else(|| truncated(bh, &section))?;
-                    let n = r.size_t().ok_or_else(|| truncated(bh, &section))?;
-                    if parametric != 0 {
-                        return Err(MeshError::UnsupportedFormat {
-                            path: path.to_path_buf(),
-                            detail: format!(
-                                "byte {bh}: node block {} has parametric coordinates, which hvi does not read; \
-                                 re-export with Mesh.SaveParametric = 0",
-                                b + 1
-                            ),
-                        });
-                    }
-                    check_fits(path, bh, &section, "nodes in a block", n, st + 24, r.remaining(), false)?;
-                    if node_tags.len() as u64 + n > count {
-                        return Err(syntax(
-                            bh,
-                            &section,
-                            format!("the node blocks hold more than the {count} nodes the section header says"),
-                        ));
-                    }
-                    for _ in 0..n {
-                        let tp = r.pos;
-                        let t = r.size_t().ok_or_else(|| truncated(tp, &section))?;
-                        if t == 0 {
-                            return Err(syntax(
-                                tp,
-                                &section,
-                                "node tag 0 is not allowed (tags start at 1)".into(),
-                            ));
-                        }
-                        node_tags.push(t);
-                    }
-                    // n ≤ remaining / 32 was checked above, so this cannot overflow.
-                    r.pos += 24 * n as usize;
-                    if r.pos > bytes.len() {
-                        return Err(truncated(bh, &section));
-                    }
-                    block_sizes.push(n as usize);
-                }
-                if node_tags.len() as u64 != count {
-                    return Err(syntax(
-                        h,
-                        &section,
-                        format!(
-                            "the section header says {count} nodes but its blocks hold {}",
-                            node_tags.len()
-                        ),
-                    ));
-                }
-                r.skip_whitespace();
-                let e = r.pos;
-                if r.line() != b"$EndNodes" {
-                    return Err(syntax(
-                        e,
-                        &section,
-                        "expected $EndNodes: the counts in the section do not match its content".into(),
-                    ));
-                }
-                found = Some(Prescan {
-                    node_tags,
-                    block_sizes,
-                    node_lines: None,
-                });
-                continue;
-            }
-            "Elements" => {
-                seen_elements = true;
-                let h = r.pos;
-                let blocks = r.size_t().ok_or_else(|| truncated(h, &section))?;
-                let count = r.size_t().ok_or_else(|| truncated(h, &section))?;
-                if count == 0 {
-                    return Err(syntax(
-                        h,
-                        &section,
-                        "the file has no elements; mesh the geometry (gmsh -2) before saving".into(),
-                    ));
-                }
-                check_fits(
-                    path,
-                    h,
-                    &section,
-                    "element blocks",
-                    blocks,
-                    12 + st,
-                    r.remaining(),
-                    false,
-                )?;
-                check_fits(path, h, &section, "elements", count, 2 * st, r.remaining(), false)?;
-            }
-            "Entities" => {
-                let h = r.pos;
-                let mut total = 0u64;
-                for _ in 0..4 {
-                    total = total.saturating_add(r.size_t().ok_or_else(|| truncated(h, &section))?);
-                }
-                check_fits(path, h, &section, "entities", total, 28 + st, r.remaining(), false)?;
-            }
-            _ => {}
+        let int = |b: &mut Vec<u8>, v: i32| b.extend(order(v.to_le_bytes().to_vec()));
+        let size = |b: &mut Vec<u8>, v: u64| b.extend(order(v.to_le_bytes()[..st].to_vec()));
+        let float = |b: &mut Vec<u8>, v: f64| b.extend(order(v.to_le_bytes().to_vec()));
+        int(&mut b, 1);
+        b.extend(format!("\n$EndMeshFormat\n{NAMES}$Entities\n").bytes());
+        for n in [0, 1, 1, 0] {
+            size(&mut b, n);
         }
-        let end = format!("$End{name}");
-        match find_section(bytes, r.pos, end.as_bytes()) {
-            Some(p) => {
-                r.pos = p;
-                r.line();
+        for (phys, max_y) in [(3, 0.0), (5, 1.0)] {
+            int(&mut b, 1);
+            for v in [0.0, 0.0, 0.0, 2.0, max_y, 0.0] {
+                float(&mut b, v);
             }
-            None => {
-                return Err(syntax(
-                    at,
-                    &section,
-                    format!("the section {section} has no {end}: the file is truncated; re-export it"),
-                ))
+            size(&mut b, 1);
+            int(&mut b, phys);
+            size(&mut b, 0);
+        }
+        b.extend(b"\n$EndEntities\n$Nodes\n");
+        for n in [1, 6, 1, 6] {
+            size(&mut b, n);
+        }
+        for v in [2, 1, 0] {
+            int(&mut b, v);
+        }
+        size(&mut b, 6);
+        for (t, _) in NODES {
+            size(&mut b, t);
+        }
+        for (_, c) in NODES {
+            for v in c {
+                float(&mut b, v);
+            }
+        }
+        b.extend(b"\n$EndNodes\n$Elements\n");
+        for n in [2, 4, 1, 4] {
+            size(&mut b, n);
+        }
+        for (dim, ty, elements) in [(1, 1, LINES.map(|l| l.to_vec())), (2, 3, QUADS.map(|q| q.to_vec()))] {
+            for v in [dim, 1, ty] {
+                int(&mut b, v);
+            }
+            size(&mut b, 2);
+            for e in elements {
+                for t in e {
+                    size(&mut b, t);
+                }
+            }
+        }
+        b.extend(b"\n$EndElements\n");
+        b
+    }
+
+    #[test]
+    fn binary_in_both_byte_orders_and_size_t_widths_reads_like_ascii() {
+        let Ok(AnyMesh::Two(a)) = parse_msh(Path::new("a.msh"), ascii().as_bytes()) else {
+            panic!("the ASCII file does not read as a 2D mesh");
+        };
+        assert_eq!(a.points.len(), 6);
+        assert_eq!(a.points[3], [0.0, 1.0], "points are in tag order");
+        assert_eq!(a.cells.len(), 2);
+        assert_eq!(a.cell_tags, vec![3, 4]);
+        let names: Vec<_> = a.groups.iter().map(|g| (g.dim, g.tag, g.name.clone())).collect();
+        assert_eq!(names, vec![(1, 3, Some("Gamma3".into())), (2, 5, Some("Omega".into()))]);
+        assert_eq!(a.groups[0].facets.len(), 2);
+        for (st, little) in [(8, true), (8, false), (4, true), (4, false)] {
+            let b = binary(st, little);
+            match parse_msh(Path::new("b.msh"), &b) {
+                Ok(AnyMesh::Two(m)) => assert_eq!(
+                    (&m.points, &m.cells, &m.cell_tags, &m.groups),
+                    (&a.points, &a.cells, &a.cell_tags, &a.groups),
+                    "size_t {st}, little endian {little}"
+                ),
+                Ok(_) => panic!("size_t {st}, little endian {little}: not 2D"),
+                Err(e) => panic!("size_t {st}, little endian {little}: {e}"),
+            }
+            // every cut (short of the final line break) is an error naming the file, never a panic
+            for cut in (0..b.len() - 1).step_by(3) {
+                let e = parse_msh(Path::new("b.msh"), &b[..cut]).expect_err("a cut file");
+                assert!(e.to_string().contains("b.msh"), "{e}");
             }
         }
     }
-    let Some(pre) = found else {
-        return Err(syntax(
-            bytes.len(),
-            "end of file",
-            "the file has no $Nodes section: it is truncated".into(),
-        ));
-    };
-    if !seen_elements {
-        return Err(syntax(
-            bytes.len(),
-            "end of file",
-            "the file has no $Elements section: it is truncated".into(),
-        ));
-    }
-    Ok(pre)
 }

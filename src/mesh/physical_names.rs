@@ -1,5 +1,4 @@
-//! The `$PhysicalNames` section (the same in MSH 2.2 and 4.1, and ASCII even in binary files),
-//! which mshio skips:
+//! The `$PhysicalNames` section (the same in MSH 2.2 and 4.1, and ASCII even in binary files):
 //!
 //! ```text
 //! $PhysicalNames
