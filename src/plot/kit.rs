@@ -101,7 +101,7 @@ pub(crate) fn minus_sign(s: String) -> String {
 
 /// 5×7 pixel glyphs (rows top down, `#` set, rows 7 and 8 the descender) for text on the bitmap
 /// backend, which has no font without the `ttf`/`ab_glyph` features (and no system font here).
-const GLYPHS: &[(char, &str)] = &[
+pub(super) const GLYPHS: &[(char, &str)] = &[
     (' ', ""),
     ('!', "..#.. ..#.. ..#.. ..#.. ..#.. ..... ..#.."),
     ('"', ".#.#. .#.#. .#.#."),
@@ -294,4 +294,20 @@ pub(crate) fn field_range(values: &[f64]) -> (f64, f64) {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
             (a.min(clean(v)), b.max(clean(v)))
         })
+}
+
+/// A number as short text with the minus sign −.
+pub(super) fn sci_text(v: f64) -> String {
+    minus_sign(sci(v))
+}
+
+pub(super) fn bounding_box(points: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in points {
+        for d in 0..2 {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    (lo, hi)
 }
