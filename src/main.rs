@@ -251,11 +251,11 @@ fn main() -> ExitCode {
             targets,
             verify,
         } => {
-            let targets = hvi::study::spec::Targets {
+            let targets = hvi::study::Targets {
                 errors: targets,
                 verify,
             };
-            match hvi::study::spec::run_file_with(&study, &out, &overrides, &targets) {
+            match hvi::study::execute::run_file_with(&study, &out, &overrides, &targets) {
                 Ok(written) => {
                     println!("{}", written.report);
                     println!("wrote {} to {}", written.files.join(", "), out.display());

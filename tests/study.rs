@@ -353,14 +353,14 @@ fn reduced_paper_study_shows_first_order_in_h_and_second_order_in_k() {
 
 /// Runs a study file written from `text` (the scene: examples/paper.toml) into a tempdir;
 /// returns the output and the directory.
-fn study_from_text(text: &str) -> (study::spec::StudyOutput, tempfile::TempDir) {
+fn study_from_text(text: &str) -> (study::execute::StudyOutput, tempfile::TempDir) {
     let dir = tempfile::tempdir().unwrap();
     let text = format!(
         "scene = \"{}\"\n{text}",
         concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper.toml")
     );
     let spec: study::spec::StudySpec = toml::from_str(&text).unwrap();
-    let written = study::spec::run_spec(&spec, dir.path(), &dir.path().join("out"), &[], "test").unwrap();
+    let written = study::execute::run_spec(&spec, dir.path(), &dir.path().join("out"), &[], "test").unwrap();
     (written, dir)
 }
 

@@ -61,7 +61,7 @@ fn a_study_on_the_slab_is_the_plane_strain_study_times_the_root_of_its_depth() {
     let run = |text: String, sub: &str| {
         let spec: study::spec::StudySpec = toml::from_str(&text).unwrap();
         let out = dir.path().join(sub);
-        let written = study::spec::run_spec(&spec, &root.join("examples"), &out, &[], sub).unwrap();
+        let written = study::execute::run_spec(&spec, &root.join("examples"), &out, &[], sub).unwrap();
         assert!(written.files.contains(&"study.csv".to_string()), "{:?}", written.files);
         let csv = std::fs::read_to_string(out.join("study.csv")).unwrap();
         let mut lines = csv.lines();

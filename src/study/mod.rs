@@ -25,16 +25,30 @@
 //! println!("{}", study::report::markdown(&s.rows()));
 //! ```
 
+mod advice;
+
+pub mod execute;
+
 mod format;
+
 pub mod interpolate;
+
 pub mod plot;
+
 pub mod report;
+
 pub mod runner;
+
 pub mod spec;
+
 pub mod target;
 
+pub use advice::Targets;
+
 pub use interpolate::{interpolate_nodal, Locator, Transfer};
+
 pub use runner::run_plan;
+
 pub use runner::{
     observed_order, run, run_with, EvaluatedRun, ExactField, Keep, Reference, Refinement, RefinementPath, Row,
     RunErrors, RunOptions, RunRecord, RunSummary, Study, StudyPlan,

@@ -51,7 +51,9 @@ pub struct ErrorModel {
 
 /// The range searched for each order, and the grid steps (coarse, then fine around the best).
 const ORDER_RANGE: (f64, f64) = (0.2, 4.0);
+
 const COARSE_STEP: f64 = 0.01;
+
 const FINE_STEP: f64 = 0.0005;
 
 fn beyond(x: f64, reference: f64) -> bool {
