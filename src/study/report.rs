@@ -32,40 +32,39 @@ fn mb(bytes: Option<u64>) -> Option<f64> {
 
 /// The rows as CSV (header [`CSV_COLUMNS`]; empty fields where there is no value).
 pub fn csv(rows: &[Row]) -> String {
-    let mut s = CSV_COLUMNS.join(",");
-    s.push('\n');
+    // through the csv crate: a path's name is quoted when it needs to be (RFC 4180)
+    let mut writer = ::csv::WriterBuilder::new()
+        .terminator(::csv::Terminator::Any(b'\n'))
+        .from_writer(Vec::new());
+    let fail = "a CSV row in memory is always written";
+    writer.write_record(CSV_COLUMNS).expect(fail);
     for r in rows {
         let m = &r.summary;
         let p = &m.phases;
         let opt = |v: Option<f64>, prec: usize| v.map_or(String::new(), |v| format!("{v:.prec$}"));
-        let path = if r.path.contains([',', '"']) {
-            format!("\"{}\"", r.path.replace('"', "\"\""))
-        } else {
-            r.path.clone()
-        };
-        let _ = writeln!(
-            s,
-            "{path},{:e},{:e},{},{},{},{:e},{:e},{:e},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{}",
-            m.h,
-            m.k,
-            m.nodes,
-            m.unknowns,
-            m.steps,
-            r.errors.at_final.h1_seminorm,
-            r.errors.at_final.l2,
-            r.errors.h1_max_over_time,
+        let record = [
+            r.path.clone(),
+            format!("{:e}", m.h),
+            format!("{:e}", m.k),
+            m.nodes.to_string(),
+            m.unknowns.to_string(),
+            m.steps.to_string(),
+            format!("{:e}", r.errors.at_final.h1_seminorm),
+            format!("{:e}", r.errors.at_final.l2),
+            format!("{:e}", r.errors.h1_max_over_time),
             opt(r.order, 4),
-            m.wall,
-            p.assembly,
-            p.factorisation,
-            p.condensation,
-            m.steps_seconds(),
-            p.output,
-            m.newton_total,
+            format!("{:.4}", m.wall),
+            format!("{:.4}", p.assembly),
+            format!("{:.4}", p.factorisation),
+            format!("{:.4}", p.condensation),
+            format!("{:.4}", m.steps_seconds()),
+            format!("{:.4}", p.output),
+            m.newton_total.to_string(),
             opt(mb(m.peak_rss_bytes), 1),
-        );
+        ];
+        writer.write_record(&record).expect(fail);
     }
-    s
+    String::from_utf8(writer.into_inner().expect(fail)).expect("the fields are UTF-8")
 }
 
 /// The rows as one Markdown table (same columns as the CSV, h and k as fractions).
