@@ -3,6 +3,7 @@
 use super::solve::read_mesh;
 use crate::mesh::{AnyMesh, Mesh};
 use crate::scene::Scene;
+use crate::solver::faer::ElasticCheck;
 use crate::solver::{Plan, Simulation, SolveError};
 use std::path::Path;
 
@@ -27,11 +28,9 @@ fn check_dim<const D: usize>(
     let sim = Simulation::new(scene, mesh)?;
     out.push_str(&check_scene_report(scene_path, &sim));
     // The factor: symbolic analysis only (cheap), so its size is known before solving.
-    let [k_a] =
-        crate::fem::assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.tensor()]);
-    let analysis =
-        crate::linalg::Factor::analyse_with_last(&k_a.with_identity_rows(&sim.dofs), &sim.unknowns_ordered_last())
-            .map_err(|e| SolveError::Setup(e.to_string()))?;
+    // (the solver layer's own assembly and analysis of K_A, as a run does them)
+    let elastic = ElasticCheck::new(&sim)?;
+    let analysis = elastic.analysis();
     let factor_bytes = 8 * analysis.factor_entries() as u64;
     let _ = writeln!(
         out,
@@ -62,7 +61,7 @@ fn check_dim<const D: usize>(
             .collect();
         let _ = writeln!(out, "contact: {} rows on {}", c.nodes.len(), per_group.join(", "));
         if !c.laws.is_empty() {
-            let ratio = smallness_ratio(&sim)?;
+            let ratio = elastic.smallness_ratio(&sim)?;
             let _ = writeln!(
                 out,
                 "  smallness condition (discrete, energy norm of A): α_j·c² = {:.3} ({})",
@@ -172,26 +171,8 @@ fn available_memory_bytes() -> Option<u64> {
     Some(kb * 1024)
 }
 
-/// α_j λ_max(D^{1/2} C K_A⁻¹ Cᵀ D^{1/2}) (see
-/// [`crate::contact::DenseNormalStiffness::trace_constant`]).
+/// The discrete smallness number α_j λ_max(D^{1/2} C K_A⁻¹ Cᵀ D^{1/2}) of a simulation with
+/// contact ([`ElasticCheck::smallness_ratio`]).
 pub fn smallness_ratio<const D: usize>(sim: &Simulation<D>) -> Result<f64, SolveError> {
-    let c = sim
-        .contact
-        .as_ref()
-        .ok_or_else(|| SolveError::Setup("no contact".into()))?;
-    let [k_a] =
-        crate::fem::assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.tensor()]);
-    let k_a = k_a.with_identity_rows(&sim.dofs);
-    let counters = crate::linalg::Counters::default();
-    let symbolic = crate::linalg::Factor::analyse(&k_a).map_err(|e| SolveError::Setup(e.to_string()))?;
-    let factor = crate::linalg::Factor::new(&symbolic, &k_a, &counters).map_err(|e| SolveError::Singular {
-        mesh: sim.mesh.path.display().to_string(),
-        detail: e.to_string(),
-    })?;
-    let op = crate::contact::SplitSweeps::new(&c.nodes, std::sync::Arc::new(factor), &counters)
-        .map_err(SolveError::Setup)?;
-    use crate::contact::Condensation;
-    Ok(op
-        .stiffness()
-        .trace_constant(&c.laws.monotonicity_weights(c.nodes.len())))
+    ElasticCheck::new(sim)?.smallness_ratio(sim)
 }

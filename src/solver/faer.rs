@@ -168,3 +168,48 @@ impl<const D: usize> Backend<D> for FaerBackend<D> {
         }
     }
 }
+
+/// What `hvi check` asks of the faer backend before a run, without running it: K_A assembled
+/// once with identity rows at the prescribed unknowns, its symbolic analysis with the run's
+/// ordering (the factor's size), and on request the discrete smallness number of docs/method.md
+/// §1 through a factor of K_A on that analysis.
+pub struct ElasticCheck {
+    k_a: SymmetricMatrix,
+    analysis: Analysis,
+}
+
+impl ElasticCheck {
+    /// Assembles K_A and analyses its pattern as a run would.
+    pub fn new<const D: usize>(sim: &Simulation<D>) -> Result<Self, SolveError> {
+        let [k_a] = assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.tensor()]);
+        let k_a = k_a.with_identity_rows(&sim.dofs);
+        let analysis = Factor::analyse_with_last(&k_a, &sim.unknowns_ordered_last())
+            .map_err(|e| SolveError::Setup(e.to_string()))?;
+        Ok(ElasticCheck { k_a, analysis })
+    }
+
+    /// The symbolic analysis: the ordering and nnz(L).
+    pub fn analysis(&self) -> &Analysis {
+        &self.analysis
+    }
+
+    /// α_j λ_max(D^{1/2} C K_A⁻¹ Cᵀ D^{1/2}) over the contact rows (docs/method.md §1): below 1,
+    /// every step's energy is convex. One factorisation of K_A.
+    pub fn smallness_ratio<const D: usize>(&self, sim: &Simulation<D>) -> Result<f64, SolveError> {
+        let c = sim
+            .contact
+            .as_ref()
+            .ok_or_else(|| SolveError::Setup("no contact".into()))?;
+        let counters = Counters::default();
+        let factor = Factor::new(&self.analysis, &self.k_a, &counters).map_err(|e| SolveError::Singular {
+            mesh: sim.mesh.path.display().to_string(),
+            detail: e.to_string(),
+        })?;
+        let op = crate::contact::SplitSweeps::new(&c.nodes, std::sync::Arc::new(factor), &counters)
+            .map_err(SolveError::Setup)?;
+        use crate::contact::Condensation;
+        Ok(op
+            .stiffness()
+            .trace_constant(&c.laws.monotonicity_weights(c.nodes.len())))
+    }
+}
