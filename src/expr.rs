@@ -3,9 +3,10 @@
 //!
 //! hvi parses an expression itself, with the grammar README documents, so that every error
 //! names its column (with a caret under it) and says what is valid there; the checked tree is
-//! then written out fully parenthesised for exmex, which evaluates it. Writing it out fully
-//! parenthesised means exmex's own precedence never decides anything (its binary functions
-//! `min(a, min(b, c))` also fail to nest, and its `+` binds looser than `-`).
+//! compiled into a tree of closures over f64 (numbers parsed once, constants and variables
+//! resolved to values and slots) and evaluated directly. One parser: nothing is printed and read
+//! again. The arithmetic is IEEE's and the functions are Rust's `f64` methods (`^` is `powf`,
+//! `log` and `ln` the natural logarithm).
 //!
 //! Precedence, loosest first: `a if c else b`, `||`, `&&`, comparisons `< <= > >= == !=`,
 //! `+ -`, `* /`, unary `- + !`, `^`, then numbers, variables, constants, `f(…)` and `(…)`.
@@ -14,21 +15,6 @@
 //! * a sign in front of a power (`-x^2`: −(x²) or (−x)²?);
 //! * chained powers (`2^3^2`: 2⁹ or 8²?);
 //! * chained comparisons (`0 < x < 1`: write `0 < x && x < 1`).
-//!
-//! exmex's default literals have no exponent: `1e-3` is accepted through [`SciNumber`].
-
-use exmex::prelude::*;
-use exmex::{literal_matcher_from_pattern, BinOp, FlatEx, FloatOpsFactory, MakeOperators, MatchLiteral, Operator};
-
-literal_matcher_from_pattern!(SciNumber, r"^(([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?)");
-
-/// exmex's float operators, the comparisons, the logical operators and the conditional.
-#[derive(Clone, Debug)]
-pub struct HviOps;
-
-/// What `a if c` gives when c is false: a NaN with a payload of its own, which `else` replaces.
-/// The grammar pairs every `if` with an `else`, so the marker never leaves an expression.
-const NOT_TAKEN: u64 = 0x7ff8_5eed_0000_0001;
 
 fn truth(a: f64) -> bool {
     a != 0.0
@@ -41,38 +27,6 @@ fn bool_value(b: bool) -> f64 {
         0.0
     }
 }
-
-impl MakeOperators<f64> for HviOps {
-    fn make<'a>() -> Vec<Operator<'a, f64>> {
-        let bin = |repr: &'a str, prio: i64, apply: fn(f64, f64) -> f64| {
-            Operator::make_bin(
-                repr,
-                BinOp {
-                    apply,
-                    prio,
-                    is_commutative: false,
-                },
-            )
-        };
-        let mut ops = FloatOpsFactory::<f64>::make();
-        ops.extend([
-            bin("<", -1, |a, b| bool_value(a < b)),
-            bin("<=", -1, |a, b| bool_value(a <= b)),
-            bin(">", -1, |a, b| bool_value(a > b)),
-            bin(">=", -1, |a, b| bool_value(a >= b)),
-            bin("==", -1, |a, b| bool_value(a == b)),
-            bin("!=", -1, |a, b| bool_value(a != b)),
-            bin("&&", -2, |a, b| bool_value(truth(a) && truth(b))),
-            bin("||", -3, |a, b| bool_value(truth(a) || truth(b))),
-            bin("if", -4, |a, c| if truth(c) { a } else { f64::from_bits(NOT_TAKEN) }),
-            bin("else", -5, |a, b| if a.to_bits() == NOT_TAKEN { b } else { a }),
-            Operator::make_unary("!", |a| bool_value(!truth(a))),
-        ]);
-        ops
-    }
-}
-
-type Flat = FlatEx<f64, HviOps, SciNumber>;
 
 /// The variables of a traction density: the point (x, y, z), the time t and the facet's outward
 /// unit normal (nx, ny, nz). In 2D, z = nz = 0. A load on a group that has several sides can use
@@ -87,7 +41,7 @@ pub const BODY_FORCE_VARIABLES: [&str; 4] = ["x", "y", "z", "t"];
 /// The variable of a relaxation kernel b(s): the time lag s ≥ 0.
 pub const KERNEL_VARIABLES: [&str; 1] = ["s"];
 
-/// The functions of one argument (exmex's names; `log` and `ln` are both the natural logarithm).
+/// The functions of one argument (`log` and `ln` are both the natural logarithm).
 pub const FUNCTIONS: [&str; 26] = [
     "abs", "signum", "sin", "cos", "tan", "asin", "acos", "atan", "sinh", "cosh", "tanh", "asinh", "acosh", "atanh",
     "floor", "round", "ceil", "trunc", "fract", "exp", "sqrt", "cbrt", "ln", "log", "log2", "log10",
@@ -213,56 +167,144 @@ enum Node {
     Cond(Box<Node>, Box<Node>, Box<Node>),
 }
 
-impl Node {
-    /// Fully parenthesised text for exmex (binary functions written infix, as exmex reads them).
-    fn emit(&self, out: &mut String) {
+/// A compiled expression: what [`Expr::eval`] walks.
+#[derive(Clone, Debug)]
+enum Code {
+    Number(f64),
+    /// The caller's variable at this index.
+    Variable(usize),
+    Unary(fn(f64) -> f64, Box<Code>),
+    Binary(fn(f64, f64) -> f64, Box<Code>, Box<Code>),
+    /// then, condition, otherwise
+    Cond(Box<Code>, Box<Code>, Box<Code>),
+}
+
+impl Code {
+    fn eval(&self, values: &[f64]) -> f64 {
         match self {
-            Node::Leaf(s) => out.push_str(s),
-            Node::Unary(op, a) => {
-                out.push_str(op);
-                out.push('(');
-                a.emit(out);
-                out.push(')');
-            }
-            Node::Binary(op, a, b) => {
-                out.push_str("((");
-                a.emit(out);
-                out.push_str(") ");
-                out.push_str(op);
-                out.push_str(" (");
-                b.emit(out);
-                out.push_str("))");
-            }
-            Node::Call(f, args) if args.len() == 2 => {
-                out.push_str("((");
-                args[0].emit(out);
-                out.push_str(") ");
-                out.push_str(f);
-                out.push_str(" (");
-                args[1].emit(out);
-                out.push_str("))");
-            }
-            Node::Group(a) => {
-                out.push('(');
-                a.emit(out);
-                out.push(')');
-            }
-            Node::Call(f, args) => {
-                out.push_str(f);
-                out.push('(');
-                args[0].emit(out);
-                out.push(')');
-            }
-            Node::Cond(a, c, b) => {
-                out.push_str("(((");
-                a.emit(out);
-                out.push_str(") if (");
-                c.emit(out);
-                out.push_str(")) else (");
-                b.emit(out);
-                out.push_str("))");
+            Code::Number(v) => *v,
+            Code::Variable(i) => values[*i],
+            Code::Unary(f, a) => f(a.eval(values)),
+            Code::Binary(f, a, b) => f(a.eval(values), b.eval(values)),
+            Code::Cond(a, c, b) => {
+                // every branch is evaluated, as the operators of the grammar are
+                let (a, c, b) = (a.eval(values), c.eval(values), b.eval(values));
+                if truth(c) {
+                    a
+                } else {
+                    b
+                }
             }
         }
+    }
+}
+
+/// The function of a unary operator or a one-argument function.
+fn unary_function(name: &str) -> Option<fn(f64) -> f64> {
+    Some(match name {
+        "-" => |a: f64| -a,
+        "+" => |a| a,
+        "!" => |a| bool_value(!truth(a)),
+        "abs" => f64::abs,
+        "signum" => f64::signum,
+        "sin" => f64::sin,
+        "cos" => f64::cos,
+        "tan" => f64::tan,
+        "asin" => f64::asin,
+        "acos" => f64::acos,
+        "atan" => f64::atan,
+        "sinh" => f64::sinh,
+        "cosh" => f64::cosh,
+        "tanh" => f64::tanh,
+        "asinh" => f64::asinh,
+        "acosh" => f64::acosh,
+        "atanh" => f64::atanh,
+        "floor" => f64::floor,
+        "round" => f64::round,
+        "ceil" => f64::ceil,
+        "trunc" => f64::trunc,
+        "fract" => f64::fract,
+        "exp" => f64::exp,
+        "sqrt" => f64::sqrt,
+        "cbrt" => f64::cbrt,
+        "ln" | "log" => f64::ln,
+        "log2" => f64::log2,
+        "log10" => f64::log10,
+        _ => return None,
+    })
+}
+
+/// The function of a binary operator or a two-argument function.
+fn binary_function(name: &str) -> Option<fn(f64, f64) -> f64> {
+    Some(match name {
+        "+" => |a: f64, b: f64| a + b,
+        "-" => |a, b| a - b,
+        "*" => |a, b| a * b,
+        "/" => |a, b| a / b,
+        "^" => f64::powf,
+        "<" => |a, b| bool_value(a < b),
+        "<=" => |a, b| bool_value(a <= b),
+        ">" => |a, b| bool_value(a > b),
+        ">=" => |a, b| bool_value(a >= b),
+        "==" => |a, b| bool_value(a == b),
+        "!=" => |a, b| bool_value(a != b),
+        "&&" => |a, b| bool_value(truth(a) && truth(b)),
+        "||" => |a, b| bool_value(truth(a) || truth(b)),
+        "atan2" => f64::atan2,
+        "min" => f64::min,
+        "max" => f64::max,
+        _ => return None,
+    })
+}
+
+impl Node {
+    /// The tree as code over the caller's variables (`vars`); `used` collects the variables it
+    /// reads. Every name was checked by the parser.
+    fn compile(&self, vars: &[&str], used: &mut Vec<String>) -> Result<Code, String> {
+        let missing = |what: &str, name: &str| format!("cannot compile the {what} `{name}`");
+        Ok(match self {
+            Node::Leaf(text) => match text.as_str() {
+                "PI" | "π" => Code::Number(std::f64::consts::PI),
+                "E" | "e" => Code::Number(std::f64::consts::E),
+                "TAU" | "τ" => Code::Number(std::f64::consts::TAU),
+                name => match vars.iter().position(|v| *v == name) {
+                    Some(i) => {
+                        if !used.iter().any(|u| u == name) {
+                            used.push(name.to_string());
+                        }
+                        Code::Variable(i)
+                    }
+                    None => Code::Number(name.parse().map_err(|_| missing("number", name))?),
+                },
+            },
+            Node::Unary(op, a) => Code::Unary(
+                unary_function(op).ok_or_else(|| missing("operator", op))?,
+                Box::new(a.compile(vars, used)?),
+            ),
+            Node::Binary(op, a, b) => Code::Binary(
+                binary_function(op).ok_or_else(|| missing("operator", op))?,
+                Box::new(a.compile(vars, used)?),
+                Box::new(b.compile(vars, used)?),
+            ),
+            Node::Call(f, args) => match &args[..] {
+                [a] => Code::Unary(
+                    unary_function(f).ok_or_else(|| missing("function", f))?,
+                    Box::new(a.compile(vars, used)?),
+                ),
+                [a, b] => Code::Binary(
+                    binary_function(f).ok_or_else(|| missing("function", f))?,
+                    Box::new(a.compile(vars, used)?),
+                    Box::new(b.compile(vars, used)?),
+                ),
+                _ => return Err(missing("call", f)),
+            },
+            Node::Group(a) => a.compile(vars, used)?,
+            Node::Cond(a, c, b) => Code::Cond(
+                Box::new(a.compile(vars, used)?),
+                Box::new(c.compile(vars, used)?),
+                Box::new(b.compile(vars, used)?),
+            ),
+        })
     }
 }
 
@@ -528,9 +570,8 @@ impl Parser<'_> {
 #[derive(Clone, Debug)]
 pub struct Expr {
     source: String,
-    flat: Flat,
-    /// For each exmex variable (alphabetical), its index in the caller's variable list.
-    order: Vec<usize>,
+    code: Code,
+    /// The variables it reads.
     used: Vec<String>,
 }
 
@@ -549,34 +590,18 @@ impl Expr {
             vars: allowed_vars,
         }
         .parse()?;
-        let mut text = String::new();
-        tree.emit(&mut text);
-        let flat = Flat::parse(&text).map_err(|e| format!("cannot parse: {}", e.msg()))?;
-        let mut order = Vec::new();
         let mut used = Vec::new();
-        for name in flat.var_names() {
-            let i = allowed_vars
-                .iter()
-                .position(|v| v == name)
-                .ok_or_else(|| format!("unknown variable `{name}`"))?;
-            order.push(i);
-            used.push(name.clone());
-        }
+        let code = tree.compile(allowed_vars, &mut used)?;
         Ok(Expr {
             source: source.to_string(),
-            flat,
-            order,
+            code,
             used,
         })
     }
 
-    /// The value at `values` (in the order of the declared variables). NaN if evaluation fails.
+    /// The value at `values` (in the order of the declared variables).
     pub fn eval(&self, values: &[f64]) -> f64 {
-        let mut vars = [0.0; 8];
-        for (k, &i) in self.order.iter().enumerate() {
-            vars[k] = values[i];
-        }
-        self.flat.eval(&vars[..self.order.len()]).unwrap_or(f64::NAN)
+        self.code.eval(values)
     }
 
     /// True if the expression uses variable `var`.
@@ -633,12 +658,12 @@ mod tests {
 
     #[test]
     fn arithmetic_is_left_associative() {
-        // exmex alone gives + a looser binding than -; hvi writes the tree out parenthesised
+        // + and - bind alike, left to right (exmex, the evaluator before issue 19, did not)
         assert_eq!(eval("1 - 2 + 3", 0.0), 2.0);
         assert_eq!(eval("8 / 4 * 2", 0.0), 4.0);
         assert_eq!(eval("8 / 4 / 2", 0.0), 1.0);
         assert_eq!(eval("1 - x - 1", 5.0), -5.0);
-        // nested binary functions (exmex alone reports a parenthesis mismatch)
+        // nested binary functions
         assert_eq!(eval("min(1, max(x, 3))", 2.0), 1.0);
         assert_eq!(eval("max(min(1, 2), min(3, x))", 4.0), 3.0);
         assert_eq!(eval("atan2(1, min(1, x))*4", 1.0), std::f64::consts::PI);
