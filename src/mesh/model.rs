@@ -76,6 +76,16 @@ impl PhysicalGroup {
 }
 
 impl<const D: usize> Mesh<D> {
+    /// The longest cell edge (h of the mesh).
+    pub fn longest_edge(&self) -> f64 {
+        self.cells
+            .iter()
+            .map(|c| longest_edge(&self.points, c))
+            .fold(0.0_f64, f64::max)
+    }
+}
+
+impl<const D: usize> Mesh<D> {
     /// The physical group of dimension `dim` that `sel` names. A name that is not found but
     /// reads as an integer is also tried as a tag. If there is none, the error lists every
     /// group the mesh has.
@@ -179,6 +189,7 @@ pub(super) fn distance<const D: usize>(p: &[f64; D], q: &[f64; D]) -> f64 {
     (0..D).map(|k| (q[k] - p[k]).powi(2)).sum::<f64>().sqrt()
 }
 
+/// The longest edge of cell `c`.
 pub(super) fn longest_edge<const D: usize>(points: &[[f64; D]], c: &Cell) -> f64 {
     c.edges()
         .iter()
@@ -186,10 +197,7 @@ pub(super) fn longest_edge<const D: usize>(points: &[[f64; D]], c: &Cell) -> f64
         .fold(0.0_f64, f64::max)
 }
 
-// ---------------------------------------------------------------------------------------------
-// Shared by the readers: the $MeshFormat header, line/token scanning, the element type table,
-// and the raw data a reader hands to `build`.
-
+/// A point for messages: `(x, y)` or `(x, y, z)`.
 pub(crate) fn fmt_point<const D: usize>(p: [f64; D]) -> String {
     let parts: Vec<String> = p.iter().map(|v| format!("{v:?}")).collect();
     format!("({})", parts.join(", "))

@@ -229,12 +229,7 @@ impl<const D: usize> Dirichlet<D> {
                 // ω e_a × x, component c
                 for a in 0..3 {
                     let e = [(a == 0) as u8 as f64, (a == 1) as u8 as f64, (a == 2) as u8 as f64];
-                    let cross = [
-                        e[1] * x[2] - e[2] * x[1],
-                        e[2] * x[0] - e[0] * x[2],
-                        e[0] * x[1] - e[1] * x[0],
-                    ];
-                    row[3 + a] = cross[c];
+                    row[3 + a] = crate::mesh::vector::cross(e, [x[0], x[1], x[2]])[c];
                 }
             }
             for i in 0..modes {

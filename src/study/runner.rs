@@ -171,7 +171,7 @@ pub fn run_with<const D: usize>(
 ) -> Result<RunRecord<D>, SolveError> {
     reset_peak_rss();
     let started = Instant::now();
-    let h = options.h.unwrap_or_else(|| longest_edge(&mesh));
+    let h = options.h.unwrap_or_else(|| mesh.longest_edge());
     let sim = Simulation::new(scene, mesh)?;
     let mut sink = KeepSink {
         keep: &options.keep,
@@ -200,18 +200,6 @@ pub fn run_with<const D: usize>(
         peak_rss_bytes: peak_rss_bytes(),
         mesh: sim.mesh,
     })
-}
-
-/// The longest cell edge of a mesh.
-pub fn longest_edge<const D: usize>(mesh: &Mesh<D>) -> f64 {
-    mesh.cells
-        .iter()
-        .flat_map(|c| c.edges())
-        .map(|[a, b]| {
-            let (p, q) = (mesh.points[a], mesh.points[b]);
-            (0..D).map(|d| (q[d] - p[d]).powi(2)).sum::<f64>().sqrt()
-        })
-        .fold(0.0, f64::max)
 }
 
 /// VmHWM of this process from /proc/self/status, in bytes (None where there is no procfs).
