@@ -679,3 +679,25 @@ fn the_checker_sees_use_trees_and_ignores_comments_and_strings() {
         ]
     );
 }
+
+/// faer is the linear-algebra layer's: the rest of hvi sees its own types and slices
+/// (`linalg::dense` for the contact solve's small dense matrices).
+#[test]
+fn faer_stays_in_linalg() {
+    let (src, sources) = sources();
+    let outside: Vec<String> = sources
+        .iter()
+        .filter(|s| s.module[0] != "linalg")
+        .flat_map(|s| {
+            s.code
+                .match_indices("faer::")
+                .filter(|(at, _)| !ident_char(s.code.as_bytes(), at.wrapping_sub(1)) && !s.code[..*at].ends_with("::"))
+                .map(|(at, _)| format!("{}:{}", rel(&src, &s.file), s.code[..at].matches('\n').count() + 1))
+        })
+        .collect();
+    assert!(
+        outside.is_empty(),
+        "faer used outside src/linalg/ at:\n{}",
+        outside.join("\n")
+    );
+}

@@ -25,8 +25,7 @@
 
 use super::condensed::NormalStiffness;
 use super::nodal::NodalLaws;
-use faer::linalg::solvers::Solve;
-use faer::Mat;
+use crate::linalg::dense::DenseCholesky;
 
 /// Tolerance and iteration cap of the contact solve.
 #[derive(Clone, Copy, Debug)]
@@ -118,7 +117,7 @@ pub struct ReusedFactor {
     row: Vec<usize>,
     /// e on the factor's diagonal, per row.
     diagonal: Vec<f64>,
-    factor: faer::linalg::solvers::Llt<f64>,
+    factor: DenseCholesky,
 }
 
 /// What one contact solve did.
@@ -483,20 +482,20 @@ impl ActiveSetSolver<'_> {
             return x;
         }
         outcome.factorisations += 1;
-        let rhs = Mat::<f64>::from_fn(nf, 1, |i, _| grad[free[i]]);
+        let rhs: Vec<f64> = (0..nf).map(|i| grad[free[i]]).collect();
         let build = |diag: &[f64]| {
-            Mat::<f64>::from_fn(nf, nf, |i, j| {
+            DenseCholesky::new(nf, |i, j| {
                 self.operator.q(free[i], free[j]) + if i == j { diag[i] } else { 0.0 }
             })
         };
-        let (llt, diagonal) = match build(curvature).llt(faer::Side::Lower) {
-            Ok(llt) => (llt, curvature.to_vec()),
-            Err(_) => {
+        let (llt, diagonal) = match build(curvature) {
+            Some(llt) => (llt, curvature.to_vec()),
+            None => {
                 outcome.convexified += 1;
                 let mut shift = 0.0;
                 loop {
                     let diagonal: Vec<f64> = curvature.iter().map(|e| e.max(0.0) + shift).collect();
-                    if let Ok(llt) = build(&diagonal).llt(faer::Side::Lower) {
+                    if let Some(llt) = build(&diagonal) {
                         break (llt, diagonal);
                     }
                     shift = if shift == 0.0 {
@@ -508,7 +507,6 @@ impl ActiveSetSolver<'_> {
             }
         };
         let x = llt.solve(&rhs);
-        let x = (0..nf).map(|i| x[(i, 0)]).collect();
         if reuse {
             let mut row = vec![usize::MAX; self.m()];
             for (i, &p) in free.iter().enumerate() {
@@ -576,19 +574,19 @@ impl ActiveSetSolver<'_> {
                 y[i] = product[p] + curvature[i] * x[i];
             }
         };
-        let mut kept_rhs = Mat::<f64>::zeros(kept.diagonal.len(), 1);
+        let mut kept_rhs = vec![0.0; kept.diagonal.len()];
         let mut precondition = |r: &[f64], z: &mut [f64]| {
             kept_rhs.fill(0.0);
             for (i, &p) in free.iter().enumerate() {
                 if kept.row[p] != usize::MAX {
-                    kept_rhs[(kept.row[p], 0)] = r[i];
+                    kept_rhs[kept.row[p]] = r[i];
                 }
             }
-            kept.factor.solve_in_place(kept_rhs.as_mut());
+            kept.factor.solve_in_place(&mut kept_rhs);
             for (i, &p) in free.iter().enumerate() {
                 z[i] = match kept.row[p] {
                     usize::MAX => r[i] / (self.c(p) + curvature[i].max(0.0)),
-                    k => kept_rhs[(k, 0)],
+                    k => kept_rhs[k],
                 };
             }
         };

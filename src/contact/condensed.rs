@@ -15,9 +15,9 @@
 //! The active set sees only the [`NormalStiffness`] (Q = W⁻¹ and W).
 
 use crate::fem::DofMap;
+use crate::linalg::dense::{matvec_row_major, DenseCholesky};
 use crate::linalg::{Counters, Factor, Forward, ForwardColumns, LinearSolver};
 use crate::mesh::BoundaryPart;
-use faer::Mat;
 use std::sync::Arc;
 
 /// The contact nodes with their nodal quadrature weights w_p, normals ν_p, and the rows of C
@@ -152,18 +152,13 @@ pub struct DenseNormalStiffness {
 impl DenseNormalStiffness {
     /// Inverts W (symmetric positive definite) by a dense Cholesky factorisation.
     pub fn from_w(w: Vec<f64>, m: usize) -> Result<Self, String> {
-        let wm = Mat::<f64>::from_fn(m, m, |i, j| w[i * m + j]);
-        let llt = wm
-            .llt(faer::Side::Lower)
-            .map_err(|_| "the condensed contact operator W = C K⁻¹ Cᵀ is not positive definite (are two contact nodes sharing one position, or is a contact node's normal fully constrained?)".to_string())?;
-        let inv = {
-            use faer::linalg::solvers::DenseSolveCore;
-            llt.inverse()
-        };
+        let llt = DenseCholesky::new(m, |i, j| w[i * m + j])
+            .ok_or_else(|| "the condensed contact operator W = C K⁻¹ Cᵀ is not positive definite (are two contact nodes sharing one position, or is a contact node's normal fully constrained?)".to_string())?;
+        let inv = llt.inverse();
         let mut q = vec![0.0; m * m];
         for p in 0..m {
             for r in 0..m {
-                q[p * m + r] = 0.5 * (inv[(p, r)] + inv[(r, p)]);
+                q[p * m + r] = 0.5 * (inv[p * m + r] + inv[r * m + p]);
             }
         }
         Ok(DenseNormalStiffness { w, q, m })
@@ -207,20 +202,7 @@ impl NormalStiffness for DenseNormalStiffness {
     /// faer's SIMD product, on two threads from m = 512 on: the contact solve's products by Q
     /// were its largest cost at m in the thousands (docs/method.md §9.2).
     fn apply_q(&self, x: &[f64], y: &mut [f64]) {
-        let q = faer::MatRef::from_row_major_slice(&self.q, self.m, self.m);
-        let par = if self.m >= 512 {
-            faer::Par::rayon(0)
-        } else {
-            faer::Par::Seq
-        };
-        faer::linalg::matmul::matmul(
-            faer::ColMut::from_slice_mut(y),
-            faer::Accum::Replace,
-            q,
-            faer::ColRef::from_slice(x),
-            1.0,
-            par,
-        );
+        matvec_row_major(&self.q, self.m, x, y);
     }
 
     fn q(&self, p: usize, r: usize) -> f64 {

@@ -34,6 +34,7 @@
 //! assert!(x.iter().all(|v| (v - 1.0).abs() < 1e-10));
 //! ```
 
+pub mod dense;
 mod factor;
 mod forward_columns;
 mod schedule;
