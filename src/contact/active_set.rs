@@ -22,6 +22,10 @@
 //!
 //! It stops when the complementarity residual is below tolerance, and after a capped number
 //! of iterations reports failure instead of looping.
+//!
+//! Over 600 lines because it is one algorithm (docs/method.md §4.4): the Newton step, its
+//! convexification, the line search, the watchdog and the reused factor; a hundred of them are
+//! its unit tests.
 
 use super::condensed::NormalStiffness;
 use super::nodal::NodalLaws;

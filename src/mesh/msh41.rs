@@ -30,6 +30,9 @@
 //! Every count in a header is checked against the bytes that follow before anything is
 //! allocated for it, so a corrupt header claiming 10¹² nodes is a clean error. Node tags are kept
 //! as written, in file order (duplicates are found by `build`).
+//!
+//! Over 600 lines because it is one reader: the sections hvi needs, each in ASCII and in binary
+//! of either byte order and size_t width, validated as they are read.
 
 use super::physical_names::{self, find_section};
 use super::{element_type_info, line_of, trim, Header, MeshError, Origin, Places, RawMesh};

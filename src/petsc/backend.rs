@@ -2,6 +2,9 @@
 //! factor or preconditioner, the unmodified K_A and K_B for the products, and the condensation
 //! of the contact normals: one distributed solve per step with the stored responses Z = K⁻¹Cᵀ
 //! when they fit the budget of [`keeps_responses`], two otherwise.
+//!
+//! Over 600 lines because it is one backend (docs/method.md §13): the solvers, their products,
+//! the distributed condensation and the collective agreement of its failures.
 
 use super::common::SolverChoice;
 use super::partition::Partition;

@@ -1,5 +1,8 @@
 //! The serde types of a scene file (TOML). Unknown keys are caught before deserialising by
 //! [`super::validate::check_keys`], which also suggests the nearest valid key.
+//!
+//! Over 600 lines because it is one schema: every section of a scene with its documented defaults,
+//! in one place so that README's scene table can be checked against it.
 
 use crate::mesh::GroupSelector;
 use serde::{Deserialize, Serialize};
