@@ -6,6 +6,16 @@ use super::setup::Simulation;
 use crate::contact::active_set::ContactState;
 use crate::fem::SymmetricMatrix;
 
+/// What the reactions of a step are computed from: u_n, the memory displacements m_n^j (None at
+/// step 0 or without memory), F_n and the contact state, over the held unknowns.
+#[derive(Clone, Copy)]
+pub(super) struct StepState<'a> {
+    pub u: &'a [f64],
+    pub memory: Option<&'a [f64]>,
+    pub load: &'a [f64],
+    pub contact: Option<&'a ContactState>,
+}
+
 /// The reaction forces at the prescribed components (docs/method.md §7):
 /// R = K_A u_n + K_B m_n − F_n + Cᵀ λ at each prescribed unknown.
 pub struct Reactions {
@@ -73,10 +83,12 @@ impl Reactions {
     pub(super) fn through_columns<const D: usize>(
         &mut self,
         sim: &Simulation<D>,
-        u: &[f64],
-        memory: Option<&[f64]>,
-        load: &[f64],
-        contact: Option<&ContactState>,
+        StepState {
+            u,
+            memory,
+            load,
+            contact,
+        }: StepState,
     ) -> &[f64] {
         let Some(k_a) = &self.k_a else {
             return &self.totals;

@@ -4,7 +4,7 @@
 use super::backend::{Backend, Stiffness};
 use super::error::SolveError;
 use super::operator::{Lifting, StepOperator};
-use super::reactions::Reactions;
+use super::reactions::{Reactions, StepState};
 use super::setup::{ContactSetup, Simulation};
 use super::stats::{timed, RunStats};
 use crate::contact::active_set::{ActiveSetSolver, ContactOutcome, ContactState};
@@ -78,15 +78,12 @@ impl Reactions {
         &mut self,
         sim: &Simulation<D>,
         backend: &dyn Backend<D>,
-        u: &[f64],
-        memory: Option<&[f64]>,
-        load: &[f64],
-        contact: Option<&ContactState>,
+        state: StepState,
     ) -> &[f64] {
         if self.k_a.is_some() {
-            self.through_columns(sim, u, memory, load, contact)
+            self.through_columns(sim, state)
         } else {
-            self.through_products(sim, backend, u, memory, load, contact)
+            self.through_products(sim, backend, state)
         }
     }
 
@@ -95,10 +92,12 @@ impl Reactions {
         &mut self,
         sim: &Simulation<D>,
         backend: &dyn Backend<D>,
-        u: &[f64],
-        memory: Option<&[f64]>,
-        load: &[f64],
-        contact: Option<&ContactState>,
+        StepState {
+            u,
+            memory,
+            load,
+            contact,
+        }: StepState,
     ) -> &[f64] {
         let global = |k: usize| backend.held_unknowns().map_or(k, |held| held[k]);
         let mut r = vec![0.0; u.len()];

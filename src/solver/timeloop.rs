@@ -21,7 +21,7 @@ use super::backend::{Backend, Stiffness};
 use super::error::SolveError;
 use super::faer::FaerBackend;
 use super::operator::StepOperator;
-use super::reactions::Reactions;
+use super::reactions::{Reactions, StepState};
 use super::setup::Simulation;
 use super::stats::{timed, Reaction, RunStats};
 use super::step::{lift, StepSolve};
@@ -282,14 +282,13 @@ impl<'s, const D: usize> Stepper<'s, D> {
         } else {
             self.memory_displacement.as_deref()
         };
-        let values = r.compute(
-            sim,
-            &*self.backend,
-            &self.displacement,
+        let state = StepState {
+            u: &self.displacement,
             memory,
-            &self.load,
-            self.contact.as_ref(),
-        );
+            load: &self.load,
+            contact: self.contact.as_ref(),
+        };
+        let values = r.compute(sim, &*self.backend, state);
         self.reaction_values.clear();
         self.reaction_values.extend_from_slice(values);
         for (g, &force) in sim.dirichlet.reaction_groups.iter().zip(values) {
