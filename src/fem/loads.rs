@@ -7,8 +7,10 @@
 
 use super::dofs::DofMap;
 use crate::expr::Expr;
-use crate::mesh::element::{load_rule, reference, shape_at};
+use crate::mesh::element::{load_rule, shape_at};
 use crate::mesh::quadrature::{EDGE_GAUSS_3, QUAD_GAUSS_2X2, TRI_3POINT};
+use crate::mesh::topology::{edge_area_vector, face_area_vector};
+use crate::mesh::vector::norm;
 use crate::mesh::{BoundaryPart, Cell, Facet};
 
 /// One quadrature point of a load integral: position, outward normal, weight (with the
@@ -75,39 +77,22 @@ fn facet_points<const D: usize>(points: &[[f64; D]], f: &Facet) -> Vec<FacetPoin
     let mut out = Vec::new();
     match f.len() {
         2 => {
-            let (a, b) = (x(0), x(1));
-            let len = (0..D).map(|k| (b[k] - a[k]).powi(2)).sum::<f64>().sqrt();
             // the facet is oriented with the body on its left: outward normal (dy, −dx)/len
+            let (d, len) = edge_area_vector(&x(0), &x(1));
             let mut normal = [0.0; D];
-            normal[0] = (b[1] - a[1]) / len;
-            normal[1] = -(b[0] - a[0]) / len;
+            normal[0] = d[0] / len;
+            normal[1] = d[1] / len;
             for &(s, w) in &EDGE_GAUSS_3 {
                 let v = [1.0 - s, s];
                 out.push((combine(&v), normal, w * len, vec![(nodes[0], v[0]), (nodes[1], v[1])]));
             }
         }
         n => {
-            // A face as a 2D reference cell: tangents from the reference gradients.
-            let (cell, rule) = if n == 3 {
-                (Cell::Tri3([0, 1, 2]), &TRI_3POINT[..])
-            } else {
-                (Cell::Quad4([0, 1, 2, 3]), &QUAD_GAUSS_2X2[..])
-            };
+            // a face: its reference cell's map (mesh/topology.rs)
+            let rule = if n == 3 { &TRI_3POINT[..] } else { &QUAD_GAUSS_2X2[..] };
             for q in rule {
-                let (_, value, grad) = reference(&cell, q.xi);
-                let (mut t1, mut t2) = ([0.0; 3], [0.0; 3]);
-                for a in 0..n {
-                    for k in 0..D {
-                        t1[k] += grad[a][0] * x(a)[k];
-                        t2[k] += grad[a][1] * x(a)[k];
-                    }
-                }
-                let c = [
-                    t1[1] * t2[2] - t1[2] * t2[1],
-                    t1[2] * t2[0] - t1[0] * t2[2],
-                    t1[0] * t2[1] - t1[1] * t2[0],
-                ];
-                let da = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+                let (value, c) = face_area_vector(points, f, q.xi);
+                let da = norm(&c);
                 let normal = std::array::from_fn(|k| c[k] / da);
                 let shape = (0..n).map(|a| (nodes[a], value[a])).collect();
                 out.push((combine(&value[..n]), normal, q.weight * da, shape));

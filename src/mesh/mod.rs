@@ -47,7 +47,7 @@ mod read;
 
 pub mod structured;
 
-mod topology;
+pub mod topology;
 pub mod vector;
 
 pub use cell::{Cell, Facet};

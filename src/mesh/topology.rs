@@ -1,7 +1,7 @@
 //! Boundary parts: a group of facets (curves in 2D, surfaces in 3D: Γ₁, Γ₂, Γ₃) as oriented
 //! facets with outward normals and nodal quadrature weights (docs/method.md §2, §8).
 
-use super::element::reference;
+use super::element::{reference, MAX_NODES};
 use super::vector::{cross, norm};
 use super::Cell;
 use super::{fmt_point, Facet, GroupSelector, Mesh, MeshError, PhysicalGroup};
@@ -61,16 +61,44 @@ impl<const D: usize> Mesh<D> {
     }
 }
 
+/// An edge's outward normal times its length, (dy, −dx, 0), for an edge a → b oriented with the
+/// body on its left; and the length.
+pub fn edge_area_vector<const D: usize>(a: &[f64; D], b: &[f64; D]) -> ([f64; 3], f64) {
+    let d = sub(b, a);
+    ([d[1], -d[0], 0.0], norm(&d))
+}
+
+/// A face's map at the reference point `xi` of its reference cell (`Tri3` or `Quad4`, element.rs):
+/// the shape values and the area vector ∂x/∂ξ × ∂x/∂η (the outward normal times dA/dξdη).
+pub fn face_area_vector<const D: usize>(
+    points: &[[f64; D]],
+    face: &Facet,
+    xi: [f64; 3],
+) -> ([f64; MAX_NODES], [f64; 3]) {
+    let reference_cell = match face.len() {
+        3 => Cell::Tri3([0, 1, 2]),
+        _ => Cell::Quad4([0, 1, 2, 3]),
+    };
+    let (n, value, grad) = reference(&reference_cell, xi);
+    let (mut t1, mut t2) = ([0.0; 3], [0.0; 3]);
+    for a in 0..n {
+        let p = points[face.nodes()[a]];
+        for k in 0..D {
+            t1[k] += grad[a][0] * p[k];
+            t2[k] += grad[a][1] * p[k];
+        }
+    }
+    (value, cross(t1, t2))
+}
+
 /// Quadrature of one facet: for each node, ∫ N_a ds and ∫ N_a n ds (n the outward unit normal,
 /// so the second is an area vector), and the facet's measure.
 pub(crate) fn facet_integrals<const D: usize>(points: &[[f64; D]], f: &Facet) -> (Vec<f64>, Vec<[f64; 3]>, f64) {
     let x = |i: usize| points[f.nodes()[i]];
     match f.len() {
         2 => {
-            // (dy, −dx) is the outward normal times the length.
-            let d = sub(&x(1), &x(0));
-            let len = norm(&d);
-            let n = [d[1] / 2.0, -d[0] / 2.0, 0.0];
+            let (d, len) = edge_area_vector(&x(0), &x(1));
+            let n = [d[0] / 2.0, d[1] / 2.0, 0.0];
             (vec![len / 2.0; 2], vec![n; 2], len)
         }
         3 => {
@@ -80,22 +108,10 @@ pub(crate) fn facet_integrals<const D: usize>(points: &[[f64; D]], f: &Facet) ->
             (vec![area / 3.0; 3], vec![share; 3], area)
         }
         _ => {
-            // bilinear face: the Q1 reference square's shape functions (element.rs), 2×2 Gauss on
-            // [−1, 1]², tangents ∂x/∂ξ, ∂x/∂η
+            // bilinear face: 2×2 Gauss on [−1, 1]²
             let (mut w, mut nv, mut area) = (vec![0.0; 4], vec![[0.0; 3]; 4], 0.0);
-            let square = Cell::Quad4([0, 1, 2, 3]);
             for q in &QUAD_GAUSS_2X2 {
-                let (mut t1, mut t2) = ([0.0; 3], [0.0; 3]);
-                let (_, value, grad) = reference(&square, q.xi);
-                for a in 0..4 {
-                    let (g1, g2) = (grad[a][0], grad[a][1]);
-                    let p = x(a);
-                    for k in 0..D {
-                        t1[k] += g1 * p[k];
-                        t2[k] += g2 * p[k];
-                    }
-                }
-                let dn = cross(t1, t2);
+                let (value, dn) = face_area_vector(points, f, q.xi);
                 let da = norm(&dn) * q.weight;
                 area += da;
                 for a in 0..4 {
