@@ -1,6 +1,7 @@
 //! Reading a run back for its pictures: `gamma3.csv` through the csv crate (a bad row is an error
 //! naming its line), Γ₃'s nodes placed on the mesh and ordered by arc length.
 
+use crate::mesh::topology::edge_area_vector;
 use crate::mesh::Mesh;
 use crate::plot::kit::bounding_box;
 use std::collections::HashMap;
@@ -173,7 +174,8 @@ pub fn arc_length(mesh: &Mesh<2>, nodes: &[usize]) -> (Vec<f64>, Vec<usize>, Vec
         neighbours[ka].push(kb);
         neighbours[kb].push(ka);
         let (pa, pb) = (mesh.points[a], mesh.points[b]);
-        let mut n = [pb[1] - pa[1], pa[0] - pb[0]]; // |n| = edge length
+        let (d, _) = edge_area_vector(&pa, &pb);
+        let mut n = [d[0], d[1]]; // (dy, −dx): |n| = edge length
         let mid = [(pa[0] + pb[0]) / 2.0, (pa[1] + pb[1]) / 2.0];
         if (mid[0] - centroid[0]) * n[0] + (mid[1] - centroid[1]) * n[1] < 0.0 {
             n = [-n[0], -n[1]];
