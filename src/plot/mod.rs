@@ -15,6 +15,7 @@
 //! drawn with the pixel glyphs of `kit.rs` (no system font is needed).
 
 mod deformed;
+mod error;
 
 mod gamma3;
 
@@ -29,6 +30,7 @@ mod run;
 pub mod surface;
 
 pub use deformed::{render_deformed, DeformedPicture};
+pub use error::PlotError;
 
 pub use kit::{colour_map, sci};
 

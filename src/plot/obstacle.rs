@@ -1,11 +1,11 @@
 //! The rigid obstacles in a picture (docs/method.md §12.4): the zero level set of φ(x − a(t)) by
 //! marching squares, chained into curves, moved away from Γ₃ like the displacement.
 
+use super::error::PlotError;
 use crate::mesh::Mesh;
 use crate::plot::kit::bounding_box;
 use crate::plot::Gamma3;
 use crate::scene::Scene;
-use crate::solver::SolveError;
 use std::collections::HashMap;
 
 /// The outlines of the scene's rigid obstacles at time `time` (moved by their motion a(t)) for
@@ -23,7 +23,7 @@ pub(super) fn obstacle_edges(
     gamma3: Option<&Gamma3>,
     time: f64,
     scale: f64,
-) -> Result<Vec<ObstacleEdge>, SolveError> {
+) -> Result<Vec<ObstacleEdge>, PlotError> {
     if scene.contact.iter().all(|c| c.obstacle.is_none()) {
         return Ok(vec![]);
     }
@@ -61,11 +61,12 @@ pub(super) fn obstacle_edges(
     for (i, c) in scene.contact.iter().enumerate() {
         let Some(spec) = &c.obstacle else { continue };
         let key = format!("{}.obstacle", scene.contact_key(i));
-        let obstacle = crate::solver::contact::obstacle_of::<2>(spec, &key, "scene.toml", diagonal)?;
+        let obstacle = crate::solver::contact::obstacle_of::<2>(spec, &key, "scene.toml", diagonal)
+            .map_err(|e| PlotError::Scene(e.to_string()))?;
         let mut a = [0.0; 2];
         for (k, e) in spec.motion().unwrap_or(&[]).iter().enumerate().take(2) {
             let expr = crate::scene::Expr::parse(e, &["t"])
-                .map_err(|err| SolveError::Setup(format!("scene.toml: {key}.motion[{k}] = \"{e}\": {err}")))?;
+                .map_err(|err| PlotError::Scene(format!("scene.toml: {key}.motion[{k}] = \"{e}\": {err}")))?;
             a[k] = expr.eval(&[time]);
         }
         let phi = |x: [f64; 2]| obstacle.phi(&[x[0] - a[0], x[1] - a[1]]);

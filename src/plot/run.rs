@@ -1,6 +1,7 @@
 //! `hvi plot RUN_DIR` (README "Pictures"): what the run directory holds decides the pictures, their
 //! times and their magnification.
 
+use super::error::PlotError;
 use crate::mesh::{Cell, Mesh};
 use crate::output;
 use crate::plot::deformed::cell_colours;
@@ -16,7 +17,6 @@ use crate::plot::read::read_numeric_csv;
 use crate::plot::read_gamma3;
 use crate::plot::sci;
 use crate::scene::Scene;
-use crate::solver::SolveError;
 use std::path::{Path, PathBuf};
 
 /// Options of `hvi plot`.
@@ -53,8 +53,11 @@ pub fn default_scale(max_displacement: f64, diagonal: f64) -> f64 {
 }
 
 /// `hvi plot RUN_DIR`: draws the run (see the module documentation); returns the files written.
-pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, SolveError> {
-    let fail = |what: String| SolveError::Setup(format!("{}: {what}", run_dir.display()));
+pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, PlotError> {
+    let fail = |detail: String| PlotError::Run {
+        dir: run_dir.to_path_buf(),
+        detail,
+    };
     if let Some(s) = options.scale {
         if !(s.is_finite() && s > 0.0) {
             return Err(fail(format!(
@@ -134,13 +137,10 @@ pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, S
         _ => None,
     });
     let bound = match (layer, &gamma3) {
-        (Some(spec), Some(g3)) => Some(crate::solver::bound::nodal_bound(
-            spec,
-            &g3.nodes,
-            &mesh.points,
-            "scene.toml",
-            "contact.bound",
-        )?),
+        (Some(spec), Some(g3)) => Some(
+            crate::solver::bound::nodal_bound(spec, &g3.nodes, &mesh.points, "scene.toml", "contact.bound")
+                .map_err(|e| PlotError::Scene(e.to_string()))?,
+        ),
         _ => None,
     };
     let (lo, hi) = bounding_box(&mesh.points);
@@ -243,7 +243,7 @@ pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, S
 /// The PNG and SVG files of picture `stem` in the run directory, recorded in the run's manifest
 /// before they are written, so that `hvi solve --overwrite` removes them with the run's own files
 /// (docs/method.md §12.2).
-pub(super) fn pictures(run_dir: &Path, stem: &str) -> Result<(PathBuf, PathBuf), SolveError> {
+pub(super) fn pictures(run_dir: &Path, stem: &str) -> Result<(PathBuf, PathBuf), PlotError> {
     let (png, svg) = (format!("{stem}.png"), format!("{stem}.svg"));
     output::record_in_run(run_dir, &[&png, &svg])?;
     Ok((run_dir.join(png), run_dir.join(svg)))
@@ -309,9 +309,12 @@ pub(super) fn nearest_times(available: &[f64], wanted: &[f64]) -> Vec<usize> {
 /// `hvi plot` of a 3D run: u_ν and the contact pressure over Γ₃ at the last time of
 /// `gamma3.csv`, as two colour maps of the nodes projected onto the plane of the two coordinates
 /// with the largest spread (Γ₃ is flat in the shipped examples), nodes on the bound outlined.
-pub(super) fn plot_3d(run_dir: &Path, last: &str) -> Result<Vec<PathBuf>, SolveError> {
+pub(super) fn plot_3d(run_dir: &Path, last: &str) -> Result<Vec<PathBuf>, PlotError> {
     use super::surface::{project_surface, render_surface_map, MapPanel, SurfaceMap};
-    let fail = |what: String| SolveError::Setup(format!("{}: {what}", run_dir.display()));
+    let fail = |detail: String| PlotError::Run {
+        dir: run_dir.to_path_buf(),
+        detail,
+    };
     let csv = std::fs::read_to_string(run_dir.join("gamma3.csv")).map_err(|e| {
         fail(format!(
             "{last} is a 3D run, drawn by hvi plot from gamma3.csv, which cannot be read ({e}; a run without \
