@@ -73,33 +73,24 @@ pub fn reference(cell: &Cell, xi: [f64; 3]) -> (usize, [f64; MAX_NODES], [[f64; 
 
 /// The inverse and determinant of a D × D matrix (D = 2 or 3).
 pub fn invert<const D: usize>(j: &[[f64; D]; D]) -> ([[f64; D]; D], f64) {
-    let mut inv = [[0.0; D]; D];
-    let det = match D {
+    // nalgebra's closed forms (cofactors over the determinant); a singular J gives NaN entries
+    // and det 0, which the callers test
+    fn fill<const D: usize>(det: f64, entry: impl Fn(usize, usize) -> Option<f64>) -> ([[f64; D]; D], f64) {
+        (std::array::from_fn(|r| std::array::from_fn(|c| entry(r, c).unwrap_or(f64::NAN))), det)
+    }
+    match D {
         2 => {
-            let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-            inv[0][0] = j[1][1] / det;
-            inv[0][1] = -j[0][1] / det;
-            inv[1][0] = -j[1][0] / det;
-            inv[1][1] = j[0][0] / det;
-            det
+            let m = nalgebra::Matrix2::from_fn(|r, c| j[r][c]);
+            let inv = m.try_inverse();
+            fill(m.determinant(), |r, c| inv.map(|i| i[(r, c)]))
         }
         3 => {
-            let c = |r: usize, s: usize| {
-                let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
-                let (s1, s2) = ((s + 1) % 3, (s + 2) % 3);
-                j[r1][s1] * j[r2][s2] - j[r1][s2] * j[r2][s1]
-            };
-            let det = j[0][0] * c(0, 0) + j[0][1] * c(0, 1) + j[0][2] * c(0, 2);
-            for (r, row) in inv.iter_mut().enumerate() {
-                for (s, v) in row.iter_mut().enumerate() {
-                    *v = c(s, r) / det;
-                }
-            }
-            det
+            let m = nalgebra::Matrix3::from_fn(|r, c| j[r][c]);
+            let inv = m.try_inverse();
+            fill(m.determinant(), |r, c| inv.map(|i| i[(r, c)]))
         }
         _ => unreachable!("hvi computes in 2 or 3 dimensions"),
-    };
-    (inv, det)
+    }
 }
 
 /// The point x(ξ) = Σ_a N_a x_a of `cell`'s map and its Jacobian J = Σ_a x_a ⊗ ∇_ξ N_a, from the

@@ -11,11 +11,7 @@ pub fn norm<const D: usize>(v: &[f64; D]) -> f64 {
     dot(v, v).sqrt()
 }
 
-/// a × b.
+/// a × b (nalgebra's).
 pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
+    nalgebra::Vector3::from(a).cross(&nalgebra::Vector3::from(b)).into()
 }
