@@ -1191,6 +1191,20 @@ fn failure_at_step_n_leaves_frames_before_it() {
 /// the `.pvd` lists.
 #[test]
 fn sigint_leaves_a_valid_series() {
+    stop_with_signal("INT");
+}
+
+/// SIGTERM (what `timeout` and a batch scheduler send) and SIGHUP (a closed terminal) stop a run
+/// as SIGINT does (issue 23): between steps, with the interrupted summary and no temporary left.
+#[test]
+fn sigterm_and_sighup_stop_like_sigint() {
+    stop_with_signal("TERM");
+    stop_with_signal("HUP");
+}
+
+/// Starts a long run, sends `signal` once two frames are listed, and checks the stop: exit code
+/// 130, the series valid, summary.json's status "interrupted", no temporary file.
+fn stop_with_signal(signal: &str) {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
     let mut child = hvi()
@@ -1216,7 +1230,7 @@ fn sigint_leaves_a_valid_series() {
         std::thread::sleep(Duration::from_millis(20));
     }
     let pid = child.id().to_string();
-    assert!(Command::new("kill").args(["-INT", &pid]).status().unwrap().success());
+    assert!(Command::new("kill").args([&format!("-{signal}"), &pid]).status().unwrap().success());
     let t1 = Instant::now();
     let status = loop {
         if let Some(s) = child.try_wait().unwrap() {
@@ -1224,17 +1238,25 @@ fn sigint_leaves_a_valid_series() {
         }
         if t1.elapsed() > Duration::from_secs(30) {
             let _ = child.kill();
-            panic!("hvi did not stop within 30 s of SIGINT");
+            panic!("hvi did not stop within 30 s of SIG{signal}");
         }
         std::thread::sleep(Duration::from_millis(20));
     };
     let mut stderr = String::new();
     std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut stderr).unwrap();
-    assert_eq!(status.code(), Some(130), "{stderr}");
+    assert_eq!(status.code(), Some(130), "SIG{signal}: {stderr}");
     assert_contains(&stderr, &["interrupted", "valid"]);
     let on_disk = frames_on_disk(&out);
     assert!(on_disk.len() >= 2);
     assert_eq!(pvd_files(&out.join("solution.pvd")), on_disk);
+    let summary = std::fs::read_to_string(out.join("summary.json")).expect("summary.json written");
+    assert_contains(&summary, &["\"status\": \"interrupted\""]);
+    let temporaries: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| hvi::output::is_temporary_name(n))
+        .collect();
+    assert!(temporaries.is_empty(), "SIG{signal} left {temporaries:?}");
 }
 
 fn pvd_count(out: &Path) -> usize {
