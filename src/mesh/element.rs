@@ -76,7 +76,10 @@ pub fn invert<const D: usize>(j: &[[f64; D]; D]) -> ([[f64; D]; D], f64) {
     // nalgebra's closed forms (cofactors over the determinant); a singular J gives NaN entries
     // and det 0, which the callers test
     fn fill<const D: usize>(det: f64, entry: impl Fn(usize, usize) -> Option<f64>) -> ([[f64; D]; D], f64) {
-        (std::array::from_fn(|r| std::array::from_fn(|c| entry(r, c).unwrap_or(f64::NAN))), det)
+        (
+            std::array::from_fn(|r| std::array::from_fn(|c| entry(r, c).unwrap_or(f64::NAN))),
+            det,
+        )
     }
     match D {
         2 => {
