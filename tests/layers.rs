@@ -501,7 +501,6 @@ fn imports_run_down_the_layers_and_no_files_import_each_other() {
                     reexports.insert((i, name), full);
                 }
             }
-            at = end;
         }
     }
 

@@ -170,9 +170,3 @@ fn available_memory_bytes() -> Option<u64> {
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb * 1024)
 }
-
-/// The discrete smallness number α_j λ_max(D^{1/2} C K_A⁻¹ Cᵀ D^{1/2}) of a simulation with
-/// contact ([`ElasticCheck::smallness_ratio`]).
-pub fn smallness_ratio<const D: usize>(sim: &Simulation<D>) -> Result<f64, SolveError> {
-    ElasticCheck::new(sim)?.smallness_ratio(sim)
-}

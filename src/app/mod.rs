@@ -15,7 +15,7 @@ pub mod solve;
 
 pub mod summary;
 
-pub use check::{check, smallness_ratio};
+pub use check::check;
 
 pub use options::SolveOptions;
 

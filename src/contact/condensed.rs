@@ -154,13 +154,7 @@ impl DenseNormalStiffness {
     pub fn from_w(w: Vec<f64>, m: usize) -> Result<Self, String> {
         let llt = DenseCholesky::new(m, |i, j| w[i * m + j])
             .ok_or_else(|| "the condensed contact operator W = C K⁻¹ Cᵀ is not positive definite (are two contact nodes sharing one position, or is a contact node's normal fully constrained?)".to_string())?;
-        let inv = llt.inverse();
-        let mut q = vec![0.0; m * m];
-        for p in 0..m {
-            for r in 0..m {
-                q[p * m + r] = 0.5 * (inv[p * m + r] + inv[r * m + p]);
-            }
-        }
+        let q = llt.symmetric_inverse();
         Ok(DenseNormalStiffness { w, q, m })
     }
 

@@ -162,10 +162,3 @@ pub(crate) fn rectangle_stiffness<const M: usize>(
     let mats = assemble_stiffness(&mesh.cells, &mesh.points, &dofs, cs);
     mats.map(|m| m.with_identity_rows(&dofs))
 }
-
-/// max |a − b| / max |b| (for tests comparing two computations of one vector).
-#[cfg(test)]
-pub(crate) fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
-    let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
-    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / scale
-}

@@ -105,7 +105,8 @@ impl<const D: usize> NodeBlockMatrix<D> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fem::assembly::{rectangle_stiffness, relative_difference};
+    use crate::fem::assembly::rectangle_stiffness;
+    use crate::linalg::sparse::test_matrices::relative_difference;
     use crate::material::{Elasticity, PlaneModel, IDENTITY_TENSOR};
     use crate::mesh::structured::CellShape;
 

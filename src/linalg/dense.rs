@@ -38,11 +38,14 @@ impl DenseCholesky {
             .solve_in_place(MatMut::from_column_major_slice_mut(x, self.n, 1));
     }
 
-    /// A⁻¹, row-major.
-    pub fn inverse(&self) -> Vec<f64> {
+    /// ½(A⁻¹ + A⁻ᵀ), row-major: the inverse, symmetrised against round-off (one n × n copy
+    /// beside faer's).
+    pub fn symmetric_inverse(&self) -> Vec<f64> {
         let inv = self.llt.inverse();
         let n = self.n;
-        (0..n * n).map(|k| inv[(k / n, k % n)]).collect()
+        (0..n * n)
+            .map(|k| 0.5 * (inv[(k / n, k % n)] + inv[(k % n, k / n)]))
+            .collect()
     }
 }
 

@@ -76,20 +76,23 @@ impl<const D: usize> FaerBackend<D> {
                 channels.len()
             )));
         }
-        let (k_a, k_b) = timed(&mut stats.phases.assembly, || {
-            // one assembly pass for K_A and every channel's K_j (one or two, docs/method.md §15.1)
-            let mut tensors = vec![a];
-            tensors.extend_from_slice(&channels);
-            let assembled = match tensors[..] {
-                [a] => Vec::from(assemble_stiffness(cells, points, &sim.dofs, &[a])),
-                [a, t] => Vec::from(assemble_stiffness(cells, points, &sim.dofs, &[a, t])),
-                [a, t, v] => Vec::from(assemble_stiffness(cells, points, &sim.dofs, &[a, t, v])),
-                _ => Vec::new(),
-            };
-            let mut assembled = assembled.into_iter();
-            (assembled.next(), assembled.collect::<Vec<_>>())
+        // one assembly pass for K_A and every channel's K_j (one or two, docs/method.md §15.1)
+        let assembled = timed(&mut stats.phases.assembly, || match channels[..] {
+            [] => {
+                let [a] = assemble_stiffness(cells, points, &sim.dofs, &[a]);
+                Some((a, Vec::new()))
+            }
+            [t] => {
+                let [a, b] = assemble_stiffness(cells, points, &sim.dofs, &[a, t]);
+                Some((a, vec![b]))
+            }
+            [t, v] => {
+                let [a, b, c] = assemble_stiffness(cells, points, &sim.dofs, &[a, t, v]);
+                Some((a, vec![b, c]))
+            }
+            _ => None,
         });
-        let Some(k_a) = k_a else {
+        let Some((k_a, k_b)) = assembled else {
             return Err(SolveError::Setup(format!(
                 "a memory term has one or two channels, this one {}",
                 channels.len()

@@ -299,7 +299,7 @@ pub fn reference_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x
         Cell::Tet4(_) => [0.25; 3],
         Cell::Quad4(_) | Cell::Hex8(_) => [0.0; 3],
     };
-    let Some(xi) = newton(&map, x, start, size) else {
+    let Some(xi) = newton(map, x, start, size) else {
         return ([0.0; 3], f64::INFINITY);
     };
     let (y, _) = map(xi);
@@ -337,7 +337,7 @@ pub fn reference_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x
 /// Newton on a cell's map x(ξ) (value and Jacobian) from `start` towards `x`: at most 50 steps,
 /// far-away iterates kept bounded; None when a step is not finite.
 fn newton<const D: usize>(
-    map: &dyn Fn([f64; 3]) -> ([f64; D], [[f64; D]; D]),
+    map: impl Fn([f64; 3]) -> ([f64; D], [[f64; D]; D]),
     x: [f64; D],
     start: [f64; 3],
     size: f64,
