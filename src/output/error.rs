@@ -73,6 +73,9 @@ pub enum OutputError {
     /// The output directory holds an earlier run that may not (or cannot) be replaced.
     #[error("cannot write into {}: {detail}", dir.display())]
     EarlierRun { dir: PathBuf, detail: String },
+    /// Another run holds the output directory's lock.
+    #[error("cannot write into {}: {detail}", dir.display())]
+    Busy { dir: PathBuf, detail: String },
     /// A `.vtu` (`.vtp`, `.pvtu`, `.pvd`) file that was read back does not have the expected
     /// structure.
     #[error("{}: not a {} written by hvi: {detail}", path.display(), kind(path))]

@@ -23,6 +23,8 @@ const FIRST_LINE: &str = "hvi run manifest v1";
 pub struct RunManifest {
     path: PathBuf,
     file: File,
+    /// The directory's lock, held as long as the manifest (the run) lives.
+    _lock: super::RunLock,
 }
 
 /// True if `name` is a plain file name (no separator, not `.` or `..`): the only names a
@@ -36,13 +38,18 @@ fn plain(name: &str) -> bool {
 }
 
 impl RunManifest {
-    /// Starts the manifest of a new run in `dir` (created if needed). If `dir` holds an earlier
+    /// Starts the manifest of a new run in `dir` (created if needed), holding the directory's
+    /// lock ([`super::RunLock`]) as long as it lives: an error naming the holder if another run
+    /// holds it. If `dir` holds an earlier
     /// run (a manifest, or a `solution.pvd` of an hvi without manifests) this is an error naming
     /// the directory and the flag, unless `overwrite`: then the files the earlier manifest lists
     /// are removed first (an earlier run without a manifest is an error even then, since which
     /// files it wrote is not known).
     pub fn start(dir: &Path, overwrite: bool) -> Result<Self, OutputError> {
         fs::create_dir_all(dir).map_err(|e| OutputError::directory(dir, e))?;
+        // first the lock, so that the check for an earlier run and its removal below are not
+        // raced by another run into the same directory
+        let lock = super::RunLock::acquire(dir)?;
         let path = dir.join(MANIFEST_NAME);
         let earlier = path.exists();
         if earlier || dir.join("solution.pvd").exists() {
@@ -75,7 +82,11 @@ impl RunManifest {
             .append(true)
             .open(&path)
             .map_err(|e| OutputError::write(&path, e))?;
-        Ok(RunManifest { path, file })
+        Ok(RunManifest {
+            path,
+            file,
+            _lock: lock,
+        })
     }
 
     /// Records that the run writes `name` (a file of the output directory). Call before

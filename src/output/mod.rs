@@ -47,6 +47,8 @@ mod error;
 
 mod frame;
 
+mod lock;
+
 mod manifest;
 
 mod pvd;
@@ -68,6 +70,8 @@ pub use error::OutputError;
 pub use frame::{
     format_number, Field, FieldValues, Frame, SurfaceFrame, DEFAULT_COMPRESSION_LEVEL, MAX_COMPRESSION_LEVEL,
 };
+
+pub use lock::{RunLock, LOCK_NAME};
 
 pub use manifest::{read_manifest, record_in_run, RunManifest, MANIFEST_NAME};
 
