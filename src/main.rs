@@ -51,6 +51,10 @@ enum Command {
         /// manifest .hvi-run) first. Without it, an --out holding a run is refused.
         #[arg(long)]
         overwrite: bool,
+        /// Run on a mesh that is not one conforming body (a crack, non-matching faces,
+        /// overlapping cells), which is refused otherwise; its defects become warnings.
+        #[arg(long)]
+        accept_mesh_defects: bool,
     },
     /// Run a convergence study described by a study file (see examples/paper_study.toml).
     Study {
@@ -100,6 +104,9 @@ enum Command {
         /// With --backend petsc: the solver whose memory to predict (mumps, the default, or gamg).
         #[arg(long, value_enum)]
         solver: Option<SolverArg>,
+        /// Report a mesh that is not one conforming body with warnings instead of an error.
+        #[arg(long)]
+        accept_mesh_defects: bool,
     },
 }
 
@@ -175,8 +182,10 @@ fn check_petsc(
     scene: Option<&std::path::Path>,
     overrides: &[String],
     solver: Option<SolverArg>,
+    accept_mesh_defects: bool,
 ) -> ExitCode {
-    let run = hvi::petsc::check(mesh, scene, overrides, petsc_solver(solver)).map(|r| (r.rank, r.result));
+    let run = hvi::petsc::check(mesh, scene, overrides, petsc_solver(solver), accept_mesh_defects)
+        .map(|r| (r.rank, r.result));
     petsc_exit(run, |report| print!("{report}"))
 }
 
@@ -195,6 +204,7 @@ fn check_petsc(
     _scene: Option<&std::path::Path>,
     _overrides: &[String],
     _solver: Option<SolverArg>,
+    _accept_mesh_defects: bool,
 ) -> ExitCode {
     eprintln!("{NO_PETSC}");
     ExitCode::FAILURE
@@ -212,6 +222,7 @@ fn main() -> ExitCode {
             backend,
             solver,
             overwrite,
+            accept_mesh_defects,
         } => {
             let opts = hvi::app::SolveOptions {
                 mesh,
@@ -220,6 +231,7 @@ fn main() -> ExitCode {
                 overrides,
                 progress: !quiet && std::io::stderr().is_terminal(),
                 overwrite,
+                accept_mesh_defects,
             };
             if backend == BackendArg::Petsc {
                 return solve_petsc(&opts, solver);
@@ -287,15 +299,16 @@ fn main() -> ExitCode {
             overrides,
             backend,
             solver,
+            accept_mesh_defects,
         } => {
             if backend == BackendArg::Petsc {
-                return check_petsc(&mesh, scene.as_deref(), &overrides, solver);
+                return check_petsc(&mesh, scene.as_deref(), &overrides, solver, accept_mesh_defects);
             }
             if solver.is_some() {
                 eprintln!("error: --solver chooses the PETSc solver: use it with --backend petsc");
                 return ExitCode::FAILURE;
             }
-            match hvi::app::check(&mesh, scene.as_deref(), &overrides) {
+            match hvi::app::check(&mesh, scene.as_deref(), &overrides, accept_mesh_defects) {
                 Ok(report) => {
                     print!("{report}");
                     ExitCode::SUCCESS

@@ -5,6 +5,9 @@
 //! `tests/mesh_read.rs` and `tests/scene_input.rs` test the readers directly; this file goes
 //! end to end, through `hvi::app::solve` and the `hvi` binary, and adds the cases they miss.
 
+mod common;
+use common::msh22;
+
 use hvi::app::{solve, solve_in_memory, SolveOptions};
 use hvi::mesh::structured::{rectangle, CellShape};
 use hvi::mesh::{parse_mesh, Cell, Mesh, PhysicalGroup};
@@ -46,48 +49,6 @@ fn run_cli(args: &[&str]) -> (i32, String) {
     )
 }
 
-/// MSH 2.2 text of a mesh with its groups: dim-0 groups as points (type 15), dim-1 groups as
-/// lines, cells in the dim-2 group (tag 5 if there is none), all named in `$PhysicalNames`.
-fn msh22(mesh: &Mesh<2>) -> String {
-    let mut s = String::from("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n");
-    s += &format!("{}\n", mesh.groups.len());
-    for g in &mesh.groups {
-        s += &format!("{} {} \"{}\"\n", g.dim, g.tag, g.name.clone().unwrap_or_default());
-    }
-    s += &format!("$EndPhysicalNames\n$Nodes\n{}\n", mesh.points.len());
-    for (i, p) in mesh.points.iter().enumerate() {
-        s += &format!("{} {:?} {:?} 0\n", i + 1, p[0], p[1]);
-    }
-    let mut el = Vec::new();
-    for g in &mesh.groups {
-        for n in &g.nodes {
-            el.push(format!("15 2 {} {} {}", g.tag, g.tag, n + 1));
-        }
-        for f in &g.facets {
-            el.push(format!("1 2 {} {} {} {}", g.tag, g.tag, f[0] + 1, f[1] + 1));
-        }
-    }
-    let omega = mesh.groups.iter().find(|g| g.dim == 2).map_or(5, |g| g.tag);
-    for c in &mesh.cells {
-        el.push(match c {
-            Cell::Tri3(n) => format!("2 2 {omega} {omega} {} {} {}", n[0] + 1, n[1] + 1, n[2] + 1),
-            Cell::Quad4(n) => format!(
-                "3 2 {omega} {omega} {} {} {} {}",
-                n[0] + 1,
-                n[1] + 1,
-                n[2] + 1,
-                n[3] + 1
-            ),
-            other => panic!("a 2D test mesh has no {other:?}"),
-        });
-    }
-    s += &format!("$EndNodes\n$Elements\n{}\n", el.len());
-    for (i, e) in el.iter().enumerate() {
-        s += &format!("{} {e}\n", i + 1);
-    }
-    s + "$EndElements\n"
-}
-
 /// The paper's domain with 4 × 2 cells (15 nodes, Gamma1 = left, Gamma3 = bottom, …).
 fn small() -> Mesh<2> {
     rectangle(2.0, 1.0, 4, 2, CellShape::Quad)
@@ -122,6 +83,7 @@ impl Case {
             progress: false,
             // each case replaces the run of the one before
             overwrite: true,
+            accept_mesh_defects: false,
         };
         match solve(&opts, None) {
             Ok(_) => panic!("{}: expected an error", self.mesh.display()),
@@ -504,6 +466,7 @@ fn missing_or_misnamed_groups_list_the_existing_ones() {
         .to_vec(),
         progress: false,
         overwrite: false,
+        accept_mesh_defects: false,
     };
     solve(&opts, None).unwrap_or_else(|e| panic!("{e}"));
 
@@ -1067,6 +1030,7 @@ fn unwritable_out_is_reported_before_solving() {
         overrides: vec!["time.steps=10000000".into()],
         progress: false,
         overwrite: false,
+        accept_mesh_defects: false,
     };
     let t0 = Instant::now();
     let e = solve(&opts, None).expect_err("an error");
@@ -1118,6 +1082,7 @@ fn failure_at_step_n_leaves_frames_before_it() {
         overrides: sets.map(String::from).to_vec(),
         progress: false,
         overwrite: false,
+        accept_mesh_defects: false,
     };
     let e = solve(&opts, None).expect_err("the contact solve should fail");
     let SolveError::ContactFailed { step, iterations, .. } = e else {

@@ -16,7 +16,7 @@ fn warnings(mesh_name: &str, scene: Option<&str>, overrides: &[&str]) -> Vec<Str
         p
     });
     let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    let report = hvi::app::check(&mesh(mesh_name), scene_path.as_deref(), &overrides)
+    let report = hvi::app::check(&mesh(mesh_name), scene_path.as_deref(), &overrides, false)
         .unwrap_or_else(|e| panic!("hvi check {mesh_name}: {e}"));
     report
         .lines()

@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use hvi::mesh::structured::{rectangle, CellShape};
-use hvi::mesh::{Facet, Mesh, PhysicalGroup};
+use hvi::mesh::{Cell, Facet, Mesh, PhysicalGroup};
 use hvi::scene::Scene;
 use std::process::{Command, Output};
 
@@ -133,4 +133,46 @@ pub fn step_differences(a: &hvi::app::MemorySink, b: &hvi::app::MemorySink) -> V
             (x.step, d / max_u)
         })
         .collect()
+}
+
+/// MSH 2.2 text of a mesh with its groups: dim-0 groups as points (type 15), dim-1 groups as
+/// lines, cells in the dim-2 group (tag 5 if there is none), all named in `$PhysicalNames`.
+pub fn msh22(mesh: &Mesh<2>) -> String {
+    let mut s = String::from("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n");
+    s += &format!("{}\n", mesh.groups.len());
+    for g in &mesh.groups {
+        s += &format!("{} {} \"{}\"\n", g.dim, g.tag, g.name.clone().unwrap_or_default());
+    }
+    s += &format!("$EndPhysicalNames\n$Nodes\n{}\n", mesh.points.len());
+    for (i, p) in mesh.points.iter().enumerate() {
+        s += &format!("{} {:?} {:?} 0\n", i + 1, p[0], p[1]);
+    }
+    let mut el = Vec::new();
+    for g in &mesh.groups {
+        for n in &g.nodes {
+            el.push(format!("15 2 {} {} {}", g.tag, g.tag, n + 1));
+        }
+        for f in &g.facets {
+            el.push(format!("1 2 {} {} {} {}", g.tag, g.tag, f[0] + 1, f[1] + 1));
+        }
+    }
+    let omega = mesh.groups.iter().find(|g| g.dim == 2).map_or(5, |g| g.tag);
+    for c in &mesh.cells {
+        el.push(match c {
+            Cell::Tri3(n) => format!("2 2 {omega} {omega} {} {} {}", n[0] + 1, n[1] + 1, n[2] + 1),
+            Cell::Quad4(n) => format!(
+                "3 2 {omega} {omega} {} {} {} {}",
+                n[0] + 1,
+                n[1] + 1,
+                n[2] + 1,
+                n[3] + 1
+            ),
+            other => panic!("a 2D test mesh has no {other:?}"),
+        });
+    }
+    s += &format!("$EndNodes\n$Elements\n{}\n", el.len());
+    for (i, e) in el.iter().enumerate() {
+        s += &format!("{} {e}\n", i + 1);
+    }
+    s + "$EndElements\n"
 }

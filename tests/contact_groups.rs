@@ -248,14 +248,14 @@ fn an_interference_fit_is_pushed_out_with_the_analytic_force() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("fit.toml");
     std::fs::write(&path, interference(depth)).unwrap();
-    let report = hvi::app::check(std::path::Path::new("rect:8x4"), Some(&path), &[]).unwrap();
+    let report = hvi::app::check(std::path::Path::new("rect:8x4"), Some(&path), &[], false).unwrap();
     assert!(
         report.contains("warning: 9 node(s) of contact group `Gamma2_top` start inside its obstacle"),
         "{report}"
     );
     // touching, not inside: no such warning
     std::fs::write(&path, interference(0.0)).unwrap();
-    let report = hvi::app::check(std::path::Path::new("rect:8x4"), Some(&path), &[]).unwrap();
+    let report = hvi::app::check(std::path::Path::new("rect:8x4"), Some(&path), &[], false).unwrap();
     assert!(!report.contains("inside its obstacle"), "{report}");
 }
 

@@ -19,6 +19,7 @@ fn run_files(mesh: &str, scene: Option<&str>, out: &Path) -> hvi::solver::RunSta
         overrides: vec![],
         progress: false,
         overwrite: false,
+        accept_mesh_defects: false,
     };
     solve(&opts, None).unwrap_or_else(|e| panic!("{e}"))
 }

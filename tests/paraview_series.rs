@@ -23,6 +23,7 @@ fn run(mesh: &str, scene: Option<&str>, steps: usize, out: &Path) {
         overrides: vec![format!("time.steps={steps}")],
         progress: false,
         overwrite: false,
+        accept_mesh_defects: false,
     };
     solve(&opts, None).unwrap_or_else(|e| panic!("{e}"));
 }
@@ -231,6 +232,7 @@ fn opts(out: &Path, steps: usize, extra: &[&str], overwrite: bool) -> SolveOptio
         overrides,
         progress: false,
         overwrite,
+        accept_mesh_defects: false,
     }
 }
 

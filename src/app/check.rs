@@ -7,12 +7,18 @@ use crate::solver::faer::ElasticCheck;
 use crate::solver::{Plan, Simulation, SolveError};
 use std::path::Path;
 
-/// The report of `hvi check`.
-pub fn check(mesh_path: &Path, scene_path: Option<&Path>, overrides: &[String]) -> Result<String, SolveError> {
+/// The report of `hvi check`. Severe mesh defects are an error unless `accept_mesh_defects`
+/// (then warnings, as in a run).
+pub fn check(
+    mesh_path: &Path,
+    scene_path: Option<&Path>,
+    overrides: &[String],
+    accept_mesh_defects: bool,
+) -> Result<String, SolveError> {
     let scene = Scene::load(scene_path, overrides)?;
     match read_mesh(mesh_path)? {
-        AnyMesh::Two(m) => check_dim(mesh_path, scene_path, &scene, m),
-        AnyMesh::Three(m) => check_dim(mesh_path, scene_path, &scene, m),
+        AnyMesh::Two(m) => check_dim(mesh_path, scene_path, &scene, m, accept_mesh_defects),
+        AnyMesh::Three(m) => check_dim(mesh_path, scene_path, &scene, m, accept_mesh_defects),
     }
 }
 
@@ -22,10 +28,13 @@ fn check_dim<const D: usize>(
     scene_path: Option<&Path>,
     scene: &Scene,
     mesh: Mesh<D>,
+    accept_mesh_defects: bool,
 ) -> Result<String, SolveError> {
     use std::fmt::Write;
     let mut out = check_mesh_report(mesh_path, &mesh);
+    let mesh_warnings = super::warnings::mesh_warnings(&mesh, accept_mesh_defects)?;
     let sim = Simulation::new(scene, mesh)?;
+    sim.check_data()?;
     out.push_str(&check_scene_report(scene_path, &sim));
     // The factor: symbolic analysis only (cheap), so its size is known before solving.
     // (the solver layer's own assembly and analysis of K_A, as a run does them)
@@ -77,8 +86,7 @@ fn check_dim<const D: usize>(
             );
         }
     }
-    let warnings = crate::solver::advice::warnings(scene, &sim);
-    for w in &warnings {
+    for w in &super::warnings::warnings(mesh_warnings, scene, &sim) {
         let _ = writeln!(out, "warning: {w}");
     }
     Ok(out)

@@ -15,6 +15,8 @@ pub mod solve;
 
 pub mod summary;
 
+pub mod warnings;
+
 pub use check::check;
 
 pub use options::SolveOptions;

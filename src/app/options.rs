@@ -12,4 +12,7 @@ pub struct SolveOptions {
     /// Replace an earlier run in `out` (remove exactly the files its manifest lists) instead
     /// of refusing to write there.
     pub overwrite: bool,
+    /// Run on a mesh with severe defects (not conforming, a crack, overlapping cells) instead of
+    /// refusing it: the defects become warnings (docs/method.md §2.3).
+    pub accept_mesh_defects: bool,
 }

@@ -268,6 +268,16 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
                     (cell, node)
                 })
             });
+            if let Some((cell, node)) = &stresses {
+                // von Mises squares the stress: the first to overflow
+                if !cell.von_mises.iter().chain(&node.von_mises).all(|v| v.is_finite()) {
+                    return Err(SolveError::NonFinite {
+                        step: view.step,
+                        time: view.time,
+                        what: "stress".into(),
+                    });
+                }
+            }
             let (mut point_fields, mut cell_fields) =
                 body_fields(&self.fields, &displacement, stresses.as_ref(), &self.cell_groups);
             mark_active(&mut point_fields, &mut cell_fields, self.active_scalar.as_deref());

@@ -90,7 +90,13 @@ fn solve_dim<const D: usize>(
     mesh_seconds: f64,
     stop: Option<&AtomicBool>,
 ) -> Result<RunStats, SolveError> {
+    let mesh_warnings = super::warnings::mesh_warnings(&mesh, opts.accept_mesh_defects)?;
     let sim = Simulation::new(scene, mesh)?;
+    // what `hvi check` would warn about, said before the run (and kept in summary.json)
+    let warnings = super::warnings::warnings(mesh_warnings, scene, &sim);
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
     let manifest = output::RunManifest::start(&opts.out, opts.overwrite)?;
     let contact_groups: Vec<GroupSelector> = (0..scene.contact.len()).map(|i| scene.contact_group(i)).collect();
     let mut sink = FileSink::create(
@@ -110,6 +116,7 @@ fn solve_dim<const D: usize>(
         .and_then(|()| timeloop::run(&sim, &mut sink, stop));
     sink.finish();
     let mut summary = Summary::new(opts, sink.steps_done, sink.last_written, None);
+    summary.warnings = warnings;
     let mut stats = match result {
         Ok(stats) => stats,
         Err(e) => {

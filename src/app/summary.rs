@@ -19,6 +19,8 @@ pub struct Summary<'a> {
     /// Steps computed (of `time.steps + 1`, step 0 included), and the last step written.
     pub steps_done: usize,
     pub last_step_written: Option<usize>,
+    /// What `hvi check` warns about, printed before the run (empty: nothing).
+    pub warnings: Vec<String>,
     #[serde(flatten)]
     pub stats: Option<&'a RunStats>,
 }
@@ -45,6 +47,7 @@ impl<'a> Summary<'a> {
             status: "completed".into(),
             steps_done,
             last_step_written,
+            warnings: Vec::new(),
             stats,
         }
     }

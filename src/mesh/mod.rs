@@ -25,6 +25,8 @@ mod build;
 
 mod cell;
 
+mod conformity;
+
 pub mod element;
 
 mod error;
@@ -51,6 +53,8 @@ pub mod topology;
 pub mod vector;
 
 pub use cell::{Cell, Facet};
+
+pub use conformity::MeshDefect;
 
 pub use error::MeshError;
 

@@ -71,7 +71,7 @@ pub use frame::{
     format_number, Field, FieldValues, Frame, SurfaceFrame, DEFAULT_COMPRESSION_LEVEL, MAX_COMPRESSION_LEVEL,
 };
 
-pub use lock::{RunLock, LOCK_NAME};
+pub use lock::RunLock;
 
 pub use manifest::{read_manifest, record_in_run, RunManifest, MANIFEST_NAME};
 

@@ -73,13 +73,14 @@ pub fn check(
     scene_path: Option<&Path>,
     overrides: &[String],
     choice: SolverChoice,
+    accept_mesh_defects: bool,
 ) -> Result<MpiCheck, String> {
     let petsc = start()?;
     let rank = petsc.rank();
     let result =
         read_everywhere(petsc.world(), mesh_path, scene_path, overrides).and_then(|(scene, mesh)| match mesh {
-            AnyMesh::Two(m) => check_dim(&petsc, mesh_path, scene_path, &scene, m, choice),
-            AnyMesh::Three(m) => check_dim(&petsc, mesh_path, scene_path, &scene, m, choice),
+            AnyMesh::Two(m) => check_dim(&petsc, mesh_path, scene_path, &scene, m, choice, accept_mesh_defects),
+            AnyMesh::Three(m) => check_dim(&petsc, mesh_path, scene_path, &scene, m, choice, accept_mesh_defects),
         });
     Ok(MpiCheck { rank, result })
 }
@@ -91,11 +92,13 @@ fn check_dim<const D: usize>(
     scene: &Scene,
     mesh: Mesh<D>,
     choice: SolverChoice,
+    accept_mesh_defects: bool,
 ) -> Result<String, SolveError> {
     let world = petsc.world();
     let (rank, ranks) = (petsc.rank(), petsc.size());
     let mut out = app::check::check_mesh_report(mesh_path, &mesh);
-    let (sim, partition) = simulation_and_partition(world, scene_path, scene, mesh)?;
+    let (sim, partition, warnings) = simulation_and_partition(world, scene_path, scene, mesh, accept_mesh_defects)?;
+    sim.check_data()?;
     out.push_str(&app::check::check_scene_report(scene_path, &sim));
     let shares = RankShare::all(&sim, &partition);
     let backend = PetscBackend::new(petsc, &sim, partition, choice);
@@ -205,7 +208,7 @@ fn check_dim<const D: usize>(
             }
         );
     }
-    for w in crate::solver::advice::warnings(scene, &sim) {
+    for w in warnings {
         let _ = writeln!(out, "warning: {w}");
     }
     Ok(out)

@@ -122,16 +122,21 @@ pub(super) fn unsupported<const D: usize>(
     }
 }
 
-/// The scene on the mesh on every rank, and the partition rank 0 computes (collective).
-/// `scene_path` names the scene in a refusal ([`unsupported`]).
+/// The scene on the mesh on every rank, the partition rank 0 computes, and the warnings of
+/// `hvi check` (collective). `scene_path` names the scene in a refusal ([`unsupported`]); a mesh
+/// with severe defects is refused unless `accept_mesh_defects`.
 pub(super) fn simulation_and_partition<const D: usize>(
     world: &SimpleCommunicator,
     scene_path: Option<&std::path::Path>,
     scene: &Scene,
     mesh: Mesh<D>,
-) -> Result<(Simulation<D>, Partition), SolveError> {
+    accept_mesh_defects: bool,
+) -> Result<(Simulation<D>, Partition, Vec<String>), SolveError> {
     let (rank, ranks) = (world.rank() as usize, world.size() as usize);
     let collective = |r: Result<(), String>| agree(world, r).map_err(SolveError::Setup);
+    let mesh_warnings = crate::app::warnings::mesh_warnings(&mesh, accept_mesh_defects);
+    collective(mesh_warnings.as_ref().map(|_| ()).map_err(|e| e.to_string()))?;
+    let mesh_warnings = mesh_warnings?;
     // (deterministic: the same verdict on every rank, but agreed on all the same so that no
     // rank goes on alone)
     let sim = Simulation::new(scene, mesh);
@@ -147,7 +152,8 @@ pub(super) fn simulation_and_partition<const D: usize>(
     collective(parts)?;
     world.process_at_rank(0).broadcast_into(&mut owner[..]);
     let partition = Partition::from_owners(&sim.mesh, ranks, owner.into_iter().map(|v| v as usize).collect());
-    Ok((sim, partition))
+    let warnings = crate::app::warnings::warnings(mesh_warnings, scene, &sim);
+    Ok((sim, partition, warnings))
 }
 
 /// What one rank holds of the problem (summary.json's `per_rank`, `hvi check --backend petsc`).

@@ -84,7 +84,13 @@ fn run_dim<const D: usize>(
     let world = petsc.world();
     let (rank, ranks) = (petsc.rank(), petsc.size());
     let collective = |r: Result<(), String>| agree(world, r).map_err(SolveError::Setup);
-    let (sim, partition) = simulation_and_partition(world, opts.scene.as_deref(), scene, mesh)?;
+    let (sim, partition, warnings) =
+        simulation_and_partition(world, opts.scene.as_deref(), scene, mesh, opts.accept_mesh_defects)?;
+    if rank == 0 {
+        for w in &warnings {
+            eprintln!("warning: {w}");
+        }
+    }
     let shares = RankShare::all(&sim, &partition);
     let mut backend = PetscBackend::new(petsc, &sim, partition, choice);
     collective(backend.prepare_products(&sim).map_err(|e| e.to_string()))?;
@@ -173,6 +179,7 @@ fn run_dim<const D: usize>(
         Err(e) => {
             if let Some(t) = &sink.tables {
                 let mut summary = Summary::new(opts, t.steps_done, t.last_written, None);
+                summary.warnings = warnings;
                 summary.status = match &e {
                     SolveError::Interrupted { .. } => "interrupted".into(),
                     e => format!("failed: {e}"),
@@ -196,8 +203,10 @@ fn run_dim<const D: usize>(
     stats.peak_memory_bytes = crate::solver::stats::peak_memory_bytes();
     let written = match &sink.tables {
         Some(t) => {
+            let mut summary = Summary::new(opts, t.steps_done, t.last_written, Some(&stats));
+            summary.warnings = warnings;
             let summary = MpiSummary {
-                summary: Summary::new(opts, t.steps_done, t.last_written, Some(&stats)),
+                summary,
                 backend: "petsc",
                 ranks,
                 petsc_solver: method_name(backend.method()),

@@ -35,13 +35,16 @@ const COMPONENTS: [&str; 3] = ["x", "y", "z"];
 
 impl<const D: usize> Dirichlet<D> {
     /// The degree-of-freedom map and the prescribed values of `clamped` (every component zero)
-    /// and the `[[dirichlet]]` sections on `mesh`. A component prescribed twice with different
-    /// values is an error naming both; so is a body whose prescribed components leave a rigid
-    /// motion free.
+    /// and the `[[dirichlet]]` sections on `mesh`. A component prescribed twice is compared by
+    /// value at the shared node at `times` (the text may differ: "0.0" and "0", "0.01*x" and "0"
+    /// at x = 0): different values are an error naming both; so is a body whose prescribed
+    /// components leave a rigid motion free. Every group must be on the boundary of the body
+    /// ([`Mesh::boundary_group_nodes`]).
     pub fn new(
         mesh: &Mesh<D>,
         clamped: Option<&GroupSelector>,
         sections: &[DirichletSpec],
+        times: &[f64],
     ) -> Result<(DofMap<D>, Self), SolveError> {
         let origin = mesh.path.display().to_string();
         let mut dofs = DofMap::new(mesh.points.len(), &[]);
@@ -51,8 +54,8 @@ impl<const D: usize> Dirichlet<D> {
             at: Vec::new(),
             reaction_groups: Vec::new(),
         };
-        // unknown → (who set it, the value's text)
-        let mut set_by: HashMap<usize, (String, String)> = HashMap::new();
+        // unknown → (who set it, the value's text, its expression)
+        let mut set_by: HashMap<usize, (String, String, Option<usize>)> = HashMap::new();
         let mut prescribe = |dofs: &mut DofMap<D>,
                              out: &mut Dirichlet<D>,
                              node: usize,
@@ -62,26 +65,40 @@ impl<const D: usize> Dirichlet<D> {
                              expr: Option<usize>|
          -> Result<(), SolveError> {
             let d = dofs.index(node, c);
-            match set_by.get(&d) {
-                Some((other, t)) if t != text => {
-                    let p = mesh.points[node];
+            if let Some((other, t, first)) = set_by.get(&d) {
+                let x = mesh.points[node];
+                let value = |e: &Option<usize>, time: f64| {
+                    e.map_or(0.0, |e| {
+                        let mut vars = [0.0; 4];
+                        vars[..D].copy_from_slice(&x);
+                        vars[3] = time;
+                        out.exprs[e].eval(&vars)
+                    })
+                };
+                // (a NaN is no conflict here: Dirichlet::values names it)
+                let differs = times.iter().find_map(|&time| {
+                    let (a, b) = (value(first, time), value(&expr, time));
+                    ((a - b).abs() > 1e-12 * a.abs().max(b.abs()).max(1.0)).then_some((time, a, b))
+                });
+                if let Some((time, a, b)) = differs {
                     return Err(SolveError::Setup(format!(
-                        "{origin}: component {} of the node at {p:?} is prescribed by {other} as \"{t}\" and by {who} \
-                         as \"{text}\"; give the shared nodes one value (or leave the component out of one section)",
-                        COMPONENTS[c]
+                        "{origin}: component {} of the node at {} is prescribed by {other} as \"{t}\" and by {who} \
+                         as \"{text}\" ({a} against {b} at t = {time}); give the shared nodes one value (or leave the \
+                         component out of one section)",
+                        COMPONENTS[c],
+                        crate::mesh::fmt_point(x)
                     )));
                 }
-                Some(_) => return Ok(()),
-                None => {}
+                return Ok(());
             }
-            set_by.insert(d, (who.to_string(), text.to_string()));
+            set_by.insert(d, (who.to_string(), text.to_string(), expr));
             dofs.prescribe(node, c);
             out.entries.push((d, expr));
             out.at.push(mesh.points[node]);
             Ok(())
         };
         if let Some(sel) = clamped {
-            let nodes = mesh.group_nodes(sel)?;
+            let nodes = mesh.boundary_group_nodes(sel)?;
             if nodes.is_empty() {
                 return Err(SolveError::NoClampedNodes {
                     mesh: origin,
@@ -102,7 +119,7 @@ impl<const D: usize> Dirichlet<D> {
             }
         }
         for (i, section) in sections.iter().enumerate() {
-            let nodes = mesh.group_nodes(&section.group)?;
+            let nodes = mesh.boundary_group_nodes(&section.group)?;
             if nodes.is_empty() {
                 return Err(SolveError::Setup(format!(
                     "{origin}: dirichlet[{i}].group = {} has no nodes",

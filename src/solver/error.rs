@@ -29,8 +29,10 @@ pub enum SolveError {
     },
     #[error("step {step} (t = {time}): the load {detail}")]
     NonFiniteLoad { step: usize, time: f64, detail: String },
-    #[error("step {step} (t = {time}) produced a non-finite displacement; check the load expressions and material data of the scene")]
-    NonFinite { step: usize, time: f64 },
+    /// A result that is not finite: the data overflow double precision (a load of 1e300), or
+    /// something not finite got past the checks.
+    #[error("step {step} (t = {time}) produced a non-finite {what}: the results overflow double precision or the data are not finite; check the load expressions and material data of the scene (work in units in which loads and moduli are moderate numbers)")]
+    NonFinite { step: usize, time: f64, what: String },
     #[error("run interrupted; {}", match last_written { Some(n) => format!("the frames up to step {n} and the .pvd listing them are valid"), None => "no frame was written".to_string() })]
     Interrupted { last_written: Option<usize> },
     #[error("{0}")]

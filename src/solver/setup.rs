@@ -22,6 +22,21 @@ impl TimeGrid {
     pub fn step(&self) -> f64 {
         self.final_time / self.steps as f64
     }
+    /// The steps at which data are checked before a run ([`Simulation::check_data`], the
+    /// comparison of prescribed values in [`Dirichlet::new`]): every step up to 16 steps, else
+    /// t_0, t_1, t_N and evenly spaced steps between (16 in all at most).
+    pub fn sample(&self) -> Vec<usize> {
+        let steps = self.steps;
+        let mut at: Vec<usize> = if steps <= 16 {
+            (0..=steps).collect()
+        } else {
+            (0..14).map(|i| 1 + i * (steps - 1) / 13).chain([0]).collect()
+        };
+        at.sort_unstable();
+        at.dedup();
+        at
+    }
+
     /// t_n (exactly T at n = N).
     pub fn time(&self, n: usize) -> f64 {
         if n == self.steps {
@@ -91,7 +106,12 @@ impl<const D: usize> Simulation<D> {
     pub fn new(scene: &Scene, mesh: Mesh<D>) -> Result<Self, SolveError> {
         let origin = mesh.path.display().to_string();
         let clamped: Option<GroupSelector> = scene.clamped_group();
-        let (dofs, dirichlet) = Dirichlet::new(&mesh, clamped.as_ref(), &scene.dirichlet)?;
+        let grid = TimeGrid {
+            final_time: scene.time.final_time,
+            steps: scene.time.steps,
+        };
+        let times: Vec<f64> = grid.sample().into_iter().map(|n| grid.time(n)).collect();
+        let (dofs, dirichlet) = Dirichlet::new(&mesh, clamped.as_ref(), &scene.dirichlet, &times)?;
         let plane = match (D, scene.material.plane) {
             (2, Some(p)) => Some(match p {
                 scene::Plane::Stress => PlaneModel::Stress,
@@ -180,5 +200,30 @@ impl<const D: usize> Simulation<D> {
     /// True if step n is written (every `output_every`-th step and always the last).
     pub fn is_output_step(&self, n: usize) -> bool {
         n % self.output_every == 0 || n == self.time.steps
+    }
+
+    /// The loads and prescribed values evaluated on their groups before anything is factorised
+    /// (docs/method.md §3): at t_0 when nothing depends on t, else at t_0, t_1, t_N and evenly
+    /// spaced steps between (at most 16 in all), so that a NaN or an infinity in the data stops
+    /// the run at once with the key, the point and the time. One at a time not evaluated here
+    /// stops the run at that step (the time loop evaluates them every step).
+    pub fn check_data(&self) -> Result<(), SolveError> {
+        let varies = self.loads.is_time_dependent() || self.dirichlet.is_time_dependent();
+        let at = if varies { self.time.sample() } else { vec![0] };
+        let mut load = vec![0.0; self.dofs.n()];
+        let mut prescribed = vec![0.0; self.dofs.n()];
+        for n in at {
+            let t = self.time.time(n);
+            let failed = |detail| SolveError::NonFiniteLoad {
+                step: n,
+                time: t,
+                detail,
+            };
+            if !self.loads.is_empty() {
+                self.loads.assemble(t, &self.dofs, &mut load).map_err(failed)?;
+            }
+            self.dirichlet.values(t, &mut prescribed).map_err(failed)?;
+        }
+        Ok(())
     }
 }

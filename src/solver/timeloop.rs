@@ -188,7 +188,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
         self.update_history(n);
         let output = self.sim.is_output_step(n);
         if output {
-            self.record_reactions(n, t);
+            self.record_reactions(n, t)?;
             self.record_contact_forces(n, t)?;
         }
         self.next += 1;
@@ -260,7 +260,11 @@ impl<'s, const D: usize> Stepper<'s, D> {
         };
         self.rhs = rhs;
         if self.backend.any(self.displacement.iter().any(|v| !v.is_finite())) {
-            return Err(SolveError::NonFinite { step: n, time: t });
+            return Err(SolveError::NonFinite {
+                step: n,
+                time: t,
+                what: "displacement".into(),
+            });
         }
         self.outcome = outcome;
         if let Some(o) = outcome {
@@ -272,10 +276,10 @@ impl<'s, const D: usize> Stepper<'s, D> {
     }
 
     /// The reactions of the scene's groups at an output step (docs/method.md §7).
-    fn record_reactions(&mut self, n: usize, t: f64) {
+    fn record_reactions(&mut self, n: usize, t: f64) -> Result<(), SolveError> {
         let sim = self.sim;
         let Some(r) = &mut self.reactions else {
-            return;
+            return Ok(());
         };
         let memory = if n == 0 {
             None
@@ -289,6 +293,14 @@ impl<'s, const D: usize> Stepper<'s, D> {
             contact: self.contact.as_ref(),
         };
         let values = r.compute(sim, &*self.backend, state);
+        if let Some(g) = values.iter().position(|v| !v.is_finite()) {
+            let g = &sim.dirichlet.reaction_groups[g];
+            return Err(SolveError::NonFinite {
+                step: n,
+                time: t,
+                what: format!("reaction on group {} ({})", g.group, ["x", "y", "z"][g.component]),
+            });
+        }
         self.reaction_values.clear();
         self.reaction_values.extend_from_slice(values);
         for (g, &force) in sim.dirichlet.reaction_groups.iter().zip(values) {
@@ -299,6 +311,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
                 force,
             });
         }
+        Ok(())
     }
 
     /// The total contact force of each contact group at an output step (docs/method.md §14.4).
@@ -312,6 +325,13 @@ impl<'s, const D: usize> Stepper<'s, D> {
             detail,
         })?;
         let forces = setup.group_forces(state, moved.as_ref().map(|(o, _)| &o[..]));
+        if let Some(g) = forces.iter().position(|f| f.iter().any(|v| !v.is_finite())) {
+            return Err(SolveError::NonFinite {
+                step: n,
+                time: t,
+                what: format!("contact force on group {}", setup.groups[g]),
+            });
+        }
         self.contact_forces.clear();
         for (group, f) in setup.groups.iter().zip(&forces) {
             self.contact_forces.extend_from_slice(f);
@@ -447,6 +467,7 @@ pub fn run_with<'s, const D: usize>(
     backend: Box<dyn Backend<D> + 's>,
 ) -> Result<RunStats, SolveError> {
     let started = Instant::now();
+    sim.check_data()?;
     let mut stepper = Stepper::prepare_with(sim, backend)?;
     let mut output_seconds = 0.0;
     let mut frames = 0;
