@@ -77,6 +77,11 @@ mesh3 slab.geo slab_p1_h4.msh -setnumber n 4 -setnumber layers 2 -setnumber hexe
 # The indentation block (0,1)x(0,1)x(0,0.5): unstructured tetrahedra and 8 x 8 x 4 hexahedra.
 mesh3 block.geo block_p1.msh -setnumber hexes 0 -setnumber lc 0.08
 mesh3 block.geo block_q1_h8.msh -setnumber hexes 1 -setnumber n 8
+# Coarse tetrahedra of the block (lc 0.25: 91 nodes, 222 tetrahedra) in MSH 4.1 binary and MSH 2.2
+# ASCII, the other two formats' bases of the 3D mutation campaign (tests/mesh_mutations_3d.rs).
+mesh3 block.geo block_p1_bin.msh -setnumber hexes 0 -setnumber lc 0.25 -bin
+gmsh -3 block.geo -setnumber hexes 0 -setnumber lc 0.25 -format msh22 -o block_p1_v22.msh >/dev/null
+echo "wrote block_p1_v22.msh ($(wc -c <block_p1_v22.msh) bytes)"
 # The L bracket (OpenCASCADE), tetrahedra.
 mesh3 bracket.geo bracket_p1.msh -setnumber lc 0.03
 

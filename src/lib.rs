@@ -23,6 +23,7 @@
 // Index loops over the D components and the nodes of a cell read like the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
+pub mod alloc;
 pub mod app;
 pub mod contact;
 pub mod expr;

@@ -21,6 +21,11 @@ struct Cli {
     command: Command,
 }
 
+/// An allocation failure ends a run with a message and its summary, never an abort
+/// (src/alloc.rs).
+#[global_allocator]
+static GLOBAL: hvi::alloc::Guarded = hvi::alloc::Guarded;
+
 #[derive(Subcommand)]
 enum Command {
     /// Solve a scene on a gmsh mesh and write a ParaView time series.
@@ -170,7 +175,7 @@ fn petsc_exit<T>(
 /// `hvi solve --backend petsc`: every rank runs; rank 0 prints the report or the error.
 #[cfg(feature = "petsc")]
 fn solve_petsc(opts: &hvi::app::SolveOptions, solver: Option<SolverArg>) -> ExitCode {
-    let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::Relaxed));
+    // (the signal handlers are installed once PETSc has started: src/petsc/run.rs)
     let run = hvi::petsc::solve(opts, petsc_solver(solver), Some(&STOP)).map(|r| (r.rank, r.result));
     petsc_exit(run, |stats| println!("{}", hvi::app::report(&stats, &opts.out)))
 }

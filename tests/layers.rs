@@ -17,8 +17,9 @@ use std::path::{Path, PathBuf};
 /// The layers, lowest first. A module may import from its own layer's other modules (as long as
 /// no cycle forms) and from any layer below; never from above.
 const LAYERS: &[&[&str]] = &[
-    // expressions of position, time and state: parsed once, evaluated everywhere
-    &["expr"],
+    // expressions of position, time and state: parsed once, evaluated everywhere; the global
+    // allocator's clean end on an allocation failure
+    &["expr", "alloc"],
     // the geometry: reference cells, their maps and quadrature, meshes and their readers
     &["mesh"],
     // sparse and dense linear algebra: storage, ordering, the Cholesky factor

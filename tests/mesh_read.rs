@@ -114,6 +114,20 @@ const MESHES_3D: &[(&str, usize, usize, f64, &[(&str, usize)])] = &[
         &[("Gamma1", 406), ("Gamma2", 868), ("Gamma3", 406)],
     ),
     (
+        "block_p1_bin.msh",
+        91,
+        222,
+        0.5,
+        &[("Gamma1", 42), ("Gamma2", 88), ("Gamma3", 42)],
+    ),
+    (
+        "block_p1_v22.msh",
+        91,
+        222,
+        0.5,
+        &[("Gamma1", 42), ("Gamma2", 88), ("Gamma3", 42)],
+    ),
+    (
         "bracket_p1.msh",
         4972,
         19951,

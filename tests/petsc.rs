@@ -677,3 +677,65 @@ fn memory_of_two_channels_is_refused_by_solve_and_check() {
     let written = std::fs::read_dir(&out_dir).map_or(0, |d| d.count());
     assert_eq!(written, 0, "the refused run wrote into {d}");
 }
+
+/// Ctrl-C on `mpirun` (which sends SIGTERM to every rank, then SIGKILL after a grace time):
+/// the ranks stop together after the step they agree on, rank 0 writes the interrupted summary,
+/// the series stays valid and the exit code is 130 (issue 23; PETSc's own signal handler used
+/// to abort the ranks with exit code 1 and no summary).
+#[test]
+fn ctrl_c_on_mpirun_stops_every_rank_with_the_interrupted_summary() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let mut child = Command::new("mpirun")
+        .args([
+            "--allow-run-as-root",
+            "--oversubscribe",
+            "--mca",
+            "mpi_yield_when_idle",
+            "1",
+        ])
+        .args(["--mca", "odls_base_sigkill_timeout", "30", "-np", "2", HVI])
+        .args(["solve", "meshes/rect_q1_h8.msh", "--quiet", "--backend", "petsc"])
+        .args(["--out", out.to_str().unwrap()])
+        .args(["--set", "time.steps=5000000", "--set", "output.every=2000"])
+        .env_remove("PETSC_OPTIONS")
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("mpirun");
+    let listed = |p: &Path| std::fs::read_to_string(p).map_or(0, |t| t.matches("file=\"").count());
+    let t0 = std::time::Instant::now();
+    while listed(&out.join("solution.pvd")) < 2 {
+        assert!(t0.elapsed().as_secs() < 120, "no frames written");
+        if let Some(s) = child.try_wait().unwrap() {
+            panic!("mpirun ended early: {s}");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    assert!(Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap()
+        .success());
+    let t1 = std::time::Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if t1.elapsed().as_secs() > 60 {
+            let _ = child.kill();
+            panic!("the ranks did not stop within 60 s of Ctrl-C");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut stderr).unwrap();
+    assert_eq!(status.code(), Some(130), "{stderr}");
+    assert!(stderr.contains("interrupted"), "{stderr}");
+    assert_eq!(summary(&out)["status"], "interrupted", "{stderr}");
+    let pvtu = pvd_files(&out.join("solution.pvd"));
+    assert!(pvtu.len() >= 2);
+    for f in &pvtu {
+        assert!(out.join(f).exists(), "{f} listed but missing");
+    }
+}

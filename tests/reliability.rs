@@ -509,3 +509,127 @@ fn dirichlet_values_are_compared_by_value() {
         .to_string();
     assert_contains(&msg, &["\"0.01*t\"", "t = "]);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Memory
+
+/// `hvi` under an address-space cap (`ulimit -v`, setrlimit in the test's child): the command,
+/// its exit status, and everything it printed.
+fn capped(kib: u64, args: &[&str], env: &[(&str, &str)]) -> (Option<i32>, String) {
+    let quoted: Vec<String> = args.iter().map(|a| format!("'{a}'")).collect();
+    let mut cmd = Command::new("sh");
+    cmd.arg("-c").arg(format!(
+        "ulimit -v {kib} && exec '{}' {}",
+        env!("CARGO_BIN_EXE_hvi"),
+        quoted.join(" ")
+    ));
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    let o = cmd.output().unwrap();
+    (o.status.code(), text(&o))
+}
+
+/// Under a memory cap a run whose predicted peak does not fit is refused before the
+/// factorisation, naming the prediction, the limit and the remedies; `hvi check` says the same;
+/// and when the refusal is overridden the allocation that fails ends the run with a message and
+/// summary.json, never a panic (exit code 101) or an abort (134).
+#[test]
+fn a_run_that_does_not_fit_ends_with_a_message_and_a_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let slab = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/slab.toml");
+    let solve = [
+        "solve",
+        "box:64x32x8",
+        "--scene",
+        slab.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    // the run's predicted peak is ≈ 480 MiB (README "When the solver struggles")
+    let (code, msg) = capped(350_000, &solve, &[]);
+    assert_eq!(code, Some(1), "{msg}");
+    assert_contains(
+        &msg,
+        &[
+            "out of memory",
+            "the run needs about",
+            "factor",
+            "ulimit -v is",
+            "coarser mesh",
+            "--backend petsc",
+        ],
+    );
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert_contains(&summary, &["\"status\": \"failed: out of memory"]);
+
+    let (code, msg) = capped(
+        350_000,
+        &["check", "box:64x32x8", "--scene", slab.to_str().unwrap()],
+        &[],
+    );
+    assert_eq!(code, Some(1), "{msg}");
+    assert_contains(&msg, &["out of memory"]);
+    assert!(!msg.contains("panicked"), "{msg}");
+
+    // the refusal overridden: at two caps the failure comes at different places (assembly,
+    // factorisation), each ends cleanly
+    for cap in [150_000, 350_000] {
+        std::fs::remove_dir_all(&out).unwrap();
+        let (code, msg) = capped(cap, &solve, &[("HVI_IGNORE_MEMORY_ESTIMATE", "1")]);
+        assert_eq!(code, Some(1), "cap {cap} KiB: {msg}");
+        assert_contains(&msg, &["error:", "out of memory"]);
+        assert!(
+            !msg.contains("panicked") && !msg.contains("memory allocation of"),
+            "{msg}"
+        );
+        let summary = std::fs::read_to_string(out.join("summary.json")).expect("summary.json");
+        assert_contains(&summary, &["\"status\": \"failed:", "out of memory"]);
+        let left: Vec<String> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.contains(".tmp"))
+            .collect();
+        assert!(left.is_empty(), "{left:?}");
+    }
+}
+
+/// The predicted peak (summary.json's `predicted_peak_bytes`, what `hvi check` prints and a run
+/// is refused by) is within 30 % of the measured peak (VmHWM) on a 2D and a 3D run with
+/// contact and memory (README "When the solver struggles" lists the larger cases).
+#[test]
+fn the_predicted_peak_is_within_30_percent_of_the_measured_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let slab = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/slab.toml");
+    for (mesh, extra) in [
+        ("rect:256x128", vec!["--set", "time.steps=16"]),
+        (
+            "box:48x24x6",
+            vec!["--scene", slab.to_str().unwrap(), "--set", "time.steps=8"],
+        ),
+    ] {
+        let out = dir.path().join(mesh.replace(':', "_"));
+        let o = hvi()
+            .args(["solve", mesh, "--quiet", "--out", out.to_str().unwrap()])
+            .args(&extra)
+            .args(["--set", "output.every=1000"])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", text(&o));
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+        let (Some(peak), Some(predicted)) = (
+            summary["peak_memory_bytes"].as_f64(),
+            summary["predicted_peak_bytes"].as_f64(),
+        ) else {
+            panic!("{mesh}: no peak in {summary}");
+        };
+        let ratio = predicted / peak;
+        assert!(
+            (0.7..1.3).contains(&ratio),
+            "{mesh}: predicted {predicted} against {peak} measured ({ratio:.2})"
+        );
+    }
+}

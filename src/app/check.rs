@@ -4,6 +4,7 @@ use super::solve::read_mesh;
 use crate::mesh::{AnyMesh, Mesh};
 use crate::scene::Scene;
 use crate::solver::faer::ElasticCheck;
+use crate::solver::memory::{memory_limit, MemoryEstimate};
 use crate::solver::{Plan, Simulation, SolveError};
 use std::path::Path;
 
@@ -40,26 +41,27 @@ fn check_dim<const D: usize>(
     // (the solver layer's own assembly and analysis of K_A, as a run does them)
     let elastic = ElasticCheck::new(&sim)?;
     let analysis = elastic.analysis();
-    let factor_bytes = 8 * analysis.factor_entries() as u64;
     let _ = writeln!(
         out,
-        "factor: {} ordering, nnz(L) = {} ({:.1} MiB per factor, at most 2 factors)",
+        "factor: {} ordering, nnz(L) = {} ({})",
         analysis.ordering(),
         analysis.factor_entries(),
-        factor_bytes as f64 / 1048576.0
+        crate::solver::memory::size(8 * analysis.factor_entries() as u64)
     );
-    if let Some(available) = available_memory_bytes() {
-        if 2 * factor_bytes > available {
-            return Err(SolveError::Setup(format!(
-                "{}: the factor needs {:.1} GiB ({} entries, twice with memory) but {:.1} GiB are available; use a \
-                 coarser mesh (fewer unknowns) or a machine with more memory",
-                mesh_path.display(),
-                2.0 * factor_bytes as f64 / 1073741824.0,
-                analysis.factor_entries(),
-                available as f64 / 1073741824.0
-            )));
-        }
+    // the run's own prediction and refusal (docs/method.md §16.1)
+    let estimate = MemoryEstimate::new(&sim, analysis, elastic.matrix_entries());
+    let _ = writeln!(out, "memory: predicted peak {}", estimate.describe());
+    if let Some(limit) = memory_limit() {
+        let _ = writeln!(
+            out,
+            "  this process may use {} ({})",
+            crate::solver::memory::size(limit.bytes),
+            limit.what
+        );
     }
+    estimate
+        .check_fits(sim.contact.as_ref().map_or(0, |c| c.nodes.len()))
+        .map_err(|e| SolveError::OutOfMemory(format!("{}: {e}", mesh_path.display())))?;
     if let Some(c) = &sim.contact {
         // rows per group (a corner node counts once per wall, docs/method.md §14.3)
         let per_group: Vec<String> = c
@@ -169,12 +171,4 @@ fn softening_memory<const D: usize>(sim: &Simulation<D>) -> bool {
         let s = m.step_share(sim.time.step());
         s.mu < 0.0 || 2.0 * s.mu + D as f64 * s.lambda < 0.0
     })
-}
-
-/// MemAvailable of /proc/meminfo (Linux), in bytes.
-fn available_memory_bytes() -> Option<u64> {
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
 }

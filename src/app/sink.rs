@@ -247,6 +247,7 @@ impl<const D: usize> FileSink<D> {
 impl<const D: usize> FrameSink<D> for FileSink<D> {
     fn step_done(&mut self, _sim: &Simulation<D>, view: &StepView) {
         self.steps_done = view.step + 1;
+        crate::alloc::record_progress(self.steps_done, self.last_written);
         if let Some(bar) = &self.progress {
             bar.set_position(view.step as u64 + 1);
             if let Some(o) = view.outcome {

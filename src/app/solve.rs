@@ -111,10 +111,12 @@ fn solve_dim<const D: usize>(
     .with_active_scalar(scene.output.active_scalar_name());
     sink.manifest.add("scene.toml")?;
     sink.manifest.add("summary.json")?;
+    arm_failure_summary(opts, &warnings);
     let result = output::write_atomic(&opts.out.join("scene.toml"), scene.to_toml_string().as_bytes())
         .map_err(SolveError::from)
         .and_then(|()| timeloop::run(&sim, &mut sink, stop));
     sink.finish();
+    crate::alloc::arm(None);
     let mut summary = Summary::new(opts, sink.steps_done, sink.last_written, None);
     summary.warnings = warnings;
     let mut stats = match result {
@@ -137,6 +139,20 @@ fn solve_dim<const D: usize>(
     summary.stats = Some(&stats);
     output::write_json_atomic(&opts.out.join("summary.json"), &summary)?;
     Ok(stats)
+}
+
+/// Arms the summary.json an allocation failure leaves (src/alloc.rs): this run's summary with
+/// the failure as its status and the progress as of the failure.
+pub(crate) fn arm_failure_summary(opts: &SolveOptions, warnings: &[String]) {
+    let mut template = Summary::new(opts, crate::alloc::STEPS_MARK, Some(crate::alloc::LAST_MARK), None);
+    template.status = crate::alloc::STATUS_MARK.into();
+    template.warnings = warnings.to_vec();
+    if let Ok(text) = serde_json::to_string_pretty(&template) {
+        crate::alloc::arm(crate::alloc::FailureReport::from_template(
+            &opts.out.join("summary.json"),
+            &format!("{text}\n"),
+        ));
+    }
 }
 
 /// Solves in memory (no files): for tests, studies and examples.

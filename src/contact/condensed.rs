@@ -312,7 +312,7 @@ impl StoredResponses {
     ) -> Result<Self, String> {
         let (n, m) = (solver.n(), nodes.len());
         let mut z = Vec::new();
-        z.try_reserve_exact(n * m)
+        crate::alloc::fallible(|| z.try_reserve_exact(n * m))
             .map_err(|_| format!("out of memory for the stored responses Z ({n} × {m})"))?;
         z.resize(n * m, 0.0);
         for (p, row) in nodes.rows().iter().enumerate() {

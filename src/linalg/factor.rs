@@ -270,8 +270,8 @@ impl Factor {
             return Err(FactorError::Other("faer chose a simplicial factor".into()));
         };
         let mut values = Vec::new();
-        values
-            .try_reserve_exact(symbolic.len_val())
+        // (a failure is this message, not the allocator's end of the process: src/alloc.rs)
+        crate::alloc::fallible(|| values.try_reserve_exact(symbolic.len_val()))
             .map_err(|_| FactorError::Other(format!("out of memory for {} factor entries", symbolic.len_val())))?;
         values.resize(symbolic.len_val(), 0.0);
         // 3D factors have large dense supernodes, where faer's parallel kernels pay off (box

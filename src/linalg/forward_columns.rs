@@ -7,7 +7,7 @@
 //! segment per supernode. A few hundred paths of a 2D factor hold well under a tenth of the
 //! factor's entries, so Gᵀ y and y − G λ are cheap next to a sweep over L.
 
-use super::factor::{Counters, Factor, Forward};
+use super::factor::{Analysis, Counters, Factor, Forward};
 use super::supernodes::dot;
 use rayon::prelude::*;
 use std::sync::atomic::Ordering;
@@ -167,6 +167,33 @@ impl ForwardColumns {
         }
         w
     }
+}
+
+/// The number of values [`ForwardColumns::new`] will store for `rows` on `analysis`: each
+/// column's supernode path, trimmed as the sweep trims it. For predicting a run's memory before
+/// the numeric factorisation (docs/method.md §16.1).
+pub fn forward_columns_entries(analysis: &Analysis, rows: &[Vec<(usize, f64)>]) -> usize {
+    let supernodes = analysis.supernodes();
+    let position = analysis.permutation().1;
+    let mut marked = vec![usize::MAX; supernodes.len()];
+    let mut total = 0;
+    for (c, row) in rows.iter().enumerate() {
+        let first = if analysis.ordered_last() > 0 {
+            row.iter().map(|&(i, _)| position[i]).min().unwrap_or(0)
+        } else {
+            0
+        };
+        for &(i, _) in row {
+            let mut s = supernodes.supernode_of[position[i]];
+            while s != usize::MAX && marked[s] != c {
+                marked[s] = c;
+                let end = supernodes.start[s] + supernodes.width[s];
+                total += end - supernodes.start[s].max(first).min(end);
+                s = supernodes.parent[s];
+            }
+        }
+    }
+    total
 }
 
 /// L⁻¹ P b for a sparse b, visiting only the supernodes on the paths from b's entries to the

@@ -42,7 +42,7 @@ pub mod sparse;
 mod supernodes;
 
 pub use factor::{set_parallelism, Analysis, Counters, Factor, FactorError, Forward, NodeOrdering};
-pub use forward_columns::ForwardColumns;
+pub use forward_columns::{forward_columns_entries, ForwardColumns};
 
 /// Solves with a fixed matrix K (docs/method.md §9): the seam a second linear-algebra backend
 /// plugs into. The cached faer [`Factor`] is one implementation.

@@ -330,7 +330,7 @@ pub(crate) mod test_matrices {
 
     impl Prescribed for LeftSide {
         fn is_prescribed(&self, i: usize) -> bool {
-            (i / 2) % (self.nx + 1) == 0
+            (i / 2).is_multiple_of(self.nx + 1)
         }
     }
 

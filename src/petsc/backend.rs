@@ -605,7 +605,7 @@ impl PetscSolver {
         let mut w = if root { vec![0.0; m * m] } else { Vec::new() };
         let mut z = if keep {
             let mut z = Vec::new();
-            z.try_reserve_exact(nl * m).map_err(|_| hvi_petsc::Error {
+            crate::alloc::fallible(|| z.try_reserve_exact(nl * m)).map_err(|_| hvi_petsc::Error {
                 code: -1,
                 message: format!("out of memory for the stored responses Z ({nl} × {m} on this rank)"),
             })?;

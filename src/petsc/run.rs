@@ -49,9 +49,16 @@ pub struct MpiRun {
 
 /// `hvi solve --backend petsc`: initialises MPI and PETSc, runs the scene on every rank, and
 /// finalises. Only rank 0 should print the result (every rank holds the same error). `stop`
-/// (Ctrl-C on any rank) ends the run after the step every rank agrees on.
-pub fn solve(opts: &SolveOptions, choice: SolverChoice, stop: Option<&AtomicBool>) -> Result<MpiRun, String> {
+/// (set on SIGINT, SIGTERM or SIGHUP of any rank, handlers installed here) ends the run after the
+/// step every rank agrees on, with rank 0's interrupted summary.
+pub fn solve(opts: &SolveOptions, choice: SolverChoice, stop: Option<&'static AtomicBool>) -> Result<MpiRun, String> {
     let petsc = start()?;
+    // After PETSc's start, whose signal handler would otherwise take SIGTERM (what mpirun sends
+    // every rank on Ctrl-C) and abort the ranks: SIGINT, SIGTERM and SIGHUP set `stop`, and the
+    // ranks stop together after the step they agree on (docs/method.md §13).
+    if let Some(stop) = stop {
+        let _ = ctrlc::set_handler(move || stop.store(true, std::sync::atomic::Ordering::Relaxed));
+    }
     let (rank, ranks) = (petsc.rank(), petsc.size());
     let result = run(&petsc, opts, choice, stop);
     Ok(MpiRun { rank, ranks, result })
@@ -125,6 +132,9 @@ fn run_dim<const D: usize>(
         Ok(())
     };
     collective(prepared)?;
+    if rank == 0 {
+        crate::app::solve::arm_failure_summary(opts, &warnings);
+    }
     let sink = PieceSink::new(
         petsc,
         &opts.out,

@@ -35,6 +35,9 @@ pub enum SolveError {
     NonFinite { step: usize, time: f64, what: String },
     #[error("run interrupted; {}", match last_written { Some(n) => format!("the frames up to step {n} and the .pvd listing them are valid"), None => "no frame was written".to_string() })]
     Interrupted { last_written: Option<usize> },
+    /// The predicted peak does not fit the memory this process may use (docs/method.md §16.1).
+    #[error("out of memory: {0}")]
+    OutOfMemory(String),
     #[error("{0}")]
     Setup(String),
 }

@@ -129,6 +129,12 @@ impl<const D: usize> FaerBackend<D> {
         .map_err(|e| SolveError::Setup(e.to_string()))?;
         stats.ordering = Some(symbolic.ordering().to_string());
         stats.factor_entries = symbolic.factor_entries();
+        // the predicted peak against what the process may use, before the large allocations
+        let estimate = super::memory::MemoryEstimate::new(sim, &symbolic, stats.matrix_nonzeros);
+        stats.predicted_peak_bytes = Some(estimate.total());
+        estimate
+            .check_fits(sim.contact.as_ref().map_or(0, |c| c.nodes.len()))
+            .map_err(|e| SolveError::OutOfMemory(format!("{}: {e}", sim.mesh.path.display())))?;
         let operator = StepOperator::factored(sim, &symbolic, system, counters, stats)?;
         self.k_a = Some(k_a);
         self.symbolic = Some(symbolic);
@@ -189,6 +195,11 @@ impl ElasticCheck {
         let analysis = Factor::analyse_with_last(&k_a, &sim.unknowns_ordered_last())
             .map_err(|e| SolveError::Setup(e.to_string()))?;
         Ok(ElasticCheck { k_a, analysis })
+    }
+
+    /// Stored entries of the assembled K_A (for the memory prediction).
+    pub fn matrix_entries(&self) -> usize {
+        self.k_a.values.len()
     }
 
     /// The symbolic analysis: the ordering and nnz(L).

@@ -9,6 +9,7 @@ pub mod contact;
 pub mod dirichlet;
 pub mod error;
 pub mod faer;
+pub mod memory;
 pub mod operator;
 pub mod plan;
 pub mod reactions;

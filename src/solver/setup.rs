@@ -199,7 +199,7 @@ impl<const D: usize> Simulation<D> {
 
     /// True if step n is written (every `output_every`-th step and always the last).
     pub fn is_output_step(&self, n: usize) -> bool {
-        n % self.output_every == 0 || n == self.time.steps
+        n.is_multiple_of(self.output_every) || n == self.time.steps
     }
 
     /// The loads and prescribed values evaluated on their groups before anything is factorised

@@ -74,6 +74,8 @@ pub struct RunStats {
     pub contact_forces: Vec<Reaction>,
     /// Peak resident memory of the process (VmHWM, Linux), in bytes.
     pub peak_memory_bytes: Option<u64>,
+    /// The peak predicted before the factorisation (docs/method.md §16.1), in bytes.
+    pub predicted_peak_bytes: Option<u64>,
     pub phases: PhaseTimes,
 }
 
