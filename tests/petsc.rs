@@ -680,8 +680,8 @@ fn memory_of_two_channels_is_refused_by_solve_and_check() {
 
 /// Ctrl-C on `mpirun` (which sends SIGTERM to every rank, then SIGKILL after a grace time):
 /// the ranks stop together after the step they agree on, rank 0 writes the interrupted summary,
-/// the series stays valid and the exit code is 130 (issue 23; PETSc's own signal handler used
-/// to abort the ranks with exit code 1 and no summary).
+/// the series stays valid (issue 23; PETSc's own signal handler used to abort the ranks with no
+/// message and no summary).
 #[test]
 fn ctrl_c_on_mpirun_stops_every_rank_with_the_interrupted_summary() {
     let tmp = tempfile::tempdir().unwrap();
@@ -697,7 +697,7 @@ fn ctrl_c_on_mpirun_stops_every_rank_with_the_interrupted_summary() {
         .args(["--mca", "odls_base_sigkill_timeout", "30", "-np", "2", HVI])
         .args(["solve", "meshes/rect_q1_h8.msh", "--quiet", "--backend", "petsc"])
         .args(["--out", out.to_str().unwrap()])
-        .args(["--set", "time.steps=5000000", "--set", "output.every=2000"])
+        .args(["--set", "time.steps=5000000", "--set", "output.every=100"])
         .env_remove("PETSC_OPTIONS")
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::piped())
@@ -730,8 +730,9 @@ fn ctrl_c_on_mpirun_stops_every_rank_with_the_interrupted_summary() {
     };
     let mut stderr = String::new();
     std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut stderr).unwrap();
-    assert_eq!(status.code(), Some(130), "{stderr}");
-    assert!(stderr.contains("interrupted"), "{stderr}");
+    // (each rank exits with 130; mpirun, having forwarded a signal, reports 1 itself)
+    assert!(!status.success(), "{stderr}");
+    assert!(stderr.contains("run interrupted"), "{stderr}");
     assert_eq!(summary(&out)["status"], "interrupted", "{stderr}");
     let pvtu = pvd_files(&out.join("solution.pvd"));
     assert!(pvtu.len() >= 2);

@@ -633,3 +633,50 @@ fn the_predicted_peak_is_within_30_percent_of_the_measured_one() {
         );
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// A residual that stalls at round-off
+
+/// An ill-conditioned condensed operator (W = 10⁻⁹ I + 𝟙𝟙ᵀ/m, the compliance of a body that is
+/// almost rigid in all but one mode, like a thin plate): with a tolerance below its round-off the
+/// solve fails having stalled near it, and the advice names a tolerance (not smaller steps or
+/// more regularisation, which cannot lower a round-off floor) at which the same solve converges.
+#[test]
+fn a_stalled_contact_solve_names_the_tolerance_that_converges() {
+    use hvi::contact::active_set::ContactState;
+    use hvi::contact::{ActiveSetSolver, ContactSettings, DenseNormalStiffness, NodalLaws};
+    let m = 60;
+    let w: Vec<f64> = (0..m * m)
+        .map(|k| 1.0 / m as f64 + if k / m == k % m { 1e-9 } else { 0.0 })
+        .collect();
+    let op = DenseNormalStiffness::from_w(w, m).unwrap();
+    let laws = NodalLaws::default();
+    // the free solution d crosses the bound on part of the surface
+    let d: Vec<f64> = (0..m).map(|p| 0.3 * (p as f64 / m as f64 * 6.0).sin()).collect();
+    let bound = vec![0.1; m];
+    let solve = |tolerance: f64| {
+        let solver = ActiveSetSolver {
+            operator: &op,
+            laws: &laws,
+            offset: None,
+            bound: Some(&bound),
+            settings: ContactSettings {
+                tolerance,
+                max_iterations: 100,
+                dense_limit: 1000,
+            },
+        };
+        solver.solve(&d, &mut ContactState::new(m))
+    };
+    let failure = solve(1e-18).expect_err("a tolerance below round-off cannot be met");
+    let advice = hvi::solver::error::contact_failure_advice(failure.smallest_residual, 1e-18);
+    assert!(advice.contains("stalled"), "smallest {:e}: {advice}", failure.smallest_residual);
+    let suggested: f64 = advice
+        .split("solver.tolerance = ")
+        .nth(1)
+        .and_then(|s| s.split('`').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("{advice}"));
+    assert!(suggested > failure.smallest_residual && suggested <= 20.0 * failure.smallest_residual, "{advice}");
+    solve(suggested).unwrap_or_else(|f| panic!("the suggested {suggested:e} fails too: {}", f.reason));
+}

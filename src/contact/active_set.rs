@@ -180,6 +180,8 @@ impl ContactOutcome {
 pub struct ContactFailure {
     pub outcome: ContactOutcome,
     pub reason: String,
+    /// The smallest relative residual the solve reached: where it stalled, if it did.
+    pub smallest_residual: f64,
 }
 
 /// The contact problem data of a step: condensed operator, the rows' laws (with their nodal
@@ -363,6 +365,7 @@ impl ActiveSetSolver<'_> {
                 return Err(ContactFailure {
                     outcome,
                     reason: format!("no convergence in {} iterations", self.settings.max_iterations),
+                    smallest_residual: best_residual / scale,
                 });
             }
             outcome.iterations += 1;
@@ -446,6 +449,7 @@ impl ActiveSetSolver<'_> {
                     }
                     return Err(ContactFailure {
                         outcome,
+                        smallest_residual: best_residual / scale,
                         reason: "the line search could not decrease the energy (the regularised law may be too steep: increase `contact.law.regularisation` or reduce the time step)".into(),
                     });
                 }

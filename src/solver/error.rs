@@ -18,7 +18,8 @@ pub enum SolveError {
     NoClampedNodes { mesh: String, group: String },
     #[error("{mesh}: {detail}")]
     Singular { mesh: String, detail: String },
-    #[error("contact solve failed at step {step} (t = {time}): {reason}; residual {residual:.3e} after {iterations} iterations (tolerance {tolerance:.1e}). Try: a smaller time step (`--set time.steps=...`), a larger `contact.law.regularisation`, or more `solver.max_iterations`")]
+    /// The contact solve of a step did not converge; `advice` is [`contact_failure_advice`]'s.
+    #[error("contact solve failed at step {step} (t = {time}): {reason}; residual {residual:.3e} after {iterations} iterations (tolerance {tolerance:.1e}). {advice}")]
     ContactFailed {
         step: usize,
         time: f64,
@@ -26,6 +27,7 @@ pub enum SolveError {
         residual: f64,
         tolerance: f64,
         reason: String,
+        advice: String,
     },
     #[error("step {step} (t = {time}): the load {detail}")]
     NonFiniteLoad { step: usize, time: f64, detail: String },
@@ -40,4 +42,42 @@ pub enum SolveError {
     OutOfMemory(String),
     #[error("{0}")]
     Setup(String),
+}
+
+/// What to do when a contact solve fails having reached at best the relative residual
+/// `smallest` (docs/method.md §5.4). Far from converged: smaller steps, more regularisation or
+/// iterations. Within reach but above `tolerance` by no more than round-off can explain (below
+/// 10⁻⁶): the residual has stalled at the round-off of the condensed operator's scale (a thin
+/// plate, very different stiffnesses), which none of those lower: name the tolerance where the
+/// solve converges, the stall level rounded up to a power of ten.
+pub fn contact_failure_advice(smallest: f64, tolerance: f64) -> String {
+    if smallest.is_finite() && smallest > tolerance && smallest < 1e-6 {
+        let suggested = 10f64.powf((2.0 * smallest).log10().ceil());
+        format!(
+            "The residual stalled at {smallest:.1e}, the round-off level of the condensed contact operator for this \
+             body (an ill-conditioned one: a thin plate, or parts of very different stiffness); smaller steps or \
+             more regularisation do not lower it. Set `solver.tolerance = {suggested:.0e}` (`--set \
+             solver.tolerance={suggested:.0e}`)"
+        )
+    } else {
+        "Try: a smaller time step (`--set time.steps=...`), a larger `contact.law.regularisation`, or more \
+         `solver.max_iterations`"
+            .to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_stall_near_the_tolerance_names_a_tolerance_above_it() {
+        let advice = contact_failure_advice(1.7e-9, 1e-10);
+        assert!(advice.contains("solver.tolerance = 1e-8"), "{advice}");
+        let advice = contact_failure_advice(1e-9, 1e-10);
+        assert!(advice.contains("solver.tolerance = 1e-8"), "{advice}");
+        // far from converged: the usual remedies
+        assert!(contact_failure_advice(0.7, 1e-10).contains("smaller time step"));
+        assert!(contact_failure_advice(f64::NAN, 1e-10).contains("smaller time step"));
+    }
 }

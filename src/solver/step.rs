@@ -160,6 +160,7 @@ fn contact_solve<const D: usize>(
         residual: f.outcome.residual,
         tolerance: setup.settings.tolerance,
         reason: f.reason,
+        advice: super::error::contact_failure_advice(f.smallest_residual, setup.settings.tolerance),
     })
 }
 
