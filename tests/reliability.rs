@@ -670,13 +670,20 @@ fn a_stalled_contact_solve_names_the_tolerance_that_converges() {
     };
     let failure = solve(1e-18).expect_err("a tolerance below round-off cannot be met");
     let advice = hvi::solver::error::contact_failure_advice(failure.smallest_residual, 1e-18);
-    assert!(advice.contains("stalled"), "smallest {:e}: {advice}", failure.smallest_residual);
+    assert!(
+        advice.contains("stalled"),
+        "smallest {:e}: {advice}",
+        failure.smallest_residual
+    );
     let suggested: f64 = advice
         .split("solver.tolerance = ")
         .nth(1)
         .and_then(|s| s.split('`').next())
         .and_then(|s| s.parse().ok())
         .unwrap_or_else(|| panic!("{advice}"));
-    assert!(suggested > failure.smallest_residual && suggested <= 20.0 * failure.smallest_residual, "{advice}");
+    assert!(
+        suggested > failure.smallest_residual && suggested <= 20.0 * failure.smallest_residual,
+        "{advice}"
+    );
     solve(suggested).unwrap_or_else(|f| panic!("the suggested {suggested:e} fails too: {}", f.reason));
 }

@@ -13,6 +13,6 @@ pub struct SolveOptions {
     /// of refusing to write there.
     pub overwrite: bool,
     /// Run on a mesh with severe defects (not conforming, a crack, overlapping cells) instead of
-    /// refusing it: the defects become warnings (docs/method.md §2.3).
+    /// refusing it: the defects become warnings (docs/method.md §16.3).
     pub accept_mesh_defects: bool,
 }

@@ -1,12 +1,12 @@
 //! The warnings `hvi check` prints and `hvi solve` prints before running (and keeps in
-//! summary.json): the mesh's defects as one body (docs/method.md §2.3), then the scene's
+//! summary.json): the mesh's defects as one body (docs/method.md §16.3), then the scene's
 //! set-ups that are valid but probably unintended (docs/method.md §14.5).
 
 use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::solver::{Simulation, SolveError};
 
-/// The mesh's defects as one conforming body (docs/method.md §2.3): an error naming the severe
+/// The mesh's defects as one conforming body (docs/method.md §16.3): an error naming the severe
 /// ones unless `accept`; else every defect as a warning (what `hvi check` and `hvi solve` print).
 pub fn mesh_warnings<const D: usize>(mesh: &Mesh<D>, accept: bool) -> Result<Vec<String>, SolveError> {
     let defects = mesh.defects();

@@ -1,5 +1,5 @@
 //! Is the mesh one conforming body, and is each group where the scene needs it (docs/method.md
-//! §2.3)? A mesh can parse, have only positively oriented cells, and still be broken in ways
+//! §16.3)? A mesh can parse, have only positively oriented cells, and still be broken in ways
 //! that give a wrong answer without any other error: a duplicated node that cuts the body (a
 //! crack), a hexahedron whose face no longer matches its neighbour's, cells that overlap, or a
 //! clamped group whose facets are not faces of the body. Everything here is combinatorial (faces

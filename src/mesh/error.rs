@@ -51,7 +51,7 @@ pub enum MeshError {
         dim: u8,
         available: String,
     },
-    /// The mesh is not one conforming body (docs/method.md §2.3): its defects, severe first.
+    /// The mesh is not one conforming body (docs/method.md §16.3): its defects, severe first.
     #[error("{}: the mesh is not one conforming body: {detail}; if this is intended, pass --accept-mesh-defects to run anyway", path.display())]
     Defects { path: PathBuf, detail: String },
     /// A group used as a boundary part is not on the boundary of the body.

@@ -45,7 +45,7 @@ pub enum SolveError {
 }
 
 /// What to do when a contact solve fails having reached at best the relative residual
-/// `smallest` (docs/method.md §5.4). Far from converged: smaller steps, more regularisation or
+/// `smallest` (docs/method.md §16.4). Far from converged: smaller steps, more regularisation or
 /// iterations. Within reach but above `tolerance` by no more than round-off can explain (below
 /// 10⁻⁶): the residual has stalled at the round-off of the condensed operator's scale (a thin
 /// plate, very different stiffnesses), which none of those lower: name the tolerance where the

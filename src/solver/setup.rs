@@ -203,7 +203,7 @@ impl<const D: usize> Simulation<D> {
     }
 
     /// The loads and prescribed values evaluated on their groups before anything is factorised
-    /// (docs/method.md §3): at t_0 when nothing depends on t, else at t_0, t_1, t_N and evenly
+    /// (docs/method.md §16.3): at t_0 when nothing depends on t, else at t_0, t_1, t_N and evenly
     /// spaced steps between (at most 16 in all), so that a NaN or an infinity in the data stops
     /// the run at once with the key, the point and the time. One at a time not evaluated here
     /// stops the run at that step (the time loop evaluates them every step).
