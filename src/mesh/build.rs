@@ -166,9 +166,11 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
             return Err(invalid(
                 raw.node_place(i, true),
                 format!(
-                    "node {} has z = {:?} but node {} has z = {:?}, and the mesh has no tetrahedra or hexahedra: a 2D \
-                     mesh must lie in a plane z = const; mesh a plane surface (gmsh -2), or mesh the volume (gmsh -3) \
-                     for a 3D body",
+                    "node {} has z = {:?} but node {} has z = {:?}, and the file has no volume elements: a 2D mesh \
+                     must lie in a plane z = const. If this is a volume mesh, its volume is in no physical group, so \
+                     gmsh saved only the surfaces: add `Physical Volume(\"Omega\", 5) = {{...}};` to the .geo (or set \
+                     Mesh.SaveAll = 1) and mesh again; if the volume was never meshed, mesh it (gmsh -3); for a 2D \
+                     body mesh a plane surface (gmsh -2)",
                     raw.node_tags[i], raw.coords[i][2], raw.node_tags[0], z0
                 ),
             ));

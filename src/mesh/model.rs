@@ -121,12 +121,34 @@ impl<const D: usize> Mesh<D> {
             }
             s
         };
+        let available = match (sel, self.nearest_group_name(sel)) {
+            (GroupSelector::Name(_), Some(near)) => format!(
+                "{available}; did you mean \"{near}\"? (names are case-sensitive; a group's tag number works too)"
+            ),
+            _ => format!("{available} (a group's name or its tag number works)"),
+        };
         MeshError::GroupNotFound {
             path: self.path.clone(),
             wanted: sel.to_string(),
             dim,
             available,
         }
+    }
+
+    /// The group name nearest to a wanted name: equal ignoring case, or within two edits of it
+    /// (ignoring case), the closest first.
+    fn nearest_group_name(&self, sel: &GroupSelector) -> Option<&str> {
+        let GroupSelector::Name(wanted) = sel else {
+            return None;
+        };
+        let wanted = wanted.to_lowercase();
+        self.groups
+            .iter()
+            .filter_map(|g| g.name.as_deref())
+            .map(|n| (edit_distance(&n.to_lowercase(), &wanted), n))
+            .filter(|&(d, _)| d <= 2)
+            .min_by_key(|&(d, _)| d)
+            .map(|(_, n)| n)
     }
 
     /// The sorted, unique node indices of a group: of dimension D − 1 (facets) if there is one
@@ -201,4 +223,20 @@ pub(super) fn longest_edge<const D: usize>(points: &[[f64; D]], c: &Cell) -> f64
 pub(crate) fn fmt_point<const D: usize>(p: [f64; D]) -> String {
     let parts: Vec<String> = p.iter().map(|v| format!("{v:?}")).collect();
     format!("({})", parts.join(", "))
+}
+
+/// The Levenshtein distance of two strings (by characters).
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let above = row[j + 1];
+            row[j + 1] = (above + 1).min(row[j] + 1).min(diagonal + usize::from(ca != cb));
+            diagonal = above;
+        }
+    }
+    row[b.len()]
 }

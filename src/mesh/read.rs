@@ -34,7 +34,13 @@ pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<AnyMesh, MeshError> {
         Version::V2 => msh22::parse(path, bytes, header.body)?,
         Version::V41 => msh41::parse(path, bytes, &header)?,
     };
-    if raw.element_types.iter().any(|&t| matches!(t, 4 | 5)) {
+    // any volume element (also one hvi does not compute with: prisms, pyramids, second-order
+    // tetrahedra) makes a 3D mesh, whose reader then names what to do about the element
+    if raw
+        .element_types
+        .iter()
+        .any(|&t| crate::mesh::element_type_info(t).is_some_and(|(_, _, dim)| dim == 3))
+    {
         build_mesh::<3>(path, raw).map(AnyMesh::Three)
     } else {
         build_mesh::<2>(path, raw).map(AnyMesh::Two)

@@ -83,6 +83,7 @@ impl Scene {
                 message: e.into_inner().to_string(),
             }
         })?;
+        scene.origin = origin.to_string();
         scene.read_tables(origin, dir)?;
         validate::check_values(&scene, origin)?;
         Ok(scene)

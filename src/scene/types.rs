@@ -12,6 +12,9 @@ use std::path::PathBuf;
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
+    /// How messages name the scene: its file, or [`super::DEFAULT_SCENE_ORIGIN`] (not a key).
+    #[serde(skip)]
+    pub origin: String,
     #[serde(default)]
     pub groups: Groups,
     pub material: Material,

@@ -52,6 +52,16 @@ pub fn warnings<const D: usize>(scene: &Scene, sim: &Simulation<D>) -> Vec<Strin
     for (i, spec) in scene.contact.iter().enumerate() {
         let group = c.groups.get(i).cloned().unwrap_or_else(|| format!("#{i}"));
         let rows: Vec<usize> = (0..c.row_group.len()).filter(|&p| c.row_group[p] == i).collect();
+        // (two sections on one group share its rows, kept under the first: §14.3)
+        let same_group = |j: usize| c.group_tags.get(j) == c.group_tags.get(i);
+        if rows.is_empty() && !c.row_group.iter().any(|&j| same_group(j)) {
+            out.push(format!(
+                "contact group `{group}` has no contact unknowns: every node of it has its normal component \
+                 prescribed (it is the clamped group, or a [[dirichlet]] group's), so it can never touch; name the \
+                 group that touches in `groups.contact` (or `contact[{i}].group`)"
+            ));
+            continue;
+        }
         // a constant bound along each node's own normal on a curved Γ₃: the foundation is then a
         // copy of Γ₃ shifted by g, not a flat obstacle
         if spec.obstacle.is_none() && matches!(spec.bound, Some(BoundSpec::Number(_))) {

@@ -223,8 +223,14 @@ pub fn build<const D: usize>(
     for &i in &used {
         let c = &scene.contact[i];
         let key = scene.contact_key(i);
-        parts.push(mesh.boundary(&scene.contact_group(i))?);
-        group_tags.push(mesh.group(&scene.contact_group(i), (D - 1) as u8)?.tag);
+        let group_key = if c.group.is_some() {
+            format!("{key}.group")
+        } else {
+            "groups.contact".to_string()
+        };
+        let keyed = super::error::group_error(&scene.origin, &group_key);
+        parts.push(mesh.boundary(&scene.contact_group(i)).map_err(&keyed)?);
+        group_tags.push(mesh.group(&scene.contact_group(i), (D - 1) as u8).map_err(&keyed)?.tag);
         obstacles.push(match &c.obstacle {
             Some(o) => Some(obstacle_of::<D>(o, &format!("{key}.obstacle"), origin, length)?),
             None => None,

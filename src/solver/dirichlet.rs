@@ -45,6 +45,7 @@ impl<const D: usize> Dirichlet<D> {
         clamped: Option<&GroupSelector>,
         sections: &[DirichletSpec],
         times: &[f64],
+        scene_origin: &str,
     ) -> Result<(DofMap<D>, Self), SolveError> {
         let origin = mesh.path.display().to_string();
         let mut dofs = DofMap::new(mesh.points.len(), &[]);
@@ -98,7 +99,9 @@ impl<const D: usize> Dirichlet<D> {
             Ok(())
         };
         if let Some(sel) = clamped {
-            let nodes = mesh.boundary_group_nodes(sel)?;
+            let nodes = mesh
+                .boundary_group_nodes(sel)
+                .map_err(super::error::group_error(scene_origin, "groups.clamped"))?;
             if nodes.is_empty() {
                 return Err(SolveError::NoClampedNodes {
                     mesh: origin,
@@ -119,7 +122,10 @@ impl<const D: usize> Dirichlet<D> {
             }
         }
         for (i, section) in sections.iter().enumerate() {
-            let nodes = mesh.boundary_group_nodes(&section.group)?;
+            let key = format!("dirichlet[{i}].group");
+            let nodes = mesh
+                .boundary_group_nodes(&section.group)
+                .map_err(super::error::group_error(scene_origin, &key))?;
             if nodes.is_empty() {
                 return Err(SolveError::Setup(format!(
                     "{origin}: dirichlet[{i}].group = {} has no nodes",

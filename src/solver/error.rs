@@ -8,6 +8,14 @@ use crate::scene::SceneError;
 pub enum SolveError {
     #[error(transparent)]
     Mesh(#[from] MeshError),
+    /// A group the scene names, at `key`, is missing from the mesh or not where it must be.
+    #[error("{origin}: `{key}`: {source}")]
+    Group {
+        origin: String,
+        key: String,
+        #[source]
+        source: MeshError,
+    },
     #[error(transparent)]
     Scene(#[from] SceneError),
     /// A [`FrameSink`](super::FrameSink) could not take a frame (the output layer's errors
@@ -79,5 +87,19 @@ mod tests {
         // far from converged: the usual remedies
         assert!(contact_failure_advice(0.7, 1e-10).contains("smaller time step"));
         assert!(contact_failure_advice(f64::NAN, 1e-10).contains("smaller time step"));
+    }
+}
+
+/// A mesh error about the group the scene names at `key` (of the scene `origin`), as a
+/// [`SolveError::Group`] that says where the name came from; other errors unchanged.
+pub fn group_error(origin: &str, key: &str) -> impl Fn(MeshError) -> SolveError {
+    let (origin, key) = (origin.to_string(), key.to_string());
+    move |e| match e {
+        MeshError::GroupNotFound { .. } | MeshError::NotBoundary { .. } => SolveError::Group {
+            origin: origin.clone(),
+            key: key.clone(),
+            source: e,
+        },
+        e => SolveError::Mesh(e),
     }
 }

@@ -111,7 +111,7 @@ impl<const D: usize> Simulation<D> {
             steps: scene.time.steps,
         };
         let times: Vec<f64> = grid.sample().into_iter().map(|n| grid.time(n)).collect();
-        let (dofs, dirichlet) = Dirichlet::new(&mesh, clamped.as_ref(), &scene.dirichlet, &times)?;
+        let (dofs, dirichlet) = Dirichlet::new(&mesh, clamped.as_ref(), &scene.dirichlet, &times, &scene.origin)?;
         let plane = match (D, scene.material.plane) {
             (2, Some(p)) => Some(match p {
                 scene::Plane::Stress => PlaneModel::Stress,
@@ -122,10 +122,18 @@ impl<const D: usize> Simulation<D> {
                     "{origin} is a 2D mesh: say which 2D model in the scene, material.plane = \"stress\" or \"strain\""
                 )))
             }
+            (_, Some(_)) if scene.origin == scene::DEFAULT_SCENE_ORIGIN => {
+                return Err(SolveError::Setup(format!(
+                    "{origin} is a 3D mesh, but no scene was given and the embedded default is the paper's 2D example \
+                     (examples/paper.toml, plane strain); a 3D body needs a scene of its own: --scene \
+                     examples/slab.toml (the paper's example on a slab) or one of yours (README \"Scene files\")"
+                )))
+            }
             (_, Some(_)) => {
                 return Err(SolveError::Setup(format!(
-                    "{origin} is a 3D mesh, but the scene sets material.plane: plane stress and plane strain are 2D \
-                     models; remove material.plane for a 3D body"
+                    "{origin} is a 3D mesh, but the scene {} sets material.plane: plane stress and plane strain are 2D \
+                     models; remove material.plane for a 3D body",
+                    scene.origin
                 )))
             }
             (_, None) => None,
@@ -138,7 +146,10 @@ impl<const D: usize> Simulation<D> {
         }
         let mut loads = Loads::new();
         for (i, t) in scene.traction.iter().enumerate() {
-            let part = mesh.boundary(&t.group)?;
+            let part = mesh.boundary(&t.group).map_err(super::error::group_error(
+                &scene.origin,
+                &format!("traction[{i}].group"),
+            ))?;
             if let Some(p) = &t.pressure {
                 let key = format!("traction[{i}].pressure");
                 let p = Expr::parse(p, &scene::TRACTION_VARIABLES)

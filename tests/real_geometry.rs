@@ -1,0 +1,145 @@
+//! Issue 20, what a gmsh user's own parts hit first: messages that say what is wrong with the
+//! mesh or the scene and name the scene key a group came from.
+
+use std::path::Path;
+use std::process::Command;
+
+fn hvi_fails(args: &[&str]) -> String {
+    let o = Command::new(env!("CARGO_BIN_EXE_hvi")).args(args).output().unwrap();
+    assert!(!o.status.success(), "hvi {args:?} succeeded");
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn assert_contains(msg: &str, parts: &[&str]) {
+    for p in parts {
+        assert!(msg.contains(p), "expected {p:?} in:\n{msg}");
+    }
+}
+
+/// An MSH 2.2 file with the given nodes (x, y, z) and elements (type, physical tag, nodes).
+fn msh22(names: &[(u8, i32, &str)], nodes: &[[f64; 3]], elements: &[(i32, i32, Vec<usize>)]) -> String {
+    let mut s = format!(
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n{}\n",
+        names.len()
+    );
+    for (d, t, n) in names {
+        s += &format!("{d} {t} \"{n}\"\n");
+    }
+    s += &format!("$EndPhysicalNames\n$Nodes\n{}\n", nodes.len());
+    for (i, p) in nodes.iter().enumerate() {
+        s += &format!("{} {} {} {}\n", i + 1, p[0], p[1], p[2]);
+    }
+    s += &format!("$EndNodes\n$Elements\n{}\n", elements.len());
+    for (i, (ty, tag, n)) in elements.iter().enumerate() {
+        let n: Vec<String> = n.iter().map(|v| v.to_string()).collect();
+        s += &format!("{} {ty} 2 {tag} {tag} {}\n", i + 1, n.join(" "));
+    }
+    s + "$EndElements\n"
+}
+
+/// A prism-only mesh, a second-order tetrahedron and a volume mesh saved without its Physical
+/// Volume each get their own message (all three used to be told "mesh the volume (gmsh -3)").
+#[test]
+fn volume_meshes_hvi_cannot_use_say_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: String| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let corners = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [1.0, 0.0, 1.0],
+        [0.0, 1.0, 1.0],
+    ];
+    let prism = write(
+        "prism.msh",
+        msh22(&[(3, 5, "Omega")], &corners, &[(6, 5, vec![1, 2, 3, 4, 5, 6])]),
+    );
+    let msg = hvi_fails(&["check", &prism, "--scene", "examples/slab.toml"]);
+    assert_contains(&msg, &["prism.msh", "6-node prism", "tetrahedra and hexahedra only"]);
+    assert!(!msg.contains("gmsh -3"), "{msg}");
+
+    let mut tet10 = corners[..4].to_vec();
+    for (a, b) in [(0, 1), (1, 2), (2, 0), (0, 3), (2, 3), (1, 3)] {
+        let (p, q): ([f64; 3], [f64; 3]) = (corners[a], corners[b]);
+        tet10.push(std::array::from_fn(|k| 0.5 * (p[k] + q[k])));
+    }
+    let second = write(
+        "tet10.msh",
+        msh22(&[(3, 5, "Omega")], &tet10, &[(11, 5, (1..=10).collect())]),
+    );
+    let msg = hvi_fails(&["check", &second, "--scene", "examples/slab.toml"]);
+    assert_contains(&msg, &["10-node second-order tetrahedron", "-order 1"]);
+
+    // the surfaces of a tetrahedron in physical groups, its volume in none: gmsh saves only them
+    let surfaces = write(
+        "surfaces.msh",
+        msh22(
+            &[(2, 1, "Gamma1"), (2, 3, "Gamma3")],
+            &corners[..4],
+            &[(2, 1, vec![1, 3, 2]), (2, 3, vec![1, 2, 4]), (2, 3, vec![2, 3, 4])],
+        ),
+    );
+    let msg = hvi_fails(&["check", &surfaces, "--scene", "examples/slab.toml"]);
+    assert_contains(&msg, &["no volume elements", "Physical Volume", "Mesh.SaveAll"]);
+}
+
+/// The embedded default scene (the paper's 2D example) on a 3D mesh: the message says so and
+/// points at a 3D scene, instead of "remove material.plane" from a scene the user never wrote.
+#[test]
+fn the_embedded_scene_on_a_3d_mesh_points_at_a_3d_scene() {
+    let msg = hvi_fails(&["check", "meshes/block_q1_h8.msh"]);
+    assert_contains(
+        &msg,
+        &[
+            "3D mesh",
+            "embedded default is the paper's 2D example",
+            "--scene examples/slab.toml",
+        ],
+    );
+}
+
+/// A misnamed group names the scene key it came from (and the embedded scene as the scene),
+/// suggests the nearest group name, and says that a tag works too.
+#[test]
+fn a_misnamed_group_names_the_key_and_the_nearest_group() {
+    let mesh = Path::new("meshes/rect_q1_h8.msh").to_str().unwrap();
+    let msg = hvi_fails(&["check", mesh, "--set", "groups.contact=gamma3"]);
+    assert_contains(
+        &msg,
+        &[
+            "embedded default scene",
+            "`groups.contact`",
+            "no physical group \"gamma3\"",
+            "did you mean \"Gamma3\"",
+            "tag number works too",
+        ],
+    );
+    let msg = hvi_fails(&["check", mesh, "--set", "traction.0.group=Gama2_top"]);
+    assert_contains(&msg, &["`traction[0].group`", "did you mean \"Gamma2_top\""]);
+    let msg = hvi_fails(&["check", mesh, "--set", "groups.clamped=Gamma9"]);
+    assert_contains(&msg, &["`groups.clamped`", "did you mean \"Gamma1\""]);
+}
+
+/// A contact group that is also the clamped group has no contact unknowns: `hvi check` (and
+/// `hvi solve`) say so instead of running a contact problem on 0 nodes without a word.
+#[test]
+fn a_contact_group_that_is_clamped_is_warned_about() {
+    let o = Command::new(env!("CARGO_BIN_EXE_hvi"))
+        .args(["check", "meshes/rect_q1_h8.msh", "--set", "groups.contact=Gamma1"])
+        .output()
+        .unwrap();
+    let report = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{report}");
+    assert_contains(
+        &report,
+        &[
+            "warning: contact group `Gamma1` has no contact unknowns",
+            "clamped group",
+        ],
+    );
+}
