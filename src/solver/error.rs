@@ -14,7 +14,7 @@ pub enum SolveError {
         origin: String,
         key: String,
         #[source]
-        source: MeshError,
+        source: Box<MeshError>,
     },
     #[error(transparent)]
     Scene(#[from] SceneError),
@@ -98,7 +98,7 @@ pub fn group_error(origin: &str, key: &str) -> impl Fn(MeshError) -> SolveError 
         MeshError::GroupNotFound { .. } | MeshError::NotBoundary { .. } => SolveError::Group {
             origin: origin.clone(),
             key: key.clone(),
-            source: e,
+            source: Box::new(e),
         },
         e => SolveError::Mesh(e),
     }
