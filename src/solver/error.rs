@@ -74,6 +74,20 @@ pub fn contact_failure_advice(smallest: f64, tolerance: f64) -> String {
     }
 }
 
+/// A mesh error about the group the scene names at `key` (of the scene `origin`), as a
+/// [`SolveError::Group`] that says where the name came from; other errors unchanged.
+pub fn group_error(origin: &str, key: &str) -> impl Fn(MeshError) -> SolveError {
+    let (origin, key) = (origin.to_string(), key.to_string());
+    move |e| match e {
+        MeshError::GroupNotFound { .. } | MeshError::NotBoundary { .. } => SolveError::Group {
+            origin: origin.clone(),
+            key: key.clone(),
+            source: Box::new(e),
+        },
+        e => SolveError::Mesh(e),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -87,19 +101,5 @@ mod tests {
         // far from converged: the usual remedies
         assert!(contact_failure_advice(0.7, 1e-10).contains("smaller time step"));
         assert!(contact_failure_advice(f64::NAN, 1e-10).contains("smaller time step"));
-    }
-}
-
-/// A mesh error about the group the scene names at `key` (of the scene `origin`), as a
-/// [`SolveError::Group`] that says where the name came from; other errors unchanged.
-pub fn group_error(origin: &str, key: &str) -> impl Fn(MeshError) -> SolveError {
-    let (origin, key) = (origin.to_string(), key.to_string());
-    move |e| match e {
-        MeshError::GroupNotFound { .. } | MeshError::NotBoundary { .. } => SolveError::Group {
-            origin: origin.clone(),
-            key: key.clone(),
-            source: Box::new(e),
-        },
-        e => SolveError::Mesh(e),
     }
 }
