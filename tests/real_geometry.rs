@@ -143,3 +143,40 @@ fn a_contact_group_that_is_clamped_is_warned_about() {
         ],
     );
 }
+
+/// A study with `mesh_files` runs only on those files: an n without its file (here the
+/// reference) is refused naming it, instead of running on a generated rectangle beside the
+/// user's geometry.
+#[test]
+fn a_study_with_mesh_files_needs_a_file_for_every_n() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    std::fs::copy(root.join("examples/paper.toml"), dir.path().join("paper.toml")).unwrap();
+    for n in [8, 16] {
+        std::fs::copy(
+            root.join(format!("meshes/rect_q1_h{n}.msh")),
+            dir.path().join(format!("m{n}.msh")),
+        )
+        .unwrap();
+    }
+    let study = dir.path().join("study.toml");
+    std::fs::write(
+        &study,
+        "scene = \"paper.toml\"\nreference = { n = 32, steps = 8 }\nmesh_files = { \"8\" = \"m8.msh\", \"16\" = \"m16.msh\" }\n\
+         [[h_paths]]\nsteps = 8\nn = [8, 16]\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let e = hvi::study::execute::run_file_with(&study, &out, &[], &hvi::study::Targets::default())
+        .map(|_| ())
+        .unwrap_err();
+    assert_contains(
+        &e,
+        &[
+            "the reference runs n = 32",
+            "mesh_files has no mesh for it",
+            "n = 8, 16",
+            "32 = ",
+        ],
+    );
+}

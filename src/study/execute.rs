@@ -119,6 +119,34 @@ pub fn run_spec_with(
             three.keys().map(|n| n.to_string()).collect::<Vec<_>>().join(", ")
         ));
     }
+    // with mesh files, every n the study runs needs its file: a generated rectangle or slab
+    // beside a user's geometry would compare different bodies
+    if !spec.mesh_files.is_empty() {
+        let given: Vec<usize> = two.keys().chain(three.keys()).copied().collect();
+        let needed = std::iter::once((spec.reference.n, "the reference".to_string()))
+            .chain(
+                spec.h_paths
+                    .iter()
+                    .enumerate()
+                    .flat_map(|(i, p)| p.n.iter().map(move |&n| (n, format!("h_paths[{i}]")))),
+            )
+            .chain(
+                spec.k_paths
+                    .iter()
+                    .enumerate()
+                    .map(|(i, p)| (p.n, format!("k_paths[{i}]"))),
+            );
+        for (n, who) in needed {
+            if !given.contains(&n) {
+                return Err(format!(
+                    "{name}: {who} runs n = {n}, but mesh_files has no mesh for it (it has n = {}); with mesh_files \
+                     every n needs its file (add `{n} = \"….msh\"` to [mesh_files]), or leave mesh_files out to \
+                     run on generated meshes of the paper's body",
+                    given.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(", ")
+                ));
+            }
+        }
+    }
     let solid = !three.is_empty() || (two.is_empty() && matches!(spec.shape.as_str(), "hex" | "tet"));
     let t = base.time.final_time;
     let plan = StudyPlan {
