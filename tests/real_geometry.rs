@@ -180,3 +180,32 @@ fn a_study_with_mesh_files_needs_a_file_for_every_n() {
         ],
     );
 }
+
+/// A traction written with `floor(y)` on the face y = 1 of a hexahedral slab acts on the whole
+/// face: the quadrature points of a facet in a plane y = 1 have y = 1 exactly (Σ N_a y_a missed
+/// it by a rounding at some points, where the load silently vanished).
+#[test]
+fn a_load_selected_by_a_coordinate_acts_on_its_whole_face() {
+    use hvi::mesh::structured::{block, SolidShape};
+    let scene = |value: &str| {
+        hvi::scene::Scene::from_toml_str(
+            &format!(
+                "[material]\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n[time]\nfinal_time = 1.0\nsteps = 1\n\
+                 [groups]\nclamped = \"Gamma1\"\n[[traction]]\ngroup = \"Gamma2_top\"\nvalue = [\"0\", \"{value}\", \"0\"]\n"
+            ),
+            "<test>",
+        )
+        .unwrap()
+    };
+    let mesh = block([2.0, 1.0, 0.25], [32, 16, 4], SolidShape::Hex);
+    let load = |value: &str| {
+        let sim = hvi::solver::Simulation::new(&scene(value), mesh.clone()).unwrap();
+        let mut f = vec![0.0; sim.dofs.n()];
+        sim.loads.assemble(0.0, &sim.dofs, &mut f).unwrap();
+        f
+    };
+    let (by_floor, by_one) = (load("floor(y)"), load("1"));
+    let total = |f: &[f64]| f.iter().sum::<f64>();
+    assert!((total(&by_one) - 0.5).abs() < 1e-12, "the face's area is 2 × 0.25: {}", total(&by_one));
+    assert_eq!(by_floor, by_one);
+}

@@ -71,8 +71,18 @@ type FacetPoint<const D: usize> = ([f64; D], [f64; D], f64, Vec<(usize, f64)>);
 fn facet_points<const D: usize>(points: &[[f64; D]], f: &Facet) -> Vec<FacetPoint<D>> {
     let nodes = f.nodes();
     let x = |i: usize| points[nodes[i]];
+    // x₀ + Σ_a N_a (x_a − x₀): a point of a facet in a plane x_k = c gets exactly c (Σ N_a x_a
+    // may miss it by a rounding, and `floor(y)` on the face y = 1 would vanish there)
     let combine = |values: &[f64]| -> [f64; D] {
-        std::array::from_fn(|k| values.iter().enumerate().map(|(a, v)| v * x(a)[k]).sum())
+        std::array::from_fn(|k| {
+            let x0 = x(0)[k];
+            x0 + values
+                .iter()
+                .enumerate()
+                .skip(1)
+                .map(|(a, v)| v * (x(a)[k] - x0))
+                .sum::<f64>()
+        })
     };
     let mut out = Vec::new();
     match f.len() {
