@@ -206,6 +206,34 @@ fn a_load_selected_by_a_coordinate_acts_on_its_whole_face() {
     };
     let (by_floor, by_one) = (load("floor(y)"), load("1"));
     let total = |f: &[f64]| f.iter().sum::<f64>();
-    assert!((total(&by_one) - 0.5).abs() < 1e-12, "the face's area is 2 × 0.25: {}", total(&by_one));
+    assert!(
+        (total(&by_one) - 0.5).abs() < 1e-12,
+        "the face's area is 2 × 0.25: {}",
+        total(&by_one)
+    );
     assert_eq!(by_floor, by_one);
+}
+
+/// A load depending on position is checked on its own group, not at the origin: `1/x` on a body
+/// in 1 ≤ x ≤ 3 is accepted (it was refused, "evaluates to inf at [0, 0, 0]"), and `log(x - 2.5)`
+/// there is refused naming the point of the group where it is NaN.
+#[test]
+fn loads_are_checked_on_their_groups_not_at_the_origin() {
+    use hvi::mesh::structured::{rectangle, CellShape};
+    let mut mesh = rectangle(2.0, 1.0, 8, 4, CellShape::Quad);
+    mesh.points.iter_mut().for_each(|p| p[0] += 1.0);
+    let scene = |value: &str| {
+        hvi::scene::Scene::from_toml_str(
+            &format!(
+                "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n[time]\nfinal_time = 1.0\n\
+                 steps = 2\n[groups]\nclamped = \"Gamma1\"\n[[traction]]\ngroup = \"Gamma2_top\"\nvalue = [\"0\", \"{value}\"]\n"
+            ),
+            "<test>",
+        )
+    };
+    let sim = hvi::solver::Simulation::new(&scene("-0.01/x").unwrap(), mesh.clone()).unwrap();
+    sim.check_data().unwrap();
+    let sim = hvi::solver::Simulation::new(&scene("log(x - 2.5)").unwrap(), mesh).unwrap();
+    let e = sim.check_data().unwrap_err().to_string();
+    assert_contains(&e, &["traction[0].value[1]", "is NaN at (x, y) = ("]);
 }

@@ -232,7 +232,7 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
                 ));
             }
             for (c, v) in values.iter().enumerate() {
-                compile(
+                compile_load(
                     origin,
                     &format!("dirichlet[{i}].value[{c}]"),
                     v,
@@ -245,7 +245,7 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
     for (i, tr) in scene.traction.iter().enumerate() {
         match (&tr.pressure, tr.value.is_empty()) {
             (Some(p), true) => {
-                compile(
+                compile_load(
                     origin,
                     &format!("traction[{i}].pressure"),
                     p,
@@ -274,7 +274,7 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
         }
         check_components(origin, &format!("traction[{i}].value"), &tr.value)?;
         for c in 0..tr.value.len() {
-            compile(
+            compile_load(
                 origin,
                 &format!("traction[{i}].value[{c}]"),
                 &tr.value[c],
@@ -286,7 +286,7 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
     if let Some(f) = &scene.body_force {
         check_components(origin, "body_force.value", &f.value)?;
         for c in 0..f.value.len() {
-            compile(
+            compile_load(
                 origin,
                 &format!("body_force.value[{c}]"),
                 &f.value[c],
@@ -733,6 +733,23 @@ fn check_law(law: &ContactLawSpec, origin: &str, at: &str) -> Result<(), SceneEr
 }
 
 fn compile(origin: &str, key: &str, source: &str, vars: &[&str], probe: &[f64]) -> Result<Expr, SceneError> {
+    compile_with(origin, key, source, vars, probe, false)
+}
+
+/// [`compile`] for a load or prescribed value: an expression of position is not probed here
+/// but on its group (`positional`).
+fn compile_load(origin: &str, key: &str, source: &str, vars: &[&str], probe: &[f64]) -> Result<Expr, SceneError> {
+    compile_with(origin, key, source, vars, probe, true)
+}
+
+fn compile_with(
+    origin: &str,
+    key: &str,
+    source: &str,
+    vars: &[&str],
+    probe: &[f64],
+    positional: bool,
+) -> Result<Expr, SceneError> {
     let err = |message: String| SceneError::Expression {
         origin: origin.into(),
         key: key.into(),
@@ -740,6 +757,12 @@ fn compile(origin: &str, key: &str, source: &str, vars: &[&str], probe: &[f64]) 
         message,
     };
     let e = Expr::parse(source, vars).map_err(err)?;
+    // A load depending on position is evaluated on its own group's points before the run
+    // (Simulation::check_data, docs/method.md §16.3): a probe at the origin would refuse `p/x`
+    // on a body in 1 ≤ x ≤ 3. A constant (or time-only) one is probed here.
+    if positional && ["x", "y", "z", "nx", "ny", "nz"].iter().any(|v| e.depends_on(v)) {
+        return Ok(e);
+    }
     let v = e.eval(probe);
     if !v.is_finite() {
         return Err(err(format!(
