@@ -237,3 +237,36 @@ fn loads_are_checked_on_their_groups_not_at_the_origin() {
     let e = sim.check_data().unwrap_err().to_string();
     assert_contains(&e, &["traction[0].value[1]", "is NaN at (x, y) = ("]);
 }
+
+/// A component prescribed by two groups (the corner of a clamped side and a roller side) reports
+/// its reaction in the first group only, so the reported reactions and the loads add up to zero
+/// along each direction (the corner counted in both groups before).
+#[test]
+fn reactions_of_overlapping_groups_add_up() {
+    use hvi::mesh::structured::{rectangle, CellShape};
+    let s = hvi::scene::Scene::from_toml_str(
+        "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n[time]\nfinal_time = 1.0\nsteps = 2\n\
+         [groups]\nclamped = \"Gamma1\"\n[[dirichlet]]\ngroup = \"Gamma3\"\ncomponents = [\"y\"]\n\
+         [[traction]]\ngroup = \"Gamma2_top\"\nvalue = [\"0.01\", \"-0.02*x\"]\n",
+        "<test>",
+    )
+    .unwrap();
+    let mesh = rectangle(2.0, 1.0, 8, 4, CellShape::Quad);
+    let (sim, stats, _) = hvi::app::solve_in_memory(&s, mesh).unwrap();
+    let mut load = vec![0.0; sim.dofs.n()];
+    sim.loads.assemble(1.0, &sim.dofs, &mut load).unwrap();
+    for (k, comp) in ["x", "y"].iter().enumerate() {
+        let applied: f64 = (0..sim.mesh.points.len()).map(|p| load[sim.dofs.index(p, k)]).sum();
+        let reactions: f64 = stats
+            .reactions
+            .iter()
+            .filter(|r| r.time == 1.0 && r.component == *comp)
+            .map(|r| r.force)
+            .sum();
+        assert!(applied.abs() > 1e-3);
+        assert!(
+            (reactions + applied).abs() < 1e-12 * applied.abs().max(1.0),
+            "{comp}: reactions {reactions:e} + loads {applied:e}"
+        );
+    }
+}

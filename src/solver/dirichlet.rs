@@ -64,7 +64,7 @@ impl<const D: usize> Dirichlet<D> {
                              who: &str,
                              text: &str,
                              expr: Option<usize>|
-         -> Result<(), SolveError> {
+         -> Result<bool, SolveError> {
             let d = dofs.index(node, c);
             if let Some((other, t, first)) = set_by.get(&d) {
                 let x = mesh.points[node];
@@ -90,13 +90,13 @@ impl<const D: usize> Dirichlet<D> {
                         crate::mesh::fmt_point(x)
                     )));
                 }
-                return Ok(());
+                return Ok(false);
             }
             set_by.insert(d, (who.to_string(), text.to_string(), expr));
             dofs.prescribe(node, c);
             out.entries.push((d, expr));
             out.at.push(mesh.points[node]);
-            Ok(())
+            Ok(true)
         };
         if let Some(sel) = clamped {
             let nodes = mesh
@@ -111,8 +111,9 @@ impl<const D: usize> Dirichlet<D> {
             for c in 0..D {
                 let mut unknowns = Vec::with_capacity(nodes.len());
                 for &p in &nodes {
-                    prescribe(&mut dofs, &mut out, p, c, "groups.clamped", "0", None)?;
-                    unknowns.push(dofs.index(p, c));
+                    if prescribe(&mut dofs, &mut out, p, c, "groups.clamped", "0", None)? {
+                        unknowns.push(dofs.index(p, c));
+                    }
                 }
                 out.reaction_groups.push(ReactionGroup {
                     group: group_name(sel),
@@ -151,9 +152,12 @@ impl<const D: usize> Dirichlet<D> {
                     Some(out.exprs.len() - 1)
                 };
                 let mut unknowns = Vec::with_capacity(nodes.len());
+                // a component an earlier group prescribes already reports its reaction there
+                // (each reaction in exactly one group: docs/method.md §7.5)
                 for &p in &nodes {
-                    prescribe(&mut dofs, &mut out, p, c, &who, &text, expr)?;
-                    unknowns.push(dofs.index(p, c));
+                    if prescribe(&mut dofs, &mut out, p, c, &who, &text, expr)? {
+                        unknowns.push(dofs.index(p, c));
+                    }
                 }
                 out.reaction_groups.push(ReactionGroup {
                     group: group_name(&section.group),
