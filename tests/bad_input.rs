@@ -685,7 +685,7 @@ fn unknown_keys_name_the_nearest_valid_key() {
         (
             "group = \"Gamma2\"",
             "groop = \"Gamma2\"",
-            vec!["unknown key `groop` in [traction]", "did you mean `group`?"],
+            vec!["unknown key `groop` in traction[0]", "did you mean `group`?"],
         ),
     ] {
         let (msg, _) = scene_error(from, to);

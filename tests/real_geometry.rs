@@ -270,3 +270,28 @@ fn reactions_of_overlapping_groups_add_up() {
         );
     }
 }
+
+/// A missing `[time]` says so (it pointed at line 1, column 1), and `motion` written beside an
+/// obstacle instead of inside it names the section `contact[1]` (it said `[contact]`) and where
+/// `motion` belongs.
+#[test]
+fn scene_messages_name_the_missing_section_and_the_numbered_contact_section() {
+    let base =
+        "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n[groups]\nclamped = \"Gamma1\"\n";
+    let e = hvi::scene::Scene::from_toml_str(base, "s.toml")
+        .unwrap_err()
+        .to_string();
+    assert_contains(&e, &["s.toml", "`time`", "add a [time] section"]);
+    assert!(!e.contains("line 1"), "{e}");
+    let motion = format!(
+        "{base}[time]\nfinal_time = 1.0\nsteps = 2\n[[contact]]\ngroup = \"Gamma3\"\nbound = 0.1\n[[contact]]\n\
+         group = \"Gamma2_top\"\nobstacle = {{ kind = \"plane\", point = [0.0, 1.1], normal = [0.0, -1.0] }}\nmotion = [\"0\", \"-t\"]\n"
+    );
+    let e = hvi::scene::Scene::from_toml_str(&motion, "s.toml")
+        .unwrap_err()
+        .to_string();
+    assert_contains(
+        &e,
+        &["unknown key `motion` in contact[1]", "belongs inside the obstacle"],
+    );
+}

@@ -130,7 +130,7 @@ fn wrong_types_and_bad_values_name_the_key() {
         ("output.compress=\"zlib\"", "output.compress"),
         ("output.compress=0.5", "output.compress"),
         ("traction.0.value=[\"0\", \"sin(\"]", "traction[0].value[1]"),
-        ("traction.0.value=[\"0\", \"log(x - 5)\"]", "traction[0].value[1]"),
+        ("traction.0.value=[\"0\", \"log(-5)\"]", "traction[0].value[1]"),
         ("traction.0.value=[\"q\", \"0\"]", "traction[0].value[0]"),
         ("traction.0.value=[\"-x^2\", \"0\"]", "traction[0].value[0]"),
         ("memory.coefficients=[]", "memory.coefficients"),

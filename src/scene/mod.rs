@@ -69,6 +69,34 @@ impl Scene {
         // error does not name; toml's message keeps the line, the column and the caret.
         let mut scene: Scene = serde_path_to_error::deserialize(toml::Deserializer::new(&effective)).map_err(|e| {
             let path = e.path().to_string();
+            // a required section or key that is absent: say which, not "line 1, column 1"
+            let inner = e.inner().to_string();
+            if let Some(field) = inner.split("missing field `").nth(1).and_then(|r| r.split('`').next()) {
+                let within = if path.is_empty() || path == "." {
+                    String::new()
+                } else {
+                    format!("{path}.")
+                };
+                return SceneError::Invalid {
+                    origin: origin.into(),
+                    key: format!("{within}{field}"),
+                    value: "(missing)".into(),
+                    fix: match (within.as_str(), field) {
+                        ("", "time") => "add a [time] section, e.g. [time] final_time = 1.0, steps = 32".into(),
+                        ("", "material") => "add a [material] section, e.g. [material] youngs_modulus = 1.0, \
+                                             poisson_ratio = 0.3 (and plane = \"strain\" in 2D)"
+                            .into(),
+                        _ => format!(
+                            "it is required: add `{field} = …`{}",
+                            if within.is_empty() {
+                                String::new()
+                            } else {
+                                format!(" to [{path}]")
+                            }
+                        ),
+                    },
+                };
+            }
             SceneError::Type {
                 origin: if overrides.is_empty() {
                     origin.into()

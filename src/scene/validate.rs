@@ -87,7 +87,7 @@ fn distance(a: &str, b: &str) -> usize {
 
 /// Rejects unknown keys anywhere in the tree, naming the nearest valid one.
 pub fn check_keys(value: &Value, origin: &str) -> Result<(), SceneError> {
-    walk(value, "", origin)?;
+    walk(value, "", "", origin)?;
     // `[[contact]]` sections name their groups; `groups.contact` belongs to the one-table form.
     let sections = value.get("contact").and_then(|c| c.as_array());
     let shorthand = value.get("groups").and_then(|g| g.get("contact"));
@@ -126,7 +126,9 @@ pub fn check_keys(value: &Value, origin: &str) -> Result<(), SceneError> {
     Ok(())
 }
 
-fn walk(value: &Value, path: &str, origin: &str) -> Result<(), SceneError> {
+/// `shown`: how messages name the table (`contact[1]` for the second `[[contact]]` section);
+/// `path`: the dotted path that selects its valid keys.
+fn walk(value: &Value, path: &str, shown: &str, origin: &str) -> Result<(), SceneError> {
     match value {
         Value::Table(table) => {
             if let Some(allowed) = allowed_keys(path, table) {
@@ -134,6 +136,11 @@ fn walk(value: &Value, path: &str, origin: &str) -> Result<(), SceneError> {
                     if !allowed.contains(&key.as_str()) {
                         let best = allowed.iter().min_by_key(|k| distance(key, k)).copied();
                         let suggestion = match best {
+                            _ if key == "motion" && allowed.contains(&"obstacle") => {
+                                " (`motion` belongs inside the obstacle's table: obstacle = { kind = \"plane\", …, \
+                                 motion = [\"0\", \"-0.1*t\"] })"
+                                    .to_string()
+                            }
                             Some(b) if distance(key, b) <= (key.len() / 3).max(2) => format!(" (did you mean `{b}`?)"),
                             _ => String::new(),
                         };
@@ -141,8 +148,10 @@ fn walk(value: &Value, path: &str, origin: &str) -> Result<(), SceneError> {
                             origin: origin.into(),
                             section: if path.is_empty() {
                                 "the top level".into()
+                            } else if shown.contains('[') {
+                                shown.to_string()
                             } else {
-                                format!("[{path}]")
+                                format!("[{shown}]")
                             },
                             key: key.clone(),
                             suggestion,
@@ -154,12 +163,21 @@ fn walk(value: &Value, path: &str, origin: &str) -> Result<(), SceneError> {
                     } else {
                         format!("{path}.{key}")
                     };
-                    walk(v, &child, origin)?;
+                    let shown_child = if shown.is_empty() {
+                        key.clone()
+                    } else {
+                        format!("{shown}.{key}")
+                    };
+                    walk(v, &child, &shown_child, origin)?;
                 }
             }
             Ok(())
         }
-        Value::Array(items) => items.iter().try_for_each(|v| walk(v, path, origin)),
+        Value::Array(items) if items.len() > 1 || items.iter().all(Value::is_table) => items
+            .iter()
+            .enumerate()
+            .try_for_each(|(i, v)| walk(v, path, &format!("{shown}[{i}]"), origin)),
+        Value::Array(items) => items.iter().try_for_each(|v| walk(v, path, shown, origin)),
         _ => Ok(()),
     }
 }
