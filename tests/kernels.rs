@@ -816,7 +816,7 @@ fn bad_memory_tensors_name_the_key_the_value_and_the_range() {
             ),
             (
                 base("\"identity\"").replace("relaxation_time = 0.5", "relaxation_time = 0.5, tensor = \"identity\""),
-                vec!["unknown key `tensor` in [memory.terms]"],
+                vec!["unknown key `tensor` in memory.terms[0]"],
             ),
         ]
     {

@@ -238,9 +238,10 @@ fn loads_are_checked_on_their_groups_not_at_the_origin() {
     assert_contains(&e, &["traction[0].value[1]", "is NaN at (x, y) = ("]);
 }
 
-/// A component prescribed by two groups (the corner of a clamped side and a roller side) reports
-/// its reaction in the first group only, so the reported reactions and the loads add up to zero
-/// along each direction (the corner counted in both groups before).
+/// A component prescribed by two groups (the corner of a clamped side and a roller side) counts
+/// in both groups' rows (each the whole force on its group) and once more, negatively, in the
+/// overlap row `Gamma1 & Gamma3`, so all rows and the loads add up to zero along each direction
+/// (there was no overlap row before, and the sum missed the corner's reaction).
 #[test]
 fn reactions_of_overlapping_groups_add_up() {
     use hvi::mesh::structured::{rectangle, CellShape};
@@ -264,6 +265,12 @@ fn reactions_of_overlapping_groups_add_up() {
             .map(|r| r.force)
             .sum();
         assert!(applied.abs() > 1e-3);
+        if *comp == "y" {
+            assert!(
+                stats.reactions.iter().any(|r| r.group == "Gamma1 & Gamma3"),
+                "no overlap row"
+            );
+        }
         assert!(
             (reactions + applied).abs() < 1e-12 * applied.abs().max(1.0),
             "{comp}: reactions {reactions:e} + loads {applied:e}"

@@ -71,12 +71,11 @@ impl Scene {
             let path = e.path().to_string();
             // a required section or key that is absent: say which, not "line 1, column 1"
             let inner = e.inner().to_string();
-            if let Some(field) = inner.split("missing field `").nth(1).and_then(|r| r.split('`').next()) {
-                let within = if path.is_empty() || path == "." {
-                    String::new()
-                } else {
-                    format!("{path}.")
-                };
+            // (at the top level only: toml points a nested one at its table's line)
+            let top = path.is_empty() || path == ".";
+            let missing = inner.split("missing field `").nth(1).and_then(|r| r.split('`').next());
+            if let (true, Some(field)) = (top, missing) {
+                let within = String::new();
                 return SceneError::Invalid {
                     origin: origin.into(),
                     key: format!("{within}{field}"),

@@ -17,6 +17,8 @@ pub struct ReactionGroup {
     /// 0, 1 or 2 (x, y, z).
     pub component: usize,
     pub unknowns: Vec<usize>,
+    /// 1 for a group; −(k − 1) for the overlap row of k groups sharing these unknowns.
+    pub weight: f64,
 }
 
 /// The prescribed components of a run and their values.
@@ -111,14 +113,14 @@ impl<const D: usize> Dirichlet<D> {
             for c in 0..D {
                 let mut unknowns = Vec::with_capacity(nodes.len());
                 for &p in &nodes {
-                    if prescribe(&mut dofs, &mut out, p, c, "groups.clamped", "0", None)? {
-                        unknowns.push(dofs.index(p, c));
-                    }
+                    prescribe(&mut dofs, &mut out, p, c, "groups.clamped", "0", None)?;
+                    unknowns.push(dofs.index(p, c));
                 }
                 out.reaction_groups.push(ReactionGroup {
                     group: group_name(sel),
                     component: c,
                     unknowns,
+                    weight: 1.0,
                 });
             }
         }
@@ -152,22 +154,56 @@ impl<const D: usize> Dirichlet<D> {
                     Some(out.exprs.len() - 1)
                 };
                 let mut unknowns = Vec::with_capacity(nodes.len());
-                // a component an earlier group prescribes already reports its reaction there
-                // (each reaction in exactly one group: docs/method.md §7.5)
                 for &p in &nodes {
-                    if prescribe(&mut dofs, &mut out, p, c, &who, &text, expr)? {
-                        unknowns.push(dofs.index(p, c));
-                    }
+                    prescribe(&mut dofs, &mut out, p, c, &who, &text, expr)?;
+                    unknowns.push(dofs.index(p, c));
                 }
                 out.reaction_groups.push(ReactionGroup {
                     group: group_name(&section.group),
                     component: c,
                     unknowns,
+                    weight: 1.0,
                 });
             }
         }
+        out.add_overlap_rows();
         out.check_rigid_motions(mesh, &dofs)?;
         Ok((dofs, out))
+    }
+
+    /// Each group's reaction is the whole force on that group, so a component in two groups (the
+    /// corner of a clamped side and a roller side) counts in both; an overlap row per set of
+    /// groups sharing components, `Gamma1 & Gamma3` with weight −(k − 1) for k groups, takes the
+    /// surplus back, so that all rows together add up with the contact forces and the loads
+    /// (docs/method.md §7.5).
+    fn add_overlap_rows(&mut self) {
+        let mut members: HashMap<usize, Vec<usize>> = HashMap::new();
+        for (g, group) in self.reaction_groups.iter().enumerate() {
+            for &d in &group.unknowns {
+                let list = members.entry(d).or_default();
+                if !list.iter().any(|&h| self.reaction_groups[h].group == group.group) {
+                    list.push(g);
+                }
+            }
+        }
+        // (set of group names, component) → unknowns, in a stable order
+        let mut overlaps: std::collections::BTreeMap<(Vec<String>, usize), Vec<usize>> = Default::default();
+        for (d, list) in members {
+            if list.len() > 1 {
+                let names: Vec<String> = list.iter().map(|&g| self.reaction_groups[g].group.clone()).collect();
+                let c = self.reaction_groups[list[0]].component;
+                overlaps.entry((names, c)).or_default().push(d);
+            }
+        }
+        for ((names, component), mut unknowns) in overlaps {
+            unknowns.sort_unstable();
+            self.reaction_groups.push(ReactionGroup {
+                group: names.join(" & "),
+                component,
+                weight: -((names.len() - 1) as f64),
+                unknowns,
+            });
+        }
     }
 
     /// True if some prescribed value is not identically zero (then the prescribed part moves

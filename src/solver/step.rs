@@ -118,11 +118,17 @@ impl Reactions {
                 }
             }
         }
-        for (total, members) in self.totals.iter_mut().zip(&self.groups) {
-            *total = members
-                .iter()
-                .map(|&k| r[k] + force.get(&global(k)).copied().unwrap_or(0.0) - load[k])
-                .sum();
+        for ((total, members), g) in self
+            .totals
+            .iter_mut()
+            .zip(&self.groups)
+            .zip(&sim.dirichlet.reaction_groups)
+        {
+            *total = g.weight
+                * members
+                    .iter()
+                    .map(|&k| r[k] + force.get(&global(k)).copied().unwrap_or(0.0) - load[k])
+                    .sum::<f64>();
         }
         backend.sum(&mut self.totals);
         &self.totals
