@@ -92,6 +92,9 @@ for n in 4 8 16; do
     gmsh -2 ring.geo -setnumber n "$n" -setnumber quads 0 -format msh41 -o "ring_p1_n$n.msh" >/dev/null
     echo "wrote ring_q1_n$n.msh, ring_p1_n$n.msh"
 done
+# the reference of the curved-domain study (examples/gallery/ring/ring_study.toml)
+gmsh -2 ring.geo -setnumber n 32 -setnumber quads 1 -format msh41 -o ring_q1_n32.msh >/dev/null
+echo "wrote ring_q1_n32.msh"
 
 # Orientation, boundary groups and the slabs' (x, y) grids of every MSH 4.1 ASCII file here: one
 # line per file (OK or FAILED) and any ERROR lines; fails the script if any check fails.

@@ -321,6 +321,7 @@ const RINGS: &[(&str, usize, bool)] = &[
     ("ring_q1_n4.msh", 4, true),
     ("ring_q1_n8.msh", 8, true),
     ("ring_q1_n16.msh", 16, true),
+    ("ring_q1_n32.msh", 32, true),
     ("ring_p1_n4.msh", 4, false),
     ("ring_p1_n8.msh", 8, false),
     ("ring_p1_n16.msh", 16, false),

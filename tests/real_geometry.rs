@@ -302,3 +302,76 @@ fn scene_messages_name_the_missing_section_and_the_numbered_contact_section() {
         &["unknown key `motion` in contact[1]", "belongs inside the obstacle"],
     );
 }
+
+/// A convergence study on a curved domain with gmsh meshes that are not nested
+/// (examples/gallery/ring/ring_study.toml: the quarter ring, n = 4, 8, 16 against n = 32). The
+/// fine meshes' arc nodes lie outside the coarse meshes' chords by O(h²); they are evaluated by
+/// extension (the study stopped with "lies outside the mesh" before), study.md says how far the
+/// farthest was, that distance falls like h², and the H¹ error converges at the order the theory
+/// gives for Q1 (1; L² 2).
+#[test]
+fn a_study_on_curved_non_nested_meshes_converges_at_the_theoretical_order() {
+    let out = tempfile::tempdir().unwrap();
+    let study = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/gallery/ring/ring_study.toml");
+    hvi::study::execute::run_file(&study, out.path(), &[]).unwrap_or_else(|e| panic!("{e}"));
+    let mut reader = csv::Reader::from_path(out.path().join("study.csv")).unwrap();
+    let rows: Vec<(f64, f64, f64)> = reader
+        .records()
+        .map(|r| {
+            let r = r.unwrap();
+            (r[1].parse().unwrap(), r[6].parse().unwrap(), r[7].parse().unwrap())
+        })
+        .collect();
+    assert_eq!(rows.len(), 3);
+    for w in rows.windows(2) {
+        let ratio = w[0].0 / w[1].0;
+        let h1 = (w[0].1 / w[1].1).ln() / ratio.ln();
+        let l2 = (w[0].2 / w[1].2).ln() / ratio.ln();
+        // (the last pair is biased by the reference, h_ref = h/2: ≤ 1.3)
+        assert!(
+            (0.9..1.3).contains(&h1),
+            "H¹ order {h1} between h = {} and {}",
+            w[0].0,
+            w[1].0
+        );
+        assert!((1.8..2.5).contains(&l2), "L² order {l2}");
+    }
+    let md = std::fs::read_to_string(out.path().join("study.md")).unwrap();
+    let farthest: Vec<(f64, f64)> = md
+        .lines()
+        .filter(|l| l.contains("reference nodes outside its mesh"))
+        .map(|l| {
+            let by = l.split("the farthest by ").nth(1).unwrap();
+            let (d, rest) = by.split_once(" (allowed ").unwrap();
+            (d.parse().unwrap(), rest.trim_end_matches(')').parse().unwrap())
+        })
+        .collect();
+    assert_eq!(farthest.len(), 3, "{md}");
+    for (d, allowed) in &farthest {
+        assert!(d <= allowed && *d > 0.0);
+    }
+    for w in farthest.windows(2) {
+        let ratio = w[0].0 / w[1].0;
+        assert!((3.0..5.0).contains(&ratio), "the gap falls like h²: ratio {ratio}");
+    }
+}
+
+/// A point farther outside than the coarse boundary's sagitta bound is refused, saying the
+/// meshes are not of the same geometry; a polygonal domain has no such allowance.
+#[test]
+fn points_beyond_the_sagitta_bound_are_refused() {
+    use hvi::mesh::structured::{rectangle, CellShape};
+    use hvi::study::{boundary_sagitta, Locator};
+    let rect = rectangle(2.0, 1.0, 8, 4, CellShape::Quad);
+    assert_eq!(boundary_sagitta(&rect), 0.0);
+    let ring = hvi::mesh::read_mesh::<2>(Path::new("meshes/ring_q1_n4.msh")).unwrap();
+    let allowed = boundary_sagitta(&ring);
+    assert!(allowed > 0.0 && allowed < 0.05, "{allowed}");
+    let locator = Locator::new(&ring);
+    // just outside the outer arc at 45°, within the bound; and well outside
+    let at = |r: f64| [r * std::f64::consts::FRAC_1_SQRT_2, r * std::f64::consts::FRAC_1_SQRT_2];
+    let (_, e) = locator.transfer_extending(&[at(2.0)], allowed).unwrap();
+    assert!(e.points <= 1 && e.farthest <= allowed);
+    let err = locator.transfer_extending(&[at(2.2)], allowed).map(|_| ()).unwrap_err();
+    assert_contains(&err, &["lies outside the mesh", "not of the same geometry"]);
+}

@@ -188,6 +188,51 @@ impl<'m, const D: usize> Locator<'m, D> {
         })
     }
 
+    /// [`Locator::transfer`] for meshes of a curved domain that are not nested: a target point
+    /// outside the mesh by at most `allowed` (the O(h²) gap between two polygonal approximations
+    /// of one curved boundary, [`boundary_sagitta`]) is evaluated by extending its nearest cell's
+    /// map there; farther is an error. Reports how many points were extended and the farthest.
+    pub fn transfer_extending(&self, to_points: &[[f64; D]], allowed: f64) -> Result<(Transfer, Extension), String> {
+        let allowed = allowed.max(self.tolerance);
+        let mut extension = Extension {
+            points: 0,
+            farthest: 0.0,
+            allowed,
+        };
+        let mut weights = Vec::with_capacity(to_points.len());
+        for &x in to_points {
+            let (c, xi, d) = match self.locate_with_distance(x) {
+                Some(found) if found.2 <= allowed => found,
+                _ => {
+                    return Err(format!(
+                        "{}; a curved boundary meshed twice differs by O(h²), bounded here by {allowed:.3e} (the \
+                         coarse boundary's chords' sagitta, twice over): farther means the meshes are not of the same \
+                         geometry (or not in the same units)",
+                        self.outside_message(x)
+                    ))
+                }
+            };
+            if d > self.tolerance {
+                extension.points += 1;
+                extension.farthest = extension.farthest.max(d);
+            }
+            let cell = &self.cells[c];
+            let s = shape_at(cell, self.points, xi);
+            let mut nodes = [0usize; MAX_NODES];
+            let mut w = [0.0; MAX_NODES];
+            nodes[..s.n].copy_from_slice(&cell.nodes()[..s.n]);
+            w[..s.n].copy_from_slice(&s.value[..s.n]);
+            weights.push((s.n as u8, nodes, w));
+        }
+        Ok((
+            Transfer {
+                n_from: self.points.len(),
+                weights,
+            },
+            extension,
+        ))
+    }
+
     fn outside_message(&self, x: [f64; D]) -> String {
         let at = x.iter().map(|v| format!("{v:.17e}")).collect::<Vec<_>>().join(", ");
         match self.locate_with_distance(x) {
@@ -198,6 +243,85 @@ impl<'m, const D: usize> Locator<'m, D> {
             None => format!("point ({at}) lies outside the bounding box of the mesh"),
         }
     }
+}
+
+/// Target points evaluated outside the source mesh by [`Locator::transfer_extending`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Extension {
+    /// How many lay outside (beyond round-off).
+    pub points: usize,
+    /// The largest distance of one from the mesh.
+    pub farthest: f64,
+    /// The distance that was allowed.
+    pub allowed: f64,
+}
+
+/// A bound on how far a polygonal (faceted) boundary can lie inside the curved boundary it
+/// approximates, from the mesh alone: at each boundary node (2D) or edge (3D) where two boundary
+/// facets meet at an angle θ below 30° (a curve, not a corner of the geometry), a chord of length
+/// h on a circle turning by θ per chord has sagitta h θ / 8; twice that, over the boundary. Zero
+/// on a polygonal domain (θ = 0 or a corner everywhere).
+pub fn boundary_sagitta<const D: usize>(mesh: &Mesh<D>) -> f64 {
+    let facets = mesh.boundary_facets();
+    let x = |p: usize| mesh.points[p];
+    let sub = |a: [f64; D], b: [f64; D]| -> [f64; 3] { std::array::from_fn(|k| if k < D { a[k] - b[k] } else { 0.0 }) };
+    let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    // each facet's outward normal (unnormalised) and its longest edge
+    let shape: Vec<([f64; 3], f64)> = facets
+        .iter()
+        .map(|f| {
+            let n = f.nodes();
+            let longest = (0..n.len())
+                .map(|i| norm(sub(x(n[(i + 1) % n.len()]), x(n[i]))))
+                .fold(0.0, f64::max);
+            let normal = match n.len() {
+                2 => {
+                    let d = sub(x(n[1]), x(n[0]));
+                    [d[1], -d[0], 0.0]
+                }
+                3 => cross(sub(x(n[1]), x(n[0])), sub(x(n[2]), x(n[0]))),
+                _ => cross(sub(x(n[2]), x(n[0])), sub(x(n[3]), x(n[1]))),
+            };
+            (normal, longest)
+        })
+        .collect();
+    // facets meeting at a node (2D) or an edge (3D)
+    let mut by_key: std::collections::HashMap<(usize, usize), Vec<usize>> = std::collections::HashMap::new();
+    for (i, f) in facets.iter().enumerate() {
+        let n = f.nodes();
+        if D == 2 {
+            for &p in n {
+                by_key.entry((p, p)).or_default().push(i);
+            }
+        } else {
+            for k in 0..n.len() {
+                let (a, b) = (n[k], n[(k + 1) % n.len()]);
+                by_key.entry((a.min(b), a.max(b))).or_default().push(i);
+            }
+        }
+    }
+    let limit = 30f64.to_radians();
+    let mut bound = 0.0f64;
+    for list in by_key.values() {
+        for (a, &i) in list.iter().enumerate() {
+            for &j in &list[a + 1..] {
+                let (ni, nj) = (shape[i].0, shape[j].0);
+                let cos = (ni[0] * nj[0] + ni[1] * nj[1] + ni[2] * nj[2]) / (norm(ni) * norm(nj));
+                let theta = cos.clamp(-1.0, 1.0).acos();
+                if theta < limit {
+                    bound = bound.max(shape[i].1.max(shape[j].1) * theta / 4.0);
+                }
+            }
+        }
+    }
+    bound
 }
 
 /// The flat index of a bucket (first axis fastest).

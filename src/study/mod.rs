@@ -45,7 +45,7 @@ pub mod target;
 
 pub use advice::Targets;
 
-pub use interpolate::{interpolate_nodal, Locator, Transfer};
+pub use interpolate::{boundary_sagitta, interpolate_nodal, Extension, Locator, Transfer};
 
 pub use runner::run_plan;
 

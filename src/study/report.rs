@@ -107,6 +107,32 @@ pub fn markdown(rows: &[Row]) -> String {
             mb(m.peak_rss_bytes).map_or("–".into(), |v| format!("{v:.0}")),
         );
     }
+    // non-nested meshes of a curved domain (docs/method.md §6.2)
+    let extended: Vec<String> = rows
+        .iter()
+        .filter_map(|r| {
+            let e = r.errors.extension?;
+            Some(format!(
+                "h = {}, k = {}: {} reference nodes outside its mesh, the farthest by {:.3e} (allowed {:.3e})",
+                fraction(r.summary.h),
+                fraction(r.summary.k),
+                e.points,
+                e.farthest,
+                e.allowed
+            ))
+        })
+        .collect();
+    if !extended.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nThe meshes are not nested and the boundary is curved: reference nodes outside a run's mesh (by the \
+             O(h²) gap between two faceted approximations of one curved boundary, allowed up to twice the run's \
+             boundary sagitta) were evaluated by extending the nearest cell's map (docs/method.md §6.2):\n"
+        );
+        for e in extended {
+            let _ = writeln!(s, "* {e}");
+        }
+    }
     s
 }
 

@@ -6,7 +6,7 @@
 //! against it as it is added: the H¹-seminorm and L² errors at T, the largest H¹ error over the
 //! output times both share, and then the observed orders along each refinement path.
 
-use super::interpolate::Locator;
+use super::interpolate::{boundary_sagitta, Extension, Locator};
 use super::seminorm_errors;
 use crate::fem::norms::{errors, FieldErrors};
 use crate::mesh::Mesh;
@@ -243,6 +243,9 @@ pub struct RunErrors {
     pub h1_max_time: f64,
     /// How many times were compared for the maximum.
     pub times_compared: usize,
+    /// Reference nodes outside the run's mesh, evaluated by extension (non-nested meshes of a
+    /// curved domain); None when every one was inside.
+    pub extension: Option<Extension>,
 }
 
 /// A run once evaluated: its summary and errors.
@@ -365,8 +368,10 @@ impl<const D: usize> Study<D> {
                         run.label, run.final_time, reference.label, reference.final_time
                     ));
                 }
-                let transfer = Locator::new(&run.mesh)
-                    .transfer(&reference.mesh.points)
+                // non-nested meshes of a curved domain: reference nodes up to the coarse boundary's
+                // sagitta outside the run's mesh are evaluated by extension (docs/method.md §6.2)
+                let (transfer, extension) = Locator::new(&run.mesh)
+                    .transfer_extending(&reference.mesh.points, boundary_sagitta(&run.mesh))
                     .map_err(|e| format!("carrying run {} to the reference mesh: {e}", run.label))?;
                 let at =
                     |u_ref: &[[f64; D]], u: &[[f64; D]]| seminorm_errors(&reference.mesh, u_ref, &transfer.apply(u));
@@ -379,7 +384,9 @@ impl<const D: usize> Study<D> {
                         let (_, u_ref) = reference.displacement_at.iter().find(|(s, _)| (s - t).abs() <= tol)?;
                         Some((*t, at(u_ref, u).h1_seminorm))
                     });
-                Ok(with_max_over_time(at_final, run.final_time, others))
+                let mut errors = with_max_over_time(at_final, run.final_time, others);
+                errors.extension = (extension.points > 0).then_some(extension);
+                Ok(errors)
             }
         }
     }
@@ -530,5 +537,6 @@ fn with_max_over_time(at_final: FieldErrors, final_time: f64, others: impl Itera
         h1_max_over_time: max.0,
         h1_max_time: max.1,
         times_compared: count,
+        extension: None,
     }
 }
