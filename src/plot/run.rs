@@ -353,28 +353,85 @@ pub(super) fn plot_3d(run_dir: &Path, last: &str) -> Result<Vec<PathBuf>, PlotEr
     let Some(time) = rows.first().map(|r| r[0]) else {
         return Err(fail("gamma3.csv has no row: nothing to draw".into()));
     };
-    let points: Vec<[f64; 3]> = rows.iter().map(|r| [r[1], r[2], r[3]]).collect();
-    let (axes, projected) = project_surface(&points);
+    // the surface's own faces from the contact frame of that time, else the rows' node tiles
+    let surface = contact_surface(run_dir, time).unwrap_or_else(|| ContactSurface {
+        points: rows.iter().map(|r| [r[1], r[2], r[3]]).collect(),
+        faces: Vec::new(),
+        u_nu: rows.iter().map(|r| r[4]).collect(),
+        pressure: rows.iter().map(|r| r[5]).collect(),
+        status: rows.iter().map(|r| r[6]).collect(),
+    });
+    let (axes, projected) = project_surface(&surface.points);
     let t = sci(time);
+    let by_faces = !surface.faces.is_empty();
     let map = SurfaceMap {
+        faces: surface.faces,
         axes: axes.map(|a| ["x", "y", "z"][a].to_string()),
         points: projected,
-        marked: rows.iter().map(|r| r[6] == 2.0).collect(),
-        marked_meaning: "outlined: nodes on the bound".into(),
+        marked: surface.status.iter().map(|&s| s == 2.0).collect(),
+        marked_meaning: if by_faces {
+            "squares: nodes on the bound".into()
+        } else {
+            "outlined: nodes on the bound".into()
+        },
         panels: vec![
             MapPanel {
                 title: format!("Normal displacement u_ν on Γ₃ at t = {t}"),
                 name: format!("u_ν at t = {t}"),
-                values: rows.iter().map(|r| r[4]).collect(),
+                values: surface.u_nu,
             },
             MapPanel {
                 title: format!("Contact pressure on Γ₃ at t = {t}"),
                 name: format!("pressure at t = {t}"),
-                values: rows.iter().map(|r| r[5]).collect(),
+                values: surface.pressure,
             },
         ],
     };
     let (png, svg) = pictures(run_dir, "gamma3_map")?;
     render_surface_map(&png, Some(&svg), &map).map_err(fail)?;
     Ok(vec![png, svg])
+}
+
+/// Γ₃ as the run's last contact frame has it (`contact.pvd`'s last `.vtp`): its points, faces,
+/// u_ν, pressure and status (every node of the surface, also those whose normal is prescribed),
+/// at `time` (the last time of gamma3.csv). None when there is no such frame (the map then draws
+/// node tiles of gamma3.csv's rows).
+struct ContactSurface {
+    points: Vec<[f64; 3]>,
+    faces: Vec<Vec<usize>>,
+    u_nu: Vec<f64>,
+    pressure: Vec<f64>,
+    status: Vec<f64>,
+}
+
+fn contact_surface(run_dir: &Path, time: f64) -> Option<ContactSurface> {
+    let frames = output::read_pvd(&run_dir.join("contact.pvd")).ok()?;
+    let (t, last) = frames.last()?;
+    if (t - time).abs() > 1e-12 * time.abs().max(1.0) {
+        return None;
+    }
+    let frame = output::read_vtu_arrays(&run_dir.join(last)).ok()?;
+    let field = |name: &str| {
+        frame
+            .point_data
+            .get(name)
+            .filter(|(k, v)| *k == 1 && v.len() == frame.points.len())
+            .map(|(_, v)| v.clone())
+    };
+    let faces: Vec<Vec<usize>> = frame
+        .connectivity
+        .iter()
+        .filter(|c| (3..=4).contains(&c.len()) && c.iter().all(|&n| n < frame.points.len()))
+        .cloned()
+        .collect();
+    if faces.is_empty() {
+        return None;
+    }
+    Some(ContactSurface {
+        u_nu: field("u_nu")?,
+        pressure: field("pressure")?,
+        status: field("status")?,
+        points: frame.points,
+        faces,
+    })
 }

@@ -51,6 +51,77 @@ pub struct SurfaceMap {
     /// What an outline means, for the legend.
     pub marked_meaning: String,
     pub panels: Vec<MapPanel>,
+    /// The surface's own faces (indices into `points`, 3 or 4 each): drawn as they are, the
+    /// colour interpolated in each, so that holes and fillets show as the mesh has them. Empty:
+    /// node tiles ([`node_tiles`]), for a surface known only by its nodes.
+    pub faces: Vec<Vec<usize>>,
+}
+
+/// A coloured polygon of a map and the nodal weights of its colour's value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Piece {
+    pub polygon: Vec<[f64; 2]>,
+    pub weights: Vec<(usize, f64)>,
+}
+
+/// Sub-divisions per face edge: the colour is interpolated over a face as s² flat pieces.
+const FACE_SUBDIVISIONS: usize = 4;
+
+/// The faces of a surface (triangles, bilinear quadrangles) cut into s × s pieces, each with
+/// the weights (linear or bilinear shape values at its centre) of its colour: a map of the
+/// surface as the mesh has it, clipped to it by construction.
+pub fn face_pieces(points: &[[f64; 2]], faces: &[Vec<usize>], s: usize) -> Vec<Piece> {
+    let mut out = Vec::new();
+    let at = |f: &[usize], w: &[f64]| -> [f64; 2] {
+        let mut x = [0.0; 2];
+        for (&n, &wn) in f.iter().zip(w) {
+            x[0] += wn * points[n][0];
+            x[1] += wn * points[n][1];
+        }
+        x
+    };
+    let sf = s as f64;
+    for f in faces {
+        match f.len() {
+            3 => {
+                let bary = |u: f64, v: f64| [1.0 - u - v, u, v];
+                let mut push = |corners: [(f64, f64); 3]| {
+                    let c = corners
+                        .iter()
+                        .fold((0.0, 0.0), |a, q| (a.0 + q.0 / 3.0, a.1 + q.1 / 3.0));
+                    out.push(Piece {
+                        polygon: corners.iter().map(|&(u, v)| at(f, &bary(u, v))).collect(),
+                        weights: f.iter().copied().zip(bary(c.0, c.1)).collect(),
+                    });
+                };
+                for i in 0..s {
+                    for j in 0..s - i {
+                        let (u, v) = (i as f64 / sf, j as f64 / sf);
+                        let d = 1.0 / sf;
+                        push([(u, v), (u + d, v), (u, v + d)]);
+                        if i + j + 1 < s {
+                            push([(u + d, v), (u + d, v + d), (u, v + d)]);
+                        }
+                    }
+                }
+            }
+            4 => {
+                let bilinear = |x: f64, y: f64| [(1.0 - x) * (1.0 - y), x * (1.0 - y), x * y, (1.0 - x) * y];
+                for i in 0..s {
+                    for j in 0..s {
+                        let (x0, y0, d) = (i as f64 / sf, j as f64 / sf, 1.0 / sf);
+                        let corners = [(x0, y0), (x0 + d, y0), (x0 + d, y0 + d), (x0, y0 + d)];
+                        out.push(Piece {
+                            polygon: corners.iter().map(|&(x, y)| at(f, &bilinear(x, y))).collect(),
+                            weights: f.iter().copied().zip(bilinear(x0 + d / 2.0, y0 + d / 2.0)).collect(),
+                        });
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    out
 }
 
 /// Clips the convex polygon to the half-plane {q : (q − m)·n ≤ 0} (Sutherland–Hodgman).
@@ -209,7 +280,7 @@ fn map_layout(tiles: &[Vec<[f64; 2]>], panels: usize, legend: &str) -> MapLayout
 fn draw_surface_map<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     map: &SurfaceMap,
-    tiles: &[Vec<[f64; 2]>],
+    pieces: &[Piece],
     layout: &MapLayout,
     lettering: Lettering,
 ) -> Result<(), String> {
@@ -241,13 +312,14 @@ fn draw_surface_map<DB: DrawingBackend>(
         draw_text(root, lettering, &panel.title, (left, oy + 14), HPos::Left, 2, black)?;
         let (vmin, vmax) = field_range(&panel.values);
         let range = if vmax > vmin { vmax - vmin } else { 1.0 };
-        // the tiles, each also stroked in its colour so that no seam shows between neighbours
-        for (tile, v) in tiles.iter().zip(&panel.values) {
-            if tile.len() < 3 {
+        // the pieces, each also stroked in its colour so that no seam shows between neighbours
+        for piece in pieces {
+            if piece.polygon.len() < 3 {
                 continue;
             }
+            let v: f64 = piece.weights.iter().map(|&(n, w)| w * panel.values[n]).sum();
             let colour = colour_map((v - vmin) / range);
-            let poly: Vec<(i32, i32)> = tile.iter().map(|&q| to_px(q)).collect();
+            let poly: Vec<(i32, i32)> = piece.polygon.iter().map(|&q| to_px(q)).collect();
             root.draw(&Polygon::new(poly.clone(), colour.filled())).map_err(err)?;
             let mut closed = poly;
             closed.push(closed[0]);
@@ -270,11 +342,27 @@ fn draw_surface_map<DB: DrawingBackend>(
             v.push(v[0]);
             v
         };
-        for (tile, _) in tiles.iter().zip(&map.marked).filter(|(t, &m)| m && t.len() >= 3) {
-            root.draw(&PathElement::new(inset(tile, 1.0), black.stroke_width(1)))
-                .map_err(err)?;
-            root.draw(&PathElement::new(inset(tile, 2.0), WHITE.stroke_width(1)))
-                .map_err(err)?;
+        if map.faces.is_empty() {
+            // tile mode: piece i is node i's tile
+            for (piece, _) in pieces
+                .iter()
+                .zip(&map.marked)
+                .filter(|(t, &m)| m && t.polygon.len() >= 3)
+            {
+                root.draw(&PathElement::new(inset(&piece.polygon, 1.0), black.stroke_width(1)))
+                    .map_err(err)?;
+                root.draw(&PathElement::new(inset(&piece.polygon, 2.0), WHITE.stroke_width(1)))
+                    .map_err(err)?;
+            }
+        } else {
+            // face mode: a small square at each marked node
+            for (p, _) in map.points.iter().zip(&map.marked).filter(|(_, &m)| m) {
+                let (x, y) = to_px(*p);
+                root.draw(&Rectangle::new([(x - 3, y - 3), (x + 3, y + 3)], black.stroke_width(1)))
+                    .map_err(err)?;
+                root.draw(&Rectangle::new([(x - 2, y - 2), (x + 2, y + 2)], WHITE.stroke_width(1)))
+                    .map_err(err)?;
+            }
         }
         // frame, ticks and axis names
         root.draw(&Rectangle::new(
@@ -389,19 +477,93 @@ pub fn render_surface_map(png: &Path, svg: Option<&Path>, map: &SurfaceMap) -> R
             map.points.len()
         ));
     }
-    let tiles = node_tiles(&map.points);
+    let pieces: Vec<Piece> = if map.faces.is_empty() {
+        node_tiles(&map.points)
+            .into_iter()
+            .enumerate()
+            .map(|(i, polygon)| Piece {
+                polygon,
+                weights: vec![(i, 1.0)],
+            })
+            .collect()
+    } else {
+        face_pieces(&map.points, &map.faces, FACE_SUBDIVISIONS)
+    };
+    let tiles: Vec<Vec<[f64; 2]>> = pieces.iter().map(|p| p.polygon.clone()).collect();
     let layout = map_layout(&tiles, map.panels.len(), &marked_legend(map));
     let size = (
         (layout.columns * layout.panel.0) as u32,
         (layout.rows * layout.panel.1) as u32,
     );
     let root = BitMapBackend::new(png, size).into_drawing_area();
-    draw_surface_map(&root, map, &tiles, &layout, Lettering::Pixels)?;
+    draw_surface_map(&root, map, &pieces, &layout, Lettering::Pixels)?;
     root.present().map_err(err)?;
     if let Some(svg) = svg {
         let root = SVGBackend::new(svg, size).into_drawing_area();
-        draw_surface_map(&root, map, &tiles, &layout, Lettering::Native)?;
+        draw_surface_map(&root, map, &pieces, &layout, Lettering::Native)?;
         root.present().map_err(err)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn contains(poly: &[[f64; 2]], x: [f64; 2]) -> bool {
+        let mut inside = false;
+        for i in 0..poly.len() {
+            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+            if (a[1] > x[1]) != (b[1] > x[1]) && x[0] < a[0] + (x[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]) {
+                inside = !inside;
+            }
+        }
+        inside
+    }
+
+    /// A square plate 1 × 1 with a hole of radius 0.2 in its middle, meshed by quadrangles
+    /// between the hole and the square (the surface of a part with a hole): the face pieces
+    /// cover the plate and leave the hole empty to its edge (node tiles filled it, leaving a
+    /// hole ~0.1 wide), and each piece's colour weights sum to 1.
+    #[test]
+    fn face_pieces_keep_a_hole_empty() {
+        let (rings, around) = (4usize, 32usize);
+        let mut points = Vec::new();
+        for i in 0..=rings {
+            let s = i as f64 / rings as f64;
+            for j in 0..around {
+                let a = std::f64::consts::TAU * j as f64 / around as f64;
+                let (c, d) = (a.cos(), a.sin());
+                // from the circle r = 0.2 to the square's edge along the ray
+                let edge = 0.5 / c.abs().max(d.abs());
+                let r = 0.2 + s * (edge - 0.2);
+                points.push([0.5 + r * c, 0.5 + r * d]);
+            }
+        }
+        let id = |i: usize, j: usize| i * around + j % around;
+        let faces: Vec<Vec<usize>> = (0..rings)
+            .flat_map(|i| (0..around).map(move |j| vec![id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]))
+            .collect();
+        let pieces = face_pieces(&points, &faces, FACE_SUBDIVISIONS);
+        assert_eq!(pieces.len(), faces.len() * FACE_SUBDIVISIONS * FACE_SUBDIVISIONS);
+        let covered = |x: [f64; 2]| pieces.iter().any(|p| contains(&p.polygon, x));
+        for x in [
+            [0.5, 0.5],
+            [0.5 + 0.19, 0.5],
+            [0.5, 0.5 - 0.19],
+            [0.5 + 0.13, 0.5 + 0.13],
+        ] {
+            assert!(!covered(x), "the hole is drawn over at {x:?}");
+        }
+        for x in [[0.5 + 0.22, 0.5], [0.05, 0.05], [0.95, 0.5], [0.5, 0.9]] {
+            assert!(covered(x), "the plate is not drawn at {x:?}");
+        }
+        for p in &pieces {
+            let sum: f64 = p.weights.iter().map(|w| w.1).sum();
+            assert!((sum - 1.0).abs() < 1e-12);
+        }
+        // tiles of the same nodes spill into the hole
+        let tiles = node_tiles(&points);
+        assert!(tiles.iter().any(|t| contains(t, [0.5 + 0.19, 0.5])));
+    }
 }
