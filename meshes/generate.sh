@@ -82,6 +82,9 @@ mesh3 block.geo block_q1_h8.msh -setnumber hexes 1 -setnumber n 8
 mesh3 block.geo block_p1_bin.msh -setnumber hexes 0 -setnumber lc 0.25 -bin
 gmsh -3 block.geo -setnumber hexes 0 -setnumber lc 0.25 -format msh22 -o block_p1_v22.msh >/dev/null
 echo "wrote block_p1_v22.msh ($(wc -c <block_p1_v22.msh) bytes)"
+# Prisms (an extruded triangulation, Layers + Recombine) under tetrahedra on the same interface.
+gmsh -3 prism.geo -format msh41 -o prism_tet.msh >/dev/null
+echo "wrote prism_tet.msh"
 # The L bracket (OpenCASCADE), tetrahedra.
 mesh3 bracket.geo bracket_p1.msh -setnumber lc 0.03
 

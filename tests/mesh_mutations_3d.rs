@@ -672,6 +672,11 @@ fn cell_faces(cell: &Cell) -> Vec<Vec<usize>> {
         Cell::Hex8(_) => HEX_FACES.iter().map(|f| map(f)).collect(),
         Cell::Tri3(_) => TRI_EDGES.iter().map(|f| map(f)).collect(),
         Cell::Quad4(_) => QUAD_EDGES.iter().map(|f| map(f)).collect(),
+        // prism: the triangles ζ = ∓1 and the three side quadrangles
+        Cell::Prism6(_) => [&[0, 2, 1][..], &[3, 4, 5], &[0, 1, 4, 3], &[1, 2, 5, 4], &[2, 0, 3, 5]]
+            .iter()
+            .map(|f| map(f))
+            .collect(),
     }
 }
 

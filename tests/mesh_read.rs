@@ -114,6 +114,13 @@ const MESHES_3D: &[(&str, usize, usize, f64, &[(&str, usize)])] = &[
         &[("Gamma1", 406), ("Gamma2", 868), ("Gamma3", 406)],
     ),
     (
+        "prism_tet.msh",
+        136,
+        268,
+        0.5,
+        &[("Gamma1", 24), ("Gamma2", 114), ("Gamma3", 42)],
+    ),
+    (
         "block_p1_bin.msh",
         91,
         222,

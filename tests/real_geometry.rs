@@ -37,8 +37,9 @@ fn msh22(names: &[(u8, i32, &str)], nodes: &[[f64; 3]], elements: &[(i32, i32, V
     s + "$EndElements\n"
 }
 
-/// A prism-only mesh, a second-order tetrahedron and a volume mesh saved without its Physical
-/// Volume each get their own message (all three used to be told "mesh the volume (gmsh -3)").
+/// A pyramid-only mesh, a second-order tetrahedron and a volume mesh saved without its Physical
+/// Volume each get their own message (all three used to be told "mesh the volume (gmsh -3)";
+/// prisms are computed on now, tests/three_d.rs).
 #[test]
 fn volume_meshes_hvi_cannot_use_say_why() {
     let dir = tempfile::tempdir().unwrap();
@@ -55,13 +56,21 @@ fn volume_meshes_hvi_cannot_use_say_why() {
         [1.0, 0.0, 1.0],
         [0.0, 1.0, 1.0],
     ];
-    let prism = write(
-        "prism.msh",
-        msh22(&[(3, 5, "Omega")], &corners, &[(6, 5, vec![1, 2, 3, 4, 5, 6])]),
+    // a pyramid (the apex above the square base)
+    let pyramid_nodes = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.5, 0.5, 1.0],
+    ];
+    let pyramid = write(
+        "pyramid.msh",
+        msh22(&[(3, 5, "Omega")], &pyramid_nodes, &[(7, 5, vec![1, 2, 3, 4, 5])]),
     );
-    let msg = hvi_fails(&["check", &prism, "--scene", "examples/slab.toml"]);
-    assert_contains(&msg, &["prism.msh", "6-node prism", "tetrahedra and hexahedra only"]);
-    assert!(!msg.contains("gmsh -3"), "{msg}");
+    let msg = hvi_fails(&["check", &pyramid, "--scene", "examples/slab.toml"]);
+    assert_contains(&msg, &["pyramid.msh", "5-node pyramid", "not pyramids", "Layers"]);
+    assert!(!msg.contains("gmsh -3)"), "{msg}");
 
     let mut tet10 = corners[..4].to_vec();
     for (a, b) in [(0, 1), (1, 2), (2, 0), (0, 3), (2, 3), (1, 3)] {
@@ -374,4 +383,52 @@ fn points_beyond_the_sagitta_bound_are_refused() {
     assert!(e.points <= 1 && e.farthest <= allowed);
     let err = locator.transfer_extending(&[at(2.2)], allowed).map(|_| ()).unwrap_err();
     assert_contains(&err, &["lies outside the mesh", "not of the same geometry"]);
+}
+
+/// A run on the mixed prism–tetrahedron mesh (meshes/prism.geo: an extruded triangulation under
+/// tetrahedra) with contact on its triangulated bottom writes a series ParaView reads as wedges:
+/// VTK type 13 with the base triangle's normal pointing away from the other triangle (VTK's
+/// convention; gmsh's prism has it the other way round).
+#[test]
+fn a_prism_mesh_runs_with_contact_and_writes_vtk_wedges() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("prism.toml");
+    std::fs::write(
+        &scene,
+        "[material]\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n[time]\nfinal_time = 1.0\nsteps = 2\n\
+         [groups]\nclamped = \"Gamma1\"\n[[traction]]\ngroup = \"Gamma2\"\npressure = \"0.01*t*(z > 0.49)\"\n\
+         [[contact]]\ngroup = \"Gamma3\"\nbound = 0.001\n[contact.law]\nkind = \"power\"\nscale = 0.1\nexponent = 1.0\n",
+    )
+    .unwrap();
+    let out = dir.path().join("run");
+    let o = Command::new(env!("CARGO_BIN_EXE_hvi"))
+        .args(["solve", "meshes/prism_tet.msh", "--scene", scene.to_str().unwrap()])
+        .args(["--out", out.to_str().unwrap(), "--quiet"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let frame = hvi::output::read_vtu_arrays(&out.join("solution_00002.vtu")).unwrap();
+    let wedges: Vec<&Vec<usize>> = frame
+        .cell_types
+        .iter()
+        .zip(&frame.connectivity)
+        .filter(|(t, _)| **t == 13)
+        .map(|(_, c)| c)
+        .collect();
+    assert_eq!(wedges.len(), 84);
+    for c in wedges {
+        let p = |k: usize| frame.points[c[k]];
+        let d = |a: [f64; 3], b: [f64; 3]| [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let (u, v) = (d(p(0), p(1)), d(p(0), p(2)));
+        let normal = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        let up = d(p(0), p(3));
+        assert!(normal.iter().zip(&up).map(|(a, b)| a * b).sum::<f64>() < 0.0, "{c:?}");
+    }
+    // the contact surface is the bottom's triangles
+    let contact = hvi::output::read_vtu_arrays(&out.join("contact_00002.vtp")).unwrap();
+    assert!(!contact.connectivity.is_empty() && contact.connectivity.iter().all(|c| c.len() == 3));
 }

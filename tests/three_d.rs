@@ -189,6 +189,8 @@ fn patch_test_on_distorted_tetrahedra_and_hexahedra() {
         ("block_q1_h8.msh", vec!["Gamma1", "Gamma2", "Gamma3"]),
         ("block_p1.msh", vec!["Gamma1", "Gamma2", "Gamma3"]),
         ("slab_p1_h4.msh", vec!["Gamma1", "Gamma2", "Gamma3", "Sides"]),
+        // prisms (an extruded triangulation) under tetrahedra on the same interface (issue 20)
+        ("prism_tet.msh", vec!["Gamma1", "Gamma2", "Gamma3"]),
     ] {
         let mut m = mesh::<3>(file);
         distort(&mut m, 0.2);
@@ -291,7 +293,7 @@ fn free_rigid_motions_are_named() {
 fn structured_block_matches_the_gmsh_slab() {
     use hvi::mesh::structured::{block, SolidShape};
     use hvi::mesh::GroupSelector;
-    for shape in [SolidShape::Hex, SolidShape::Tet] {
+    for shape in [SolidShape::Hex, SolidShape::Tet, SolidShape::Prism] {
         let m = block([2.0, 1.0, 0.25], [8, 4, 2], shape);
         let volume = m.measure();
         assert!((volume - 0.5).abs() < 1e-13, "{shape:?}: volume {volume}");

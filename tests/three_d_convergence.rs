@@ -195,6 +195,8 @@ fn manufactured_solution_converges_in_3d_on_hexes_and_tets() {
     for (shape, levels) in [
         (SolidShape::Hex, &[2usize, 4, 8, 16][..]),
         (SolidShape::Tet, &[2, 4, 8, 16, 24][..]),
+        // linear prisms (issue 20): triangle × segment, the orders of Q1
+        (SolidShape::Prism, &[2, 4, 8, 16][..]),
     ] {
         let (mut hs, mut h1, mut l2) = (vec![], vec![], vec![]);
         for &n in levels {
@@ -301,8 +303,9 @@ fn relaxation_with_a_prescribed_displacement_matches_its_closed_form() {
     let stiff = l + 2.0 * m;
     let start = Instant::now();
 
-    // No memory: the derivation of the reaction at t = 0, on hexahedra and tetrahedra.
-    for shape in [SolidShape::Hex, SolidShape::Tet] {
+    // No memory: the derivation of the reaction at t = 0, on hexahedra, tetrahedra and prisms
+    // (a uniform strain: the patch test, exact on every cell kind).
+    for shape in [SolidShape::Hex, SolidShape::Tet, SolidShape::Prism] {
         let (sim, stats, sink) =
             solve_in_memory(&relaxation_scene(1, false), block([1.0; 3], [2, 2, 2], shape)).unwrap();
         let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);

@@ -106,10 +106,14 @@ pub(crate) fn check_mesh_report<const D: usize>(mesh_path: &Path, mesh: &Mesh<D>
             format!("{} quadrilaterals", count("quadrangle")),
         ]
     } else {
-        vec![
+        let mut kinds = vec![
             format!("{} tetrahedra", count("tetrahedron")),
             format!("{} hexahedra", count("hexahedron")),
-        ]
+        ];
+        if count("prism") > 0 {
+            kinds.push(format!("{} prisms", count("prism")));
+        }
+        kinds
     };
     let _ = writeln!(
         out,

@@ -18,11 +18,12 @@ pub fn read_mesh(path: &Path) -> Result<AnyMesh, SolveError> {
     if let (Some(spec), false) = (text.strip_prefix("box:"), path.exists()) {
         let (dims, shape) = match spec.split_once(':') {
             Some((d, "tet")) => (d, mesh::structured::SolidShape::Tet),
+            Some((d, "prism")) => (d, mesh::structured::SolidShape::Prism),
             Some((d, "hex")) | Some((d, "")) => (d, mesh::structured::SolidShape::Hex),
             None => (spec, mesh::structured::SolidShape::Hex),
             Some((_, other)) => {
                 return Err(SolveError::Setup(format!(
-                    "mesh spec {text}: unknown cell shape `{other}` (use hex or tet)"
+                    "mesh spec {text}: unknown cell shape `{other}` (use hex, tet or prism)"
                 )))
             }
         };
@@ -40,7 +41,7 @@ pub fn read_mesh(path: &Path) -> Result<AnyMesh, SolveError> {
                 )))
             }
             _ => Err(SolveError::Setup(format!(
-                "mesh spec {text}: expected box:NXxNYxNZ[:tet] with counts ≥ 1, e.g. box:64x32x8 (cubic cells of size 1/NY: the slab (0, NX/NY)×(0,1)×(0, NZ/NY))"
+                "mesh spec {text}: expected box:NXxNYxNZ[:tet|:prism] with counts ≥ 1, e.g. box:64x32x8 (cubic cells of size 1/NY: the slab (0, NX/NY)×(0,1)×(0, NZ/NY))"
             ))),
         };
     }

@@ -116,6 +116,11 @@ fn min_det_3d(points: &[[f64; 3]], cell: &Cell) -> (f64, [f64; 3]) {
             }
         }
     }
+    if let Cell::Prism6(_) = cell {
+        for &z in &[-1.0, 1.0] {
+            at.extend([[0.0, 0.0, z], [1.0, 0.0, z], [0.0, 1.0, z]]);
+        }
+    }
     at.iter()
         .map(|&xi| (crate::mesh::element::shape_at(cell, points, xi).det_j, xi))
         .fold((f64::INFINITY, [0.0; 3]), |a, b| if b.0 < a.0 { b } else { a })
@@ -229,7 +234,7 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
         let ty = raw.element_types[e];
         let origin = &raw.origins[raw.element_origin[e] as usize];
         let info = element_type_info(ty);
-        if !matches!(ty, 1 | 2 | 3 | 4 | 5 | 15) {
+        if !matches!(ty, 1 | 2 | 3 | 4 | 5 | 6 | 15) {
             let dim = info.map_or(2, |i| i.2);
             let group_text = if origin.physical.is_empty() {
                 match origin.entity {
@@ -250,11 +255,12 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
                 format!("in physical group {}", names.join(", "))
             };
             let (name, fix) = match info {
-                Some((name, _, 3)) if matches!(ty, 6 | 7) => (
+                Some((name, _, 3)) if ty == 7 => (
                     name,
-                    "hvi computes on tetrahedra and hexahedra only: mesh the volume with tetrahedra (no Recombine in \
-                     the extrusion, Mesh.Algorithm3D = 1) or with hexahedra throughout (transfinite volumes with \
-                     Recombine)",
+                    "hvi computes on tetrahedra, hexahedra and prisms, not pyramids (the transitions gmsh puts \
+                     between hexahedra and tetrahedra): mesh the volume with tetrahedra (no Recombine, \
+                     Mesh.Algorithm3D = 1), with hexahedra throughout (transfinite volumes with Recombine), or \
+                     extrude a surface into prisms (Extrude … Layers{…}; Recombine;)",
                 ),
                 Some((name, _, _)) => (
                     name,
@@ -334,6 +340,7 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
                     2 => Cell::Tri3([nodes[0], nodes[1], nodes[2]]),
                     3 => Cell::Quad4([nodes[0], nodes[1], nodes[2], nodes[3]]),
                     4 => Cell::Tet4([nodes[0], nodes[1], nodes[2], nodes[3]]),
+                    6 => Cell::Prism6(std::array::from_fn(|k| nodes[k])),
                     _ => Cell::Hex8(std::array::from_fn(|k| nodes[k])),
                 });
                 cell_tags.push(raw.element_tags[e] as usize);

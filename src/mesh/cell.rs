@@ -22,6 +22,9 @@ pub enum Cell {
     Tet4([usize; 4]),
     /// Trilinear hexahedron (gmsh element type 5): nodes 0–3 the face ζ = −1, 4–7 the face ζ = +1.
     Hex8([usize; 8]),
+    /// Linear prism (wedge; gmsh element type 6, what an extruded triangulation gives): nodes 0–2
+    /// the triangle ζ = −1, 3–5 the triangle ζ = +1, node k + 3 above node k; triangle × segment.
+    Prism6([usize; 6]),
 }
 
 /// Edges of a triangle and a quadrilateral (counter-clockwise cells: outward = (dy, −dx)).
@@ -31,6 +34,10 @@ const QUAD_EDGES: [[usize; 2]; 4] = [[0, 1], [1, 2], [2, 3], [3, 0]];
 
 /// Faces of a tetrahedron, counter-clockwise seen from outside (opposite nodes 3, 2, 1, 0).
 const TET_FACES: [[usize; 3]; 4] = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+
+/// Faces of a prism, counter-clockwise seen from outside: ζ = −1, ζ = +1, η = 0, ξ + η = 1,
+/// ξ = 0.
+const PRISM_FACES: [&[usize]; 5] = [&[0, 2, 1], &[3, 4, 5], &[0, 1, 4, 3], &[1, 2, 5, 4], &[2, 0, 3, 5]];
 
 /// Faces of a hexahedron, counter-clockwise seen from outside: ζ = −1, ζ = +1, η = −1, η = +1,
 /// ξ = −1, ξ = +1.
@@ -58,6 +65,7 @@ impl Cell {
             Cell::Quad4(n) => n,
             Cell::Tet4(n) => n,
             Cell::Hex8(n) => n,
+            Cell::Prism6(n) => n,
         }
     }
 
@@ -65,7 +73,7 @@ impl Cell {
     pub fn dim(&self) -> usize {
         match self {
             Cell::Tri3(_) | Cell::Quad4(_) => 2,
-            Cell::Tet4(_) | Cell::Hex8(_) => 3,
+            Cell::Tet4(_) | Cell::Hex8(_) | Cell::Prism6(_) => 3,
         }
     }
 
@@ -77,6 +85,7 @@ impl Cell {
             Cell::Quad4(n) => Cell::Quad4(n.map(number)),
             Cell::Tet4(n) => Cell::Tet4(n.map(number)),
             Cell::Hex8(n) => Cell::Hex8(n.map(number)),
+            Cell::Prism6(n) => Cell::Prism6(n.map(number)),
         }
     }
 
@@ -87,6 +96,7 @@ impl Cell {
             Cell::Quad4([a, b, c, d]) => Cell::Quad4([a, d, c, b]),
             Cell::Tet4([a, b, c, d]) => Cell::Tet4([a, c, b, d]),
             Cell::Hex8([a, b, c, d, e, f, g, h]) => Cell::Hex8([a, d, c, b, e, h, g, f]),
+            Cell::Prism6([a, b, c, d, e, f]) => Cell::Prism6([a, c, b, d, f, e]),
         }
     }
 
@@ -105,6 +115,7 @@ impl Cell {
                 &HEX_FACES[4],
                 &HEX_FACES[5],
             ],
+            Cell::Prism6(_) => &PRISM_FACES,
         };
         table
             .iter()
@@ -132,17 +143,28 @@ impl Cell {
                 [2, 6],
                 [3, 7],
             ],
+            Cell::Prism6(_) => &[[0, 1], [1, 2], [2, 0], [3, 4], [4, 5], [5, 3], [0, 3], [1, 4], [2, 5]],
         };
         local.iter().map(|&[a, b]| [n[a], n[b]]).collect()
     }
 
-    /// VTK cell type id (5 triangle, 9 quad, 10 tetra, 12 hexahedron; same node order as gmsh).
+    /// VTK cell type id (5 triangle, 9 quad, 10 tetra, 12 hexahedron, 13 wedge).
     pub fn vtk_type(&self) -> u8 {
         match self {
             Cell::Tri3(_) => 5,
             Cell::Quad4(_) => 9,
             Cell::Tet4(_) => 10,
             Cell::Hex8(_) => 12,
+            Cell::Prism6(_) => 13,
+        }
+    }
+
+    /// The positions of [`Cell::nodes`] in VTK's order: gmsh's, except for the prism, whose base
+    /// triangle VTK orients with its normal away from the other triangle (gmsh: towards it).
+    pub fn vtk_order(&self) -> &'static [usize] {
+        match self {
+            Cell::Prism6(_) => &[0, 2, 1, 3, 5, 4],
+            c => &[0, 1, 2, 3, 4, 5, 6, 7][..c.nodes().len()],
         }
     }
 
@@ -153,6 +175,7 @@ impl Cell {
             Cell::Quad4(_) => "quadrangle",
             Cell::Tet4(_) => "tetrahedron",
             Cell::Hex8(_) => "hexahedron",
+            Cell::Prism6(_) => "prism",
         }
     }
 }

@@ -2,8 +2,8 @@
 //! functions, their physical gradients and the Jacobian determinant at a quadrature point.
 
 use super::quadrature::{
-    tensor_gauss_3, tet_duffy_27, QuadPoint, HEX_GAUSS_2X2X2, QUAD_GAUSS_2X2, TET_4POINT, TET_CENTROID, TRI_3POINT,
-    TRI_CENTROID,
+    tensor_gauss_3, tet_duffy_27, QuadPoint, HEX_GAUSS_2X2X2, PRISM_6POINT, QUAD_GAUSS_2X2, TET_4POINT, TET_CENTROID,
+    TRI_3POINT, TRI_CENTROID,
 };
 use crate::mesh::Cell;
 
@@ -67,6 +67,19 @@ pub fn reference(cell: &Cell, xi: [f64; 3]) -> (usize, [f64; MAX_NODES], [[f64; 
                 g[a] = [0.125 * c[0] * sy * sz, 0.125 * c[1] * sx * sz, 0.125 * c[2] * sx * sy];
             }
             (8, v, g)
+        }
+        Cell::Prism6(_) => {
+            // the triangle's (1 − ξ − η, ξ, η) times the segment's (1 ∓ ζ)/2
+            let l = [1.0 - x - y, x, y];
+            let dl = [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]];
+            for a in 0..3 {
+                for (b, s) in [(a, -1.0), (a + 3, 1.0)] {
+                    let h = 0.5 * (1.0 + s * z);
+                    v[b] = l[a] * h;
+                    g[b] = [dl[a][0] * h, dl[a][1] * h, 0.5 * s * l[a]];
+                }
+            }
+            (6, v, g)
         }
     }
 }
@@ -149,6 +162,7 @@ pub fn stiffness_rule(cell: &Cell) -> &'static [QuadPoint] {
         Cell::Quad4(_) => &QUAD_GAUSS_2X2,
         Cell::Tet4(_) => &TET_CENTROID,
         Cell::Hex8(_) => &HEX_GAUSS_2X2X2,
+        Cell::Prism6(_) => &PRISM_6POINT,
     }
 }
 
@@ -159,6 +173,7 @@ pub fn load_rule(cell: &Cell) -> &'static [QuadPoint] {
         Cell::Quad4(_) => &QUAD_GAUSS_2X2,
         Cell::Tet4(_) => &TET_4POINT,
         Cell::Hex8(_) => &HEX_GAUSS_2X2X2,
+        Cell::Prism6(_) => &PRISM_6POINT,
     }
 }
 
@@ -175,6 +190,22 @@ pub fn error_rule(cell: &Cell) -> Vec<QuadPoint> {
         Cell::Quad4(_) => tensor_gauss_3(2),
         Cell::Tet4(_) => tet_duffy_27(),
         Cell::Hex8(_) => tensor_gauss_3(3),
+        Cell::Prism6(_) => {
+            // the triangle's 6-point rule times 3-point Gauss in ζ
+            let gauss = [
+                (-(0.6f64).sqrt(), 5.0 / 9.0),
+                (0.0, 8.0 / 9.0),
+                ((0.6f64).sqrt(), 5.0 / 9.0),
+            ];
+            TRI6.iter()
+                .flat_map(|&(xi, w)| {
+                    gauss.iter().map(move |&(z, wz)| QuadPoint {
+                        xi: [xi[0], xi[1], z],
+                        weight: w * wz,
+                    })
+                })
+                .collect()
+        }
     }
 }
 
@@ -191,7 +222,7 @@ const TRI6: [([f64; 2], f64); 6] = [
 /// The cell's centroid in reference coordinates.
 pub fn reference_centroid(cell: &Cell) -> [f64; 3] {
     match cell {
-        Cell::Tri3(_) => [1.0 / 3.0, 1.0 / 3.0, 0.0],
+        Cell::Tri3(_) | Cell::Prism6(_) => [1.0 / 3.0, 1.0 / 3.0, 0.0],
         Cell::Quad4(_) | Cell::Hex8(_) => [0.0, 0.0, 0.0],
         Cell::Tet4(_) => [0.25, 0.25, 0.25],
     }
@@ -261,5 +292,11 @@ mod tests {
             [2.0, -3.0, 0.5],
         );
         check(Cell::Tet4([0, 1, 3, 4]), &p3, [0.2, 0.3, 0.1], [2.0, -3.0, 0.5]);
+        check(
+            Cell::Prism6([0, 1, 3, 4, 5, 7]),
+            &p3,
+            [0.2, 0.3, -0.4],
+            [2.0, -3.0, 0.5],
+        );
     }
 }

@@ -41,6 +41,18 @@ pub const TRI_3POINT: [QuadPoint; 3] = [
     qp(1.0 / 6.0, 2.0 / 3.0, 0.0, 1.0 / 6.0),
 ];
 
+/// 6-point rule on the reference prism {ξ, η ≥ 0, ξ + η ≤ 1} × [−1, 1]: the triangle's 3-point
+/// rule times 2-point Gauss, exact for quadratics in (ξ, η) times cubics in ζ (the P1 × Q1
+/// stiffness on a right prism).
+pub const PRISM_6POINT: [QuadPoint; 6] = [
+    qp(1.0 / 6.0, 1.0 / 6.0, -G, 1.0 / 6.0),
+    qp(2.0 / 3.0, 1.0 / 6.0, -G, 1.0 / 6.0),
+    qp(1.0 / 6.0, 2.0 / 3.0, -G, 1.0 / 6.0),
+    qp(1.0 / 6.0, 1.0 / 6.0, G, 1.0 / 6.0),
+    qp(2.0 / 3.0, 1.0 / 6.0, G, 1.0 / 6.0),
+    qp(1.0 / 6.0, 2.0 / 3.0, G, 1.0 / 6.0),
+];
+
 /// 1-point (centroid) rule on the reference triangle: exact for P1 stiffness (constant strain).
 pub const TRI_CENTROID: [QuadPoint; 1] = [qp(1.0 / 3.0, 1.0 / 3.0, 0.0, 0.5)];
 

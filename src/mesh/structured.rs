@@ -90,6 +90,9 @@ pub enum SolidShape {
     /// Linear tetrahedra (P1): each grid box split into six around its diagonal from the
     /// corner (0, 0, 0) to (1, 1, 1) (conforming across boxes).
     Tet,
+    /// Linear prisms (wedges, extruded triangles): each grid box split into two along its
+    /// diagonal from (0, 0) to (1, 1) in x, y, extruded in z.
+    Prism,
 }
 
 /// A structured mesh of the box (0, lx) × (0, ly) × (0, lz) with `nx` × `ny` × `nz` grid boxes and
@@ -136,6 +139,10 @@ pub fn block(l: [f64; 3], n: [usize; 3], kind: SolidShape) -> Mesh<3> {
                 ];
                 match kind {
                     SolidShape::Hex => cells.push(Cell::Hex8(c)),
+                    SolidShape::Prism => {
+                        cells.push(Cell::Prism6([c[0], c[1], c[2], c[4], c[5], c[6]]));
+                        cells.push(Cell::Prism6([c[0], c[2], c[3], c[4], c[6], c[7]]));
+                    }
                     SolidShape::Tet => {
                         // Six tetrahedra sharing the diagonal c0–c6 (Kuhn's split), each positive.
                         for [a, b] in [[1, 2], [2, 3], [3, 7], [7, 4], [4, 5], [5, 1]] {
@@ -176,7 +183,11 @@ pub fn block(l: [f64; 3], n: [usize; 3], kind: SolidShape) -> Mesh<3> {
                     SolidShape::Hex => {
                         out.push(Facet::from(if at_max { ccw } else { [ccw[0], ccw[3], ccw[2], ccw[1]] }))
                     }
-                    SolidShape::Tet => {
+                    // prisms: quadrangles on the sides, the triangles of the split at z = const
+                    SolidShape::Prism if fixed != 2 => {
+                        out.push(Facet::from(if at_max { ccw } else { [ccw[0], ccw[3], ccw[2], ccw[1]] }))
+                    }
+                    SolidShape::Tet | SolidShape::Prism => {
                         // The faces of the six tetrahedra on a box face: split along the diagonal
                         // through the box's corner nearest (0, 0, 0) or farthest from it.
                         // (every box face holds exactly one end of the diagonal c0–c6: ccw[0]–ccw[2])

@@ -419,7 +419,7 @@ pub fn reference_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x
     };
     let simplex = matches!(cell, Cell::Tri3(_) | Cell::Tet4(_));
     let start = match cell {
-        Cell::Tri3(_) => [1.0 / 3.0, 1.0 / 3.0, 0.0],
+        Cell::Tri3(_) | Cell::Prism6(_) => [1.0 / 3.0, 1.0 / 3.0, 0.0],
         Cell::Tet4(_) => [0.25; 3],
         Cell::Quad4(_) | Cell::Hex8(_) => [0.0; 3],
     };
@@ -448,6 +448,25 @@ pub fn reference_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x
             0.0
         } else {
             polygon_distance(&corner, at)
+        }
+    } else if let Cell::Prism6(_) = cell {
+        // triangle × segment: inside when ξ, η ≥ 0, ξ + η ≤ 1, |ζ| ≤ 1; else the distance to the
+        // map of the nearest such point (clamped: an upper bound, exact across one face)
+        let inside = xi[0] >= 0.0 && xi[1] >= 0.0 && xi[0] + xi[1] <= 1.0 && xi[2].abs() <= 1.0;
+        if inside {
+            0.0
+        } else {
+            let (mut a, mut b) = (xi[0].max(0.0), xi[1].max(0.0));
+            if a + b > 1.0 {
+                let excess = 0.5 * (a + b - 1.0);
+                (a, b) = ((a - excess).max(0.0), (b - excess).max(0.0));
+                let s = a + b;
+                if s > 1.0 {
+                    (a, b) = (a / s, b / s);
+                }
+            }
+            let (y, _) = map([a, b, xi[2].clamp(-1.0, 1.0)]);
+            (0..D).map(|k| (x[k] - y[k]).powi(2)).sum::<f64>().sqrt()
         }
     } else if xi.iter().all(|v| v.abs() <= 1.0) {
         0.0

@@ -217,7 +217,7 @@ pub(super) fn encode<const D: usize>(frame: &View<D>, level: u32, buffer: &mut V
     let topology = frame.topology;
     let offset = a.array(|buf| {
         for c in 0..n_cells {
-            put_items(buf, topology.nodes(c).iter(), |&i| (i as u64).to_le_bytes());
+            put_items(buf, topology.vtk_nodes(c), |i| (i as u64).to_le_bytes());
         }
     });
     declare(&mut text, "UInt64", "connectivity", 1, "", offset);

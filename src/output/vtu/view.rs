@@ -27,6 +27,16 @@ impl Topology<'_> {
             Topology::Facets(f) => f[i].nodes(),
         }
     }
+
+    /// The nodes of item i in VTK's order ([`crate::mesh::Cell::vtk_order`]).
+    pub(crate) fn vtk_nodes(&self, i: usize) -> impl ExactSizeIterator<Item = usize> + '_ {
+        let nodes = self.nodes(i);
+        let order: &[usize] = match self {
+            Topology::Cells(c) => c[i].vtk_order(),
+            Topology::Facets(_) => &[0, 1, 2, 3][..nodes.len()],
+        };
+        order.iter().map(move |&k| nodes[k])
+    }
 }
 
 /// What the encoder needs of a [`Frame`] or a [`SurfaceFrame`].
