@@ -162,7 +162,7 @@ fn study_writes_tables_and_plots() {
     }
     let md = std::fs::read_to_string(out.join("study.md")).unwrap();
     assert!(
-        md.contains("paper's error") && md.contains("Least-squares orders"),
+        md.contains("paper's error") && md.contains("fitted over all runs of the path"),
         "{md}"
     );
     // 4 runs, one CSV row each after the header

@@ -432,3 +432,28 @@ fn a_prism_mesh_runs_with_contact_and_writes_vtk_wedges() {
     let contact = hvi::output::read_vtu_arrays(&out.join("contact_00002.vtp")).unwrap();
     assert!(!contact.connectivity.is_empty() && contact.connectivity.iter().all(|c| c.len() == 3));
 }
+
+/// study.md gives every path its table under its heading (the headings of a study without
+/// published numbers stood empty) and says which order is which.
+#[test]
+fn every_path_of_a_study_has_its_table_and_its_fitted_order() {
+    let out = tempfile::tempdir().unwrap();
+    let study = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/gallery/ring/ring_study.toml");
+    hvi::study::execute::run_file(&study, out.path(), &[]).unwrap_or_else(|e| panic!("{e}"));
+    let md = std::fs::read_to_string(out.path().join("study.md")).unwrap();
+    let section = md
+        .split("## h refined at k = T/4")
+        .nth(1)
+        .and_then(|s| s.split("\n## ").next())
+        .unwrap_or_else(|| panic!("{md}"));
+    assert_contains(
+        section,
+        &[
+            "| 1/4 |",
+            "| 1/8 |",
+            "| 1/16 |",
+            "observed between neighbouring runs",
+            "order 1.",
+        ],
+    );
+}

@@ -292,13 +292,14 @@ pub(super) fn run_in<const D: usize>(
             .copied()
             .collect();
         let title = format!("h refined at k = T/{}", p.steps);
+        let fit = fitted_line(study.fitted_order(&study.paths[i]), "h");
         if p.published.is_empty() {
-            let _ = writeln!(md, "## {title}\n");
+            let _ = writeln!(md, "## {title}\n\n{}\n{fit}\n", report::path_markdown(&these));
         } else {
             let hs: Vec<f64> = p.n.iter().map(|n| 1.0 / *n as f64).collect();
             let _ = writeln!(
                 md,
-                "## {title}\n\n{}",
+                "## {title}\n\n{}\n{fit}\n",
                 report::comparison_markdown(&these, &published(&p.published, &hs))
             );
         }
@@ -310,27 +311,18 @@ pub(super) fn run_in<const D: usize>(
             .copied()
             .collect();
         let title = format!("k refined at h = 1/{}", p.n);
+        let fit = fitted_line(study.fitted_order(&study.paths[spec.h_paths.len() + j]), "k");
         if p.published.is_empty() {
-            let _ = writeln!(md, "## {title}\n");
+            let _ = writeln!(md, "## {title}\n\n{}\n{fit}\n", report::path_markdown(&these));
         } else {
             let ks: Vec<f64> = p.steps.iter().map(|s| t / *s as f64).collect();
             let _ = writeln!(
                 md,
-                "## {title}\n\n{}",
+                "## {title}\n\n{}\n{fit}\n",
                 report::comparison_markdown(&these, &published(&p.published, &ks))
             );
         }
     }
-    let fitted: Vec<String> = study
-        .paths
-        .iter()
-        .map(|p| format!("{}: {:.3}", p.name, study.fitted_order(p).unwrap_or(f64::NAN)))
-        .collect();
-    let _ = writeln!(
-        md,
-        "Least-squares orders of the H¹ error at T: {}.\n",
-        fitted.join(", ")
-    );
     let _ = writeln!(
         md,
         "## All runs (wall time per phase in seconds)\n\n{}",
@@ -419,4 +411,16 @@ pub(super) fn run_in<const D: usize>(
         report: md,
         files: written,
     })
+}
+
+/// The sentence under a path's table that says which order is which.
+fn fitted_line(order: Option<f64>, parameter: &str) -> String {
+    match order {
+        Some(o) => format!(
+            "The `order` columns are observed between neighbouring runs, log(e₁/e₂)/log({parameter}₁/{parameter}₂); \
+             fitted over all runs of the path (least squares of log e against log {parameter}) the H¹ error at T has \
+             order {o:.3}."
+        ),
+        None => "(one run: no order)".into(),
+    }
 }

@@ -136,6 +136,33 @@ pub fn markdown(rows: &[Row]) -> String {
     s
 }
 
+/// A compact table of one path: its parameter, the H¹ and L² errors at T with the observed
+/// order between neighbouring runs, and the max-over-time H¹ error.
+pub fn path_markdown(rows: &[&Row]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "| h | k | H¹ error at T | order | L² error at T | L² order | max_t H¹ error | order |"
+    );
+    let _ = writeln!(s, "|---|---|--:|--:|--:|--:|--:|--:|");
+    let ord = |o: Option<f64>| o.map_or("–".to_string(), |o| format!("{o:.2}"));
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.6e} | {} | {:.6e} | {} | {:.6e} | {} |",
+            fraction(r.summary.h),
+            fraction(r.summary.k),
+            r.errors.at_final.h1_seminorm,
+            ord(r.order),
+            r.errors.at_final.l2,
+            ord(r.l2_order),
+            r.errors.h1_max_over_time,
+            ord(r.max_order),
+        );
+    }
+    s
+}
+
 /// A value printed beside ours: the paper's error and order for one run of a path.
 #[derive(Clone, Copy, Debug)]
 pub struct Published {
