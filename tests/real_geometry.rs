@@ -457,3 +457,35 @@ fn every_path_of_a_study_has_its_table_and_its_fitted_order() {
         ],
     );
 }
+
+/// `--target` whose recommendation has the reference's own h says plainly that the target
+/// cannot be verified against this reference (its spatial error is 0 by construction there).
+#[test]
+fn a_target_on_the_reference_mesh_says_it_cannot_be_verified() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("small.toml");
+    std::fs::write(
+        &study,
+        format!(
+            "scene = \"{}\"\nreference = {{ n = 32, steps = 32 }}\n[[h_paths]]\nsteps = 32\nn = [4, 8, 16]\n\
+             [[k_paths]]\nn = 32\nsteps = [2, 4, 8]\n",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper.toml")
+        ),
+    )
+    .unwrap();
+    let targets = hvi::study::Targets {
+        errors: vec![1e-3],
+        verify: false,
+    };
+    let out = dir.path().join("out");
+    hvi::study::execute::run_file_with(&study, &out, &[], &targets).unwrap_or_else(|e| panic!("{e}"));
+    let md = std::fs::read_to_string(out.join("study.md")).unwrap();
+    assert_contains(
+        &md,
+        &[
+            "Recommended: **h = 1/32",
+            "the target cannot be verified against it",
+            "finer reference",
+        ],
+    );
+}

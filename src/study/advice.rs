@@ -266,12 +266,19 @@ pub(super) fn target_sections<const D: usize>(
     );
     for &e_target in &targets.errors {
         let _ = writeln!(md, "### Target: H¹ error at T ≤ {e_target:.3e}\n");
-        // the cheapest run of the tables that reaches the target (measured)
+        // the cheapest run of the tables that reaches the target (measured): by its work,
+        // unknowns × steps, which the machine's noise does not reorder (wall times of runs a few
+        // tens of per cent apart swap places from one minute to the next); wall time breaks ties
         let cheapest = study
             .runs
             .iter()
             .filter(|r| r.errors.at_final.h1_seminorm <= e_target)
-            .min_by(|a, b| a.summary.wall.total_cmp(&b.summary.wall));
+            .min_by(|a, b| {
+                let work = |r: &&super::runner::EvaluatedRun| r.summary.unknowns as f64 * r.summary.steps as f64;
+                work(a)
+                    .total_cmp(&work(b))
+                    .then(a.summary.wall.total_cmp(&b.summary.wall))
+            });
         let Some(p) = target::plan(&error, &cost, candidates.iter().copied(), e_target) else {
             let _ = writeln!(
                 md,
@@ -300,6 +307,14 @@ pub(super) fn target_sections<const D: usize>(
             fmt_n(error.against_exact(h_ref, k_ref))
         );
         let _ = writeln!(md, "* Run it: `{}`", solve_command(c, n, steps));
+        if n == n_ref {
+            let _ = writeln!(
+                md,
+                "* **This h is the reference's own: against this reference its spatial error is 0 by construction, \
+                 so the target cannot be verified against it** (what is measured is the temporal error alone). \
+                 To verify, run the study with a finer reference (reference.n above {n_ref})."
+            );
+        }
         match cheapest {
             Some(r) => {
                 let _ = writeln!(
