@@ -124,6 +124,19 @@ struct StackText {
     len: usize,
 }
 
+impl StackText {
+    const fn new() -> Self {
+        StackText {
+            bytes: [0; 1024],
+            len: 0,
+        }
+    }
+
+    fn text(&self) -> &[u8] {
+        &self.bytes[..self.len]
+    }
+}
+
 impl std::fmt::Write for StackText {
     fn write_str(&mut self, s: &str) -> std::fmt::Result {
         let n = s.len().min(self.bytes.len() - self.len);
@@ -151,12 +164,9 @@ fn out_of_memory(size: usize) {
     if FAILING.swap(true, Ordering::SeqCst) {
         return;
     }
-    let mut text = StackText {
-        bytes: [0; 1024],
-        len: 0,
-    };
+    let mut text = StackText::new();
     status(size, &mut text);
-    let message = &text.bytes[..text.len];
+    let message = text.text();
     let _ = write_all(2, b"error: ");
     let _ = write_all(2, message.strip_prefix(b"failed: ").unwrap_or(message));
     let _ = write_all(2, b"\n");
@@ -170,15 +180,9 @@ fn out_of_memory(size: usize) {
                     0o644,
                 );
                 if fd >= 0 {
-                    let mut steps = StackText {
-                        bytes: [0; 1024],
-                        len: 0,
-                    };
+                    let mut steps = StackText::new();
                     let _ = write!(steps, "{}", STEPS_DONE.load(Ordering::Relaxed));
-                    let mut last = StackText {
-                        bytes: [0; 1024],
-                        len: 0,
-                    };
+                    let mut last = StackText::new();
                     let _ = match LAST_WRITTEN.load(Ordering::Relaxed) {
                         usize::MAX => write!(last, "null"),
                         n => write!(last, "{n}"),
@@ -187,9 +191,9 @@ fn out_of_memory(size: usize) {
                     let ok = write_all(fd, &p[0])
                         && write_all(fd, message)
                         && write_all(fd, &p[1])
-                        && write_all(fd, &steps.bytes[..steps.len])
+                        && write_all(fd, steps.text())
                         && write_all(fd, &p[2])
-                        && write_all(fd, &last.bytes[..last.len])
+                        && write_all(fd, last.text())
                         && write_all(fd, &p[3]);
                     libc::close(fd);
                     if ok {

@@ -19,6 +19,19 @@ fn hvi() -> Command {
     Command::new(env!("CARGO_BIN_EXE_hvi"))
 }
 
+/// `hvi solve MESH --out OUT --quiet`, to add arguments to.
+fn hvi_solve(mesh: &Path, out: &Path) -> Command {
+    let mut c = hvi();
+    c.args([
+        "solve",
+        mesh.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    c
+}
+
 fn text(o: &Output) -> String {
     format!(
         "{}{}",
@@ -71,19 +84,7 @@ fn a_held_output_folder_is_refused_naming_the_holder() {
     std::fs::create_dir_all(&out).unwrap();
     let lock = hvi::output::RunLock::acquire(&out).unwrap();
     let mesh = meshes().join("rect_q1_h8.msh");
-    let run = |extra: &[&str]| {
-        hvi()
-            .args([
-                "solve",
-                mesh.to_str().unwrap(),
-                "--out",
-                out.to_str().unwrap(),
-                "--quiet",
-            ])
-            .args(extra)
-            .output()
-            .unwrap()
-    };
+    let run = |extra: &[&str]| hvi_solve(&mesh, &out).args(extra).output().unwrap();
     for extra in [&[][..], &["--overwrite"][..]] {
         let o = run(extra);
         assert!(!o.status.success(), "{}", text(&o));
@@ -155,14 +156,7 @@ fn two_runs_into_one_folder_never_mix() {
     // --overwrite into a folder a run is still writing
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
-    let mut first = hvi()
-        .args([
-            "solve",
-            mesh.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--quiet",
-        ])
+    let mut first = hvi_solve(&mesh, &out)
         .args(["--set", "time.steps=50000000", "--set", "output.every=20000"])
         .stdout(Stdio::null())
         .stderr(Stdio::null())
@@ -173,17 +167,7 @@ fn two_runs_into_one_folder_never_mix() {
         assert!(t0.elapsed() < Duration::from_secs(60), "the first run wrote nothing");
         std::thread::sleep(Duration::from_millis(20));
     }
-    let second = hvi()
-        .args([
-            "solve",
-            mesh.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--quiet",
-            "--overwrite",
-        ])
-        .output()
-        .unwrap();
+    let second = hvi_solve(&mesh, &out).arg("--overwrite").output().unwrap();
     let still_running = first.try_wait().unwrap().is_none();
     let _ = first.kill();
     let _ = first.wait();
@@ -352,14 +336,7 @@ fn a_cracked_mesh_is_refused_unless_accepted() {
     let dir = tempfile::tempdir().unwrap();
     let mesh = write_mesh(dir.path(), "cracked.msh", &cracked());
     let out = dir.path().join("run");
-    let args = [
-        "solve",
-        mesh.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ];
-    let o = hvi().args(args).output().unwrap();
+    let o = hvi_solve(&mesh, &out).output().unwrap();
     assert!(!o.status.success());
     assert_contains(
         &text(&o),
@@ -375,7 +352,7 @@ fn a_cracked_mesh_is_refused_unless_accepted() {
     let o = hvi().args(["check", mesh.to_str().unwrap()]).output().unwrap();
     assert!(!o.status.success());
     assert_contains(&text(&o), &["coincide"]);
-    let o = hvi().args(args).arg("--accept-mesh-defects").output().unwrap();
+    let o = hvi_solve(&mesh, &out).arg("--accept-mesh-defects").output().unwrap();
     assert!(o.status.success(), "{}", text(&o));
     assert_contains(&String::from_utf8_lossy(&o.stderr), &["warning:", "coincide"]);
     let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
@@ -427,14 +404,7 @@ fn a_result_that_overflows_is_an_error() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
     let mesh = meshes().join("rect_q1_h8.msh");
-    let o = hvi()
-        .args([
-            "solve",
-            mesh.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--quiet",
-        ])
+    let o = hvi_solve(&mesh, &out)
         .args(["--set", "traction.0.value=[\"0\", \"-1e300\"]", "--set", "time.steps=2"])
         .output()
         .unwrap();
@@ -458,14 +428,7 @@ fn a_load_nan_on_part_of_its_group_is_found_before_the_run() {
     assert!(!o.status.success(), "{}", text(&o));
     assert_contains(&text(&o), &["traction[0].value[1]", "is NaN at (x, y) = (", "t = 0."]);
     let out = dir.path().join("run");
-    let o = hvi()
-        .args([
-            "solve",
-            mesh.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--quiet",
-        ])
+    let o = hvi_solve(&mesh, &out)
         .args(["--set", set, "--set", "time.steps=40"])
         .output()
         .unwrap();

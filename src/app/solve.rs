@@ -118,15 +118,11 @@ fn solve_dim<const D: usize>(
         .and_then(|()| timeloop::run(&sim, &mut sink, stop));
     sink.finish();
     crate::alloc::arm(None);
-    let mut summary = Summary::new(opts, sink.steps_done, sink.last_written, None);
-    summary.warnings = warnings;
+    let mut summary = Summary::new(opts, warnings, sink.steps_done, sink.last_written, None);
     let mut stats = match result {
         Ok(stats) => stats,
         Err(e) => {
-            summary.status = match &e {
-                SolveError::Interrupted { .. } => "interrupted".into(),
-                e => format!("failed: {e}"),
-            };
+            summary.stopped_by(&e);
             // The run's own error is the one to report; a summary that cannot be written adds
             // nothing to it.
             let _ = output::write_json_atomic(&opts.out.join("summary.json"), &summary);
@@ -145,9 +141,14 @@ fn solve_dim<const D: usize>(
 /// Arms the summary.json an allocation failure leaves (src/alloc.rs): this run's summary with
 /// the failure as its status and the progress as of the failure.
 pub(crate) fn arm_failure_summary(opts: &SolveOptions, warnings: &[String]) {
-    let mut template = Summary::new(opts, crate::alloc::STEPS_MARK, Some(crate::alloc::LAST_MARK), None);
+    let mut template = Summary::new(
+        opts,
+        warnings.to_vec(),
+        crate::alloc::STEPS_MARK,
+        Some(crate::alloc::LAST_MARK),
+        None,
+    );
     template.status = crate::alloc::STATUS_MARK.into();
-    template.warnings = warnings.to_vec();
     if let Ok(text) = serde_json::to_string_pretty(&template) {
         crate::alloc::arm(crate::alloc::FailureReport::from_template(
             &opts.out.join("summary.json"),

@@ -1,7 +1,7 @@
 //! What a run leaves to be read: `summary.json` and the one-screen report of `hvi solve`.
 
 use super::options::SolveOptions;
-use crate::solver::RunStats;
+use crate::solver::{RunStats, SolveError};
 use serde::Serialize;
 use std::path::Path;
 
@@ -26,10 +26,12 @@ pub struct Summary<'a> {
 }
 
 impl<'a> Summary<'a> {
-    /// The summary of a run of `opts` that has computed `steps_done` steps and written up to
-    /// `last_step_written`; `status` "completed" until the caller says otherwise.
+    /// The summary of a run of `opts` with `warnings` that has computed `steps_done` steps and
+    /// written up to `last_step_written`; `status` "completed" until the caller says otherwise
+    /// ([`Summary::stopped_by`]).
     pub fn new(
         opts: &SolveOptions,
+        warnings: Vec<String>,
         steps_done: usize,
         last_step_written: Option<usize>,
         stats: Option<&'a RunStats>,
@@ -47,9 +49,19 @@ impl<'a> Summary<'a> {
             status: "completed".into(),
             steps_done,
             last_step_written,
-            warnings: Vec::new(),
+            warnings,
             stats,
         }
+    }
+}
+
+impl Summary<'_> {
+    /// The status of a run that `e` stopped: "interrupted", or "failed: <the error>".
+    pub fn stopped_by(&mut self, e: &SolveError) {
+        self.status = match e {
+            SolveError::Interrupted { .. } => "interrupted".into(),
+            e => format!("failed: {e}"),
+        };
     }
 }
 

@@ -229,17 +229,26 @@ impl<const D: usize> Mesh<D> {
             group: g.label(),
             detail,
         };
-        let boundary = self.boundary_facets();
         let side = if D == 2 { "edge" } else { "face" };
         if g.dim as usize == D - 1 {
-            let keys: HashSet<[usize; 4]> = boundary.iter().map(Facet::key).collect();
-            let all: HashMap<[usize; 4], u32> = self.facet_uses().into_iter().map(|(k, u)| (k, u.count)).collect();
-            for f in &g.facets {
-                if f.dim() != D - 1 || !keys.contains(&f.key()) {
+            // each facet once, in the group's order, with the number of cells that have it
+            let mut slot: HashMap<[usize; 4], usize> = HashMap::with_capacity(g.facets.len());
+            let mut facets: Vec<Facet> = Vec::with_capacity(g.facets.len());
+            for &f in &g.facets {
+                slot.entry(f.key()).or_insert_with(|| {
+                    facets.push(f);
+                    facets.len() - 1
+                });
+            }
+            let as_given = facets.clone();
+            let cells = super::topology::orient_by_cells(self, &mut facets, &slot);
+            for (f, &n) in as_given.iter().zip(&cells) {
+                if f.dim() != D - 1 || n != 1 {
                     let corners: Vec<String> = f.nodes().iter().map(|&p| fmt_point(self.points[p])).collect();
-                    let why = match all.get(&f.key()) {
-                        Some(&n) if n > 1 => format!("is shared by {n} cells, so it lies inside the body"),
-                        _ => format!("is not {} of any cell", if D == 2 { "an edge" } else { "a face" }),
+                    let why = if n > 1 {
+                        format!("is shared by {n} cells, so it lies inside the body")
+                    } else {
+                        format!("is not {} of any cell", if D == 2 { "an edge" } else { "a face" })
                     };
                     return Err(not_boundary(format!(
                         "its {} {} {why}; a group that prescribes displacements must be made of {side}s of the mesh on \
@@ -251,6 +260,7 @@ impl<const D: usize> Mesh<D> {
             }
             return Ok(());
         }
+        let boundary = self.boundary_facets();
         let mut nodes = HashSet::new();
         let mut edges = HashSet::new();
         for f in &boundary {
@@ -311,8 +321,7 @@ fn opposite(a: &Facet, b: &Facet) -> bool {
 fn coincident_nodes<const D: usize>(points: &[[f64; D]], used: &[bool]) -> Option<(usize, usize, usize)> {
     let mut lo = [f64::INFINITY; D];
     let mut hi = [f64::NEG_INFINITY; D];
-    for (p, x) in points.iter().enumerate().filter(|(p, _)| used[*p]) {
-        let _ = p;
+    for x in points.iter().zip(used).filter(|(_, &u)| u).map(|(x, _)| x) {
         for k in 0..D {
             lo[k] = lo[k].min(x[k]);
             hi[k] = hi[k].max(x[k]);

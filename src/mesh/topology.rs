@@ -126,6 +126,27 @@ pub(crate) fn facet_integrals<const D: usize>(points: &[[f64; D]], f: &Facet) ->
     }
 }
 
+/// How many cells have each of `facets` (found by node set through `slot`, the position of each
+/// facet's key), each facet turned as its (last) cell orients it: outward when it is a facet of
+/// exactly one cell. What [`boundary_part`] and the check of prescribed groups
+/// ([`Mesh::boundary_group_nodes`]) ask of the cells.
+pub(super) fn orient_by_cells<const D: usize>(
+    mesh: &Mesh<D>,
+    facets: &mut [Facet],
+    slot: &HashMap<[usize; 4], usize>,
+) -> Vec<u32> {
+    let mut count = vec![0u32; facets.len()];
+    for cell in &mesh.cells {
+        for e in cell.facets() {
+            if let Some(&k) = slot.get(&e.key()) {
+                count[k] += 1;
+                facets[k] = e;
+            }
+        }
+    }
+    count
+}
+
 pub(crate) fn boundary_part<const D: usize>(
     mesh: &Mesh<D>,
     group: &PhysicalGroup,
@@ -177,15 +198,7 @@ pub(crate) fn boundary_part<const D: usize>(
 
     // Orient each facet like the outward facet of its (single) cell.
     let as_given = facets.clone();
-    let mut count = vec![0u32; facets.len()];
-    for cell in &mesh.cells {
-        for e in cell.facets() {
-            if let Some(&k) = slot.get(&e.key()) {
-                count[k] += 1;
-                facets[k] = e;
-            }
-        }
-    }
+    let count = orient_by_cells(mesh, &mut facets, &slot);
     let show = |f: &Facet| {
         let corners: Vec<String> = f.nodes().iter().map(|&p| fmt_point(pts[p])).collect();
         format!("facet {}", corners.join("–"))

@@ -188,12 +188,8 @@ fn run_dim<const D: usize>(
         Ok(stats) => stats,
         Err(e) => {
             if let Some(t) = &sink.tables {
-                let mut summary = Summary::new(opts, t.steps_done, t.last_written, None);
-                summary.warnings = warnings;
-                summary.status = match &e {
-                    SolveError::Interrupted { .. } => "interrupted".into(),
-                    e => format!("failed: {e}"),
-                };
+                let mut summary = Summary::new(opts, warnings, t.steps_done, t.last_written, None);
+                summary.stopped_by(&e);
                 let summary = MpiSummary {
                     summary,
                     backend: "petsc",
@@ -213,10 +209,8 @@ fn run_dim<const D: usize>(
     stats.peak_memory_bytes = crate::solver::stats::peak_memory_bytes();
     let written = match &sink.tables {
         Some(t) => {
-            let mut summary = Summary::new(opts, t.steps_done, t.last_written, Some(&stats));
-            summary.warnings = warnings;
             let summary = MpiSummary {
-                summary,
+                summary: Summary::new(opts, warnings, t.steps_done, t.last_written, Some(&stats)),
                 backend: "petsc",
                 ranks,
                 petsc_solver: method_name(backend.method()),

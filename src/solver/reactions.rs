@@ -107,13 +107,8 @@ impl Reactions {
         for (rk, (j, _)) in r.iter_mut().zip(&k_a.columns) {
             *rk += force[*j] - load[*j];
         }
-        for ((total, members), g) in self
-            .totals
-            .iter_mut()
-            .zip(&self.groups)
-            .zip(&sim.dirichlet.reaction_groups)
-        {
-            *total = g.weight * members.iter().map(|&k| r[k]).sum::<f64>();
+        for (total, members) in self.totals.iter_mut().zip(&self.groups) {
+            *total = members.iter().map(|&k| r[k]).sum();
         }
         &self.totals
     }

@@ -106,11 +106,11 @@ impl<const D: usize> Simulation<D> {
     pub fn new(scene: &Scene, mesh: Mesh<D>) -> Result<Self, SolveError> {
         let origin = mesh.path.display().to_string();
         let clamped: Option<GroupSelector> = scene.clamped_group();
-        let grid = TimeGrid {
+        let time = TimeGrid {
             final_time: scene.time.final_time,
             steps: scene.time.steps,
         };
-        let times: Vec<f64> = grid.sample().into_iter().map(|n| grid.time(n)).collect();
+        let times: Vec<f64> = time.sample().into_iter().map(|n| time.time(n)).collect();
         let (dofs, dirichlet) = Dirichlet::new(&mesh, clamped.as_ref(), &scene.dirichlet, &times, &scene.origin)?;
         let plane = match (D, scene.material.plane) {
             (2, Some(p)) => Some(match p {
@@ -182,10 +182,7 @@ impl<const D: usize> Simulation<D> {
             memory,
             loads,
             contact,
-            time: TimeGrid {
-                final_time: scene.time.final_time,
-                steps: scene.time.steps,
-            },
+            time,
             output_every: scene.output.every,
             threads: 1,
             condensation: scene.solver.condensation,

@@ -81,10 +81,15 @@ impl Reactions {
         state: StepState,
     ) -> &[f64] {
         if self.k_a.is_some() {
-            self.through_columns(sim, state)
+            self.through_columns(sim, state);
         } else {
-            self.through_products(sim, backend, state)
+            self.through_products(sim, backend, state);
         }
+        // an overlap row takes back what its groups count twice (docs/method.md §7.5)
+        for (total, g) in self.totals.iter_mut().zip(&sim.dirichlet.reaction_groups) {
+            *total *= g.weight;
+        }
+        &self.totals
     }
 
     /// R over the held unknowns through the backend's products.
@@ -118,17 +123,11 @@ impl Reactions {
                 }
             }
         }
-        for ((total, members), g) in self
-            .totals
-            .iter_mut()
-            .zip(&self.groups)
-            .zip(&sim.dirichlet.reaction_groups)
-        {
-            *total = g.weight
-                * members
-                    .iter()
-                    .map(|&k| r[k] + force.get(&global(k)).copied().unwrap_or(0.0) - load[k])
-                    .sum::<f64>();
+        for (total, members) in self.totals.iter_mut().zip(&self.groups) {
+            *total = members
+                .iter()
+                .map(|&k| r[k] + force.get(&global(k)).copied().unwrap_or(0.0) - load[k])
+                .sum();
         }
         backend.sum(&mut self.totals);
         &self.totals

@@ -171,21 +171,8 @@ impl<'m, const D: usize> Locator<'m, D> {
 
     /// Locates every point once, for carrying many fields to the same points.
     pub fn transfer(&self, to_points: &[[f64; D]]) -> Result<Transfer, String> {
-        let mut weights = Vec::with_capacity(to_points.len());
-        for &x in to_points {
-            let (c, xi) = self.locate(x).ok_or_else(|| self.outside_message(x))?;
-            let cell = &self.cells[c];
-            let s = shape_at(cell, self.points, xi);
-            let mut nodes = [0usize; MAX_NODES];
-            let mut w = [0.0; MAX_NODES];
-            nodes[..s.n].copy_from_slice(&cell.nodes()[..s.n]);
-            w[..s.n].copy_from_slice(&s.value[..s.n]);
-            weights.push((s.n as u8, nodes, w));
-        }
-        Ok(Transfer {
-            n_from: self.points.len(),
-            weights,
-        })
+        self.locate_all(to_points, self.tolerance, |x| self.outside_message(x))
+            .map(|(transfer, _)| transfer)
     }
 
     /// [`Locator::transfer`] for meshes of a curved domain that are not nested: a target point
@@ -194,6 +181,24 @@ impl<'m, const D: usize> Locator<'m, D> {
     /// map there; farther is an error. Reports how many points were extended and the farthest.
     pub fn transfer_extending(&self, to_points: &[[f64; D]], allowed: f64) -> Result<(Transfer, Extension), String> {
         let allowed = allowed.max(self.tolerance);
+        self.locate_all(to_points, allowed, |x| {
+            format!(
+                "{}; a curved boundary meshed twice differs by O(h²), bounded here by {allowed:.3e} (the coarse \
+                 boundary's chords' sagitta, twice over): farther means the meshes are not of the same geometry (or \
+                 not in the same units)",
+                self.outside_message(x)
+            )
+        })
+    }
+
+    /// The interpolation weights of every point in the cell nearest to it, when that is at most
+    /// `allowed` away (else the error `refuse` words), and the points beyond round-off.
+    fn locate_all(
+        &self,
+        to_points: &[[f64; D]],
+        allowed: f64,
+        refuse: impl Fn([f64; D]) -> String,
+    ) -> Result<(Transfer, Extension), String> {
         let mut extension = Extension {
             points: 0,
             farthest: 0.0,
@@ -203,14 +208,7 @@ impl<'m, const D: usize> Locator<'m, D> {
         for &x in to_points {
             let (c, xi, d) = match self.locate_with_distance(x) {
                 Some(found) if found.2 <= allowed => found,
-                _ => {
-                    return Err(format!(
-                        "{}; a curved boundary meshed twice differs by O(h²), bounded here by {allowed:.3e} (the \
-                         coarse boundary's chords' sagitta, twice over): farther means the meshes are not of the same \
-                         geometry (or not in the same units)",
-                        self.outside_message(x)
-                    ))
-                }
+                _ => return Err(refuse(x)),
             };
             if d > self.tolerance {
                 extension.points += 1;
@@ -224,13 +222,11 @@ impl<'m, const D: usize> Locator<'m, D> {
             w[..s.n].copy_from_slice(&s.value[..s.n]);
             weights.push((s.n as u8, nodes, w));
         }
-        Ok((
-            Transfer {
-                n_from: self.points.len(),
-                weights,
-            },
-            extension,
-        ))
+        let transfer = Transfer {
+            n_from: self.points.len(),
+            weights,
+        };
+        Ok((transfer, extension))
     }
 
     fn outside_message(&self, x: [f64; D]) -> String {

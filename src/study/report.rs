@@ -67,6 +67,11 @@ pub fn csv(rows: &[Row]) -> String {
     String::from_utf8(writer.into_inner().expect(fail)).expect("the fields are UTF-8")
 }
 
+/// An observed order for a table cell: two decimals, `–` where there is none.
+fn ord(o: Option<f64>) -> String {
+    o.map_or("–".to_string(), |o| format!("{o:.2}"))
+}
+
 /// The rows as one Markdown table (same columns as the CSV, h and k as fractions).
 pub fn markdown(rows: &[Row]) -> String {
     let mut s = String::new();
@@ -81,7 +86,6 @@ pub fn markdown(rows: &[Row]) -> String {
     for r in rows {
         let m = &r.summary;
         let p = &m.phases;
-        let ord = |o: Option<f64>| o.map_or("–".to_string(), |o| format!("{o:.2}"));
         let _ = writeln!(
             s,
             "| {} | {} | {} | {} | {} | {} | {:.6e} | {} | {:.6e} | {} | {:.6e} | {} | {:.2} | {:.3} | {:.3} | {:.3} | {:.2} | {:.3} | {} | {} |",
@@ -145,7 +149,6 @@ pub fn path_markdown(rows: &[&Row]) -> String {
         "| h | k | H¹ error at T | order | L² error at T | L² order | max_t H¹ error | order |"
     );
     let _ = writeln!(s, "|---|---|--:|--:|--:|--:|--:|--:|");
-    let ord = |o: Option<f64>| o.map_or("–".to_string(), |o| format!("{o:.2}"));
     for r in rows {
         let _ = writeln!(
             s,
@@ -180,7 +183,6 @@ pub fn comparison_markdown(rows: &[&Row], published: &[Published]) -> String {
     );
     let _ = writeln!(s, "|---|---|--:|--:|--:|--:|--:|--:|--:|");
     for (i, r) in rows.iter().enumerate() {
-        let ord = |o: Option<f64>| o.map_or("–".to_string(), |o| format!("{o:.2}"));
         let e = r.errors.at_final.h1_seminorm;
         let (pe, po, ratio) = match published.get(i) {
             Some(p) => (format!("{:.6e}", p.error), ord(p.order), format!("{:.2}", e / p.error)),
