@@ -979,6 +979,7 @@ fn case8_several_local_minima() {
             offset: None,
             bound: Some(g),
             settings: c.settings,
+            singular: false,
         };
         let energy = |r: &[f64]| {
             let diff: Vec<f64> = r.iter().zip(&d).map(|(a, b)| a - b).collect();

@@ -623,6 +623,7 @@ fn a_stalled_contact_solve_names_the_tolerance_that_converges() {
             laws: &laws,
             offset: None,
             bound: Some(&bound),
+            singular: false,
             settings: ContactSettings {
                 tolerance,
                 max_iterations: 100,

@@ -20,6 +20,9 @@ pub struct StoredStep {
     pub memory_displacement: Option<Vec<f64>>,
     pub contact: Option<ContactState>,
     pub outcome: Option<ContactOutcome>,
+    /// The rigid parameters' displacements (force-controlled groups, then pins; docs/method.md
+    /// §7.7).
+    pub motion: Vec<f64>,
 }
 
 /// Keeps every output step in memory (for tests and studies).
@@ -37,6 +40,7 @@ impl<const D: usize> FrameSink<D> for MemorySink {
             memory_displacement: view.memory_displacement.map(|m| m.to_vec()),
             contact: view.contact.cloned(),
             outcome: view.outcome,
+            motion: view.motion.to_vec(),
         });
         Ok(())
     }

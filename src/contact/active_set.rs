@@ -196,6 +196,11 @@ pub struct ActiveSetSolver<'a> {
     /// g_p per row (∞ where a row has none), or `None` for no bound.
     pub bound: Option<&'a [f64]>,
     pub settings: ContactSettings,
+    /// Q may be singular along rigid motions that only the laws and the bound hold (rigid
+    /// parameters eliminated from it, docs/method.md §7.7): the Newton matrix then gets a
+    /// proximal shift min(10⁻⁶, relative residual) · Q_pp, which bounds the first steps of a body
+    /// not yet touching and vanishes as the solve converges.
+    pub singular: bool,
 }
 
 const ARMIJO: f64 = 1e-4;
@@ -225,11 +230,11 @@ impl ActiveSetSolver<'_> {
         self.laws.force(p, r - self.origin(p))
     }
 
-    /// Q(r − d) and the gradient G of E at r.
-    fn gradient(&self, r: &[f64], d: &[f64], qrd: &mut [f64], grad: &mut [f64]) {
-        let diff: Vec<f64> = r.iter().zip(d).map(|(a, b)| a - b).collect();
-        self.operator.apply_q(&diff, qrd);
+    /// Q r − q (= Q(r − d), minus the contact force λ) and the gradient G of E at r.
+    fn gradient(&self, r: &[f64], q: &[f64], qrd: &mut [f64], grad: &mut [f64]) {
+        self.operator.apply_q(r, qrd);
         for p in 0..self.m() {
+            qrd[p] -= q[p];
             grad[p] = qrd[p] + self.law_derivative(p, r[p]);
         }
     }
@@ -271,23 +276,22 @@ impl ActiveSetSolver<'_> {
     }
 
     /// The complementarity residual at r + Δ.
-    fn trial_residual(&self, r: &[f64], delta: &[f64], d: &[f64]) -> f64 {
+    fn trial_residual(&self, r: &[f64], delta: &[f64], q: &[f64]) -> f64 {
         let m = self.m();
         let moved: Vec<f64> = (0..m).map(|p| r[p] + delta[p]).collect();
         let (mut qrd, mut grad) = (vec![0.0; m], vec![0.0; m]);
-        self.gradient(&moved, d, &mut qrd, &mut grad);
+        self.gradient(&moved, q, &mut qrd, &mut grad);
         self.complementarity_residual(&moved, &grad)
     }
 
-    /// The force scale of the step: max(‖Q d‖∞, ‖Q v‖∞, max_p w_p S sup μ), v_p = min(0, g_p, o_p)
+    /// The force scale of the step: max(‖q‖∞, ‖Q v‖∞, max_p w_p S sup μ), v_p = min(0, g_p, o_p)
     /// the interference of rows that start past their bound or their obstacle's surface (a body
     /// placed into an obstacle is pushed out by forces of that size even without load; without
     /// the term an unloaded step with interference had a scale of 0 and could not converge).
-    fn force_scale(&self, d: &[f64]) -> f64 {
+    fn force_scale(&self, q: &[f64]) -> f64 {
         let m = self.m();
         let mut qd = vec![0.0; m];
-        self.operator.apply_q(d, &mut qd);
-        let load = qd.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        let load = q.iter().fold(0.0f64, |a, b| a.max(b.abs()));
         let interference: Vec<f64> = (0..m)
             .map(|p| {
                 let g = self.g(p);
@@ -306,6 +310,15 @@ impl ActiveSetSolver<'_> {
 
     /// Solves the step for free normal displacements `d` = C K⁻¹ F̃, warm-started from `state`.
     pub fn solve(&self, d: &[f64], state: &mut ContactState) -> Result<ContactOutcome, ContactFailure> {
+        let mut q = vec![0.0; d.len()];
+        self.operator.apply_q(d, &mut q);
+        self.solve_forces(&q, state)
+    }
+
+    /// [`Self::solve`] for the free contact forces q = Q d (E(r) = ½ rᵀQr − qᵀr + Σ w j(r) up to
+    /// a constant): the form that rigid parameters eliminated from Q need, whose q is not Q d
+    /// for any d (docs/method.md §7.7).
+    pub fn solve_forces(&self, d: &[f64], state: &mut ContactState) -> Result<ContactOutcome, ContactFailure> {
         let m = self.m();
         let fingerprint = self.fingerprint();
         let r = &mut state.normal_displacement;
@@ -391,9 +404,14 @@ impl ActiveSetSolver<'_> {
             let free: Vec<usize> = (0..m).filter(|&p| !active[p]).collect();
 
             // 3. Newton direction on the inactive set, diagonal scaling on the active set
+            let proximal = if self.singular {
+                (residual / scale).min(1e-6)
+            } else {
+                0.0
+            };
             let curvature: Vec<f64> = free
                 .iter()
-                .map(|&p| self.laws.stiffness(p, r[p] - self.origin(p)))
+                .map(|&p| self.laws.stiffness(p, r[p] - self.origin(p)) + proximal * self.c(p))
                 .collect();
             let free_dir = self.newton_direction(
                 &free,
@@ -641,14 +659,14 @@ impl ActiveSetSolver<'_> {
         None
     }
 
-    /// Forces and statuses at the converged r: λ = Q(d − r), ξ = w j_ε'(r), η = λ − ξ on the
-    /// bound and 0 elsewhere.
+    /// Forces and statuses at the converged r: λ = q − Q r (= Q(d − r)), ξ = w j_ε'(r),
+    /// η = λ − ξ on the bound and 0 elsewhere.
     #[allow(clippy::needless_range_loop)] // p indexes five per-node arrays at once
-    fn finish(&self, d: &[f64], state: &mut ContactState, outcome: &mut ContactOutcome) {
+    fn finish(&self, q: &[f64], state: &mut ContactState, outcome: &mut ContactOutcome) {
         let m = self.m();
         let mut qrd_final = vec![0.0; m];
-        let diff: Vec<f64> = state.normal_displacement.iter().zip(d).map(|(a, b)| a - b).collect();
-        self.operator.apply_q(&diff, &mut qrd_final);
+        self.operator.apply_q(&state.normal_displacement, &mut qrd_final);
+        qrd_final.iter_mut().zip(q).for_each(|(a, b)| *a -= b);
         outcome.active = 0;
         for p in 0..m {
             let r = state.normal_displacement[p];
@@ -720,6 +738,7 @@ mod tests {
                 laws: &laws,
                 offset: None,
                 bound: Some(&bound),
+                singular: false,
                 settings: ContactSettings {
                     tolerance: 1e-12,
                     max_iterations: 100,

@@ -210,6 +210,8 @@ pub trait Condensation: Send {
     fn name(&self) -> &'static str;
     /// W and Q.
     fn stiffness(&self) -> &DenseNormalStiffness;
+    /// W and Q, to eliminate rigid parameters from Q (docs/method.md §7.7).
+    fn stiffness_mut(&mut self) -> &mut DenseNormalStiffness;
     /// Starts a step: d = C K⁻¹ rhs over the free unknowns, keeping what [`Self::recover`] needs.
     fn free_normal(&mut self, rhs: &[f64], d: &mut [f64], counters: &Counters);
     /// Completes it: u = K⁻¹ (rhs − Cᵀ λ) for the rhs of the last [`Self::free_normal`].
@@ -251,6 +253,10 @@ impl Condensation for SplitSweeps {
 
     fn stiffness(&self) -> &DenseNormalStiffness {
         &self.stiffness
+    }
+
+    fn stiffness_mut(&mut self) -> &mut DenseNormalStiffness {
+        &mut self.stiffness
     }
 
     fn free_normal(&mut self, rhs: &[f64], d: &mut [f64], _counters: &Counters) {
@@ -357,6 +363,10 @@ impl Condensation for StoredResponses {
 
     fn stiffness(&self) -> &DenseNormalStiffness {
         &self.stiffness
+    }
+
+    fn stiffness_mut(&mut self) -> &mut DenseNormalStiffness {
+        &mut self.stiffness
     }
 
     fn free_normal(&mut self, rhs: &[f64], d: &mut [f64], counters: &Counters) {

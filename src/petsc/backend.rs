@@ -767,6 +767,10 @@ impl Condensation for DistributedCondensation {
         &self.stiffness
     }
 
+    fn stiffness_mut(&mut self) -> &mut DenseNormalStiffness {
+        &mut self.stiffness
+    }
+
     fn free_normal(&mut self, rhs: &[f64], d: &mut [f64], counters: &Counters) {
         self.rhs.copy_from_slice(rhs);
         self.solver.solve(rhs, &mut self.u_free, counters);

@@ -107,17 +107,28 @@ pub(super) fn unsupported<const D: usize>(
     scene_path: Option<&std::path::Path>,
     sim: &Simulation<D>,
 ) -> Result<(), String> {
+    let origin = scene_path.map_or(crate::scene::DEFAULT_SCENE_ORIGIN.into(), |p| p.display().to_string());
+    if let Some(p) = sim.dirichlet.rigid.first() {
+        return Err(format!(
+            "{origin}: {} needs the rigid parameters of docs/method.md §7.7 (force control, or a body only its \
+             contact holds: {}), which the PETSc backend does not support yet; run this scene without --backend \
+             petsc, or hold the body with prescribed components",
+            p.name,
+            if sim.dirichlet.held_by_contact.is_empty() {
+                "none here".to_string()
+            } else {
+                sim.dirichlet.held_by_contact.join(", ")
+            }
+        ));
+    }
     match &sim.memory {
-        Some(m) if m.channels().len() > 1 => {
-            let origin = scene_path.map_or(crate::scene::DEFAULT_SCENE_ORIGIN.into(), |p| p.display().to_string());
-            Err(format!(
-                "{origin}: the memory has two channels (its tensors are not proportional: own bulk and shear \
+        Some(m) if m.channels().len() > 1 => Err(format!(
+            "{origin}: the memory has two channels (its tensors are not proportional: own bulk and shear \
                  moduli that are not A's ratio, docs/method.md §15.1), which the PETSc backend does not support \
                  (it runs memory of one channel only): run this scene without --backend petsc, or give memory \
                  terms whose tensors are proportional (e.g. all \"identity\" or all \"elasticity\", or bulk and \
                  shear relaxing proportionally)"
-            ))
-        }
+        )),
         _ => Ok(()),
     }
 }

@@ -29,6 +29,10 @@ pub struct Scene {
     pub time: TimeSpec,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub dirichlet: Vec<DirichletSpec>,
+    /// `[[force_control]]` sections: a group moved rigidly along one axis by the displacement
+    /// that makes its total reaction a given force (docs/method.md §7.7).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub force_control: Vec<ForceControlSpec>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub traction: Vec<TractionSpec>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -102,7 +106,9 @@ impl Scene {
     pub fn clamped_group(&self) -> Option<GroupSelector> {
         match &self.groups.clamped {
             Some(g) => Some(g.clone()),
-            None if self.dirichlet.is_empty() => Some(GroupSelector::Name("Gamma1".into())),
+            None if self.dirichlet.is_empty() && self.force_control.is_empty() => {
+                Some(GroupSelector::Name("Gamma1".into()))
+            }
             None => None,
         }
     }
@@ -118,6 +124,19 @@ pub struct DirichletSpec {
     /// One expression of (x, y, z, t) per listed component; absent: all zero.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub value: Option<Vec<String>>,
+}
+
+/// A group moved rigidly along one axis by an unknown δ(t) such that the total force the group
+/// exerts on the body along that axis is `force` (docs/method.md §7.7).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ForceControlSpec {
+    pub group: GroupSelector,
+    /// "x", "y" or "z".
+    pub component: String,
+    /// P(t), an expression of t: the total force on the body through the group along the axis
+    /// (what its row of reactions.csv then reads).
+    pub force: String,
 }
 
 /// Plane stress or plane strain.

@@ -22,6 +22,7 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
             "memory",
             "time",
             "dirichlet",
+            "force_control",
             "traction",
             "body_force",
             "contact",
@@ -46,6 +47,7 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
         "time" => vec!["final_time", "steps"],
         "traction" => vec!["group", "value", "pressure"],
         "dirichlet" => vec!["group", "components", "value"],
+        "force_control" => vec!["group", "component", "force"],
         "body_force" => vec!["value"],
         "contact" => vec!["group", "bound", "law", "obstacle", "direction"],
         "contact.obstacle" => match kind {
@@ -259,6 +261,17 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
                 )?;
             }
         }
+    }
+    for (i, fc) in scene.force_control.iter().enumerate() {
+        if !matches!(fc.component.as_str(), "x" | "y" | "z") {
+            return Err(invalid(
+                origin,
+                &format!("force_control[{i}].component"),
+                format!("{:?}", fc.component),
+                "the axis the group moves along: \"x\", \"y\" or \"z\"",
+            ));
+        }
+        compile_load(origin, &format!("force_control[{i}].force"), &fc.force, &["t"], &[0.0])?;
     }
     for (i, tr) in scene.traction.iter().enumerate() {
         match (&tr.pressure, tr.value.is_empty()) {

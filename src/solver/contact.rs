@@ -183,6 +183,14 @@ pub(crate) fn obstacle_of<const D: usize>(
     })
 }
 
+/// True if some contact section has a law, a bound or an obstacle (else there is no contact).
+pub fn is_posed(scene: &Scene) -> bool {
+    scene
+        .contact
+        .iter()
+        .any(|c| c.bound.is_some() || c.law.is_some() || c.obstacle.is_some())
+}
+
 /// The contact of `scene` on `mesh` (None when no section has a law or a bound or an obstacle).
 pub fn build<const D: usize>(
     scene: &Scene,

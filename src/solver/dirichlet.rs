@@ -6,7 +6,7 @@
 use super::error::SolveError;
 use crate::fem::DofMap;
 use crate::mesh::{GroupSelector, Mesh};
-use crate::scene::{DirichletSpec, Expr, BODY_FORCE_VARIABLES};
+use crate::scene::{DirichletSpec, Expr, ForceControlSpec, BODY_FORCE_VARIABLES};
 use std::collections::HashMap;
 
 /// The unknowns of one (group, component) whose reaction is reported.
@@ -21,6 +21,30 @@ pub struct ReactionGroup {
     pub weight: f64,
 }
 
+/// A rigid parameter a_i of the step (docs/method.md §7.7): its unknowns are prescribed in the
+/// factor and all move by a_i, which the step solves for so that their total reaction is P_i(t).
+/// A force-controlled group's component is one; a single component pinned where the contact
+/// alone holds a rigid motion of the body (a semi-coercive body) is another, with P = 0.
+#[derive(Clone, Debug)]
+pub struct RigidParameter {
+    /// How messages and outputs name it: `force_control[0] (group Base, y)`, or the motion a
+    /// pin stands for.
+    pub name: String,
+    /// The unknowns it moves.
+    pub unknowns: Vec<usize>,
+    /// P_i(t), an expression of t (None: 0).
+    pub force: Option<Expr>,
+    /// The force-controlled (group, component), None for a pin.
+    pub group: Option<(String, usize)>,
+}
+
+impl RigidParameter {
+    /// P_i(t).
+    pub fn force_at(&self, t: f64) -> f64 {
+        self.force.as_ref().map_or(0.0, |e| e.eval(&[t]))
+    }
+}
+
 /// The prescribed components of a run and their values.
 #[derive(Clone, Debug)]
 pub struct Dirichlet<const D: usize> {
@@ -31,6 +55,12 @@ pub struct Dirichlet<const D: usize> {
     at: Vec<[f64; D]>,
     /// The (group, component) pairs whose reactions are reported, in scene order.
     pub reaction_groups: Vec<ReactionGroup>,
+    /// The rigid parameters: force-controlled groups, then the pins of the rigid motions only
+    /// the contact holds (docs/method.md §7.7). Their unknowns are among `entries`, with value 0.
+    pub rigid: Vec<RigidParameter>,
+    /// The rigid motions that only the contact holds (empty: the prescribed components hold
+    /// every one), by name.
+    pub held_by_contact: Vec<String>,
 }
 
 const COMPONENTS: [&str; 3] = ["x", "y", "z"];
@@ -39,13 +69,16 @@ impl<const D: usize> Dirichlet<D> {
     /// The degree-of-freedom map and the prescribed values of `clamped` (every component zero)
     /// and the `[[dirichlet]]` sections on `mesh`. A component prescribed twice is compared by
     /// value at the shared node at `times` (the text may differ: "0.0" and "0", "0.01*x" and "0"
-    /// at x = 0): different values are an error naming both; so is a body whose prescribed
-    /// components leave a rigid motion free. Every group must be on the boundary of the body
-    /// ([`Mesh::boundary_group_nodes`]).
+    /// at x = 0): different values are an error naming both. The `force_control` groups'
+    /// components are prescribed too, each group's by one rigid parameter. A rigid motion that
+    /// the prescribed components leave free is an error, unless the body has contact nodes
+    /// (`contact_nodes`): then the contact is to hold it and one component per free motion is
+    /// pinned as a rigid parameter (docs/method.md §7.7). Every group must be on the boundary of
+    /// the body ([`Mesh::boundary_group_nodes`]).
     pub fn new(
         mesh: &Mesh<D>,
-        clamped: Option<&GroupSelector>,
-        sections: &[DirichletSpec],
+        (clamped, sections, force_control): (Option<&GroupSelector>, &[DirichletSpec], &[ForceControlSpec]),
+        contact_nodes: Option<&[usize]>,
         times: &[f64],
         scene_origin: &str,
     ) -> Result<(DofMap<D>, Self), SolveError> {
@@ -56,6 +89,8 @@ impl<const D: usize> Dirichlet<D> {
             exprs: Vec::new(),
             at: Vec::new(),
             reaction_groups: Vec::new(),
+            rigid: Vec::new(),
+            held_by_contact: Vec::new(),
         };
         // unknown → (who set it, the value's text, its expression)
         let mut set_by: HashMap<usize, (String, String, Option<usize>)> = HashMap::new();
@@ -166,9 +201,138 @@ impl<const D: usize> Dirichlet<D> {
                 });
             }
         }
+        for (i, fc) in force_control.iter().enumerate() {
+            let key = format!("force_control[{i}].group");
+            let nodes = mesh
+                .boundary_group_nodes(&fc.group)
+                .map_err(super::error::group_error(scene_origin, &key))?;
+            let c = COMPONENTS[..D].iter().position(|n| *n == fc.component).ok_or_else(|| {
+                SolveError::Setup(format!(
+                    "{origin}: force_control[{i}].component = \"{}\", but the mesh is {D}D (components {})",
+                    fc.component,
+                    COMPONENTS[..D].join(", ")
+                ))
+            })?;
+            if nodes.is_empty() {
+                return Err(SolveError::Setup(format!(
+                    "{origin}: force_control[{i}].group = {} has no nodes",
+                    fc.group
+                )));
+            }
+            let force = Expr::parse(&fc.force, &["t"]).map_err(|e| {
+                SolveError::Setup(format!("{origin}: force_control[{i}].force = \"{}\": {e}", fc.force))
+            })?;
+            let mut unknowns = Vec::with_capacity(nodes.len());
+            for &p in &nodes {
+                if let Some((other, _, _)) = set_by.get(&dofs.index(p, c)) {
+                    return Err(SolveError::Setup(format!(
+                        "{origin}: component {} of the node at {} is prescribed by {other} and moved by force_control[{i}] \
+                         (group {}): a force-controlled component cannot be prescribed too; take the node out of one group \
+                         or drop the component from the [[dirichlet]] section",
+                        COMPONENTS[c],
+                        crate::mesh::fmt_point(mesh.points[p]),
+                        fc.group
+                    )));
+                }
+                set_by.insert(dofs.index(p, c), (format!("force_control[{i}]"), "δ(t)".into(), None));
+                dofs.prescribe(p, c);
+                out.entries.push((dofs.index(p, c), None));
+                out.at.push(mesh.points[p]);
+                unknowns.push(dofs.index(p, c));
+            }
+            out.reaction_groups.push(ReactionGroup {
+                group: group_name(&fc.group),
+                component: c,
+                unknowns: unknowns.clone(),
+                weight: 1.0,
+            });
+            out.rigid.push(RigidParameter {
+                name: format!("force_control[{i}] (group {}, {})", fc.group, COMPONENTS[c]),
+                unknowns,
+                force: Some(force),
+                group: Some((group_name(&fc.group), c)),
+            });
+        }
         out.add_overlap_rows();
-        out.check_rigid_motions(mesh, &dofs)?;
+        let free = out.free_rigid_motions(mesh, &dofs);
+        if !free.modes.is_empty() {
+            match contact_nodes {
+                Some(contact) => out.pin(mesh, &mut dofs, free, contact),
+                None => return Err(free.error(mesh, out.entries.len())),
+            }
+        }
         Ok((dofs, out))
+    }
+
+    /// One pinned component per rigid motion only the contact holds (docs/method.md §7.7): the
+    /// free unknowns off the contact nodes that best determine those motions, chosen greedily
+    /// (each time the one whose values of the motions are largest after removing what the
+    /// pins so far fix: a pivoted Gram–Schmidt over the unknowns).
+    fn pin(&mut self, mesh: &Mesh<D>, dofs: &mut DofMap<D>, free: FreeMotions<D>, contact: &[usize]) {
+        let k = free.modes.len();
+        let on_contact: std::collections::HashSet<usize> = contact.iter().copied().collect();
+        let mut candidates: Vec<(usize, Vec<f64>)> = (0..dofs.n())
+            .filter(|&d| !dofs.is_prescribed(d) && !on_contact.contains(&(d / D)))
+            .map(|d| {
+                let row = free.row(mesh, d);
+                (
+                    d,
+                    free.modes
+                        .iter()
+                        .map(|m| m.iter().zip(&row).map(|(a, b)| a * b).sum())
+                        .collect(),
+                )
+            })
+            .collect();
+        if candidates.len() < k {
+            // every free unknown is on a contact node: pin there
+            candidates = (0..dofs.n())
+                .filter(|&d| !dofs.is_prescribed(d))
+                .map(|d| {
+                    let row = free.row(mesh, d);
+                    (
+                        d,
+                        free.modes
+                            .iter()
+                            .map(|m| m.iter().zip(&row).map(|(a, b)| a * b).sum())
+                            .collect(),
+                    )
+                })
+                .collect();
+        }
+        for _ in 0..k.min(candidates.len()) {
+            let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>();
+            let Some(best) =
+                (0..candidates.len()).max_by(|&a, &b| norm(&candidates[a].1).total_cmp(&norm(&candidates[b].1)))
+            else {
+                break;
+            };
+            let (d, v) = candidates.swap_remove(best);
+            let len = norm(&v).sqrt();
+            if len == 0.0 {
+                break;
+            }
+            let unit: Vec<f64> = v.iter().map(|x| x / len).collect();
+            for (_, w) in &mut candidates {
+                let dot: f64 = w.iter().zip(&unit).map(|(a, b)| a * b).sum();
+                w.iter_mut().zip(&unit).for_each(|(a, b)| *a -= dot * b);
+            }
+            dofs.prescribe(d / D, d % D);
+            self.entries.push((d, None));
+            self.at.push(mesh.points[d / D]);
+            self.rigid.push(RigidParameter {
+                name: format!(
+                    "a pin of {} at the node at {} ({})",
+                    free.names.join(", "),
+                    crate::mesh::fmt_point(mesh.points[d / D]),
+                    COMPONENTS[d % D]
+                ),
+                unknowns: vec![d],
+                force: None,
+                group: None,
+            });
+        }
+        self.held_by_contact = free.names;
     }
 
     /// Each group's reaction is the whole force on that group, so a component in two groups (the
@@ -250,8 +414,8 @@ impl<const D: usize> Dirichlet<D> {
     }
 
     /// The rigid motions of the body (D translations, D(D−1)/2 rotations about the centroid)
-    /// that no prescribed component stops: an error naming them.
-    fn check_rigid_motions(&self, mesh: &Mesh<D>, dofs: &DofMap<D>) -> Result<(), SolveError> {
+    /// that no prescribed component stops (docs/method.md §7.6).
+    fn free_rigid_motions(&self, mesh: &Mesh<D>, dofs: &DofMap<D>) -> FreeMotions<D> {
         let n = mesh.points.len().max(1) as f64;
         let mut centre = [0.0; D];
         for p in &mesh.points {
@@ -264,37 +428,16 @@ impl<const D: usize> Dirichlet<D> {
             .iter()
             .map(|p| (0..D).map(|k| (p[k] - centre[k]).powi(2)).sum::<f64>().sqrt())
             .fold(f64::MIN_POSITIVE, f64::max);
-        // Modes: translations e_k, then rotations (2D: about z; 3D: about x, y, z).
-        let names: Vec<&str> = if D == 2 {
-            vec!["translation in x", "translation in y", "rotation in the plane"]
-        } else {
-            vec![
-                "translation in x",
-                "translation in y",
-                "translation in z",
-                "rotation about x",
-                "rotation about y",
-                "rotation about z",
-            ]
+        let mut free = FreeMotions {
+            centre,
+            extent,
+            modes: Vec::new(),
+            names: Vec::new(),
         };
-        let modes = names.len();
+        let modes = if D == 2 { 3 } else { 6 };
         let mut gram = nalgebra::DMatrix::<f64>::zeros(modes, modes);
-        let mut row = vec![0.0; modes];
         for d in (0..dofs.n()).filter(|&d| dofs.is_prescribed(d)) {
-            let (node, c) = (d / D, d % D);
-            let x: Vec<f64> = (0..D).map(|k| (mesh.points[node][k] - centre[k]) / extent).collect();
-            row.fill(0.0);
-            row[c] = 1.0;
-            if D == 2 {
-                // ω e_z × x = ω (−y, x)
-                row[2] = if c == 0 { -x[1] } else { x[0] };
-            } else {
-                // ω e_a × x, component c
-                for a in 0..3 {
-                    let e = [(a == 0) as u8 as f64, (a == 1) as u8 as f64, (a == 2) as u8 as f64];
-                    row[3 + a] = crate::mesh::vector::cross(e, [x[0], x[1], x[2]])[c];
-                }
-            }
+            let row = free.row(mesh, d);
             for i in 0..modes {
                 for j in 0..modes {
                     gram[(i, j)] += row[i] * row[j];
@@ -303,23 +446,22 @@ impl<const D: usize> Dirichlet<D> {
         }
         let eigen = gram.symmetric_eigen();
         let largest = eigen.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
-        let free_modes = eigen
-            .eigenvalues
-            .iter()
-            .filter(|&&v| v <= 1e-10 * largest.max(1.0))
-            .count();
-        if free_modes == 0 {
-            return Ok(());
+        free.modes = (0..modes)
+            .filter(|&i| eigen.eigenvalues[i] <= 1e-10 * largest.max(1.0))
+            .map(|i| eigen.eigenvectors.column(i).iter().copied().collect())
+            .collect();
+        if free.modes.is_empty() {
+            return free;
         }
         // Translations along an axis no prescribed component acts on are free; what is free
         // beyond them are rotations.
-        let mut free: Vec<String> = (0..D)
+        free.names = (0..D)
             .filter(|&c| !(0..dofs.n()).any(|d| d % D == c && dofs.is_prescribed(d)))
-            .map(|c| names[c].to_string())
+            .map(|c| format!("translation in {}", COMPONENTS[c]))
             .collect();
-        let rotations = free_modes.saturating_sub(free.len());
+        let rotations = free.modes.len().saturating_sub(free.names.len());
         if rotations > 0 {
-            free.push(if D == 2 {
+            free.names.push(if D == 2 {
                 "the rotation in the plane (the prescribed components act at a single point)".to_string()
             } else {
                 format!(
@@ -328,16 +470,54 @@ impl<const D: usize> Dirichlet<D> {
                 )
             });
         }
-        Err(SolveError::Singular {
+        free
+    }
+}
+
+/// The rigid motions no prescribed component stops: an orthonormal basis of their coefficients
+/// over the D translations and D(D−1)/2 rotations about `centre` (lengths scaled by `extent`).
+struct FreeMotions<const D: usize> {
+    centre: [f64; D],
+    extent: f64,
+    modes: Vec<Vec<f64>>,
+    names: Vec<String>,
+}
+
+impl<const D: usize> FreeMotions<D> {
+    /// The value at unknown d (node d / D, component d % D) of each rigid mode: translations
+    /// e_k, then rotations (2D: about z; 3D: about x, y, z).
+    fn row(&self, mesh: &Mesh<D>, d: usize) -> Vec<f64> {
+        let (node, c) = (d / D, d % D);
+        let x: Vec<f64> = (0..D)
+            .map(|k| (mesh.points[node][k] - self.centre[k]) / self.extent)
+            .collect();
+        let mut row = vec![0.0; if D == 2 { 3 } else { 6 }];
+        row[c] = 1.0;
+        if D == 2 {
+            // ω e_z × x = ω (−y, x)
+            row[2] = if c == 0 { -x[1] } else { x[0] };
+        } else {
+            // ω e_a × x, component c
+            for a in 0..3 {
+                let e = [(a == 0) as u8 as f64, (a == 1) as u8 as f64, (a == 2) as u8 as f64];
+                row[3 + a] = crate::mesh::vector::cross(e, [x[0], x[1], x[2]])[c];
+            }
+        }
+        row
+    }
+
+    /// The error of a body nothing holds against these motions.
+    fn error(&self, mesh: &Mesh<D>, prescribed: usize) -> SolveError {
+        SolveError::Singular {
             mesh: mesh.path.display().to_string(),
             detail: format!(
-                "the body is not held against rigid motions: {} {} free ({} components prescribed); clamp a group \
-                 (groups.clamped) or prescribe more components with [[dirichlet]] sections",
-                free.join(", "),
-                if free_modes == 1 { "is" } else { "are" },
-                self.entries.len()
+                "the body is not held against rigid motions: {} {} free ({prescribed} components prescribed); clamp a \
+                 group (groups.clamped), prescribe more components with [[dirichlet]] sections, or give the body a \
+                 contact group that holds it (docs/method.md §7.7)",
+                self.names.join(", "),
+                if self.modes.len() == 1 { "is" } else { "are" },
             ),
-        })
+        }
     }
 }
 

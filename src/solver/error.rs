@@ -26,6 +26,10 @@ pub enum SolveError {
     NoClampedNodes { mesh: String, group: String },
     #[error("{mesh}: {detail}")]
     Singular { mesh: String, detail: String },
+    /// A load that the force-controlled groups and the contact cannot balance (docs/method.md
+    /// §7.7).
+    #[error("step {step} (t = {time}): {detail}")]
+    Unbalanced { step: usize, time: f64, detail: String },
     /// The contact solve of a step did not converge; `advice` is [`contact_failure_advice`]'s.
     #[error("contact solve failed at step {step} (t = {time}): {reason}; residual {residual:.3e} after {iterations} iterations (tolerance {tolerance:.1e}). {advice}")]
     ContactFailed {

@@ -124,7 +124,7 @@ impl<const D: usize> FaerBackend<D> {
             })
             .collect();
         let symbolic = timed(&mut stats.phases.factorisation, || {
-            Factor::analyse_with_last(&system.0, &last)
+            Factor::analyse_with_last(&system.matrix, &last)
         })
         .map_err(|e| SolveError::Setup(e.to_string()))?;
         stats.ordering = Some(symbolic.ordering().to_string());

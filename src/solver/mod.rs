@@ -13,6 +13,7 @@ pub mod memory;
 pub mod operator;
 pub mod plan;
 pub mod reactions;
+pub mod rigid;
 pub mod setup;
 pub mod stats;
 pub mod step;

@@ -20,11 +20,36 @@ pub(super) struct PrescribedColumns {
 
 impl PrescribedColumns {
     pub(super) fn new<const D: usize>(matrix: &SymmetricMatrix, dofs: &crate::fem::DofMap<D>) -> Self {
-        let columns = (0..matrix.n())
-            .filter(|&j| dofs.is_prescribed(j))
-            .map(|j| (j, matrix.column(j).collect()))
-            .collect();
+        Self::of(matrix, (0..matrix.n()).filter(|&j| dofs.is_prescribed(j)))
+    }
+
+    /// The columns of `unknowns`, in their order.
+    pub(super) fn of(matrix: &SymmetricMatrix, unknowns: impl Iterator<Item = usize>) -> Self {
+        let columns = unknowns.map(|j| (j, matrix.column(j).collect())).collect();
         PrescribedColumns { columns }
+    }
+
+    /// The number of columns.
+    pub(super) fn len(&self) -> usize {
+        self.columns.len()
+    }
+
+    /// rhs_i −= Σ_j K_ij over the columns `start..start + len` at the free rows i: the lifting
+    /// of the value 1 at those unknowns.
+    pub(super) fn lift_unit<const D: usize>(
+        &self,
+        start: usize,
+        len: usize,
+        dofs: &crate::fem::DofMap<D>,
+        rhs: &mut [f64],
+    ) {
+        for (_, col) in &self.columns[start..start + len] {
+            for &(i, v) in col {
+                if !dofs.is_prescribed(i) {
+                    rhs[i] -= v;
+                }
+            }
+        }
     }
 
     /// rhs_i −= Σ_j K_ij g_j at the free rows i.
@@ -64,19 +89,34 @@ pub struct StepOperator {
     pub(super) condensed: Option<Box<dyn Condensation>>,
     /// How non-zero prescribed values are lifted (None when they are all zero).
     pub(super) lifting: Option<Lifting>,
+    /// The responses of the rigid parameters (force control, pins; docs/method.md §7.7).
+    pub(super) rigid: Option<super::rigid::RigidResponses>,
+}
+
+/// A step matrix as a factor is built from it (docs/method.md §7): identity rows at the
+/// prescribed unknowns, the unmodified columns that lift non-zero prescribed values, and those
+/// of the rigid parameters' unknowns (§7.7).
+pub(super) struct SystemMatrix {
+    pub(super) matrix: SymmetricMatrix,
+    pub(super) lifting: Option<Lifting>,
+    pub(super) rigid_columns: Option<PrescribedColumns>,
 }
 
 /// The matrix a factor is built from (identity rows at the prescribed unknowns, docs/method.md
 /// §7) and, when some prescribed value is non-zero, the unmodified columns that lift them.
-pub(super) fn system_matrix<const D: usize>(
-    sim: &Simulation<D>,
-    matrix: &SymmetricMatrix,
-) -> (SymmetricMatrix, Option<Lifting>) {
+pub(super) fn system_matrix<const D: usize>(sim: &Simulation<D>, matrix: &SymmetricMatrix) -> SystemMatrix {
     let lifting = sim
         .dirichlet
         .is_nonzero()
         .then(|| Lifting::Columns(PrescribedColumns::new(matrix, &sim.dofs)));
-    (matrix.with_identity_rows(&sim.dofs), lifting)
+    let rigid = &sim.dirichlet.rigid;
+    let rigid_columns = (!rigid.is_empty())
+        .then(|| PrescribedColumns::of(matrix, rigid.iter().flat_map(|p| p.unknowns.iter().copied())));
+    SystemMatrix {
+        matrix: matrix.with_identity_rows(&sim.dofs),
+        lifting,
+        rigid_columns,
+    }
 }
 
 impl StepOperator {
@@ -84,7 +124,11 @@ impl StepOperator {
     pub(super) fn factored<const D: usize>(
         sim: &Simulation<D>,
         symbolic: &Analysis,
-        (matrix, lifting): (SymmetricMatrix, Option<Lifting>),
+        SystemMatrix {
+            matrix,
+            lifting,
+            rigid_columns,
+        }: SystemMatrix,
         counters: &Counters,
         stats: &mut RunStats,
     ) -> Result<Self, SolveError> {
@@ -103,7 +147,7 @@ impl StepOperator {
             detail,
         })?;
         let factor = Arc::new(factor);
-        let condensed: Option<Box<dyn Condensation>> = match &sim.contact {
+        let mut condensed: Option<Box<dyn Condensation>> = match &sim.contact {
             Some(c) if !c.nodes.is_empty() => Some(
                 timed(
                     &mut stats.phases.condensation,
@@ -127,10 +171,28 @@ impl StepOperator {
         if let Some(c) = &condensed {
             stats.condensation = Some(c.name().to_string());
         }
+        let rigid = match rigid_columns {
+            Some(columns) => Some(timed(&mut stats.phases.condensation, || {
+                let contact = match (&sim.contact, condensed.as_mut()) {
+                    (Some(c), Some(op)) => Some((&c.nodes, op)),
+                    _ => None,
+                };
+                super::rigid::RigidResponses::new(
+                    &sim.dirichlet.rigid,
+                    &sim.dofs,
+                    columns,
+                    factor.as_ref(),
+                    contact,
+                    counters,
+                )
+            })),
+            None => None,
+        };
         Ok(StepOperator {
             solver: factor,
             condensed,
             lifting,
+            rigid,
         })
     }
 
@@ -153,6 +215,7 @@ impl StepOperator {
             solver,
             condensed,
             lifting,
+            rigid: None,
         }
     }
 }

@@ -66,6 +66,35 @@ impl Plan {
                     .into(),
             });
         }
+        let forced: Vec<&str> = sim
+            .dirichlet
+            .rigid
+            .iter()
+            .filter(|p| p.group.is_some())
+            .map(|p| p.name.as_str())
+            .collect();
+        if !forced.is_empty() || !sim.dirichlet.held_by_contact.is_empty() {
+            let k = sim.dirichlet.rigid.len();
+            let mut parts = Vec::new();
+            if !forced.is_empty() {
+                parts.push(format!("force control of {}", forced.join(", ")));
+            }
+            if !sim.dirichlet.held_by_contact.is_empty() {
+                parts.push(format!(
+                    "held by the contact alone: {} ({} pinned component(s) whose reaction the step makes zero)",
+                    sim.dirichlet.held_by_contact.join(", "),
+                    k - forced.len()
+                ));
+            }
+            effects.push(Effect {
+                name: "rigid",
+                detail: parts.join("; "),
+                cost: format!(
+                    "{k} stored response(s) (one solve each, once per factor) and a {k} × {k} system; the motions \
+                     join each step's contact solve (docs/method.md §7.7)"
+                ),
+            });
+        }
         let mut factorisations = 1;
         let mut solves_per_step = 1;
         if let Some(memory) = &sim.memory {

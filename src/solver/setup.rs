@@ -93,13 +93,18 @@ fn exprs<const D: usize>(
 
 impl<const D: usize> Simulation<D> {
     /// Whether the state of step 0 stands for every step (one solve for the run): no memory and
-    /// nothing that changes in time — loads, prescribed values, a moving obstacle
+    /// nothing that changes in time — loads, prescribed values, forces, a moving obstacle
     /// (docs/method.md §14.2). The plan and the time loop both ask here.
     pub fn is_static(&self) -> bool {
         self.memory.is_none()
             && !self.loads.is_time_dependent()
             && !self.dirichlet.is_time_dependent()
             && self.contact.as_ref().is_none_or(|c| c.motion.is_none())
+            && !self
+                .dirichlet
+                .rigid
+                .iter()
+                .any(|p| p.force.as_ref().is_some_and(|e| e.depends_on("t")))
     }
 
     /// Builds the discrete problem of `scene` on `mesh`.
@@ -111,7 +116,21 @@ impl<const D: usize> Simulation<D> {
             steps: scene.time.steps,
         };
         let times: Vec<f64> = time.sample().into_iter().map(|n| time.time(n)).collect();
-        let (dofs, dirichlet) = Dirichlet::new(&mesh, clamped.as_ref(), &scene.dirichlet, &times, &scene.origin)?;
+        // the nodes of the contact groups: the contact may hold what the prescribed components
+        // leave free (docs/method.md §7.7); a group that is not there is reported by the contact
+        let contact_nodes: Option<Vec<usize>> = super::contact::is_posed(scene).then(|| {
+            (0..scene.contact.len())
+                .filter_map(|i| mesh.boundary(&scene.contact_group(i)).ok())
+                .flat_map(|part| part.nodes)
+                .collect()
+        });
+        let (dofs, dirichlet) = Dirichlet::new(
+            &mesh,
+            (clamped.as_ref(), &scene.dirichlet, &scene.force_control),
+            contact_nodes.as_deref().filter(|n| !n.is_empty()),
+            &times,
+            &scene.origin,
+        )?;
         let plane = match (D, scene.material.plane) {
             (2, Some(p)) => Some(match p {
                 scene::Plane::Stress => PlaneModel::Stress,

@@ -8,7 +8,7 @@ use super::reactions::{Reactions, StepState};
 use super::setup::{ContactSetup, Simulation};
 use super::stats::{timed, RunStats};
 use crate::contact::active_set::{ActiveSetSolver, ContactOutcome, ContactState};
-use crate::contact::Condensation;
+use crate::contact::{Condensation, NormalStiffness};
 use crate::linalg::Counters;
 
 /// What one solve of a step reads and writes.
@@ -17,6 +17,11 @@ pub(super) struct StepSolve<'a> {
     pub rhs: &'a [f64],
     /// The prescribed part of u_ν (None when it is zero).
     pub offset: Option<&'a [f64]>,
+    /// f̃ summed over each rigid parameter's unknowns before the lifting (empty without them,
+    /// docs/method.md §7.7).
+    pub rigid_loads: &'a [f64],
+    /// Receives a, the rigid parameters' motions (empty without them).
+    pub motion: &'a mut [f64],
     /// Receives u_n.
     pub u: &'a mut [f64],
     pub state: Option<&'a mut ContactState>,
@@ -24,7 +29,7 @@ pub(super) struct StepSolve<'a> {
 
 impl StepOperator {
     /// Solves one step: d = C K⁻¹ rhs, contact → λ, u_n = K⁻¹ (rhs − Cᵀ λ) (docs/method.md
-    /// §3–4).
+    /// §3–4), with the rigid parameters' motions a found with λ and added (§7.7).
     pub(super) fn solve<const D: usize>(
         &mut self,
         sim: &Simulation<D>,
@@ -33,12 +38,27 @@ impl StepOperator {
             step,
             rhs,
             offset,
+            rigid_loads,
+            motion,
             u,
             state,
         }: StepSolve,
         counters: &Counters,
         stats: &mut RunStats,
     ) -> Result<Option<ContactOutcome>, SolveError> {
+        let t = sim.time.time(step);
+        // p̂ = P(t) − R⁰: what the rigid parameters must balance
+        let balance = match &self.rigid {
+            Some(rigid) => {
+                let forces: Vec<f64> = sim.dirichlet.rigid.iter().map(|p| p.force_at(t)).collect();
+                Some(
+                    rigid
+                        .balance(&forces, rhs, offset, rigid_loads)
+                        .map_err(|detail| super::rigid::unbalanced(step, t, detail))?,
+                )
+            }
+            None => None,
+        };
         match (&sim.contact, self.condensed.as_mut(), state) {
             (Some(setup), Some(op), Some(state)) => {
                 let mut d = vec![0.0; setup.nodes.len()];
@@ -48,23 +68,42 @@ impl StepOperator {
                 if let Some(g) = offset {
                     setup.nodes.prescribed_offset(g, &mut d);
                 }
+                // the free contact forces q = Q d (Q̂ d + Q D_a S⁺ p̂ with rigid parameters)
+                let mut q = vec![0.0; d.len()];
+                op.stiffness().apply_q(&d, &mut q);
+                if let (Some(rigid), Some(p)) = (&self.rigid, &balance) {
+                    rigid.contact_load(p, &mut q);
+                }
                 // (a backend may solve on one process and share the result)
                 let outcome = timed(&mut stats.phases.contact, || {
                     let local = if backend.solves_contact() {
-                        contact_solve(sim, setup, op.as_ref(), step, &d, state)
+                        contact_solve(sim, setup, op.as_ref(), self.rigid.is_some(), step, &q, state)
                     } else {
                         Ok(ContactOutcome::default())
                     };
                     backend.share_contact(state, local)
                 })?;
                 stats.contact_solves += 1;
+                if let (Some(rigid), Some(p)) = (&mut self.rigid, &balance) {
+                    let moved: Vec<f64> = state.normal_displacement.iter().zip(&d).map(|(r, d)| r - d).collect();
+                    rigid.solve_values(p, &moved);
+                }
                 timed(&mut stats.phases.backward_sweep, || {
                     op.recover(&state.force, u, counters)
                 });
+                if let Some(rigid) = &self.rigid {
+                    rigid.add_motion(u);
+                    motion.copy_from_slice(rigid.values());
+                }
                 Ok(Some(outcome))
             }
             _ => {
                 timed(&mut stats.phases.backward_sweep, || self.solver.solve(rhs, u, counters));
+                if let (Some(rigid), Some(p)) = (&mut self.rigid, &balance) {
+                    rigid.solve_values(p, &[]);
+                    rigid.add_motion(u);
+                    motion.copy_from_slice(rigid.values());
+                }
                 Ok(None)
             }
         }
@@ -138,8 +177,9 @@ fn contact_solve<const D: usize>(
     sim: &Simulation<D>,
     setup: &ContactSetup<D>,
     op: &dyn Condensation,
+    op_singular: bool,
     step: usize,
-    d: &[f64],
+    q: &[f64],
     state: &mut ContactState,
 ) -> Result<ContactOutcome, SolveError> {
     // a moving obstacle moves the laws' origins and the bounds (docs/method.md §14.2)
@@ -157,8 +197,9 @@ fn contact_solve<const D: usize>(
         offset,
         bound,
         settings: setup.settings,
+        singular: op_singular,
     };
-    solver.solve(d, state).map_err(|f| SolveError::ContactFailed {
+    solver.solve_forces(q, state).map_err(|f| SolveError::ContactFailed {
         step,
         time: sim.time.time(step),
         iterations: f.outcome.iterations,

@@ -49,6 +49,9 @@ pub struct StepView<'a> {
     /// The total contact force on the body of each contact group, D components per group
     /// (output steps with contact only; docs/method.md §14.4).
     pub contact_forces: Option<&'a [f64]>,
+    /// The displacement of each rigid parameter ([`Simulation::dirichlet`]'s `rigid`: the
+    /// force-controlled groups, then the pins; docs/method.md §7.7).
+    pub motion: &'a [f64],
 }
 
 /// Receives the steps of a run (the output layer implements this; tests collect in memory).
@@ -89,6 +92,8 @@ pub struct Stepper<'s, const D: usize> {
     memory_load: Vec<f64>,
     memory_rhs: Vec<f64>,
     displacement: Vec<f64>,
+    /// a: the motion of each rigid parameter in the last step (docs/method.md §7.7).
+    motion: Vec<f64>,
     memory_displacement: Option<Vec<f64>>,
     outcome: Option<ContactOutcome>,
     next: usize,
@@ -158,6 +163,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
             memory_load: vec![0.0; n_channels * n_dof],
             memory_rhs: vec![0.0; n_dof],
             displacement: vec![0.0; n_dof],
+            motion: vec![0.0; sim.dirichlet.rigid.len()],
             memory_displacement: None,
             outcome: None,
             next: 0,
@@ -202,6 +208,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
             outcome: self.outcome,
             reactions: (self.reactions.is_some() && output).then_some(&self.reaction_values[..]),
             contact_forces: with_forces.then_some(&self.contact_forces[..]),
+            motion: &self.motion,
         })
     }
 
@@ -244,14 +251,23 @@ impl<'s, const D: usize> Stepper<'s, D> {
         let mut rhs = std::mem::take(&mut self.rhs);
         rhs.copy_from_slice(&self.load);
         self.subtract_memory_load(n, &mut rhs);
+        // f̃ at the rigid parameters' unknowns, before the lifting replaces it (docs/method.md §7.7)
+        let rigid_loads: Vec<f64> = sim
+            .dirichlet
+            .rigid
+            .iter()
+            .map(|p| p.unknowns.iter().map(|&d| rhs[d]).sum())
+            .collect();
         let outcome = if n == 0 && self.history.is_some() {
-            self.step_zero(&mut rhs)?
+            self.step_zero(&mut rhs, &rigid_loads)?
         } else {
             lift(&self.main, sim, self.prescribed.as_deref(), &mut rhs, &*self.backend);
             let step = StepSolve {
                 step: n,
                 rhs: &rhs,
                 offset: self.prescribed.as_deref(),
+                rigid_loads: &rigid_loads,
+                motion: &mut self.motion,
                 u: &mut self.displacement,
                 state: self.contact.as_mut(),
             };
@@ -350,7 +366,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
     /// Step 0 with a memory kernel: K_A u_0 + Cᵀλ = F_0 (no history term). When u_0 = 0 solves
     /// it exactly (no load, no prescribed value, and the contact law exerts no force at 0)
     /// nothing is factorised.
-    fn step_zero(&mut self, rhs: &mut [f64]) -> Result<Option<ContactOutcome>, SolveError> {
+    fn step_zero(&mut self, rhs: &mut [f64], rigid_loads: &[f64]) -> Result<Option<ContactOutcome>, SolveError> {
         let sim = self.sim;
         let prescribed_zero = self.prescribed.as_ref().is_none_or(|g| g.iter().all(|v| *v == 0.0));
         let rhs_zero = !self.backend.any(rhs.iter().any(|v| *v != 0.0));
@@ -370,6 +386,8 @@ impl<'s, const D: usize> Stepper<'s, D> {
             step: 0,
             rhs,
             offset: self.prescribed.as_deref(),
+            rigid_loads,
+            motion: &mut self.motion,
             u: &mut self.displacement,
             state: self.contact.as_mut(),
         };
@@ -433,8 +451,9 @@ impl<'s, const D: usize> Stepper<'s, D> {
 }
 
 /// True if u_0 = 0 solves step 0 exactly, so that K_A gets no factor of its own: no load
-/// (`rhs_zero`), no prescribed value (`prescribed_zero`), no fixed obstacle motion or negative
-/// bound, and a contact law that exerts no force at its origin.
+/// (`rhs_zero`), no prescribed value (`prescribed_zero`), no force on a force-controlled group,
+/// no fixed obstacle motion or negative bound, and a contact law that exerts no force at its
+/// origin.
 pub fn zero_solves_step_zero<const D: usize>(sim: &Simulation<D>, rhs_zero: bool, prescribed_zero: bool) -> bool {
     let law_at_zero = sim.contact.as_ref().map_or(0.0, |c| {
         (0..c.nodes.len())
@@ -445,7 +464,9 @@ pub fn zero_solves_step_zero<const D: usize>(sim: &Simulation<D>, rhs_zero: bool
         .contact
         .as_ref()
         .is_none_or(|c| c.motion.is_none() && c.bound.as_ref().is_none_or(|g| g.iter().all(|v| *v >= 0.0)));
-    rhs_zero && law_at_zero == 0.0 && bound_ok && prescribed_zero
+    // a force-controlled group pushed at t = 0 moves the body
+    let no_force = sim.dirichlet.rigid.iter().all(|p| p.force_at(0.0) == 0.0);
+    rhs_zero && law_at_zero == 0.0 && bound_ok && prescribed_zero && no_force
 }
 
 /// Runs the whole time series on the faer backend, handing every step to `sink`. `stop` is
