@@ -146,3 +146,158 @@ fn a_floating_block_pressed_onto_a_foundation_balances_its_load_and_matches_disp
         );
     }
 }
+
+/// The same block with nothing holding it along x (no roller; the top force-controlled in y):
+/// frictionless contact takes no tangential force, so a load along x is refused naming the
+/// motion; without one, the free translation is pinned and the run balances.
+#[test]
+fn a_load_along_a_motion_nothing_holds_is_refused_naming_it() {
+    let text = |extra: &str| {
+        floating(&format!(
+            "[[force_control]]\ngroup = \"Gamma2_top\"\ncomponent = \"y\"\nforce = \"-{P}*{LX}*t\"\n{extra}"
+        ))
+        .replace("[[dirichlet]]\ngroup = \"Gamma1\"\ncomponents = [\"x\"]\n", "")
+    };
+    let mesh = || rectangle_with_sides(LX, 1.0, 8, 4, CellShape::Quad);
+    // no load along x: the translation in x is pinned, the vertical balance holds
+    let (sim, _, sink) = solve_in_memory(&scene(&text("")), mesh()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(sim.dirichlet.held_by_contact, vec!["translation in x".to_string()]);
+    let last = sink.steps.last().unwrap();
+    let total: f64 = last.contact.as_ref().unwrap().force.iter().sum();
+    assert!((total - P * LX).abs() <= 1e-10 * P * LX, "foundation {total}");
+    // a shear load on the right side: nothing can balance it
+    let pushed = text("[[traction]]\ngroup = \"Right\"\nvalue = [\"0.001*t\", \"0\"]");
+    let e = solve_in_memory(&scene(&pushed), mesh())
+        .err()
+        .expect("a load along a free motion must be refused");
+    let message = e.to_string();
+    assert!(
+        message.contains("nothing holds") && message.contains("x"),
+        "the message names the motion: {message}"
+    );
+}
+
+/// The block pulled off its one-sided foundation (a negative pressure): no contact force can
+/// hold it, and the run stops with a message saying so, not with the advice for a stiff law.
+#[test]
+fn a_body_pulled_off_its_support_is_refused_naming_the_motion() {
+    let pulled = scene(&floating(&format!(
+        "[[traction]]\ngroup = \"Gamma2_top\"\npressure = \"-{P}*t\""
+    )));
+    let e = solve_in_memory(&pulled, rectangle_with_sides(LX, 1.0, 8, 4, CellShape::Quad))
+        .err()
+        .expect("a body pulled off its support has no equilibrium");
+    let message = e.to_string();
+    assert!(
+        message.contains("cannot balance") && message.contains("translation in y"),
+        "{message}"
+    );
+}
+
+/// The floating block in 3D (hexahedra and tetrahedra): rollers on x = 0 (u_x) and on both
+/// z-faces (u_z), the base on the Winkler foundation, the top pressed by p. The vertical
+/// translation is held by the contact alone; the exact state is the plane-strain one of the 2D
+/// test with u_z = 0, which P1 and Q1 reproduce to round-off.
+#[test]
+fn a_floating_3d_block_on_symmetry_planes_is_held_by_its_foundation() {
+    use hvi::mesh::structured::{block, SolidShape};
+    let text = floating(&format!(
+        "[[dirichlet]]\ngroup = \"Sides\"\ncomponents = [\"z\"]\n\n[[traction]]\ngroup = \"Gamma2_top\"\npressure = \"{P}*t\""
+    ))
+    .replace("plane = \"strain\"\n", "");
+    for shape in [SolidShape::Hex, SolidShape::Tet] {
+        let (sim, _, sink) =
+            solve_in_memory(&scene(&text), block([LX, 1.0, 0.5], [4, 2, 2], shape)).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(sim.dirichlet.held_by_contact, vec!["translation in y".to_string()]);
+        let last = sink.steps.last().unwrap();
+        let t = last.time;
+        let total: f64 = last.contact.as_ref().unwrap().force.iter().sum();
+        let load = P * t * LX * 0.5;
+        assert!(
+            (total - load).abs() <= 1e-10 * load,
+            "{shape:?}: foundation {total} against {load}"
+        );
+        let mut worst = 0.0f64;
+        for (p, x) in sim.mesh.points.iter().enumerate() {
+            let e = exact([x[0], x[1]], t);
+            for (c, v) in [e[0], e[1], 0.0].into_iter().enumerate() {
+                worst = worst.max((last.displacement[3 * p + c] - v).abs());
+            }
+        }
+        assert!(worst <= 1e-12, "{shape:?}: off the exact uniform state by {worst:e}");
+    }
+}
+
+/// Force control with a long memory (docs/method.md §7.7 with §3): the step matrix K and step
+/// 0's K_A each get their own responses. At every step the force-controlled top's reaction —
+/// computed from K_A u_n + K_B m_n, not from the a-equation — is P(t_n) to 1e-10, and the
+/// foundation carries the same total (equilibrium), while δ(t) creeps (the memory relaxes the
+/// body: δ must change between steps under a constant force).
+#[test]
+fn force_control_with_memory_balances_every_step() {
+    let text = floating(&format!(
+        "[[force_control]]\ngroup = \"Gamma2_top\"\ncomponent = \"y\"\nforce = \"-{P}*{LX}\"\n\n\
+         [memory]\nkind = \"exponential\"\nterms = [{{ coefficient = -0.3, relaxation_time = 0.5 }}]"
+    ))
+    .replace("steps = 2", "steps = 8");
+    let (_, stats, sink) = solve_in_memory(&scene(&text), rectangle_with_sides(LX, 1.0, 8, 4, CellShape::Quad))
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(sink.steps.len(), 9);
+    let mut deltas = Vec::new();
+    for step in &sink.steps {
+        let r = reaction(&stats, "Gamma2_top", "y", step.time);
+        assert!((r + P * LX).abs() <= 1e-10 * P * LX, "t = {}: reaction {r}", step.time);
+        let total: f64 = step.contact.as_ref().unwrap().force.iter().sum();
+        assert!(
+            (total - P * LX).abs() <= 1e-10 * P * LX,
+            "t = {}: foundation {total}",
+            step.time
+        );
+        deltas.push(step.motion[0]);
+    }
+    assert!(
+        deltas.windows(2).skip(1).all(|w| (w[1] - w[0]).abs() > 1e-8),
+        "δ does not creep under the memory: {deltas:?}"
+    );
+}
+
+/// The gallery's force-controlled Hertz scene through the command line: `hvi check` shows the
+/// rigid parameter in its plan, `hvi solve` writes force_control.csv whose force is the scene's
+/// P(t) and whose displacement is the δ that moves the base (positive: towards the cylinder),
+/// and reactions.csv's base row equals that force.
+#[test]
+fn the_force_controlled_gallery_scene_runs_from_the_command_line() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mesh = root.join("examples/gallery/hertz_2d/hertz_2d_h3.msh");
+    let scene_file = root.join("examples/gallery/hertz_2d/hertz_2d_force.toml");
+    let out = tempfile::tempdir().unwrap();
+    let check = common::hvi_ok(&["check", mesh.to_str().unwrap(), "--scene", scene_file.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&check.stdout);
+    assert!(
+        text.contains("force control of force_control[0] (group Base, y)"),
+        "{text}"
+    );
+    common::hvi_ok(&[
+        "solve",
+        mesh.to_str().unwrap(),
+        "--scene",
+        scene_file.to_str().unwrap(),
+        "--out",
+        out.path().to_str().unwrap(),
+    ]);
+    let csv = std::fs::read_to_string(out.path().join("force_control.csv")).unwrap();
+    let last: Vec<&str> = csv.lines().last().unwrap().split(',').collect();
+    assert_eq!(&last[1..3], ["Base", "y"], "{csv}");
+    let (force, delta): (f64, f64) = (last[3].parse().unwrap(), last[4].parse().unwrap());
+    assert!((force - 7.2656e-4).abs() <= 1e-15, "{csv}");
+    // P is δ = 0.004's force rounded to 5 digits: δ within that
+    assert!((delta / 0.004 - 1.0).abs() < 1e-4, "δ = {delta}");
+    let reactions = std::fs::read_to_string(out.path().join("reactions.csv")).unwrap();
+    let base = reactions
+        .lines()
+        .filter(|l| l.contains(",Base,y,"))
+        .last()
+        .unwrap_or_else(|| panic!("{reactions}"));
+    let r: f64 = base.rsplit(',').next().unwrap().parse().unwrap();
+    assert!((r - force).abs() <= 1e-10 * force, "reaction {r} against {force}");
+}

@@ -29,6 +29,8 @@ fn scene(entry: &str) -> Scene {
 struct Contact {
     force: f64,
     reaction: f64,
+    /// The first rigid parameter's displacement (a force-controlled base's δ), NaN without one.
+    motion: f64,
     pressures: Vec<(f64, f64)>,
 }
 
@@ -54,6 +56,7 @@ fn run_scene<const D: usize>(scene: &Scene, entry: &str, mesh: &str, symmetry_fa
     Contact {
         force: symmetry_factor * state.force.iter().sum::<f64>(),
         reaction: symmetry_factor * common::reaction(&stats, "Base", axis, last.time),
+        motion: last.motion.first().copied().unwrap_or(f64::NAN),
         pressures,
     }
 }
@@ -202,4 +205,88 @@ fn hertz_3d_sphere_contact_radius_within_3_percent_and_peak_pressure_within_5() 
     assert!(c.pressures.len() >= 30, "a is resolved by too few nodes");
     assert!(ea.abs() < 0.03, "a = {a} against Hertz {a_hertz}");
     assert!(ep.abs() < 0.05, "p₀ = {p0} against Hertz {p0_hertz}");
+}
+
+/// The gallery's Hertz scene with its base pushed by the force `force` (half or quarter model's
+/// share) through a `[[force_control]]` section instead of the prescribed δ = `delta`·t.
+fn force_controlled(entry: &str, axis: &str, delta: &str, force: f64) -> Scene {
+    let text = std::fs::read_to_string(gallery(entry, &format!("{entry}.toml"))).unwrap();
+    let section = format!("group = \"Base\"\ncomponents = [\"{axis}\"]\nvalue = [\"{delta}*t\"]");
+    assert!(text.contains(&section), "{entry}: the base section moved");
+    let start = text.find(&section).unwrap();
+    let header = text[..start].rfind("[[dirichlet]]").unwrap();
+    let t = format!(
+        "{}[[force_control]]\ngroup = \"Base\"\ncomponent = \"{axis}\"\nforce = \"{force:e}*t\"{}",
+        &text[..header],
+        &text[start + section.len()..]
+    );
+    Scene::from_toml_str(&t, &format!("{entry} under force control")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Force control (docs/method.md §7.7): the 2D and 3D Hertz blocks pressed by a given force P
+/// (the one the displacement-controlled runs find) through their base, which nothing else holds
+/// along the axis: the base's reaction is P to 1e-10, a and p₀ are Hertz's to the gallery's
+/// tolerances (1 % in 2D; 3 % and 5 % in 3D), and the base moves by the displacement control's
+/// δ (to 1e-8: the same discrete problem solved the other way round, where only the contact
+/// solve's tolerance 1e-10 and the conditioning of S separate them).
+#[test]
+fn hertz_under_force_control_matches_hertz_and_the_displacement_control() {
+    let e_star = 1.0 / (1.0 - 0.3f64 * 0.3);
+    // (entry, mesh, symmetry factor, axis, δ)
+    for (entry, mesh, factor, axis, delta) in [
+        ("hertz_2d", "hertz_2d_h3.msh", 2.0, "y", 0.004),
+        ("hertz_3d", "hertz_3d.msh", 4.0, "z", 0.01),
+    ] {
+        let displaced = run_scene_any(&scene(entry), entry, mesh, factor);
+        let share = displaced.force / factor;
+        let forced_scene = force_controlled(entry, axis, &delta.to_string(), share);
+        let forced = run_scene_any(&forced_scene, entry, mesh, factor);
+        assert!(
+            (forced.reaction - displaced.force).abs() <= 1e-10 * displaced.force,
+            "{entry}: the base's reaction {} against P = {}",
+            forced.reaction,
+            displaced.force
+        );
+        assert!(
+            (forced.force - displaced.force).abs() <= 1e-9 * displaced.force,
+            "{entry}: the contact force {} against P = {}",
+            forced.force,
+            displaced.force
+        );
+        assert!(
+            (forced.motion - delta).abs() <= 1e-8 * delta,
+            "{entry}: δ = {} against the displacement control's {delta}",
+            forced.motion
+        );
+        let p = forced.force;
+        let (a, p0) = fit(&forced.pressures);
+        let (a_hertz, p0_hertz, tol_a, tol_p) = if entry == "hertz_2d" {
+            let a = (4.0 * p / (std::f64::consts::PI * e_star)).sqrt();
+            (a, 2.0 * p / (std::f64::consts::PI * a), 0.01, 0.01)
+        } else {
+            let a = (3.0 * p / (4.0 * e_star)).cbrt();
+            (a, 3.0 * p / (2.0 * std::f64::consts::PI * a * a), 0.03, 0.05)
+        };
+        eprintln!(
+            "{entry} under force control: P = {p:.6e}, δ = {:.10e}, a = {a:.5} (Hertz {a_hertz:.5}), p₀ = {p0:.5} (Hertz {p0_hertz:.5})",
+            forced.motion
+        );
+        assert!(
+            (a / a_hertz - 1.0).abs() < tol_a,
+            "{entry}: a = {a} against Hertz {a_hertz}"
+        );
+        assert!(
+            (p0 / p0_hertz - 1.0).abs() < tol_p,
+            "{entry}: p₀ = {p0} against Hertz {p0_hertz}"
+        );
+    }
+}
+
+/// [`run_scene`] in the dimension of the entry.
+fn run_scene_any(scene: &Scene, entry: &str, mesh: &str, factor: f64) -> Contact {
+    if entry.ends_with("3d") {
+        run_scene::<3>(scene, entry, mesh, factor)
+    } else {
+        run_scene::<2>(scene, entry, mesh, factor)
+    }
 }

@@ -82,6 +82,9 @@ pub struct FileSink<const D: usize> {
     cell_measures: Vec<f64>,
     gamma3: Option<CsvTable>,
     reactions: Option<CsvTable>,
+    /// force_control.csv: each force-controlled group's force and displacement δ (docs/method.md
+    /// §7.7).
+    force_control: Option<CsvTable>,
     contact_forces: Option<CsvTable>,
     fields: Vec<OutputField>,
     /// The body's active scalars (`output.active_scalar`; None: the first 1-component field).
@@ -194,6 +197,15 @@ impl<const D: usize> FileSink<D> {
                 &["time", "group", "component", "force"],
             )?)
         };
+        let force_control = if sim.dirichlet.rigid.iter().any(|p| p.group.is_some()) {
+            manifest.add("force_control.csv")?;
+            Some(CsvTable::create(
+                &dir.join("force_control.csv"),
+                &["time", "group", "component", "force", "displacement"],
+            )?)
+        } else {
+            None
+        };
         let contact_forces = match &sim.contact {
             Some(_) => Some({
                 manifest.add("contact_forces.csv")?;
@@ -225,6 +237,7 @@ impl<const D: usize> FileSink<D> {
             cell_measures,
             gamma3,
             reactions,
+            force_control,
             contact_forces,
             fields: fields.to_vec(),
             active_scalar: None,
@@ -339,6 +352,25 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
                         ["x", "y", "z"][g.component].to_string(),
                         output::format_number(*f),
                     ]
+                })
+                .collect();
+            csv.append_text(&rows)?;
+        }
+        if let Some(csv) = &mut self.force_control {
+            let rows: Vec<Vec<String>> = sim
+                .dirichlet
+                .rigid
+                .iter()
+                .zip(view.motion)
+                .filter_map(|(p, &delta)| {
+                    let (group, c) = p.group.as_ref()?;
+                    Some(vec![
+                        output::format_number(view.time),
+                        group.clone(),
+                        ["x", "y", "z"][*c].to_string(),
+                        output::format_number(p.force_at(view.time)),
+                        output::format_number(delta),
+                    ])
                 })
                 .collect();
             csv.append_text(&rows)?;

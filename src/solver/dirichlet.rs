@@ -247,7 +247,11 @@ impl<const D: usize> Dirichlet<D> {
                 weight: 1.0,
             });
             out.rigid.push(RigidParameter {
-                name: format!("force_control[{i}] (group {}, {})", fc.group, COMPONENTS[c]),
+                name: format!(
+                    "force_control[{i}] (group {}, {})",
+                    group_name(&fc.group),
+                    COMPONENTS[c]
+                ),
                 unknowns,
                 force: Some(force),
                 group: Some((group_name(&fc.group), c)),

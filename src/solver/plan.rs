@@ -247,6 +247,13 @@ impl fmt::Display for Plan {
                 self.solves_per_step
             )?;
         }
-        writeln!(f, "  factorisations: at most {}", self.factorisations)
+        if self.factorisations == 1 {
+            writeln!(f, "  factorisations: 1")
+        } else {
+            writeln!(
+                f,
+                "  factorisations: 1, and a second of K_A alone if step 0 has a load (docs/method.md §3)"
+            )
+        }
     }
 }

@@ -199,14 +199,42 @@ fn contact_solve<const D: usize>(
         settings: setup.settings,
         singular: op_singular,
     };
-    solver.solve_forces(q, state).map_err(|f| SolveError::ContactFailed {
+    let failure = match solver.solve_forces(q, state) {
+        Ok(outcome) => return Ok(outcome),
+        Err(f) => f,
+    };
+    // A body only its contact holds, every node separated when the solve gave up: the load
+    // pulls it off its support, and no contact force can balance that (docs/method.md §7.7).
+    let separated =
+        (0..state.normal_displacement.len()).all(|p| state.normal_displacement[p] <= offset.map_or(0.0, |o| o[p]));
+    if op_singular && separated {
+        let mut motions: Vec<String> = sim.dirichlet.held_by_contact.clone();
+        motions.extend(
+            sim.dirichlet
+                .rigid
+                .iter()
+                .filter(|p| p.group.is_some())
+                .map(|p| p.name.clone()),
+        );
+        return Err(super::rigid::unbalanced(
+            step,
+            t,
+            format!(
+                "the contact cannot balance the load: it pulls the body off its support, every contact node \
+                 separates, and nothing else holds {} (a one-sided law or a bound only pushes); hold it with \
+                 prescribed components, or reverse the load",
+                motions.join(", ")
+            ),
+        ));
+    }
+    Err(SolveError::ContactFailed {
         step,
-        time: sim.time.time(step),
-        iterations: f.outcome.iterations,
-        residual: f.outcome.residual,
+        time: t,
+        iterations: failure.outcome.iterations,
+        residual: failure.outcome.residual,
         tolerance: setup.settings.tolerance,
-        reason: f.reason,
-        advice: super::error::contact_failure_advice(f.smallest_residual, setup.settings.tolerance),
+        reason: failure.reason,
+        advice: super::error::contact_failure_advice(failure.smallest_residual, setup.settings.tolerance),
     })
 }
 
