@@ -80,7 +80,17 @@ pub fn report(stats: &RunStats, out: &Path) -> String {
         let total: usize = stats.newton_iterations.iter().sum();
         let max = stats.newton_iterations.iter().max().copied().unwrap_or(0);
         let active = stats.contact.last().map_or(0, |o| o.active);
-        let _ = writeln!(s, "  contact: {total} Newton iterations in all (max {max} per step), {active} nodes on the bound at T, max residual {:.2e}", stats.max_contact_residual);
+        // (a run whose laws have no rigid bound behind them has no node on one to count)
+        let on_bound = if stats.contact_bound {
+            format!(", {active} nodes on the bound or the rigid obstacle at T")
+        } else {
+            String::new()
+        };
+        let _ = writeln!(
+            s,
+            "  contact: {total} Newton iterations in all (max {max} per step){on_bound}, max residual {:.2e}",
+            stats.max_contact_residual
+        );
     }
     if let Some(h) = &stats.history_algorithm {
         let _ = writeln!(

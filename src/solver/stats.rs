@@ -45,6 +45,10 @@ pub struct RunStats {
     pub unknowns: usize,
     pub matrix_nonzeros: usize,
     pub contact_nodes: usize,
+    /// Whether some contact row has a rigid bound (a bound, or a rigid obstacle): then the
+    /// nodes on it are counted.
+    #[serde(skip)]
+    pub contact_bound: bool,
     pub steps: usize,
     pub time_step: f64,
     pub final_time: f64,

@@ -115,6 +115,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
             cells: sim.mesh.cells.len(),
             unknowns: sim.dofs.n_free(),
             contact_nodes: sim.contact.as_ref().map_or(0, |c| c.nodes.len()),
+            contact_bound: sim.contact.as_ref().is_some_and(|c| c.bound.is_some()),
             steps: sim.time.steps,
             time_step: sim.time.step(),
             final_time: sim.time.final_time,
