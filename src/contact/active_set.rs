@@ -411,11 +411,13 @@ impl ActiveSetSolver<'_> {
             };
             let curvature: Vec<f64> = free
                 .iter()
-                .map(|&p| self.laws.stiffness(p, r[p] - self.origin(p)) + proximal * self.c(p))
+                .map(|&p| self.laws.stiffness(p, r[p] - self.origin(p)))
                 .collect();
+            // (kept through the convexification, which drops only the laws' negative part)
+            let proximal: Vec<f64> = free.iter().map(|&p| proximal * self.c(p)).collect();
             let free_dir = self.newton_direction(
                 &free,
-                &curvature,
+                (&curvature, &proximal),
                 &grad,
                 &mut outcome,
                 &mut state.newton_factor,
@@ -483,13 +485,14 @@ impl ActiveSetSolver<'_> {
         Ok(outcome)
     }
 
-    /// Solves (Q_ℐℐ + diag(curvature)) x = G_ℐ, convexifying when indefinite. Above
+    /// Solves (Q_ℐℐ + diag(curvature + proximal)) x = G_ℐ, convexifying the curvature (the laws'
+    /// part) when indefinite. Above
     /// `dense_limit` free nodes the factorisation is kept in `kept` and reused by
     /// [`Self::preconditioned_cg`] until it no longer serves (docs/method.md §9.2).
     fn newton_direction(
         &self,
         free: &[usize],
-        curvature: &[f64],
+        (curvature, proximal): (&[f64], &[f64]),
         grad: &[f64],
         outcome: &mut ContactOutcome,
         kept: &mut KeptFactor,
@@ -499,10 +502,11 @@ impl ActiveSetSolver<'_> {
         if nf == 0 {
             return Vec::new();
         }
+        let exact: Vec<f64> = curvature.iter().zip(proximal).map(|(e, p)| e + p).collect();
         let reuse = nf > self.settings.dense_limit;
         let reused = (kept.0.as_ref())
             .filter(|k| reuse && k.fingerprint == fingerprint)
-            .and_then(|k| self.preconditioned_cg(k, free, curvature, grad));
+            .and_then(|k| self.preconditioned_cg(k, free, &exact, grad));
         if let Some(x) = reused {
             outcome.iterative += 1;
             return x;
@@ -514,13 +518,17 @@ impl ActiveSetSolver<'_> {
                 self.operator.q(free[i], free[j]) + if i == j { diag[i] } else { 0.0 }
             })
         };
-        let (llt, diagonal) = match build(curvature) {
-            Some(llt) => (llt, curvature.to_vec()),
+        let (llt, diagonal) = match build(&exact) {
+            Some(llt) => (llt, exact),
             None => {
                 outcome.convexified += 1;
                 let mut shift = 0.0;
                 loop {
-                    let diagonal: Vec<f64> = curvature.iter().map(|e| e.max(0.0) + shift).collect();
+                    let diagonal: Vec<f64> = curvature
+                        .iter()
+                        .zip(proximal)
+                        .map(|(e, p)| e.max(0.0) + p + shift)
+                        .collect();
                     if let Some(llt) = build(&diagonal) {
                         break (llt, diagonal);
                     }

@@ -5,6 +5,7 @@
 pub mod advice;
 pub mod backend;
 pub mod bound;
+mod columns;
 pub mod contact;
 pub mod dirichlet;
 pub mod error;

@@ -1,7 +1,7 @@
 //! The reaction forces at the prescribed components (docs/method.md §7), serial and with a
 //! backend that holds a share of the unknowns.
 
-use super::operator::PrescribedColumns;
+use super::columns::PrescribedColumns;
 use super::setup::Simulation;
 use crate::contact::active_set::ContactState;
 use crate::fem::SymmetricMatrix;

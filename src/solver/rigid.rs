@@ -16,8 +16,8 @@
 //! S⁺ is the inverse of S on the motions the contact or the stiffness holds; a load along a
 //! motion nothing holds is an error naming it.
 
+use super::columns::PrescribedColumns;
 use super::error::SolveError;
-use super::operator::PrescribedColumns;
 use crate::contact::{Condensation, ContactNodes, NormalStiffness};
 use crate::fem::DofMap;
 use crate::linalg::{Counters, LinearSolver};
