@@ -740,3 +740,33 @@ fn ctrl_c_on_mpirun_stops_every_rank_with_the_interrupted_summary() {
         assert!(out.join(f).exists(), "{f} listed but missing");
     }
 }
+
+/// Force control and bodies held by their contact (docs/method.md §7.7) are not run by the PETSc
+/// backend yet: `hvi solve --backend petsc` refuses the gallery's force-controlled Hertz scene
+/// with one error naming the parameter and the fix, before writing anything.
+#[test]
+fn force_control_is_refused_by_the_petsc_backend() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("mpi").display().to_string();
+    let out = mpirun(
+        2,
+        &[
+            "solve",
+            "examples/gallery/hertz_2d/hertz_2d_h1.msh",
+            "--scene",
+            "examples/gallery/hertz_2d/hertz_2d_force.toml",
+            "--quiet",
+            "--backend",
+            "petsc",
+            "--out",
+            &d,
+        ],
+        &[],
+    );
+    assert!(!out.status.success(), "the PETSc backend accepted force control");
+    let (error, err) = the_one_error(&out);
+    for part in ["force_control[0] (group Base, y)", "PETSc backend does not support", "without --backend petsc"] {
+        assert!(error.contains(part), "`{part}` missing from the error:\n{err}");
+    }
+    assert!(!tmp.path().join("mpi").join("summary.json").exists());
+}

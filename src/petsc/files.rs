@@ -357,6 +357,7 @@ impl<const D: usize> FrameSink<D> for PieceSink<'_, D> {
                         outcome: view.outcome,
                         reactions: view.reactions,
                         contact_forces: view.contact_forces,
+                        motion: view.motion,
                     };
                     t.write_frame(sim, &tables)
                 })
