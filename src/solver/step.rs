@@ -68,15 +68,15 @@ impl StepOperator {
                 if let Some(g) = offset {
                     setup.nodes.prescribed_offset(g, &mut d);
                 }
-                // the free contact forces q = Q d (Q̂ d + Q D_a S⁺ p̂ with rigid parameters)
-                let mut q = vec![0.0; d.len()];
-                op.stiffness().apply_q(&d, &mut q);
-                if let (Some(rigid), Some(p)) = (&self.rigid, &balance) {
-                    rigid.contact_load(p, &mut q);
-                }
                 // (a backend may solve on one process and share the result)
                 let outcome = timed(&mut stats.phases.contact, || {
                     let local = if backend.solves_contact() {
+                        // the free contact forces q = Q d (Q̂ d + Q D_a S⁺ p̂ with rigid parameters)
+                        let mut q = vec![0.0; d.len()];
+                        op.stiffness().apply_q(&d, &mut q);
+                        if let (Some(rigid), Some(p)) = (&self.rigid, &balance) {
+                            rigid.contact_load(p, &mut q);
+                        }
                         contact_solve(sim, setup, op.as_ref(), self.rigid.is_some(), step, &q, state)
                     } else {
                         Ok(ContactOutcome::default())
