@@ -90,11 +90,12 @@ pub fn reference(cell: &Cell, xi: [f64; 3]) -> (usize, [f64; MAX_NODES], [[f64; 
             // value along the axis (u = v = 0) is taken; no quadrature point lies there.
             const CORNERS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
             let s = 1.0 - z;
-            let (u, w) = if s.abs() > 1e-14 { (x / s, y / s) } else { (0.0, 0.0) };
+            // (u, v) of the collapsed coordinates; `v` holds the values
+            let (cu, cv) = if s.abs() > 1e-14 { (x / s, y / s) } else { (0.0, 0.0) };
             for (a, c) in CORNERS.iter().enumerate() {
-                let (su, sv) = (1.0 + c[0] * u, 1.0 + c[1] * w);
+                let (su, sv) = (1.0 + c[0] * cu, 1.0 + c[1] * cv);
                 v[a] = 0.25 * s * su * sv;
-                g[a] = [0.25 * c[0] * sv, 0.25 * c[1] * su, 0.25 * (c[0] * c[1] * u * w - 1.0)];
+                g[a] = [0.25 * c[0] * sv, 0.25 * c[1] * su, 0.25 * (c[0] * c[1] * cu * cv - 1.0)];
             }
             v[4] = z;
             g[4] = [0.0, 0.0, 1.0];
