@@ -3,13 +3,15 @@
 directly, not through gmsh, so it checks the file itself):
 
   * only first-order elements (points, 2-node lines, 3-node triangles, 4-node quadrangles,
-    4-node tetrahedra, 8-node hexahedra);
+    4-node tetrahedra, 8-node hexahedra, 6-node prisms, 5-node pyramids);
   * every cell of the top dimension (the body) has positive orientation in gmsh's node order:
       tetrahedron  (x1 - x0) x (x2 - x0) . (x3 - x0) > 0,
       hexahedron   det J > 0 at all 8 corners (and the centre) of the trilinear map from the
                    reference corners (-1,-1,-1), (1,-1,-1), (1,1,-1), (-1,1,-1), (-1,-1,1),
                    (1,-1,1), (1,1,1), (-1,1,1),
-      triangle / quadrangle (2D files)  counter-clockwise: every corner turns left;
+      prism        det J > 0 at its 6 corners (triangle (1 - r - s, r, s) times segment (1 -+ t)/2),
+      pyramid      det J > 0 at its 4 base corners and the base centre (its det J depends only on
+                   (r, s)/(1 - t): hvi's rational basis, docs/method.md section 8.1),      triangle / quadrangle (2D files)  counter-clockwise: every corner turns left;
   * every element of every physical group of dimension top - 1 (surfaces in 3D, curves in 2D)
     is a face of exactly one body cell, i.e. lies on the boundary;
   * the boundary groups together cover the whole boundary (a face in no group is reported:
@@ -40,6 +42,8 @@ TYPES = {
     3: ("quadrangle", 2, 4),
     4: ("tetrahedron", 3, 4),
     5: ("hexahedron", 3, 8),
+    6: ("prism", 3, 6),
+    7: ("pyramid", 3, 5),
 }
 # Faces (gmsh's local numbering) of the cells of each type; of lines the end points.
 FACES = {
@@ -48,6 +52,8 @@ FACES = {
     3: [(0, 1), (1, 2), (2, 3), (3, 0)],
     4: [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)],
     5: [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)],
+    6: [(0, 2, 1), (3, 4, 5), (0, 1, 4, 3), (1, 2, 5, 4), (2, 0, 3, 5)],
+    7: [(0, 3, 2, 1), (0, 1, 4), (1, 2, 4), (2, 3, 4), (3, 0, 4)],
 }
 HEX_REF = [(-1, -1, -1), (1, -1, -1), (1, 1, -1), (-1, 1, -1),
            (-1, -1, 1), (1, -1, 1), (1, 1, 1), (-1, 1, 1)]
@@ -155,12 +161,47 @@ def hex_dets(p, points=HEX_REF + [(0, 0, 0)]):
     return out
 
 
+def prism_det(p, r, s, t):
+    """det J of the prism's map at (r, s, t)."""
+    tri = (1 - r - s, r, s)
+    dtri = ((-1, -1), (1, 0), (0, 1))
+    cols = [[0.0, 0.0, 0.0] for _ in range(3)]
+    for a in range(3):
+        for b, sg in ((a, -1), (a + 3, 1)):
+            h = (1 + sg * t) / 2
+            g = (dtri[a][0] * h, dtri[a][1] * h, sg * tri[a] / 2)
+            for d in range(3):
+                for c in range(3):
+                    cols[d][c] += p[b][c] * g[d]
+    return det3(*cols)
+
+
+PYR_BASE = [(-1, -1), (1, -1), (1, 1), (-1, 1)]
+
+
+def pyramid_det(p, u, v):
+    """det J of the pyramid's map where (xi, eta)/(1 - zeta) = (u, v) (independent of zeta)."""
+    cols = [[0.0, 0.0, 0.0] for _ in range(3)]
+    for a, (ra, sa) in enumerate(PYR_BASE):
+        g = (ra * (1 + sa * v) / 4, sa * (1 + ra * u) / 4, (ra * sa * u * v - 1) / 4)
+        for d in range(3):
+            for c in range(3):
+                cols[d][c] += p[a][c] * g[d]
+    for c in range(3):
+        cols[2][c] += p[4][c]
+    return det3(*cols)
+
+
 def orientation(ty, p):
     """The smallest signed measure of the cell's orientation (must be > 0)."""
     if ty == 4:
         return det3(sub(p[1], p[0]), sub(p[2], p[0]), sub(p[3], p[0]))
     if ty == 5:
         return min(hex_dets(p))
+    if ty == 6:
+        return min(prism_det(p, r, s, t) for t in (-1, 1) for (r, s) in ((0, 0), (1, 0), (0, 1)))
+    if ty == 7:
+        return min(pyramid_det(p, u, v) for (u, v) in PYR_BASE + [(0, 0)])
     if ty in (2, 3):  # counter-clockwise in (x, y): every corner turns left
         n = len(p)
         return min(cross(sub(p[(k + 1) % n], p[k]), sub(p[(k + 2) % n], p[(k + 1) % n]))[2]
@@ -174,6 +215,11 @@ def measure(ty, p):
         return det3(sub(p[1], p[0]), sub(p[2], p[0]), sub(p[3], p[0])) / 6
     if ty == 5:
         return sum(hex_dets(p, HEX_GAUSS))
+    if ty == 6:  # the triangle's 3-point rule times 2-point Gauss (exact: det J is quadratic)
+        return sum(prism_det(p, r, s, t) / 6 for t in (-G, G)
+                   for (r, s) in ((1 / 6, 1 / 6), (2 / 3, 1 / 6), (1 / 6, 2 / 3)))
+    if ty == 7:  # 2 x 2 Gauss in (u, v) (det J is biquadratic) times the integral of (1 - w)^2, 1/3
+        return sum(pyramid_det(p, u, v) / 3 for u in (-G, G) for v in (-G, G))
     if ty in (2, 3):
         n = len(p)
         return sum(p[k][0] * p[(k + 1) % n][1] - p[(k + 1) % n][0] * p[k][1] for k in range(n)) / 2
@@ -287,7 +333,7 @@ def check(path, same_xy):
             info.append(f"all {len(zs)} z layers have exactly the {len(xy)} (x, y) nodes of "
                         f"{os.path.basename(ref)}")
     info.insert(0, f"all {len(cells)} cells positively oriented" if not n_bad else "orientation FAILED")
-    info.insert(1, f"smallest orientation measure {worst:.3e} (tet: 6 vol; hex: min corner det J; "
+    info.insert(1, f"smallest orientation measure {worst:.3e} (tet: 6 vol; hex, prism, pyramid: min corner det J; "
                    f"2D: min corner cross product); total {'volume' if top == 3 else 'area'} {total:.6g}")
     return report(path, m, groups, errors, info)
 

@@ -85,6 +85,8 @@ echo "wrote block_p1_v22.msh ($(wc -c <block_p1_v22.msh) bytes)"
 # Prisms (an extruded triangulation, Layers + Recombine) under tetrahedra on the same interface.
 gmsh -3 prism.geo -format msh41 -o prism_tet.msh >/dev/null
 echo "wrote prism_tet.msh"
+# Hexahedra over tetrahedra: gmsh puts a pyramid on every interface quadrangle by itself.
+mesh3 pyramid.geo pyramid_hex_tet.msh
 # The L bracket (OpenCASCADE), tetrahedra.
 mesh3 bracket.geo bracket_p1.msh -setnumber lc 0.03
 

@@ -677,6 +677,11 @@ fn cell_faces(cell: &Cell) -> Vec<Vec<usize>> {
             .iter()
             .map(|f| map(f))
             .collect(),
+        // pyramid: the base and the four triangles up to the apex
+        Cell::Pyr5(_) => [&[0, 3, 2, 1][..], &[0, 1, 4], &[1, 2, 4], &[2, 3, 4], &[3, 0, 4]]
+            .iter()
+            .map(|f| map(f))
+            .collect(),
     }
 }
 

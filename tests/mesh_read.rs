@@ -121,6 +121,13 @@ const MESHES_3D: &[(&str, usize, usize, f64, &[(&str, usize)])] = &[
         &[("Gamma1", 24), ("Gamma2", 114), ("Gamma3", 42)],
     ),
     (
+        "pyramid_hex_tet.msh",
+        269,
+        554,
+        0.5,
+        &[("Gamma1", 38), ("Gamma2", 150), ("Gamma3", 90)],
+    ),
+    (
         "block_p1_bin.msh",
         91,
         222,

@@ -33,7 +33,9 @@ fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 
 #[test]
 fn nested_solid_meshes_carry_exactly_both_ways_and_linear_fields_on_any_meshes() {
-    for kind in [SolidShape::Hex, SolidShape::Tet] {
+    // (pyramids: the coarse boxes' centres are the centres of the fine middle boxes, so the
+    // coarse nodes are fine nodes)
+    for kind in [SolidShape::Hex, SolidShape::Tet, SolidShape::Pyramid] {
         let coarse = block([2.0, 1.0, 0.5], [4, 2, 1], kind);
         let fine = block([2.0, 1.0, 0.5], [12, 6, 3], kind);
         let u = rough_field(&coarse);

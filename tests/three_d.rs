@@ -287,13 +287,19 @@ fn free_rigid_motions_are_named() {
     assert!(err.contains("2D models"), "{err}");
 }
 
-/// The built-in block mesher: both cell shapes fill the box, every group is a boundary part
+/// The built-in block mesher: every cell shape fills the box, every group is a boundary part
 /// whose weights add up to its area, and the slab mesh of gmsh equals it node for node.
 #[test]
 fn structured_block_matches_the_gmsh_slab() {
     use hvi::mesh::structured::{block, SolidShape};
     use hvi::mesh::GroupSelector;
-    for shape in [SolidShape::Hex, SolidShape::Tet, SolidShape::Prism] {
+    for shape in [
+        SolidShape::Hex,
+        SolidShape::Tet,
+        SolidShape::Prism,
+        SolidShape::Pyramid,
+        SolidShape::HexPyramid,
+    ] {
         let m = block([2.0, 1.0, 0.25], [8, 4, 2], shape);
         let volume = m.measure();
         assert!((volume - 0.5).abs() < 1e-13, "{shape:?}: volume {volume}");

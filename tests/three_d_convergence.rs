@@ -1,7 +1,7 @@
-//! Convergence in 3D: a manufactured solution on the unit cube with hexahedra and tetrahedra
-//! (H¹ order 1, L² order 2, as tests/elasticity.rs does in 2D), and the reaction of a fully
-//! prescribed homogeneous uniaxial strain under a Prony memory kernel against its closed form
-//! (order 2 in k, docs/method.md §2–3, §7.5).
+//! Convergence in 3D: a manufactured solution on the unit cube with hexahedra, tetrahedra,
+//! prisms and pyramids (H¹ order 1, L² order 2, as tests/elasticity.rs does in 2D), and the
+//! reaction of a fully prescribed homogeneous uniaxial strain under a Prony memory kernel
+//! against its closed form (order 2 in k, docs/method.md §2–3, §7.5).
 
 #![allow(clippy::needless_range_loop)] // component loops read like the formulas
 
@@ -185,23 +185,46 @@ fn manufactured_scene() -> hvi::scene::Scene {
 /// | P1 H¹ | 1.792 | 1.036 (0.79) | 0.537 (0.95) | 0.271 (0.99) | 0.181 (1.00) |
 /// | P1 L² | 0.257 | 0.0933 (1.46) | 0.0274 (1.77) | 0.00725 (1.92) | 0.00326 (1.97) |
 ///
+/// | pyramids H¹ | 1.154 | 0.579 (1.00) | 0.290 (1.00) | 0.145 (1.00) | |
+/// | pyramids L² | 0.129 | 0.0326 (1.98) | 0.00823 (1.99) | 0.00206 (2.00) | |
+/// | hex + pyramids H¹ | 1.126 | 0.556 (1.02) | 0.277 (1.01) | 0.138 (1.00) | |
+/// | hex + pyramids L² | 0.133 | 0.0335 (1.99) | 0.00848 (1.98) | 0.00213 (1.99) | |
+/// | warped pyramids H¹ | 1.210 | 0.610 (0.99) | 0.307 (0.99) | 0.153 (1.00) | |
+/// | warped pyramids L² | 0.140 | 0.0362 (1.95) | 0.00930 (1.96) | 0.00234 (1.99) | |
+///
 /// The Kuhn tetrahedra are pre-asymptotic in L² up to n = 8 (1.46, 1.77), so they run one level
 /// further, n = 24 (2.3 s; n = 32 gives 1.98 but takes 11 s): fitted over n = 8, 16, 24 the L²
-/// order is 1.93. Hexahedra stop at n = 16 (0.4 s; fitted over n = 4, 8, 16: 1.985).
+/// order is 1.93. Hexahedra stop at n = 16 (0.4 s; fitted over n = 4, 8, 16: 1.985). Pyramids
+/// (six per box around its centre, docs/method.md §8.1) stop there too (0.6 s at n = 16, 24 576
+/// pyramids).
 #[test]
 fn manufactured_solution_converges_in_3d_on_hexes_and_tets() {
     check_manufactured_data();
     let scene = manufactured_scene();
-    for (shape, levels) in [
-        (SolidShape::Hex, &[2usize, 4, 8, 16][..]),
-        (SolidShape::Tet, &[2, 4, 8, 16, 24][..]),
+    for (shape, warp, levels) in [
+        (SolidShape::Hex, 0.0, &[2usize, 4, 8, 16][..]),
+        (SolidShape::Tet, 0.0, &[2, 4, 8, 16, 24][..]),
         // linear prisms (issue 20): triangle × segment, the orders of Q1
-        (SolidShape::Prism, &[2, 4, 8, 16][..]),
+        (SolidShape::Prism, 0.0, &[2, 4, 8, 16][..]),
+        // linear pyramids (issue 20, docs/method.md §8.1): six per box, hexahedra and pyramids
+        // alternately, and six per box on a smoothly warped grid (non-planar bases, apexes off
+        // their bases' centres: the map is not affine, the basis's rational term matters)
+        (SolidShape::Pyramid, 0.0, &[2, 4, 8, 16][..]),
+        (SolidShape::HexPyramid, 0.0, &[2, 4, 8, 16][..]),
+        (SolidShape::Pyramid, 0.08, &[2, 4, 8, 16][..]),
     ] {
+        let label = format!("{shape:?}{}", if warp > 0.0 { " (warped)" } else { "" });
         let (mut hs, mut h1, mut l2) = (vec![], vec![], vec![]);
         for &n in levels {
             let start = Instant::now();
-            let mesh = block([1.0, 1.0, 1.0], [n, n, n], shape);
+            let mut mesh = block([1.0, 1.0, 1.0], [n, n, n], shape);
+            // x + warp·sin πx sin πy sin πz (1, −1, 1): the cube's faces stay where they are,
+            // and the map's Jacobian determinant 1 + warp·(1, −1, 1)·∇(sin πx sin πy sin πz) is at
+            // least 1 − 3π·warp > 0
+            for p in &mut mesh.points {
+                let s = warp * (PI * p[0]).sin() * (PI * p[1]).sin() * (PI * p[2]).sin();
+                *p = [p[0] + s, p[1] - s, p[2] + s];
+            }
             let (sim, _, sink) = solve_in_memory(&scene, mesh).unwrap();
             let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
             // the boundary data are nodal interpolants of u: exact at the boundary nodes
@@ -219,7 +242,7 @@ fn manufactured_solution_converges_in_3d_on_hexes_and_tets() {
                 (f64::NAN, f64::NAN)
             };
             eprintln!(
-                "{shape:?} h = 1/{n:<2}  |e|_H1 = {:.4e} (order {o1:.3})  ‖e‖_L2 = {:.4e} (order {o2:.3})  {:.2} s",
+                "{label} h = 1/{n:<2}  |e|_H1 = {:.4e} (order {o1:.3})  ‖e‖_L2 = {:.4e} (order {o2:.3})  {:.2} s",
                 e.h1_seminorm,
                 e.l2,
                 start.elapsed().as_secs_f64()
@@ -235,18 +258,12 @@ fn manufactured_solution_converges_in_3d_on_hexes_and_tets() {
             fitted_order(&hs[m - 3..], &l2[m - 3..]),
         );
         eprintln!(
-            "{shape:?}: last-pair orders H¹ {p1:.3}, L² {p2:.3}; fitted over the three finest: H¹ {q1:.3}, L² {q2:.3}"
+            "{label}: last-pair orders H¹ {p1:.3}, L² {p2:.3}; fitted over the three finest: H¹ {q1:.3}, L² {q2:.3}"
         );
-        assert!((p1 - 1.0).abs() <= 0.1, "{shape:?}: H¹ order {p1} (errors {h1:?})");
-        assert!((p2 - 2.0).abs() <= 0.1, "{shape:?}: L² order {p2} (errors {l2:?})");
-        assert!(
-            (q1 - 1.0).abs() <= 0.1,
-            "{shape:?}: fitted H¹ order {q1} (errors {h1:?})"
-        );
-        assert!(
-            (q2 - 2.0).abs() <= 0.1,
-            "{shape:?}: fitted L² order {q2} (errors {l2:?})"
-        );
+        assert!((p1 - 1.0).abs() <= 0.1, "{label}: H¹ order {p1} (errors {h1:?})");
+        assert!((p2 - 2.0).abs() <= 0.1, "{label}: L² order {p2} (errors {l2:?})");
+        assert!((q1 - 1.0).abs() <= 0.1, "{label}: fitted H¹ order {q1} (errors {h1:?})");
+        assert!((q2 - 2.0).abs() <= 0.1, "{label}: fitted L² order {q2} (errors {l2:?})");
     }
 }
 
@@ -303,9 +320,15 @@ fn relaxation_with_a_prescribed_displacement_matches_its_closed_form() {
     let stiff = l + 2.0 * m;
     let start = Instant::now();
 
-    // No memory: the derivation of the reaction at t = 0, on hexahedra, tetrahedra and prisms
-    // (a uniform strain: the patch test, exact on every cell kind).
-    for shape in [SolidShape::Hex, SolidShape::Tet, SolidShape::Prism] {
+    // No memory: the derivation of the reaction at t = 0, on hexahedra, tetrahedra, prisms and
+    // pyramids (a uniform strain: the patch test, exact on every cell kind).
+    for shape in [
+        SolidShape::Hex,
+        SolidShape::Tet,
+        SolidShape::Prism,
+        SolidShape::Pyramid,
+        SolidShape::HexPyramid,
+    ] {
         let (sim, stats, sink) =
             solve_in_memory(&relaxation_scene(1, false), block([1.0; 3], [2, 2, 2], shape)).unwrap();
         let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);

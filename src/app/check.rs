@@ -113,6 +113,9 @@ pub(crate) fn check_mesh_report<const D: usize>(mesh_path: &Path, mesh: &Mesh<D>
         if count("prism") > 0 {
             kinds.push(format!("{} prisms", count("prism")));
         }
+        if count("pyramid") > 0 {
+            kinds.push(format!("{} pyramids", count("pyramid")));
+        }
         kinds
     };
     let _ = writeln!(

@@ -121,6 +121,11 @@ fn min_det_3d(points: &[[f64; 3]], cell: &Cell) -> (f64, [f64; 3]) {
             at.extend([[0.0, 0.0, z], [1.0, 0.0, z], [0.0, 1.0, z]]);
         }
     }
+    if let Cell::Pyr5(_) = cell {
+        // det J of a pyramid depends on (ξ, η)/(1 − ζ) only (docs/method.md §8.1): its values
+        // at the base corners are also its limits at the apex along the four edges
+        at.extend([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]]);
+    }
     at.iter()
         .map(|&xi| (crate::mesh::element::shape_at(cell, points, xi).det_j, xi))
         .fold((f64::INFINITY, [0.0; 3]), |a, b| if b.0 < a.0 { b } else { a })
@@ -234,7 +239,7 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
         let ty = raw.element_types[e];
         let origin = &raw.origins[raw.element_origin[e] as usize];
         let info = element_type_info(ty);
-        if !matches!(ty, 1 | 2 | 3 | 4 | 5 | 6 | 15) {
+        if !matches!(ty, 1 | 2 | 3 | 4 | 5 | 6 | 7 | 15) {
             let dim = info.map_or(2, |i| i.2);
             let group_text = if origin.physical.is_empty() {
                 match origin.entity {
@@ -255,13 +260,6 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
                 format!("in physical group {}", names.join(", "))
             };
             let (name, fix) = match info {
-                Some((name, _, 3)) if ty == 7 => (
-                    name,
-                    "hvi computes on tetrahedra, hexahedra and prisms, not pyramids (the transitions gmsh puts \
-                     between hexahedra and tetrahedra): mesh the volume with tetrahedra (no Recombine, \
-                     Mesh.Algorithm3D = 1), with hexahedra throughout (transfinite volumes with Recombine), or \
-                     extrude a surface into prisms (Extrude … Layers{…}; Recombine;)",
-                ),
                 Some((name, _, _)) => (
                     name,
                     "hvi computes with first-order elements only: mesh with gmsh -order 1 (Mesh.ElementOrder = 1), \
@@ -270,7 +268,8 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
                 None => (
                     "an element type hvi does not know",
                     "hvi reads only points (15), 2-node lines (1), 3-node triangles (2), 4-node quadrangles (3), \
-                     4-node tetrahedra (4) and 8-node hexahedra (5): mesh with gmsh -2 -order 1 (-3 for a volume)",
+                     4-node tetrahedra (4), 8-node hexahedra (5), 6-node prisms (6) and 5-node pyramids (7): mesh \
+                     with gmsh -2 -order 1 (-3 for a volume)",
                 ),
             };
             return Err(MeshError::UnsupportedElement {
@@ -341,6 +340,7 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
                     3 => Cell::Quad4([nodes[0], nodes[1], nodes[2], nodes[3]]),
                     4 => Cell::Tet4([nodes[0], nodes[1], nodes[2], nodes[3]]),
                     6 => Cell::Prism6(std::array::from_fn(|k| nodes[k])),
+                    7 => Cell::Pyr5(std::array::from_fn(|k| nodes[k])),
                     _ => Cell::Hex8(std::array::from_fn(|k| nodes[k])),
                 });
                 cell_tags.push(raw.element_tags[e] as usize);

@@ -1,6 +1,6 @@
 //! The cells hvi computes on and their reference tables (docs/method.md §2, §8): 3-node
-//! triangles (P1) and 4-node quadrilaterals (Q1) in 2D, 4-node tetrahedra (P1) and 8-node
-//! hexahedra (Q1) in 3D, with gmsh's node order.
+//! triangles (P1) and 4-node quadrilaterals (Q1) in 2D, 4-node tetrahedra (P1), 8-node
+//! hexahedra (Q1), 6-node prisms and 5-node pyramids in 3D, with gmsh's node order.
 //!
 //! Node indices are dense, 0-based indices into [`super::Mesh::points`]. Cells are stored with
 //! positive orientation (det J > 0); the reader rejects inverted cells. Each cell type lists its
@@ -25,6 +25,11 @@ pub enum Cell {
     /// Linear prism (wedge; gmsh element type 6, what an extruded triangulation gives): nodes 0–2
     /// the triangle ζ = −1, 3–5 the triangle ζ = +1, node k + 3 above node k; triangle × segment.
     Prism6([usize; 6]),
+    /// Linear pyramid (gmsh element type 7, what gmsh puts between hexahedra and tetrahedra):
+    /// nodes 0–3 the quadrangular base ζ = 0, counter-clockwise seen from the apex, node 4 the
+    /// apex ζ = 1; the rational basis of docs/method.md §8.1 (Q1 on the base, P1 on the
+    /// triangles).
+    Pyr5([usize; 5]),
 }
 
 /// Edges of a triangle and a quadrilateral (counter-clockwise cells: outward = (dy, −dx)).
@@ -38,6 +43,10 @@ const TET_FACES: [[usize; 3]; 4] = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
 /// Faces of a prism, counter-clockwise seen from outside: ζ = −1, ζ = +1, η = 0, ξ + η = 1,
 /// ξ = 0.
 const PRISM_FACES: [&[usize]; 5] = [&[0, 2, 1], &[3, 4, 5], &[0, 1, 4, 3], &[1, 2, 5, 4], &[2, 0, 3, 5]];
+
+/// Faces of a pyramid, counter-clockwise seen from outside: the base ζ = 0, then the triangles
+/// η = −(1 − ζ), ξ = 1 − ζ, η = 1 − ζ, ξ = −(1 − ζ).
+const PYRAMID_FACES: [&[usize]; 5] = [&[0, 3, 2, 1], &[0, 1, 4], &[1, 2, 4], &[2, 3, 4], &[3, 0, 4]];
 
 /// Faces of a hexahedron, counter-clockwise seen from outside: ζ = −1, ζ = +1, η = −1, η = +1,
 /// ξ = −1, ξ = +1.
@@ -66,6 +75,7 @@ impl Cell {
             Cell::Tet4(n) => n,
             Cell::Hex8(n) => n,
             Cell::Prism6(n) => n,
+            Cell::Pyr5(n) => n,
         }
     }
 
@@ -73,7 +83,7 @@ impl Cell {
     pub fn dim(&self) -> usize {
         match self {
             Cell::Tri3(_) | Cell::Quad4(_) => 2,
-            Cell::Tet4(_) | Cell::Hex8(_) | Cell::Prism6(_) => 3,
+            Cell::Tet4(_) | Cell::Hex8(_) | Cell::Prism6(_) | Cell::Pyr5(_) => 3,
         }
     }
 
@@ -86,6 +96,7 @@ impl Cell {
             Cell::Tet4(n) => Cell::Tet4(n.map(number)),
             Cell::Hex8(n) => Cell::Hex8(n.map(number)),
             Cell::Prism6(n) => Cell::Prism6(n.map(number)),
+            Cell::Pyr5(n) => Cell::Pyr5(n.map(number)),
         }
     }
 
@@ -97,6 +108,7 @@ impl Cell {
             Cell::Tet4([a, b, c, d]) => Cell::Tet4([a, c, b, d]),
             Cell::Hex8([a, b, c, d, e, f, g, h]) => Cell::Hex8([a, d, c, b, e, h, g, f]),
             Cell::Prism6([a, b, c, d, e, f]) => Cell::Prism6([a, c, b, d, f, e]),
+            Cell::Pyr5([a, b, c, d, e]) => Cell::Pyr5([a, d, c, b, e]),
         }
     }
 
@@ -116,6 +128,7 @@ impl Cell {
                 &HEX_FACES[5],
             ],
             Cell::Prism6(_) => &PRISM_FACES,
+            Cell::Pyr5(_) => &PYRAMID_FACES,
         };
         table
             .iter()
@@ -144,11 +157,12 @@ impl Cell {
                 [3, 7],
             ],
             Cell::Prism6(_) => &[[0, 1], [1, 2], [2, 0], [3, 4], [4, 5], [5, 3], [0, 3], [1, 4], [2, 5]],
+            Cell::Pyr5(_) => &[[0, 1], [1, 2], [2, 3], [3, 0], [0, 4], [1, 4], [2, 4], [3, 4]],
         };
         local.iter().map(|&[a, b]| [n[a], n[b]]).collect()
     }
 
-    /// VTK cell type id (5 triangle, 9 quad, 10 tetra, 12 hexahedron, 13 wedge).
+    /// VTK cell type id (5 triangle, 9 quad, 10 tetra, 12 hexahedron, 13 wedge, 14 pyramid).
     pub fn vtk_type(&self) -> u8 {
         match self {
             Cell::Tri3(_) => 5,
@@ -156,11 +170,14 @@ impl Cell {
             Cell::Tet4(_) => 10,
             Cell::Hex8(_) => 12,
             Cell::Prism6(_) => 13,
+            Cell::Pyr5(_) => 14,
         }
     }
 
     /// The positions of [`Cell::nodes`] in VTK's order: gmsh's, except for the prism, whose base
-    /// triangle VTK orients with its normal away from the other triangle (gmsh: towards it).
+    /// triangle VTK orients with its normal away from the other triangle (gmsh: towards it). A
+    /// pyramid is the same in both: the base, its right-hand normal towards the apex, then the
+    /// apex.
     pub fn vtk_order(&self) -> &'static [usize] {
         match self {
             Cell::Prism6(_) => &[0, 2, 1, 3, 5, 4],
@@ -176,6 +193,7 @@ impl Cell {
             Cell::Tet4(_) => "tetrahedron",
             Cell::Hex8(_) => "hexahedron",
             Cell::Prism6(_) => "prism",
+            Cell::Pyr5(_) => "pyramid",
         }
     }
 }

@@ -157,7 +157,8 @@ impl<const D: usize> Mesh<D> {
                     if D == 2 {
                         "an edge split on one side only"
                     } else {
-                        "triangles against a quadrangle, which needs pyramids"
+                        "triangles against a quadrangle, where a pyramid belongs: gmsh puts one on every interface \
+                         quadrangle when it meshes both volumes in one run"
                     }
                 ),
             });
@@ -408,9 +409,40 @@ mod tests {
         for shape in [CellShape::Quad, CellShape::Tri] {
             assert!(rectangle(2.0, 1.0, 6, 3, shape).defects().is_empty());
         }
-        for shape in [SolidShape::Hex, SolidShape::Tet] {
-            assert!(block([2.0, 1.0, 0.5], [4, 2, 2], shape).defects().is_empty());
+        for shape in [
+            SolidShape::Hex,
+            SolidShape::Tet,
+            SolidShape::Prism,
+            SolidShape::Pyramid,
+            SolidShape::HexPyramid,
+        ] {
+            let m = block([2.0, 1.0, 0.5], [4, 2, 2], shape);
+            assert!(m.defects().is_empty(), "{shape:?}: {:?}", m.defects());
         }
+    }
+
+    /// Tetrahedra against a hexahedron's face without the pyramid between them: the face does
+    /// not match, and the message says a pyramid belongs there; with the box beside the
+    /// hexahedron split into pyramids instead, the faces match (a pyramid's base against the
+    /// hexahedron's face, its triangles against each other).
+    #[test]
+    fn triangles_against_a_quadrangle_need_a_pyramid() {
+        let hexes = block([2.0, 1.0, 1.0], [2, 1, 1], SolidShape::Hex);
+        let tets = block([2.0, 1.0, 1.0], [2, 1, 1], SolidShape::Tet);
+        let mut m = hexes.clone();
+        // the second box's six tetrahedra in place of its hexahedron
+        m.cells.truncate(1);
+        m.cells.extend(tets.cells[6..].iter().copied());
+        m.cell_tags = (1..=m.cells.len()).collect();
+        let d = m.defects();
+        assert!(
+            d.iter()
+                .any(|d| d.severe && d.message.contains("do not match") && d.message.contains("pyramid")),
+            "{d:?}"
+        );
+        let pyramids = block([2.0, 1.0, 1.0], [2, 1, 1], SolidShape::HexPyramid);
+        assert!(matches!(pyramids.cells[0], Cell::Hex8(_)) && matches!(pyramids.cells[1], Cell::Pyr5(_)));
+        assert!(pyramids.defects().is_empty(), "{:?}", pyramids.defects());
     }
 
     #[test]

@@ -2,8 +2,8 @@
 //! functions, their physical gradients and the Jacobian determinant at a quadrature point.
 
 use super::quadrature::{
-    tensor_gauss_3, tet_duffy_27, QuadPoint, HEX_GAUSS_2X2X2, PRISM_6POINT, QUAD_GAUSS_2X2, TET_4POINT, TET_CENTROID,
-    TRI_3POINT, TRI_CENTROID,
+    pyramid_collapsed_27, tensor_gauss_3, tet_duffy_27, QuadPoint, HEX_GAUSS_2X2X2, PRISM_6POINT, PYRAMID_8POINT,
+    QUAD_GAUSS_2X2, TET_4POINT, TET_CENTROID, TRI_3POINT, TRI_CENTROID,
 };
 use crate::mesh::Cell;
 
@@ -80,6 +80,26 @@ pub fn reference(cell: &Cell, xi: [f64; 3]) -> (usize, [f64; MAX_NODES], [[f64; 
                 }
             }
             (6, v, g)
+        }
+        Cell::Pyr5(_) => {
+            // The rational basis (docs/method.md §8.1): with u = ξ/(1 − ζ), v = η/(1 − ζ),
+            //   N_a = (1 − ζ)(1 + ξ_a u)(1 + η_a v)/4 = ((1 − ζ) + ξ_a ξ + η_a η + ξ_a η_a ξη/(1 − ζ))/4
+            // at the base corners (ξ_a, η_a) = (±1, ±1) and N_4 = ζ at the apex: Q1 on the base,
+            // P1 on the triangles, and Σ N_a = 1, Σ ξ_a N_a = ξ, Σ η_a N_a = η, N_4 = ζ (linear
+            // completeness). Its gradients are bounded but have no limit at the apex, where the
+            // value along the axis (u = v = 0) is taken; no quadrature point lies there.
+            const CORNERS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+            let s = 1.0 - z;
+            // (u, v) of the collapsed coordinates; `v` holds the values
+            let (cu, cv) = if s.abs() > 1e-14 { (x / s, y / s) } else { (0.0, 0.0) };
+            for (a, c) in CORNERS.iter().enumerate() {
+                let (su, sv) = (1.0 + c[0] * cu, 1.0 + c[1] * cv);
+                v[a] = 0.25 * s * su * sv;
+                g[a] = [0.25 * c[0] * sv, 0.25 * c[1] * su, 0.25 * (c[0] * c[1] * cu * cv - 1.0)];
+            }
+            v[4] = z;
+            g[4] = [0.0, 0.0, 1.0];
+            (5, v, g)
         }
     }
 }
@@ -163,6 +183,7 @@ pub fn stiffness_rule(cell: &Cell) -> &'static [QuadPoint] {
         Cell::Tet4(_) => &TET_CENTROID,
         Cell::Hex8(_) => &HEX_GAUSS_2X2X2,
         Cell::Prism6(_) => &PRISM_6POINT,
+        Cell::Pyr5(_) => &PYRAMID_8POINT,
     }
 }
 
@@ -174,6 +195,7 @@ pub fn load_rule(cell: &Cell) -> &'static [QuadPoint] {
         Cell::Tet4(_) => &TET_4POINT,
         Cell::Hex8(_) => &HEX_GAUSS_2X2X2,
         Cell::Prism6(_) => &PRISM_6POINT,
+        Cell::Pyr5(_) => &PYRAMID_8POINT,
     }
 }
 
@@ -206,6 +228,7 @@ pub fn error_rule(cell: &Cell) -> Vec<QuadPoint> {
                 })
                 .collect()
         }
+        Cell::Pyr5(_) => pyramid_collapsed_27(),
     }
 }
 
@@ -225,6 +248,8 @@ pub fn reference_centroid(cell: &Cell) -> [f64; 3] {
         Cell::Tri3(_) | Cell::Prism6(_) => [1.0 / 3.0, 1.0 / 3.0, 0.0],
         Cell::Quad4(_) | Cell::Hex8(_) => [0.0, 0.0, 0.0],
         Cell::Tet4(_) => [0.25, 0.25, 0.25],
+        // the centroid of the reference pyramid (ζ̄ = ∫ζ(1 − ζ)²/∫(1 − ζ)² = 1/4)
+        Cell::Pyr5(_) => [0.0, 0.0, 0.25],
     }
 }
 
@@ -298,5 +323,252 @@ mod tests {
             [0.2, 0.3, -0.4],
             [2.0, -3.0, 0.5],
         );
+        check(Cell::Pyr5([0, 1, 2, 3, 6]), &p3, [0.2, -0.3, 0.4], [2.0, -3.0, 0.5]);
+    }
+
+    /// A pyramid with a non-planar, non-parallelogram base and a tilted apex (its map is not
+    /// affine, so the rational term ξη/(1 − ζ) matters), and the unit-square right pyramid.
+    const PYRAMIDS: [[[f64; 3]; 5]; 2] = [
+        [
+            [0.0, 0.0, 0.05],
+            [1.2, 0.1, 0.0],
+            [1.0, 0.9, -0.1],
+            [-0.1, 1.1, 0.02],
+            [0.7, 0.3, 0.8],
+        ],
+        [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.5, 0.5, 0.5],
+        ],
+    ];
+
+    const PYR: Cell = Cell::Pyr5([0, 1, 2, 3, 4]);
+
+    /// Reference points spread over the pyramid {0 ≤ ζ < 1, |ξ|, |η| ≤ 1 − ζ} by a fixed
+    /// xorshift sequence (on faces and near the apex too).
+    fn pyramid_points(n: usize) -> Vec<[f64; 3]> {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed % 1_000_001) as f64 / 1_000_000.0
+        };
+        let mut out = vec![[1.0, -1.0, 0.0], [0.0, 0.0, 0.999_999], [0.3, -0.5, 0.5]];
+        while out.len() < n {
+            let z = 0.999 * next();
+            out.push([(2.0 * next() - 1.0) * (1.0 - z), (2.0 * next() - 1.0) * (1.0 - z), z]);
+        }
+        out
+    }
+
+    /// The rational pyramid basis (docs/method.md §8.1): a partition of unity, 1 at its own node
+    /// and 0 at the others (the apex included), the isoparametric map reproduces every linear
+    /// field and its gradient exactly at points all over the cell, and the reference gradients
+    /// are the derivatives of the values (central differences, step 1e-6: their error is
+    /// O(step²) times third derivatives of order 1, so 1e-8 leaves room for round-off 1e-16/1e-6).
+    #[test]
+    fn pyramid_basis_is_linear_complete_with_consistent_gradients() {
+        const NODES: [[f64; 3]; 5] = [
+            [-1.0, -1.0, 0.0],
+            [1.0, -1.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [-1.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        for (b, &xi) in NODES.iter().enumerate() {
+            let (n, v, _) = reference(&PYR, xi);
+            assert_eq!(n, 5);
+            for a in 0..5 {
+                let want = if a == b { 1.0 } else { 0.0 };
+                assert!((v[a] - want).abs() < 1e-15, "N_{a} at node {b}: {}", v[a]);
+            }
+        }
+        let slope = [2.0, -3.0, 0.5];
+        for pts in &PYRAMIDS {
+            for xi in pyramid_points(200) {
+                let s = shape_at(&PYR, pts, xi);
+                let sum: f64 = s.value[..5].iter().sum();
+                assert!((sum - 1.0).abs() < 1e-14, "Σ N = {sum} at {xi:?}");
+                let f = |p: [f64; 3]| 0.7 + (0..3).map(|k| slope[k] * p[k]).sum::<f64>();
+                let (mut value, mut grad) = (0.0, [0.0; 3]);
+                for a in 0..5 {
+                    value += f(pts[a]) * s.value[a];
+                    for k in 0..3 {
+                        grad[k] += f(pts[a]) * s.grad[a][k];
+                    }
+                }
+                assert!((value - f(s.x)).abs() < 1e-13, "value at {xi:?}: {value} vs {}", f(s.x));
+                for k in 0..3 {
+                    assert!((grad[k] - slope[k]).abs() < 1e-12, "gradient at {xi:?}: {grad:?}");
+                }
+                assert!(s.det_j > 0.0);
+                // the reference gradients against central differences
+                if xi[2] < 0.99 {
+                    let (_, _, g) = reference(&PYR, xi);
+                    let h = 1e-6;
+                    for d in 0..3 {
+                        let (mut lo, mut hi) = (xi, xi);
+                        lo[d] -= h;
+                        hi[d] += h;
+                        let (vl, vh) = (reference(&PYR, lo).1, reference(&PYR, hi).1);
+                        for a in 0..5 {
+                            let fd = (vh[a] - vl[a]) / (2.0 * h);
+                            assert!(
+                                (g[a][d] - fd).abs() < 1e-8,
+                                "∂N_{a}/∂ξ_{d} at {xi:?}: {} vs {fd}",
+                                g[a][d]
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        // the apex: values exact, gradients finite (the limit along the axis)
+        let s = shape_at(&PYR, &PYRAMIDS[0], [0.0, 0.0, 1.0]);
+        assert!((s.value[4] - 1.0).abs() < 1e-15 && s.grad[..5].iter().flatten().all(|g| g.is_finite()));
+    }
+
+    /// The basis restricted to the base is the Q1 quadrangle's and to each triangle the P1
+    /// triangle's (so a pyramid conforms to a hexahedron's face and a tetrahedron's face), the
+    /// nodes off the face vanishing there.
+    #[test]
+    fn pyramid_basis_is_q1_on_the_base_and_p1_on_the_triangles() {
+        for (s, t) in [(-0.6, 0.3), (0.2, 0.9), (1.0, -1.0), (0.0, 0.0)] {
+            let (_, v, _) = reference(&PYR, [s, t, 0.0]);
+            let (_, q, _) = reference(&Cell::Quad4([0, 1, 2, 3]), [s, t, 0.0]);
+            for a in 0..4 {
+                assert!((v[a] - q[a]).abs() < 1e-15);
+            }
+            assert_eq!(v[4], 0.0);
+        }
+        // the face through nodes (a, b, 4): a + (b − a) λ₁ + (apex − a) λ₂ in reference coordinates
+        const BASE: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+        for a in 0..4 {
+            let b = (a + 1) % 4;
+            for (l1, l2) in [(0.2, 0.3), (0.5, 0.5), (0.0, 0.7), (0.9, 0.05)] {
+                let xi = [
+                    BASE[a][0] + (BASE[b][0] - BASE[a][0]) * l1 - BASE[a][0] * l2,
+                    BASE[a][1] + (BASE[b][1] - BASE[a][1]) * l1 - BASE[a][1] * l2,
+                    l2,
+                ];
+                let (_, v, _) = reference(&PYR, xi);
+                let want = |k: usize| match k {
+                    _ if k == a => 1.0 - l1 - l2,
+                    _ if k == b => l1,
+                    4 => l2,
+                    _ => 0.0,
+                };
+                for k in 0..5 {
+                    assert!(
+                        (v[k] - want(k)).abs() < 1e-15,
+                        "face {a}{b}4, N_{k} = {} vs {}",
+                        v[k],
+                        want(k)
+                    );
+                }
+            }
+        }
+    }
+
+    /// ∮ N_a n ds over the pyramid's faces (outward: [`Cell::facets`]): the base by 2 × 2 Gauss
+    /// (the integrand is a bicubic there), the flat triangles by the vertex rule (N_a linear).
+    fn pyramid_boundary_integrals(pts: &[[f64; 3]; 5]) -> [[f64; 3]; 5] {
+        let cross = |u: [f64; 3], v: [f64; 3]| {
+            [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ]
+        };
+        let mut out = [[0.0; 3]; 5];
+        for f in PYR.facets() {
+            let x = |k: usize| pts[f[k]];
+            if f.len() == 3 {
+                let e = |k: usize| std::array::from_fn(|d| x(k)[d] - x(0)[d]);
+                let area = cross(e(1), e(2));
+                for &p in f.nodes() {
+                    for d in 0..3 {
+                        out[p][d] += area[d] / 6.0;
+                    }
+                }
+            } else {
+                // the bilinear base: N_k (∂x/∂s × ∂x/∂t) at 2 × 2 Gauss points
+                for q in &QUAD_GAUSS_2X2 {
+                    let (_, v, g) = reference(&Cell::Quad4([0, 1, 2, 3]), q.xi);
+                    let t = |c: usize| std::array::from_fn(|d| (0..4).map(|k| g[k][c] * x(k)[d]).sum::<f64>());
+                    let area = cross(t(0), t(1));
+                    for (k, &p) in f.nodes().iter().enumerate() {
+                        for d in 0..3 {
+                            out[p][d] += q.weight * v[k] * area[d];
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The pyramid rules: the volume (by the divergence theorem, (1/3)∮ x·n ds) and ∫ ∇N_a dx =
+    /// ∮ N_a n ds (the identity the patch test rests on) exact on the distorted pyramid with both
+    /// rules, and on the affine one the 8-point stiffness ∫ ∇N_a·∇N_b dx equal to the 27-point
+    /// one's (both exact there: quadratics in the collapsed coordinates). Round-off: 1e-14.
+    #[test]
+    fn pyramid_rules_integrate_volume_gradients_and_affine_stiffness_exactly() {
+        for (i, pts) in PYRAMIDS.iter().enumerate() {
+            let boundary = pyramid_boundary_integrals(pts);
+            // (1/3) ∮ x·n ds = (1/3) Σ_a x_a·∮ N_a n ds (x = Σ N_a x_a on the faces)
+            let volume: f64 = (0..5)
+                .map(|a| (0..3).map(|d| pts[a][d] * boundary[a][d]).sum::<f64>())
+                .sum::<f64>()
+                / 3.0;
+            let rules: [Vec<QuadPoint>; 2] = [PYRAMID_8POINT.to_vec(), error_rule(&PYR)];
+            let mut stiffness = [[[0.0; 5]; 5]; 2];
+            for (r, rule) in rules.iter().enumerate() {
+                let (mut v, mut grad) = (0.0, [[0.0; 3]; 5]);
+                for q in rule {
+                    let s = shape_at(&PYR, pts, q.xi);
+                    v += q.weight * s.det_j;
+                    for a in 0..5 {
+                        for d in 0..3 {
+                            grad[a][d] += q.weight * s.det_j * s.grad[a][d];
+                        }
+                        for b in 0..5 {
+                            stiffness[r][a][b] +=
+                                q.weight * s.det_j * (0..3).map(|d| s.grad[a][d] * s.grad[b][d]).sum::<f64>();
+                        }
+                    }
+                }
+                assert!(
+                    (v - volume).abs() < 1e-14,
+                    "pyramid {i}, rule {r}: volume {v} vs {volume}"
+                );
+                for a in 0..5 {
+                    for d in 0..3 {
+                        assert!(
+                            (grad[a][d] - boundary[a][d]).abs() < 1e-14,
+                            "pyramid {i}, rule {r}: ∫∇N_{a} {:?} vs ∮N n {:?}",
+                            grad[a],
+                            boundary[a]
+                        );
+                    }
+                }
+            }
+            if i == 1 {
+                assert!(
+                    (volume - 1.0 / 6.0).abs() < 1e-15,
+                    "the right pyramid's volume {volume}"
+                );
+                for a in 0..5 {
+                    for b in 0..5 {
+                        let (k8, k27) = (stiffness[0][a][b], stiffness[1][a][b]);
+                        assert!((k8 - k27).abs() < 1e-14, "K[{a}][{b}]: {k8} vs {k27}");
+                    }
+                }
+            }
+        }
     }
 }

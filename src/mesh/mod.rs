@@ -10,9 +10,8 @@
 //! [`BoundaryPart`] with outward normals and nodal quadrature weights.
 //!
 //! Only first-order elements are read: points (gmsh type 15), 2-node lines (1), 3-node
-//! triangles (2), 4-node quadrilaterals (3), 4-node tetrahedra (4), 8-node hexahedra (5) and 6-node
-//! prisms (6);
-//! anything else is an error that says how to re-mesh. Every problem found is reported with the
+//! triangles (2), 4-node quadrilaterals (3), 4-node tetrahedra (4), 8-node hexahedra (5), 6-node
+//! prisms (6) and 5-node pyramids (7); anything else is an error that says how to re-mesh. Every problem found is reported with the
 //! file, the place (line number for ASCII files, node or element tag) and what to do: hvi never
 //! panics on a bad file and never allocates in proportion to a count in a header that the file
 //! is too short to hold.

@@ -322,8 +322,8 @@ fn read_elements(r: &mut Reader<'_>) -> Result<ElementsRead, MeshError> {
                 detail: format!(
                     "element block {} is of type {ty}, an element type hvi does not know (so its elements cannot \
                      even be read); hvi reads only points (15), 2-node lines (1), 3-node triangles (2), 4-node \
-                     quadrangles (3), 4-node tetrahedra (4) and 8-node hexahedra (5): mesh with gmsh -2 -order 1 \
-                     (-3 for a volume)",
+                     quadrangles (3), 4-node tetrahedra (4), 8-node hexahedra (5), 6-node prisms (6) and 5-node \
+                     pyramids (7): mesh with gmsh -2 -order 1 (-3 for a volume)",
                     b + 1
                 ),
             });

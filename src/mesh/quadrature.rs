@@ -53,6 +53,58 @@ pub const PRISM_6POINT: [QuadPoint; 6] = [
     qp(1.0 / 6.0, 2.0 / 3.0, G, 1.0 / 6.0),
 ];
 
+/// The 2-point Gauss–Jacobi rule on [0, 1] for the weight (1 − w)² (nodes 1/3 ∓ √(2/45),
+/// weights 1/6 ± 1/(72 √(2/45))): ∫₀¹ p(w) (1 − w)² dw exactly for cubics p.
+const JACOBI2_2: [(f64, f64); 2] = [
+    (0.122_514_822_655_441_38, 0.232_547_451_253_507_9),
+    (0.544_151_844_011_225_3, 0.100_785_882_079_825_43),
+];
+
+/// The 3-point Gauss–Jacobi rule on [0, 1] for the weight (1 − w)²: exact for quintics.
+const JACOBI2_3: [(f64, f64); 3] = [
+    (0.072_994_024_073_149_73, 0.157_136_361_064_886_6),
+    (0.347_003_766_038_351_9, 0.146_246_269_259_866_02),
+    (0.705_002_209_888_498_4, 0.029_950_703_008_580_698),
+];
+
+/// A point of the collapsed (Duffy) rule on the reference pyramid {0 ≤ ζ ≤ 1, |ξ|, |η| ≤ 1 − ζ}:
+/// the cube point (u, v, w) ∈ [−1, 1]² × [0, 1] goes to ξ = u (1 − w), η = v (1 − w), ζ = w, whose
+/// Jacobian (1 − w)² the Gauss–Jacobi weight in w carries.
+const fn pyramid_point(u: f64, v: f64, (w, weight): (f64, f64), wu: f64, wv: f64) -> QuadPoint {
+    qp(u * (1.0 - w), v * (1.0 - w), w, wu * wv * weight)
+}
+
+/// 8-point collapsed rule on the reference pyramid (docs/method.md §8.1): 2 × 2 Gauss in (u, v)
+/// times 2-point Gauss–Jacobi in w, no point at the apex. In these coordinates the rational
+/// basis is the trilinear one of a hexahedron whose top face is collapsed to the apex, and the
+/// Jacobian of the pyramid's map and the ξ-gradients of its basis depend on (u, v) only, so the
+/// rule integrates exactly ∫ ∇N_a dx on any pyramid (the patch test: cubics in u and v), the
+/// stiffness of an affine pyramid (quadratics in u and v) and its loads (cubics in w).
+pub const PYRAMID_8POINT: [QuadPoint; 8] = [
+    pyramid_point(-G, -G, JACOBI2_2[0], 1.0, 1.0),
+    pyramid_point(G, -G, JACOBI2_2[0], 1.0, 1.0),
+    pyramid_point(G, G, JACOBI2_2[0], 1.0, 1.0),
+    pyramid_point(-G, G, JACOBI2_2[0], 1.0, 1.0),
+    pyramid_point(-G, -G, JACOBI2_2[1], 1.0, 1.0),
+    pyramid_point(G, -G, JACOBI2_2[1], 1.0, 1.0),
+    pyramid_point(G, G, JACOBI2_2[1], 1.0, 1.0),
+    pyramid_point(-G, G, JACOBI2_2[1], 1.0, 1.0),
+];
+
+/// 27-point collapsed rule on the reference pyramid: 3 × 3 Gauss in (u, v) times 3-point
+/// Gauss–Jacobi in w (error integrals, where its cost does not matter).
+pub fn pyramid_collapsed_27() -> Vec<QuadPoint> {
+    let mut out = Vec::with_capacity(27);
+    for &jw in &JACOBI2_3 {
+        for &(v, wv) in &GAUSS_3 {
+            for &(u, wu) in &GAUSS_3 {
+                out.push(pyramid_point(u, v, jw, wu, wv));
+            }
+        }
+    }
+    out
+}
+
 /// 1-point (centroid) rule on the reference triangle: exact for P1 stiffness (constant strain).
 pub const TRI_CENTROID: [QuadPoint; 1] = [qp(1.0 / 3.0, 1.0 / 3.0, 0.0, 0.5)];
 
@@ -164,5 +216,46 @@ mod tests {
         assert!((e - 0.25).abs() < 1e-14);
         let e5: f64 = EDGE_GAUSS_3.iter().map(|(s, w)| w * s.powi(5)).sum();
         assert!((e5 - 1.0 / 6.0).abs() < 1e-14);
+    }
+
+    /// The Gauss–Jacobi rules for (1 − w)² on [0, 1] against the moments ∫₀¹ wᵏ (1 − w)² dw =
+    /// 2/((k + 1)(k + 2)(k + 3)) up to their degrees (3 and 5), and the pyramid rules against
+    /// the reference pyramid's moments ∫ ξ^{2i} η^{2j} ζᵏ = 4/((2i + 1)(2j + 1)) B(k + 1, 2i + 2j + 3)
+    /// (odd powers of ξ, η give 0) of total degree up to 3 (the 8-point rule) and 5 (the
+    /// 27-point rule), the volume 4/3 among them. Round-off: 1e-15.
+    #[test]
+    fn pyramid_rules_integrate_monomials_exactly() {
+        let moment = |k: i32| 2.0 / f64::from((k + 1) * (k + 2) * (k + 3));
+        for (rule, degree) in [(&JACOBI2_2[..], 3), (&JACOBI2_3[..], 5)] {
+            for k in 0..=degree {
+                let q: f64 = rule.iter().map(|(w, c)| c * w.powi(k)).sum();
+                assert!((q - moment(k)).abs() < 1e-15, "degree {k}: {q} vs {}", moment(k));
+            }
+        }
+        // B(a, b) for integers: (a − 1)! (b − 1)! / (a + b − 1)!
+        let fact = |n: i32| (1..=n).map(f64::from).product::<f64>();
+        let beta = |a: i32, b: i32| fact(a - 1) * fact(b - 1) / fact(a + b - 1);
+        let exact = |p: [i32; 3]| {
+            if p[0] % 2 == 1 || p[1] % 2 == 1 {
+                0.0
+            } else {
+                4.0 / f64::from((p[0] + 1) * (p[1] + 1)) * beta(p[2] + 1, p[0] + p[1] + 3)
+            }
+        };
+        assert!((exact([0, 0, 0]) - 4.0 / 3.0).abs() < 1e-15);
+        for (rule, degree) in [(PYRAMID_8POINT.to_vec(), 3), (pyramid_collapsed_27(), 5)] {
+            for i in 0..=degree {
+                for j in 0..=degree - i {
+                    for k in 0..=degree - i - j {
+                        let q: f64 = rule
+                            .iter()
+                            .map(|p| p.weight * p.xi[0].powi(i) * p.xi[1].powi(j) * p.xi[2].powi(k))
+                            .sum();
+                        let want = exact([i, j, k]);
+                        assert!((q - want).abs() < 1e-15, "ξ^{i} η^{j} ζ^{k}: {q} vs {want}");
+                    }
+                }
+            }
+        }
     }
 }

@@ -34,8 +34,8 @@ pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<AnyMesh, MeshError> {
         Version::V2 => msh22::parse(path, bytes, header.body)?,
         Version::V41 => msh41::parse(path, bytes, &header)?,
     };
-    // any volume element (also one hvi does not compute with: prisms, pyramids, second-order
-    // tetrahedra) makes a 3D mesh, whose reader then names what to do about the element
+    // any volume element (also one hvi does not compute with: second-order tetrahedra, prisms
+    // or pyramids) makes a 3D mesh, whose reader then names what to do about the element
     if raw
         .element_types
         .iter()

@@ -93,13 +93,21 @@ pub enum SolidShape {
     /// Linear prisms (wedges, extruded triangles): each grid box split into two along its
     /// diagonal from (0, 0) to (1, 1) in x, y, extruded in z.
     Prism,
+    /// Linear pyramids: each grid box split into six, one on each of its faces, with their
+    /// apex at a node added at the box's centre.
+    Pyramid,
+    /// Hexahedra and pyramids alternately, like a chessboard: the boxes with i + j + k even are
+    /// hexahedra, the others split into six pyramids as [`SolidShape::Pyramid`] (each hexahedron's
+    /// faces against pyramids' bases).
+    HexPyramid,
 }
 
 /// A structured mesh of the box (0, lx) × (0, ly) × (0, lz) with `nx` × `ny` × `nz` grid boxes and
 /// the groups of `meshes/slab.geo`: `Gamma1` (dim 2, tag 1, x = 0), `Gamma2` (tag 2, x = lx and
 /// y = ly), `Gamma3` (tag 3, y = 0), `Gamma2_top` (tag 4, y = ly only), `Sides` (tag 6, z = 0 and
 /// z = lz) and `Omega` (dim 3, tag 5). Point `i + (nx + 1)(j + (ny + 1) k)` is at
-/// `(i lx / nx, j ly / ny, k lz / nz)`. The path is `<block NXxNYxNZ>`.
+/// `(i lx / nx, j ly / ny, k lz / nz)`; the pyramids' box centres follow the grid's points. The
+/// path is `<block NXxNYxNZ>`.
 ///
 /// # Panics
 /// If a count is 0 or a length is not positive and finite (a programming error, not bad input).
@@ -137,8 +145,31 @@ pub fn block(l: [f64; 3], n: [usize; 3], kind: SolidShape) -> Mesh<3> {
                     id(i + 1, j + 1, k + 1),
                     id(i, j + 1, k + 1),
                 ];
+                let pyramids = match kind {
+                    SolidShape::Pyramid => true,
+                    SolidShape::HexPyramid => (i + j + k) % 2 == 1,
+                    _ => false,
+                };
                 match kind {
-                    SolidShape::Hex => cells.push(Cell::Hex8(c)),
+                    _ if pyramids => {
+                        // the apex at the box's centre, each base a box face turned so that its
+                        // right-hand normal points into the box, towards the apex
+                        let apex = points.len();
+                        let centre = |d: usize| 0.5 * (points[c[0]][d] + points[c[6]][d]);
+                        points.push([centre(0), centre(1), centre(2)]);
+                        for f in [
+                            [0, 1, 2, 3],
+                            [4, 7, 6, 5],
+                            [0, 4, 5, 1],
+                            [2, 6, 7, 3],
+                            [0, 3, 7, 4],
+                            [1, 5, 6, 2],
+                        ] {
+                            cells.push(Cell::Pyr5([c[f[0]], c[f[1]], c[f[2]], c[f[3]], apex]));
+                        }
+                    }
+                    // a whole box (also HexPyramid's boxes with i + j + k even)
+                    SolidShape::Hex | SolidShape::HexPyramid | SolidShape::Pyramid => cells.push(Cell::Hex8(c)),
                     SolidShape::Prism => {
                         cells.push(Cell::Prism6([c[0], c[1], c[2], c[4], c[5], c[6]]));
                         cells.push(Cell::Prism6([c[0], c[2], c[3], c[4], c[6], c[7]]));
@@ -180,7 +211,8 @@ pub fn block(l: [f64; 3], n: [usize; 3], kind: SolidShape) -> Mesh<3> {
                 // (a, b, fixed) is a right-handed cyclic triple: a × b points along +fixed.
                 let ccw = [corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1)];
                 match kind {
-                    SolidShape::Hex => {
+                    // hexahedra and pyramids: the boxes' faces
+                    SolidShape::Hex | SolidShape::Pyramid | SolidShape::HexPyramid => {
                         out.push(Facet::from(if at_max { ccw } else { [ccw[0], ccw[3], ccw[2], ccw[1]] }))
                     }
                     // prisms: quadrangles on the sides, the triangles of the split at z = const

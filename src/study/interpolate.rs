@@ -385,10 +385,11 @@ pub fn interpolate_nodal<const D: usize>(
 
 /// Reference coordinates of `x` in `cell` (3 components, the unused ones 0) and the physical
 /// distance from `x` to the cell (0 inside), in any dimension: Newton on the cell's (affine,
-/// bilinear or trilinear) map from the cell's centre. The distance: for P1 the largest signed
+/// bilinear, trilinear or, for a pyramid, rational) map from the cell's centre. The distance: for P1 the largest signed
 /// distance to a facet (−λ_i / |∇λ_i|); for a Q1 quadrilateral, whose edges are straight, the
 /// distance to the polygon; for a Q1 hexahedron 0 when ξ ∈ [−1, 1]³, else |x − x(clamp ξ)| (an
-/// upper bound, exact in the direction of one face). Far from the cell (farther than half its
+/// upper bound, exact in the direction of one face), and likewise for prisms and pyramids
+/// (clamped into their reference cells). Far from the cell (farther than half its
 /// size from its bounding box) the distance to that box, without coordinates. Outside the cell
 /// the coordinates extrapolate the map (exactly for P1; for Q1 Newton's last iterate,
 /// meaningful only close to the cell).
@@ -418,6 +419,7 @@ pub fn reference_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x
         Cell::Tri3(_) | Cell::Prism6(_) => [1.0 / 3.0, 1.0 / 3.0, 0.0],
         Cell::Tet4(_) => [0.25; 3],
         Cell::Quad4(_) | Cell::Hex8(_) => [0.0; 3],
+        Cell::Pyr5(_) => [0.0, 0.0, 0.25],
     };
     let Some(xi) = newton(map, x, start, size) else {
         return ([0.0; 3], f64::INFINITY);
@@ -462,6 +464,17 @@ pub fn reference_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x
                 }
             }
             let (y, _) = map([a, b, xi[2].clamp(-1.0, 1.0)]);
+            (0..D).map(|k| (x[k] - y[k]).powi(2)).sum::<f64>().sqrt()
+        }
+    } else if let Cell::Pyr5(_) = cell {
+        // inside when 0 ≤ ζ ≤ 1 and |ξ|, |η| ≤ 1 − ζ; else the distance to the map of the point
+        // clamped into the pyramid (an upper bound, exact across one face)
+        let side = 1.0 - xi[2];
+        if (0.0..=1.0).contains(&xi[2]) && xi[0].abs() <= side && xi[1].abs() <= side {
+            0.0
+        } else {
+            let z = xi[2].clamp(0.0, 1.0);
+            let (y, _) = map([xi[0].clamp(z - 1.0, 1.0 - z), xi[1].clamp(z - 1.0, 1.0 - z), z]);
             (0..D).map(|k| (x[k] - y[k]).powi(2)).sum::<f64>().sqrt()
         }
     } else if xi.iter().all(|v| v.abs() <= 1.0) {
@@ -542,4 +555,65 @@ fn polygon_distance(p: &[[f64; 2]], x: [f64; 2]) -> f64 {
             ((r[0] - s * e[0]).powi(2) + (r[1] - s * e[1]).powi(2)).sqrt()
         })
         .fold(f64::INFINITY, f64::min)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Point location in a pyramid (docs/method.md §8.1): Newton on its rational map recovers
+    /// the reference coordinates of points all over a pyramid with a warped base and a tilted
+    /// apex (to 1e-10: Newton's stopping test is 1e-15 of the cell size on the residual, and
+    /// det J is of order 1 there), with distance 0; a point at δ below the base or beyond a
+    /// triangle of the right pyramid is at a distance between δ and √2 δ (the clamped point on
+    /// the face, not the nearest: an upper bound, exact across the base).
+    #[test]
+    fn points_are_located_in_pyramids() {
+        let warped = [
+            [0.0, 0.0, 0.05],
+            [1.2, 0.1, 0.0],
+            [1.0, 0.9, -0.1],
+            [-0.1, 1.1, 0.02],
+            [0.7, 0.3, 0.8],
+        ];
+        let cell = Cell::Pyr5([0, 1, 2, 3, 4]);
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed % 1_000_001) as f64 / 1_000_000.0
+        };
+        for _ in 0..200 {
+            let z = 0.99 * next();
+            let xi = [(2.0 * next() - 1.0) * (1.0 - z), (2.0 * next() - 1.0) * (1.0 - z), z];
+            let x = shape_at(&cell, &warped, xi).x;
+            let (found, dist) = reference_coordinates(&cell, &warped, x);
+            assert_eq!(dist, 0.0, "{xi:?} → {found:?}");
+            for k in 0..3 {
+                assert!((found[k] - xi[k]).abs() < 1e-10, "{xi:?} → {found:?}");
+            }
+        }
+        let right = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.5, 0.5, 0.5],
+        ];
+        let delta = 0.01;
+        let (_, below) = reference_coordinates(&cell, &right, [0.3, 0.6, -delta]);
+        assert!((below - delta).abs() < 1e-12, "below the base: {below}");
+        // beyond the triangle y = z (outward normal (0, −1, 1)/√2) from its point (0.5, 0.2, 0.2)
+        let s = delta / 2f64.sqrt();
+        let (_, beyond) = reference_coordinates(&cell, &right, [0.5, 0.2 - s, 0.2 + s]);
+        assert!(
+            beyond >= delta * (1.0 - 1e-9) && beyond <= 2f64.sqrt() * delta * (1.0 + 1e-9),
+            "beyond a triangle: {beyond}"
+        );
+        // inside, near the apex
+        let (found, dist) = reference_coordinates(&cell, &right, [0.5, 0.5, 0.49]);
+        assert_eq!(dist, 0.0);
+        assert!((found[2] - 0.98).abs() < 1e-12 && found[0].abs() < 1e-12, "{found:?}");
+    }
 }
