@@ -765,7 +765,11 @@ fn force_control_is_refused_by_the_petsc_backend() {
     );
     assert!(!out.status.success(), "the PETSc backend accepted force control");
     let (error, err) = the_one_error(&out);
-    for part in ["force_control[0] (group Base, y)", "PETSc backend does not support", "without --backend petsc"] {
+    for part in [
+        "force_control[0] (group Base, y)",
+        "PETSc backend does not support",
+        "without --backend petsc",
+    ] {
         assert!(error.contains(part), "`{part}` missing from the error:\n{err}");
     }
     assert!(!tmp.path().join("mpi").join("summary.json").exists());

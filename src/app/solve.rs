@@ -19,11 +19,12 @@ pub fn read_mesh(path: &Path) -> Result<AnyMesh, SolveError> {
         let (dims, shape) = match spec.split_once(':') {
             Some((d, "tet")) => (d, mesh::structured::SolidShape::Tet),
             Some((d, "prism")) => (d, mesh::structured::SolidShape::Prism),
+            Some((d, "pyramid")) => (d, mesh::structured::SolidShape::Pyramid),
             Some((d, "hex")) | Some((d, "")) => (d, mesh::structured::SolidShape::Hex),
             None => (spec, mesh::structured::SolidShape::Hex),
             Some((_, other)) => {
                 return Err(SolveError::Setup(format!(
-                    "mesh spec {text}: unknown cell shape `{other}` (use hex, tet or prism)"
+                    "mesh spec {text}: unknown cell shape `{other}` (use hex, tet, prism or pyramid)"
                 )))
             }
         };
@@ -41,7 +42,7 @@ pub fn read_mesh(path: &Path) -> Result<AnyMesh, SolveError> {
                 )))
             }
             _ => Err(SolveError::Setup(format!(
-                "mesh spec {text}: expected box:NXxNYxNZ[:tet|:prism] with counts ≥ 1, e.g. box:64x32x8 (cubic cells of size 1/NY: the slab (0, NX/NY)×(0,1)×(0, NZ/NY))"
+                "mesh spec {text}: expected box:NXxNYxNZ[:tet|:prism|:pyramid] with counts ≥ 1, e.g. box:64x32x8 (cubic cells of size 1/NY: the slab (0, NX/NY)×(0,1)×(0, NZ/NY))"
             ))),
         };
     }
