@@ -60,7 +60,7 @@ fn check_dim<const D: usize>(
         );
     }
     estimate
-        .check_fits(sim.contact.as_ref().map_or(0, |c| c.nodes.len()))
+        .check_fits(sim.contact.as_ref().map_or(0, |c| c.condensed_rows().len()))
         .map_err(|e| SolveError::OutOfMemory(format!("{}: {e}", mesh_path.display())))?;
     if let Some(c) = &sim.contact {
         // rows per group (a corner node counts once per wall, docs/method.md §14.3)

@@ -444,6 +444,44 @@ pub struct ContactSpec {
     /// nodal normal (the paper; the only one without an obstacle).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub direction: Option<ContactDirection>,
+    /// A tangential law beside the normal one (docs/method.md §17); absent: frictionless.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction: Option<FrictionSpec>,
+}
+
+/// The friction law of a contact group, acting on the slip increment of a step
+/// (docs/method.md §17).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum FrictionSpec {
+    /// |σ_τ| ≤ F_b with F_b an expression of (x, y, z, t): stick below it, slip against the slip
+    /// increment at it.
+    Tresca {
+        bound: String,
+        #[serde(default = "default_friction_regularisation")]
+        regularisation: f64,
+    },
+    /// F_b = μ |σ_ν|, with σ_ν the node's normal contact pressure of the same step (implicit).
+    Coulomb {
+        coefficient: f64,
+        #[serde(default = "default_friction_regularisation")]
+        regularisation: f64,
+    },
+}
+
+fn default_friction_regularisation() -> f64 {
+    1e-8
+}
+
+impl FrictionSpec {
+    /// ε of the smoothed |Δu_τ|.
+    pub fn regularisation(&self) -> f64 {
+        match self {
+            FrictionSpec::Tresca { regularisation, .. } | FrictionSpec::Coulomb { regularisation, .. } => {
+                *regularisation
+            }
+        }
+    }
 }
 
 /// The direction in which a contact constraint and its law act.

@@ -49,7 +49,12 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
         "dirichlet" => vec!["group", "components", "value"],
         "force_control" => vec!["group", "component", "force"],
         "body_force" => vec!["value"],
-        "contact" => vec!["group", "bound", "law", "obstacle", "direction"],
+        "contact" => vec!["group", "bound", "law", "obstacle", "direction", "friction"],
+        "contact.friction" => match kind {
+            Some("tresca") => vec!["kind", "bound", "regularisation"],
+            Some("coulomb") => vec!["kind", "coefficient", "regularisation"],
+            _ => vec!["kind", "bound", "coefficient", "regularisation"],
+        },
         "contact.obstacle" => match kind {
             Some("plane") => vec!["kind", "point", "normal", "motion"],
             Some("circle") | Some("sphere") => vec!["kind", "centre", "radius", "motion"],
@@ -333,6 +338,9 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
         } else {
             "contact".to_string()
         };
+        if let Some(f) = &c.friction {
+            check_friction(f, origin, &at)?;
+        }
         if many && c.bound.is_none() && c.law.is_none() && c.obstacle.is_none() {
             // a section naming a group and nothing else would be left out without a word
             return Err(invalid(
@@ -811,4 +819,40 @@ mod tests {
         assert_eq!(super::distance("youngs_modulos", "youngs_modulus"), 1);
         assert_eq!(super::distance("", "abc"), 3);
     }
+}
+
+/// A friction table's values (docs/method.md §17): a finite coefficient μ ≥ 0 or a Tresca bound
+/// expression of (x, y, z, t), and a positive regularisation.
+fn check_friction(f: &super::FrictionSpec, origin: &str, at: &str) -> Result<(), SceneError> {
+    let eps = f.regularisation();
+    if !(eps.is_finite() && eps > 0.0) {
+        return Err(invalid(
+            origin,
+            &format!("{at}.friction.regularisation"),
+            eps,
+            "the width ε of the smoothed |Δu_τ| must be positive (default 1e-8)",
+        ));
+    }
+    match f {
+        super::FrictionSpec::Coulomb { coefficient, .. } => {
+            if !(coefficient.is_finite() && *coefficient >= 0.0) {
+                return Err(invalid(
+                    origin,
+                    &format!("{at}.friction.coefficient"),
+                    coefficient,
+                    "the friction coefficient μ must be finite and ≥ 0",
+                ));
+            }
+        }
+        super::FrictionSpec::Tresca { bound, .. } => {
+            compile_load(
+                origin,
+                &format!("{at}.friction.bound"),
+                bound,
+                &super::BODY_FORCE_VARIABLES,
+                &[0.0; 4],
+            )?;
+        }
+    }
+    Ok(())
 }

@@ -49,9 +49,48 @@ pub struct ContactSetup<const D: usize> {
     /// Γ₃ nodes whose normal never meets their obstacle (dropped): (node, group).
     pub never_touching: Vec<(usize, usize)>,
     pub settings: ContactSettings,
+    /// The tangential rows of the groups with friction (docs/method.md §17); None: frictionless.
+    pub friction: Option<Friction<D>>,
+}
+
+/// The friction law of one tangential row.
+#[derive(Clone, Debug)]
+pub enum FrictionLaw {
+    /// F_b(x, y, z, t), a traction: the row's bound force is w_p F_b(x_p, t).
+    Tresca(Expr),
+    /// μ: the row's bound force is μ λ_ν of its normal row in the same step.
+    Coulomb(f64),
+}
+
+/// The tangential rows of a contact with friction (docs/method.md §17): the condensation holds
+/// the normal rows first, then these.
+#[derive(Clone, Debug)]
+pub struct Friction<const D: usize> {
+    /// Every row the condensation holds: the m normal rows, then the tangential ones.
+    pub rows: ContactNodes<D>,
+    /// Per tangential row: its normal row.
+    pub normal_row: Vec<usize>,
+    /// Per tangential row: its law and its smoothing width ε.
+    pub laws: Vec<(FrictionLaw, f64)>,
+}
+
+impl<const D: usize> Friction<D> {
+    /// The unit tangent of a 2D normal ν: τ = (−ν_y, ν_x).
+    fn tangent(nu: [f64; D]) -> [f64; D] {
+        let mut t = [0.0; D];
+        t[0] = -nu[1];
+        t[1] = nu[0];
+        t
+    }
 }
 
 impl<const D: usize> ContactSetup<D> {
+    /// The rows the condensation holds: the normal rows, and with friction the tangential rows
+    /// after them (docs/method.md §17).
+    pub fn condensed_rows(&self) -> &ContactNodes<D> {
+        self.friction.as_ref().map_or(&self.nodes, |f| &f.rows)
+    }
+
     /// The law when every row has the same one (None without a law or with several).
     pub fn law(&self) -> Option<&ContactLaw> {
         self.laws.single()
@@ -105,6 +144,16 @@ impl<const D: usize> ContactSetup<D> {
             }
             for k in 0..D {
                 out[self.row_group[p]][k] -= rest * d[k];
+            }
+        }
+        // the friction forces of the tangential rows (docs/method.md §17)
+        if let Some(f) = &self.friction {
+            let m = self.nodes.len();
+            for (k, &p) in f.normal_row.iter().enumerate() {
+                let tau = f.rows.normals[m + k];
+                for c in 0..D {
+                    out[self.row_group[p]][c] -= state.force[m + k] * tau[c];
+                }
             }
         }
         out
@@ -323,6 +372,8 @@ pub fn build<const D: usize>(
     let any_obstacle = obstacles.iter().any(|o| o.is_some());
     let bound: Vec<f64> = gap.iter().zip(&layer).map(|(g, l)| g + l).collect();
     let terms: Vec<_> = kept.iter().map(|&k| rows.terms[k].clone()).collect();
+    let row_group: Vec<usize> = kept.iter().map(|&k| rows.group[k]).collect();
+    let friction = friction_rows(scene, &used, &nodes, &row_group, dofs, origin)?;
     Ok(Some(ContactSetup {
         laws: NodalLaws::new(laws, &terms),
         bound: bound.iter().any(|g| g.is_finite()).then_some(bound),
@@ -341,13 +392,89 @@ pub fn build<const D: usize>(
             })
             .collect(),
         group_tags,
-        row_group: kept.iter().map(|&k| rows.group[k]).collect(),
+        row_group,
         never_touching: rows.never_touching,
+        friction,
         nodes,
         settings: ContactSettings {
             tolerance: scene.solver.tolerance,
             max_iterations: scene.solver.max_iterations,
             dense_limit: scene.solver.dense_newton_limit,
         },
+    }))
+}
+
+/// The tangential rows of the contact groups that have a `friction` table (None when none has):
+/// in 2D one per normal row, along τ = (−ν_y, ν_x); a row whose tangential direction is
+/// prescribed cannot slip and is left out (docs/method.md §17).
+fn friction_rows<const D: usize>(
+    scene: &Scene,
+    used: &[usize],
+    nodes: &ContactNodes<D>,
+    row_group: &[usize],
+    dofs: &DofMap<D>,
+    origin: &str,
+) -> Result<Option<Friction<D>>, SolveError> {
+    let specs: Vec<Option<&scene::FrictionSpec>> = used.iter().map(|&i| scene.contact[i].friction.as_ref()).collect();
+    if specs.iter().all(|f| f.is_none()) {
+        return Ok(None);
+    }
+    if D != 2 {
+        return Err(SolveError::Setup(format!(
+            "{origin}: friction is solved in 2D so far (docs/method.md §17); in 3D the slip is a vector in the \
+             tangent plane, which the contact solve does not handle yet: remove the friction table or run a 2D model"
+        )));
+    }
+    let mut laws_of_group = Vec::with_capacity(specs.len());
+    for (g, spec) in specs.iter().enumerate() {
+        laws_of_group.push(match spec {
+            None => None,
+            Some(scene::FrictionSpec::Coulomb {
+                coefficient,
+                regularisation,
+            }) => Some((FrictionLaw::Coulomb(*coefficient), *regularisation)),
+            Some(scene::FrictionSpec::Tresca { bound, regularisation }) => {
+                let key = format!("{}.friction.bound", scene.contact_key(used[g]));
+                let e = Expr::parse(bound, &scene::BODY_FORCE_VARIABLES)
+                    .map_err(|e| SolveError::Setup(format!("{origin}: {key} = \"{bound}\": {e}")))?;
+                Some((FrictionLaw::Tresca(e), *regularisation))
+            }
+        });
+    }
+    let m = nodes.len();
+    let with: Vec<usize> = (0..m).filter(|&p| laws_of_group[row_group[p]].is_some()).collect();
+    let all_nodes: Vec<usize> = nodes
+        .nodes
+        .iter()
+        .copied()
+        .chain(with.iter().map(|&p| nodes.nodes[p]))
+        .collect();
+    let weights: Vec<f64> = nodes
+        .weights
+        .iter()
+        .copied()
+        .chain(with.iter().map(|&p| nodes.weights[p]))
+        .collect();
+    let directions: Vec<[f64; D]> = nodes
+        .normals
+        .iter()
+        .copied()
+        .chain(with.iter().map(|&p| Friction::<D>::tangent(nodes.normals[p])))
+        .collect();
+    let (rows, kept) = ContactNodes::from_rows(&all_nodes, &weights, &directions, dofs);
+    if kept[..m.min(kept.len())] != (0..m).collect::<Vec<_>>()[..] {
+        return Err(SolveError::Setup(format!(
+            "{origin}: the contact rows changed when their tangential rows were added (a bug: please report it)"
+        )));
+    }
+    let tangential: Vec<usize> = kept[m..].iter().map(|&k| with[k - m]).collect();
+    let laws = tangential
+        .iter()
+        .map(|&p| laws_of_group[row_group[p]].clone().expect("a row with friction"))
+        .collect();
+    Ok(Some(Friction {
+        rows,
+        normal_row: tangential,
+        laws,
     }))
 }

@@ -133,7 +133,7 @@ impl<const D: usize> FaerBackend<D> {
         let estimate = super::memory::MemoryEstimate::new(sim, &symbolic, stats.matrix_nonzeros);
         stats.predicted_peak_bytes = Some(estimate.total());
         estimate
-            .check_fits(sim.contact.as_ref().map_or(0, |c| c.nodes.len()))
+            .check_fits(sim.contact.as_ref().map_or(0, |c| c.condensed_rows().len()))
             .map_err(|e| SolveError::OutOfMemory(format!("{}: {e}", sim.mesh.path.display())))?;
         let operator = StepOperator::factored(sim, &symbolic, system, counters, stats)?;
         self.k_a = Some(k_a);

@@ -53,11 +53,11 @@ impl MemoryEstimate {
         let matrices = (16.0 * matrix_entries as f64 * (MATRIX_COPIES + channels.saturating_sub(1) as f64)) as u64;
         let mut parts = vec![("factor", factor), ("matrices", matrices)];
         if let Some(c) = &sim.contact {
-            let m = c.nodes.len() as u64;
+            let m = c.condensed_rows().len() as u64;
             let responses = match sim.condensation {
                 CondensationKind::SplitSweeps => (
                     "G = L⁻¹PCᵀ",
-                    2 * 8 * forward_columns_entries(analysis, c.nodes.rows()) as u64,
+                    2 * 8 * forward_columns_entries(analysis, c.condensed_rows().rows()) as u64,
                 ),
                 CondensationKind::StoredResponses | CondensationKind::RecoverySolve => ("Z = K⁻¹Cᵀ", 8 * n * m),
             };

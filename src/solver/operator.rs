@@ -93,12 +93,12 @@ impl StepOperator {
                     || -> Result<Box<dyn Condensation>, String> {
                         Ok(match sim.condensation {
                             CondensationKind::SplitSweeps => {
-                                Box::new(SplitSweeps::new(&c.nodes, factor.clone(), counters)?)
+                                Box::new(SplitSweeps::new(c.condensed_rows(), factor.clone(), counters)?)
                             }
                             kind @ (CondensationKind::StoredResponses | CondensationKind::RecoverySolve) => {
                                 let solver: Arc<dyn LinearSolver> = factor.clone();
                                 let keep = kind == CondensationKind::StoredResponses;
-                                Box::new(StoredResponses::new(&c.nodes, solver, keep, counters)?)
+                                Box::new(StoredResponses::new(c.condensed_rows(), solver, keep, counters)?)
                             }
                         })
                     },
@@ -113,7 +113,7 @@ impl StepOperator {
         let rigid = match rigid_columns {
             Some(columns) => Some(timed(&mut stats.phases.condensation, || {
                 let contact = match (&sim.contact, condensed.as_mut()) {
-                    (Some(c), Some(op)) => Some((&c.nodes, op)),
+                    (Some(c), Some(op)) => Some((c.condensed_rows(), op)),
                     _ => None,
                 };
                 super::rigid::RigidResponses::new(

@@ -209,6 +209,30 @@ impl Plan {
                 },
             });
         }
+        if let Some(f) = sim.contact.as_ref().and_then(|c| c.friction.as_ref()) {
+            let (coulomb, tresca) = f.laws.iter().fold((0, 0), |(c, t), (l, _)| match l {
+                crate::solver::contact::FrictionLaw::Coulomb(_) => (c + 1, t),
+                crate::solver::contact::FrictionLaw::Tresca(_) => (c, t + 1),
+            });
+            let all = f.rows.len();
+            effects.push(Effect {
+                name: "friction",
+                detail: format!(
+                    "{} tangential rows: {coulomb} Coulomb, {tresca} Tresca, on the slip increment of each step",
+                    f.normal_row.len()
+                ),
+                cost: format!(
+                    "the condensed contact problem grows to {all} rows (normal + tangential; {:.1} MiB dense), still \
+                     one solve per step{}",
+                    (2 * all * all * 8) as f64 / 1048576.0,
+                    if coulomb > 0 {
+                        "; Coulomb's bound μλ_ν by a fixed point of warm-started contact solves"
+                    } else {
+                        ""
+                    }
+                ),
+            });
+        }
         if sim.memory.is_some() {
             factorisations += 1; // possibly K_A for step 0
         }

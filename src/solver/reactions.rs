@@ -102,7 +102,7 @@ impl Reactions {
         }
         let mut force = vec![0.0; u.len()];
         if let (Some(c), Some(state)) = (&sim.contact, contact) {
-            c.nodes.add_forces(&state.force, &mut force);
+            c.condensed_rows().add_forces(&state.force, &mut force);
         }
         for (rk, (j, _)) in r.iter_mut().zip(&k_a.columns) {
             *rk += force[*j] - load[*j];

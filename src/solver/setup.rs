@@ -215,7 +215,7 @@ impl<const D: usize> Simulation<D> {
     pub fn unknowns_ordered_last(&self) -> Vec<usize> {
         match &self.contact {
             Some(c) if D == 3 && c.nodes.len() <= 2000 => {
-                let mut dofs: Vec<usize> = c.nodes.rows().iter().flatten().map(|&(d, _)| d).collect();
+                let mut dofs: Vec<usize> = c.condensed_rows().rows().iter().flatten().map(|&(d, _)| d).collect();
                 dofs.sort_unstable();
                 dofs.dedup();
                 dofs

@@ -61,12 +61,12 @@ impl StepOperator {
         };
         match (&sim.contact, self.condensed.as_mut(), state) {
             (Some(setup), Some(op), Some(state)) => {
-                let mut d = vec![0.0; setup.nodes.len()];
+                let mut d = vec![0.0; setup.condensed_rows().len()];
                 timed(&mut stats.phases.forward_sweep, || {
                     op.free_normal(rhs, &mut d, counters)
                 });
                 if let Some(g) = offset {
-                    setup.nodes.prescribed_offset(g, &mut d);
+                    setup.condensed_rows().prescribed_offset(g, &mut d);
                 }
                 // (a backend may solve on one process and share the result)
                 let outcome = timed(&mut stats.phases.contact, || {
@@ -156,7 +156,7 @@ impl Reactions {
         // Cᵀλ at the prescribed unknowns: the prescribed parts of the contact rows.
         let mut force: std::collections::HashMap<usize, f64> = std::collections::HashMap::new();
         if let (Some(c), Some(state)) = (&sim.contact, contact) {
-            for (l, fixed) in state.force.iter().zip(c.nodes.prescribed_rows()) {
+            for (l, fixed) in state.force.iter().zip(c.condensed_rows().prescribed_rows()) {
                 for &(d, coefficient) in fixed {
                     *force.entry(d).or_insert(0.0) += l * coefficient;
                 }
@@ -191,22 +191,39 @@ fn contact_solve<const D: usize>(
         Some((o, g)) => (Some(&o[..]), Some(&g[..])),
         None => (setup.gap.as_deref(), setup.bound.as_deref()),
     };
-    let solver = ActiveSetSolver {
-        operator: op.stiffness(),
-        laws: &setup.laws,
-        offset,
-        bound,
-        settings: setup.settings,
-        singular: op_singular,
+    let solved = match &setup.friction {
+        // with friction: the tangential rows join the solve (docs/method.md §17)
+        Some(friction) => super::friction::solve(
+            sim,
+            setup,
+            friction,
+            op.stiffness(),
+            super::friction::NormalRows {
+                offset,
+                bound,
+                singular: op_singular,
+            },
+            step,
+            q,
+            state,
+        ),
+        None => ActiveSetSolver {
+            operator: op.stiffness(),
+            laws: &setup.laws,
+            offset,
+            bound,
+            settings: setup.settings,
+            singular: op_singular,
+        }
+        .solve_forces(q, state),
     };
-    let failure = match solver.solve_forces(q, state) {
+    let failure = match solved {
         Ok(outcome) => return Ok(outcome),
         Err(f) => f,
     };
     // A body only its contact holds, every node separated when the solve gave up: the load
     // pulls it off its support, and no contact force can balance that (docs/method.md §7.7).
-    let separated =
-        (0..state.normal_displacement.len()).all(|p| state.normal_displacement[p] <= offset.map_or(0.0, |o| o[p]));
+    let separated = (0..setup.nodes.len()).all(|p| state.normal_displacement[p] <= offset.map_or(0.0, |o| o[p]));
     if op_singular && separated {
         let mut motions: Vec<String> = sim.dirichlet.held_by_contact.clone();
         motions.extend(

@@ -135,13 +135,18 @@ impl<'s, const D: usize> Stepper<'s, D> {
         let n_dof = backend.held_len(sim);
         if let (Some(op), Some(c)) = (&main.condensed, &sim.contact) {
             if !c.laws.is_empty() {
-                let weights = c.laws.monotonicity_weights(c.nodes.len());
+                // (the tangential rows of friction, after the normal ones, have no normal law)
+                let mut weights = c.laws.monotonicity_weights(c.nodes.len());
+                weights.resize(c.condensed_rows().len(), 0.0);
                 stats.smallness = Some(op.stiffness().trace_constant(&weights));
             }
         }
         let history = sim.memory.as_ref().map(|m| History::new(m, n_dof, sim.time.step()));
         let n_channels = memory_diagonal.len();
-        let contact = sim.contact.as_ref().map(|c| ContactState::new(c.nodes.len()));
+        let contact = sim
+            .contact
+            .as_ref()
+            .map(|c| ContactState::new(c.condensed_rows().len()));
         let time_dependent_loads = sim.loads.is_time_dependent();
         Ok(Stepper {
             sim,

@@ -1,0 +1,177 @@
+//! The contact solve of a step with friction (docs/method.md §17). The condensation holds the
+//! normal rows and, after them, one tangential row per normal row of a group with friction
+//! (2D: along τ = (−ν_y, ν_x)). On a tangential row the law acts on the slip increment
+//! Δu_τ = u_τ − u_τ(t_{n−1}) of the step:
+//!
+//! ```text
+//!   j_τ(u_τ) = F · ρ_ε(u_τ − u_τ(t_{n−1})),   ρ_ε the smoothed |·| of docs/method.md §4.2,
+//! ```
+//!
+//! F the row's bound force: w_p F_b(x_p, t_n) (Tresca) or μ λ_ν,p (Coulomb, λ_ν,p the normal
+//! force of the same step). That is the odd law with a constant profile μ ≡ 1, scale F and the
+//! origin u_τ(t_{n−1}): the tangential rows join the same globalised active-set solve as the
+//! normal ones, in one condensed problem of size m + m_τ, still after the step's one forward
+//! sweep. Tresca is a potential (one solve); Coulomb's F depends on the solution and is found by
+//! a fixed point F ← μ λ_ν, each round warm-started from the last.
+
+use super::contact::{ContactSetup, Friction, FrictionLaw};
+use super::setup::Simulation;
+use crate::contact::active_set::{ActiveSetSolver, ContactFailure, ContactOutcome, ContactState};
+use crate::contact::{ComplianceProfile, ContactLaw, LawTerm, NodalLaws, NormalStiffness, PiecewiseLinear, Symmetry};
+
+/// Rounds of the Coulomb fixed point before the step fails.
+const COULOMB_ROUNDS: usize = 50;
+
+/// The normal rows' law origins and bounds of the step, and the solver's settings.
+pub(super) struct NormalRows<'a> {
+    pub offset: Option<&'a [f64]>,
+    pub bound: Option<&'a [f64]>,
+    pub singular: bool,
+}
+
+/// Solves the step's contact problem with friction for the free contact forces `q` over all
+/// rows, warm-started from `state` (whose tangential displacements are the previous step's).
+pub(super) fn solve<const D: usize>(
+    sim: &Simulation<D>,
+    setup: &ContactSetup<D>,
+    friction: &Friction<D>,
+    operator: &dyn NormalStiffness,
+    normal: NormalRows,
+    step: usize,
+    q: &[f64],
+    state: &mut ContactState,
+) -> Result<ContactOutcome, ContactFailure> {
+    let t = sim.time.time(step);
+    let m = setup.nodes.len();
+    let all = friction.rows.len();
+    // origins: the normal rows' gaps, the tangential rows' displacement of the previous step
+    let offset: Vec<f64> = (0..all)
+        .map(|r| {
+            if r < m {
+                normal.offset.map_or(0.0, |o| o[r])
+            } else {
+                state.normal_displacement[r]
+            }
+        })
+        .collect();
+    let bound: Option<Vec<f64>> = normal
+        .bound
+        .map(|g| (0..all).map(|r| if r < m { g[r] } else { f64::INFINITY }).collect());
+    // the laws: the normal rows' own, then one odd law of constant profile per width ε
+    let mut laws = setup.laws.laws.clone();
+    let mut law_of_width: Vec<(f64, usize)> = Vec::new();
+    let mut tangential_law = Vec::with_capacity(friction.laws.len());
+    for (_, eps) in &friction.laws {
+        let index = match law_of_width.iter().find(|(e, _)| e == eps) {
+            Some(&(_, i)) => i,
+            None => {
+                laws.push(ContactLaw {
+                    scale: 1.0,
+                    profile: ComplianceProfile::PiecewiseLinear {
+                        table: PiecewiseLinear::new(&[(0.0, 1.0)]).expect("a constant profile"),
+                    },
+                    symmetry: Symmetry::Odd,
+                    epsilon: *eps,
+                });
+                law_of_width.push((*eps, laws.len() - 1));
+                laws.len() - 1
+            }
+        };
+        tangential_law.push(index);
+    }
+    // the bound force of each tangential row, given the normal forces (Coulomb)
+    let bound_forces = |normal_force: &[f64]| -> Result<Vec<f64>, String> {
+        friction
+            .normal_row
+            .iter()
+            .zip(&friction.laws)
+            .map(|(&p, (law, _))| match law {
+                FrictionLaw::Coulomb(mu) => Ok(mu * normal_force[p].max(0.0)),
+                FrictionLaw::Tresca(e) => {
+                    let x = sim.mesh.points[setup.nodes.nodes[p]];
+                    let mut vars = [0.0; 4];
+                    vars[..D].copy_from_slice(&x);
+                    vars[3] = t;
+                    let f = e.eval(&vars);
+                    if f.is_finite() && f >= 0.0 {
+                        Ok(setup.nodes.weights[p] * f)
+                    } else {
+                        Err(format!(
+                            "the Tresca bound \"{}\" is {f} at {}, t = {t}: it must be finite and ≥ 0",
+                            e.source(),
+                            crate::mesh::fmt_point(x)
+                        ))
+                    }
+                }
+            })
+            .collect()
+    };
+    let rows_with = |forces: &[f64]| -> NodalLaws {
+        let rows: Vec<Vec<LawTerm>> = (0..all)
+            .map(|r| {
+                if r < m {
+                    setup.laws.terms(r).to_vec()
+                } else {
+                    let k = r - m;
+                    vec![LawTerm {
+                        law: tangential_law[k],
+                        weight: forces[k],
+                        group: setup.row_group[friction.normal_row[k]],
+                    }]
+                }
+            })
+            .collect();
+        NodalLaws::new(laws.clone(), &rows)
+    };
+    let failure = |reason: String, outcome: ContactOutcome| ContactFailure {
+        outcome,
+        reason,
+        smallest_residual: f64::INFINITY,
+    };
+    let coulomb = friction.laws.iter().any(|(l, _)| matches!(l, FrictionLaw::Coulomb(_)));
+    let mut normal_force: Vec<f64> = state.force[..m].to_vec();
+    let mut total = ContactOutcome::default();
+    for _ in 0..COULOMB_ROUNDS {
+        let forces = bound_forces(&normal_force).map_err(|reason| failure(reason, total))?;
+        let nodal = rows_with(&forces);
+        let solver = ActiveSetSolver {
+            operator,
+            laws: &nodal,
+            offset: Some(&offset),
+            bound: bound.as_deref(),
+            settings: setup.settings,
+            singular: normal.singular,
+        };
+        let outcome = solver.solve_forces(q, state).map_err(|mut f| {
+            f.outcome.iterations += total.iterations;
+            f
+        })?;
+        total.iterations += outcome.iterations;
+        total.line_search_cuts += outcome.line_search_cuts;
+        total.convexified += outcome.convexified;
+        total.iterative += outcome.iterative;
+        total.factorisations += outcome.factorisations;
+        total.residual = outcome.residual;
+        total.active = outcome.active;
+        if !coulomb {
+            return Ok(total);
+        }
+        // the fixed point F = μ λ_ν has settled when the normal forces stop moving
+        let scale = state.force[..m].iter().fold(f64::MIN_POSITIVE, |a, b| a.max(b.abs()));
+        let change = state.force[..m]
+            .iter()
+            .zip(&normal_force)
+            .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+        normal_force.copy_from_slice(&state.force[..m]);
+        if change <= setup.settings.tolerance * scale {
+            return Ok(total);
+        }
+    }
+    Err(failure(
+        format!(
+            "the Coulomb fixed point F_b = μ λ_ν did not settle in {COULOMB_ROUNDS} rounds (the normal forces still \
+             change with the friction forces: a large μ against a compliant body)"
+        ),
+        total,
+    ))
+}

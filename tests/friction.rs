@@ -1,0 +1,120 @@
+//! Friction (docs/method.md §17): Tresca and Coulomb on the slip increment of each step, in the
+//! one condensed contact solve of the step.
+
+mod common;
+
+use common::{rectangle_with_sides, scene};
+use hvi::app::solve_in_memory;
+use hvi::mesh::read_mesh;
+use hvi::mesh::structured::CellShape;
+use hvi::scene::Scene;
+
+const MU: f64 = 0.3;
+/// The top's horizontal displacement per step once pressed: 1e-3, so that the smoothing of |Δu_τ|
+/// (ε = 1e-8) changes a sliding node's friction force by ε²/(2Δ²) = 5e-11 of it.
+const STEPS: usize = 10;
+const SLIDE: f64 = 0.01;
+
+/// A block (0, 1) × (0, 0.5) on a rigid plane (Gamma3: u_ν ≤ 0), its top (Gamma2_top) pressed
+/// down by 0.002 from step 0 on and moved sideways by 0.01 t.
+fn dragged(friction: &str) -> String {
+    format!(
+        r#"
+[material]
+plane = "strain"
+youngs_modulus = 1.0
+poisson_ratio = 0.3
+
+[time]
+final_time = 1.0
+steps = {STEPS}
+
+[[dirichlet]]
+group = "Gamma2_top"
+components = ["x", "y"]
+value = ["{SLIDE}*t", "-0.002"]
+
+[contact]
+bound = "0"
+friction = {friction}
+
+[solver]
+tolerance = 1e-13
+"#
+    )
+}
+
+/// The dragged block under Coulomb (μ = 0.3) and Tresca friction: once the whole base slides,
+/// the total friction force is μ times the total normal force (Coulomb) or F_b times the base's
+/// length (Tresca, which acts at every node in contact or not), to 1e-10, it opposes the slip,
+/// and every base node slips by the top's increment (the state only translates).
+#[test]
+fn a_dragged_block_slides_with_the_friction_force_of_its_law() {
+    let f_b = 0.0005;
+    for (name, friction) in [
+        ("coulomb", format!("{{ kind = \"coulomb\", coefficient = {MU} }}")),
+        ("tresca", format!("{{ kind = \"tresca\", bound = \"{f_b}\" }}")),
+    ] {
+        let mesh = rectangle_with_sides(1.0, 0.5, 16, 8, CellShape::Quad);
+        let (sim, _, sink) = solve_in_memory(&scene(&dragged(&friction)), mesh).unwrap_or_else(|e| panic!("{e}"));
+        let c = sim.contact.as_ref().unwrap();
+        let f = c.friction.as_ref().expect("friction rows");
+        let m = c.nodes.len();
+        assert_eq!(f.normal_row.len(), m, "{name}: one tangential row per base node");
+        let length: f64 = c.nodes.weights.iter().sum();
+        // the last two steps: fully sliding
+        for pair in sink.steps[sink.steps.len() - 2..].windows(1) {
+            let step = &pair[0];
+            let state = step.contact.as_ref().unwrap();
+            let normal: f64 = state.force[..m].iter().sum();
+            let tangential: f64 = state.force[m..].iter().sum();
+            let expected = if name == "coulomb" { MU * normal } else { f_b * length };
+            assert!(normal > 0.0, "{name}: the block is pressed");
+            assert!(
+                (tangential - expected).abs() <= 1e-10 * expected,
+                "{name} t = {}: friction {tangential:e} against {expected:e}",
+                step.time
+            );
+        }
+        // the slip increment of the last step at every base node (τ = (1, 0) on the base)
+        let (a, b) = (&sink.steps[STEPS - 1], &sink.steps[STEPS]);
+        let increment = SLIDE / STEPS as f64;
+        for (k, &p) in c.nodes.nodes.iter().enumerate() {
+            let slip = b.displacement[2 * p] - a.displacement[2 * p];
+            assert!(
+                (slip - increment).abs() <= 1e-9 * increment,
+                "{name}: base node {k} slipped {slip:e}, the top {increment:e}"
+            );
+        }
+    }
+}
+
+/// μ = 0 and F_b = 0 give the frictionless run's numbers on the 2D Hertz block (bound), to
+/// 1e-14 of the largest displacement: the tangential rows enlarge the condensed problem, so the
+/// arithmetic differs at round-off only (measured 1.7e-15).
+#[test]
+fn zero_friction_is_the_frictionless_run() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let hertz = std::fs::read_to_string(root.join("examples/gallery/hertz_2d/hertz_2d.toml")).unwrap();
+    let with = |text: &str, friction: &str| -> Scene {
+        let t = text.replace("[contact]", &format!("[contact]\nfriction = {friction}"));
+        Scene::from_toml_str(&t, "zero friction").unwrap_or_else(|e| panic!("{e}"))
+    };
+    let mesh = || read_mesh::<2>(&root.join("examples/gallery/hertz_2d/hertz_2d_h1.msh")).unwrap();
+    let plain = Scene::from_toml_str(&hertz, "hertz").unwrap();
+    let (_, _, reference) = solve_in_memory(&plain, mesh()).unwrap();
+    for friction in [
+        "{ kind = \"coulomb\", coefficient = 0.0 }",
+        "{ kind = \"tresca\", bound = \"0\" }",
+    ] {
+        let (_, _, run) = solve_in_memory(&with(&hertz, friction), mesh()).unwrap_or_else(|e| panic!("{e}"));
+        let (u, v) = (
+            &reference.steps.last().unwrap().displacement,
+            &run.steps.last().unwrap().displacement,
+        );
+        let scale = u.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        let diff = u.iter().zip(v).fold(0.0f64, |a, (x, y)| a.max((x - y).abs())) / scale;
+        eprintln!("Hertz 2D, {friction}: max |Δu| / max |u| = {diff:.1e}");
+        assert!(diff <= 1e-14, "{friction}: {diff:e}");
+    }
+}
