@@ -182,3 +182,133 @@ fn cattaneo_mindlin_stick_zone_in_2d() {
     // the coupling's shift stays a fraction of the zone (it would be 0 at β = 0)
     assert!(shift.abs() < 0.5 * half, "the stick zone is shifted by {shift}");
 }
+
+/// Slip-dependent Coulomb friction (slip weakening μ(s) = 0.2 + 0.1 e^{−s/0.005}, s the node's
+/// accumulated slip including the step's own increment: implicit): at every step each base row
+/// that slips by more than 1e-4 carries |λ_τ| = μ(s) λ_ν to 1e-8 (below that the smoothing of
+/// |Δu_τ| with ε = 1e-8 is felt: ε²/(2Δ²) = 5e-9 at Δ = 1e-4; the fixed point's and the solve's
+/// tolerances are 1e-13), and once the whole base slides the total friction is Σ μ(s_k) λ_ν,k
+/// (the rows began to slip at different steps, so their s differ by what each slipped before)
+/// while every s grows by the step's slip, which exceeds the top's increment (weakening releases
+/// elastic shear).
+#[test]
+fn slip_weakening_friction_follows_mu_of_the_accumulated_slip() {
+    let mu = |s: f64| 0.2 + 0.1 * (-s / 0.005).exp();
+    let text = dragged("{ kind = \"coulomb\", coefficient = \"0.2 + 0.1*exp(-s/0.005)\" }");
+    let mesh = rectangle_with_sides(1.0, 0.5, 16, 8, CellShape::Quad);
+    let (sim, _, sink) = solve_in_memory(&scene(&text), mesh).unwrap_or_else(|e| panic!("{e}"));
+    let c = sim.contact.as_ref().unwrap();
+    let f = c.friction.as_ref().unwrap();
+    let m = c.nodes.len();
+    let mut slipping_steps = 0;
+    for step in &sink.steps[1..] {
+        let state = step.contact.as_ref().unwrap();
+        let rows = &state.friction;
+        let mut all_slip = true;
+        for (k, &p) in f.normal_row.iter().enumerate() {
+            if rows.slip[k].abs() >= 1e-4 {
+                assert_eq!(
+                    rows.status[k], 2,
+                    "t = {}: row {k} slips but is not marked so",
+                    step.time
+                );
+                let expected = mu(rows.accumulated[k]) * state.force[p];
+                assert!(
+                    (state.force[m + k].abs() - expected).abs() <= 1e-8 * expected,
+                    "t = {}: row {k} carries {:e}, μ(s) λ_ν = {expected:e}",
+                    step.time,
+                    state.force[m + k]
+                );
+            } else {
+                all_slip = false;
+            }
+        }
+        if all_slip {
+            slipping_steps += 1;
+            // the rows began to slip at different steps, so each has its own s
+            let expected: f64 = f
+                .normal_row
+                .iter()
+                .enumerate()
+                .map(|(k, &p)| mu(rows.accumulated[k]) * state.force[p])
+                .sum();
+            let tangential: f64 = state.force[m..].iter().sum();
+            assert!(
+                (tangential - expected).abs() <= 1e-8 * tangential,
+                "t = {}: friction {tangential:e} against Σ μ(s) λ_ν = {expected:e}",
+                step.time
+            );
+        }
+    }
+    assert!(
+        slipping_steps >= 3,
+        "the base slides fully for only {slipping_steps} steps"
+    );
+    let last = &sink.steps[STEPS].contact.as_ref().unwrap().friction;
+    let before = &sink.steps[STEPS - 1].contact.as_ref().unwrap().friction;
+    // s grows by the step's |Δu_τ|, which exceeds the top's increment: the weakening friction
+    // releases some of the base's elastic shear every step
+    for k in 0..f.normal_row.len() {
+        let grown = last.accumulated[k] - before.accumulated[k];
+        assert!(
+            (grown - last.slip[k].abs()).abs() <= 1e-15,
+            "row {k}: s grew by {grown:e}"
+        );
+        assert!(
+            last.slip[k] > SLIDE / STEPS as f64,
+            "row {k}: slip {:e} under weakening",
+            last.slip[k]
+        );
+    }
+}
+
+/// The command line on the Cattaneo–Mindlin scene: `hvi check` shows the friction plan,
+/// gamma3.csv has the friction columns with stick (1) and slip (2) rows at T, and the contact
+/// dataset carries the friction fields.
+#[test]
+fn friction_outputs_from_the_command_line() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/gallery/cattaneo_2d");
+    let (mesh, scene_file) = (root.join("cattaneo_2d.msh"), root.join("cattaneo_2d.toml"));
+    let check = common::hvi_ok(&["check", mesh.to_str().unwrap(), "--scene", scene_file.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&check.stdout);
+    assert!(text.contains("friction") && text.contains("Coulomb"), "{text}");
+    let out = tempfile::tempdir().unwrap();
+    common::hvi_ok(&[
+        "solve",
+        mesh.to_str().unwrap(),
+        "--scene",
+        scene_file.to_str().unwrap(),
+        "--out",
+        out.path().to_str().unwrap(),
+    ]);
+    let csv = std::fs::read_to_string(out.path().join("gamma3.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let column = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .unwrap_or_else(|| panic!("{name}: {header:?}"))
+    };
+    let (status, time) = (column("friction_status"), column("time"));
+    for name in ["u_tau", "slip", "force_tau", "friction_bound", "accumulated_slip"] {
+        column(name);
+    }
+    let last: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|r| r[time] == "1")
+        .collect();
+    assert!(last.iter().any(|r| r[status] == "1"), "no stick row at T");
+    assert!(last.iter().any(|r| r[status] == "2"), "no slip row at T");
+    // (the appended data are binary: the field names are in the XML head)
+    let vtp = String::from_utf8_lossy(&std::fs::read(out.path().join("contact_00002.vtp")).unwrap()).into_owned();
+    for field in [
+        "\"slip\"",
+        "\"friction_force\"",
+        "\"friction_status\"",
+        "\"accumulated_slip\"",
+    ] {
+        assert!(vtp.contains(field), "{field} missing from the contact dataset");
+    }
+}

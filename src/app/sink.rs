@@ -183,6 +183,10 @@ impl<const D: usize> FileSink<D> {
                 let mut columns = vec!["time", "x", "y", "z"];
                 columns.truncate(1 + D);
                 columns.extend(["u_nu", "force", "pressure", "status", "group"]);
+                if sim.contact.as_ref().is_some_and(|c| c.friction.is_some()) {
+                    // docs/method.md §17: along τ = (−ν_y, ν_x)
+                    columns.extend(FRICTION_COLUMNS);
+                }
                 manifest.add("gamma3.csv")?;
                 Some(CsvTable::create(&dir.join("gamma3.csv"), &columns)?)
             }
@@ -315,6 +319,7 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
             let mut normal = vec![0.0; c.nodes.len()];
             c.nodes.normal_displacements(view.displacement, &mut normal);
             let mut rows = Vec::with_capacity(c.nodes.len());
+            let tangential = c.friction.as_ref().map_or(Vec::new(), |f| f.row_of(c.nodes.len()));
             for (k, &p) in c.nodes.nodes.iter().enumerate() {
                 let pressure = state.force[k] / c.nodes.weights[k];
                 let mut row = vec![view.time];
@@ -329,6 +334,13 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
                     f64::from(state.status[k].code()),
                     f64::from(tag),
                 ]);
+                if let Some(f) = &c.friction {
+                    row.extend(friction_columns(
+                        f.rows.len() - f.normal_row.len(),
+                        tangential[k],
+                        state,
+                    ));
+                }
                 rows.push(row);
             }
             if let Some(csv) = &mut self.gamma3 {
@@ -499,6 +511,27 @@ fn write_contact_frame<const D: usize>(
         .iter()
         .flat_map(|&p| std::array::from_fn::<f64, 3, _>(|d| if d < D { nodal[p][d] } else { 0.0 }))
         .collect();
+    // friction (docs/method.md §17): the slip increment and the friction force on the body as
+    // vectors along each row's tangent, the bound force, the accumulated slip and the status
+    let friction_fields = c.friction.as_ref().map(|f| {
+        let m = c.nodes.len();
+        let (mut slip, mut force_tau) = (vec![0.0; 3 * n], vec![0.0; 3 * n]);
+        let (mut bound, mut accumulated, mut fstatus) = (vec![f64::NAN; n], vec![f64::NAN; n], vec![-1i32; n]);
+        for (k, &p) in f.normal_row.iter().enumerate() {
+            let (Some(i), true) = (b.local(c.nodes.nodes[p]), state.friction.slip.len() > k) else {
+                continue;
+            };
+            let tau = f.rows.normals[m + k];
+            for d in 0..D {
+                slip[3 * i + d] = state.friction.slip[k] * tau[d];
+                force_tau[3 * i + d] = -state.force[m + k] * tau[d];
+            }
+            bound[i] = state.friction.bound[k];
+            accumulated[i] = state.friction.accumulated[k];
+            fstatus[i] = state.friction.status[k];
+        }
+        (slip, force_tau, bound, accumulated, fstatus)
+    });
     let mut point_fields = vec![Field::f64("u_nu", 1, &u_nu)];
     if let Some(gap) = &gap {
         point_fields.push(Field::f64("gap", 1, gap));
@@ -511,6 +544,15 @@ fn write_contact_frame<const D: usize>(
         Field::f64("normal", 3, &b.normals),
         Field::i32("group", 1, &b.node_groups),
     ]);
+    if let Some((slip, force_tau, bound, accumulated, fstatus)) = &friction_fields {
+        point_fields.extend([
+            Field::f64("slip", 3, slip),
+            Field::f64("friction_force", 3, force_tau),
+            Field::f64("friction_bound", 1, bound),
+            Field::f64("accumulated_slip", 1, accumulated),
+            Field::i32("friction_status", 1, fstatus),
+        ]);
+    }
     let frame = SurfaceFrame {
         step: view.step,
         time: view.time,
@@ -521,4 +563,30 @@ fn write_contact_frame<const D: usize>(
     };
     cs.series.write_surface_frame(&frame)?;
     Ok(())
+}
+
+/// gamma3.csv's friction columns (docs/method.md §17).
+const FRICTION_COLUMNS: [&str; 6] = [
+    "u_tau",
+    "slip",
+    "force_tau",
+    "friction_bound",
+    "accumulated_slip",
+    "friction_status",
+];
+
+/// The friction columns of normal row `k` with tangential row `tangential` (NaN and status −1
+/// where the row has none: its group has no friction, or its tangential direction is prescribed).
+fn friction_columns(m: usize, tangential: Option<usize>, state: &ContactState) -> [f64; 6] {
+    match tangential {
+        Some(t) if state.friction.slip.len() > t => [
+            state.normal_displacement[m + t],
+            state.friction.slip[t],
+            state.force[m + t],
+            state.friction.bound[t],
+            state.friction.accumulated[t],
+            f64::from(state.friction.status[t]),
+        ],
+        _ => [f64::NAN, f64::NAN, f64::NAN, f64::NAN, f64::NAN, -1.0],
+    }
 }

@@ -83,6 +83,34 @@ pub struct ContactState {
     /// The last factorisation of the Newton matrix, kept above `dense_limit` free nodes as the
     /// preconditioner of later Newton systems (docs/method.md §9.2).
     pub newton_factor: KeptFactor,
+    /// Per tangential row of a contact with friction, after the step (empty without friction;
+    /// docs/method.md §17).
+    pub friction: FrictionRows,
+}
+
+/// What a step leaves on the tangential rows of a contact with friction (docs/method.md §17):
+/// row k belongs to the normal row `Friction::normal_row[k]`.
+#[derive(Clone, Debug, Default)]
+pub struct FrictionRows {
+    /// Δu_τ, the slip increment of the step along the row's tangent.
+    pub slip: Vec<f64>,
+    /// Σ |Δu_τ| over the steps so far.
+    pub accumulated: Vec<f64>,
+    /// The bound force F of the row (w_p F_b for Tresca, μ λ_ν for Coulomb).
+    pub bound: Vec<f64>,
+    /// [`FrictionStatus`] codes.
+    pub status: Vec<i32>,
+}
+
+/// Where a tangential row ends a step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrictionStatus {
+    /// Its normal row is separated.
+    Separated = 0,
+    /// |λ_τ| below the bound force: no slip.
+    Stick = 1,
+    /// |λ_τ| at the bound force: slipping against Δu_τ.
+    Slip = 2,
 }
 
 impl ContactState {
@@ -95,6 +123,7 @@ impl ContactState {
             bound_force: vec![0.0; m],
             status: vec![NodeStatus::Separated; m],
             newton_factor: KeptFactor::default(),
+            friction: FrictionRows::default(),
         }
     }
 }

@@ -10,7 +10,7 @@ pub mod nodal;
 pub mod obstacle;
 pub mod rows;
 
-pub use active_set::{ActiveSetSolver, ContactOutcome, ContactSettings, NodeStatus};
+pub use active_set::{ActiveSetSolver, ContactOutcome, ContactSettings, FrictionRows, FrictionStatus, NodeStatus};
 pub use condensed::{Condensation, ContactNodes, DenseNormalStiffness, NormalStiffness, SplitSweeps, StoredResponses};
 pub use law::{ComplianceProfile, ContactLaw, PiecewiseLinear, Symmetry};
 pub use nodal::{LawTerm, NodalLaws};

@@ -461,12 +461,21 @@ pub enum FrictionSpec {
         #[serde(default = "default_friction_regularisation")]
         regularisation: f64,
     },
-    /// F_b = μ |σ_ν|, with σ_ν the node's normal contact pressure of the same step (implicit).
+    /// F_b = μ |σ_ν|, with σ_ν the node's normal contact pressure of the same step (implicit);
+    /// μ a number or an expression of the node's accumulated slip `s` (slip-dependent friction).
     Coulomb {
-        coefficient: f64,
+        coefficient: FrictionCoefficient,
         #[serde(default = "default_friction_regularisation")]
         regularisation: f64,
     },
+}
+
+/// A Coulomb coefficient: a number, or an expression of the accumulated slip `s`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum FrictionCoefficient {
+    Value(f64),
+    Expression(String),
 }
 
 fn default_friction_regularisation() -> f64 {

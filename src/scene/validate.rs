@@ -834,15 +834,24 @@ fn check_friction(f: &super::FrictionSpec, origin: &str, at: &str) -> Result<(),
         ));
     }
     match f {
-        super::FrictionSpec::Coulomb { coefficient, .. } => {
-            if !(coefficient.is_finite() && *coefficient >= 0.0) {
+        super::FrictionSpec::Coulomb {
+            coefficient: super::FrictionCoefficient::Value(mu),
+            ..
+        } => {
+            if !(mu.is_finite() && *mu >= 0.0) {
                 return Err(invalid(
                     origin,
                     &format!("{at}.friction.coefficient"),
-                    coefficient,
-                    "the friction coefficient μ must be finite and ≥ 0",
+                    mu,
+                    "the friction coefficient μ must be finite and ≥ 0 (or an expression of the accumulated slip s)",
                 ));
             }
+        }
+        super::FrictionSpec::Coulomb {
+            coefficient: super::FrictionCoefficient::Expression(e),
+            ..
+        } => {
+            compile_load(origin, &format!("{at}.friction.coefficient"), e, &["s"], &[0.0])?;
         }
         super::FrictionSpec::Tresca { bound, .. } => {
             compile_load(

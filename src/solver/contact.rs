@@ -58,8 +58,26 @@ pub struct ContactSetup<const D: usize> {
 pub enum FrictionLaw {
     /// F_b(x, y, z, t), a traction: the row's bound force is w_p F_b(x_p, t).
     Tresca(Expr),
-    /// μ: the row's bound force is μ λ_ν of its normal row in the same step.
-    Coulomb(f64),
+    /// μ, a number or an expression of the accumulated slip s: the row's bound force is
+    /// μ λ_ν of its normal row in the same step.
+    Coulomb(Coefficient),
+}
+
+/// A Coulomb coefficient: constant, or μ(s) of the accumulated slip.
+#[derive(Clone, Debug)]
+pub enum Coefficient {
+    Constant(f64),
+    OfSlip(Expr),
+}
+
+impl Coefficient {
+    /// μ at accumulated slip s.
+    pub fn at(&self, s: f64) -> f64 {
+        match self {
+            Coefficient::Constant(mu) => *mu,
+            Coefficient::OfSlip(e) => e.eval(&[s]),
+        }
+    }
 }
 
 /// The tangential rows of a contact with friction (docs/method.md §17): the condensation holds
@@ -75,6 +93,15 @@ pub struct Friction<const D: usize> {
 }
 
 impl<const D: usize> Friction<D> {
+    /// The tangential row of each of the m normal rows (None: it has none).
+    pub fn row_of(&self, m: usize) -> Vec<Option<usize>> {
+        let mut out = vec![None; m];
+        for (k, &p) in self.normal_row.iter().enumerate() {
+            out[p] = Some(k);
+        }
+        out
+    }
+
     /// The unit tangent of a 2D normal ν: τ = (−ν_y, ν_x).
     fn tangent(nu: [f64; D]) -> [f64; D] {
         let mut t = [0.0; D];
@@ -432,7 +459,19 @@ fn friction_rows<const D: usize>(
             Some(scene::FrictionSpec::Coulomb {
                 coefficient,
                 regularisation,
-            }) => Some((FrictionLaw::Coulomb(*coefficient), *regularisation)),
+            }) => {
+                let mu = match coefficient {
+                    scene::FrictionCoefficient::Value(v) => Coefficient::Constant(*v),
+                    scene::FrictionCoefficient::Expression(text) => {
+                        let key = format!("{}.friction.coefficient", scene.contact_key(used[g]));
+                        Coefficient::OfSlip(
+                            Expr::parse(text, &["s"])
+                                .map_err(|e| SolveError::Setup(format!("{origin}: {key} = \"{text}\": {e}")))?,
+                        )
+                    }
+                };
+                Some((FrictionLaw::Coulomb(mu), *regularisation))
+            }
             Some(scene::FrictionSpec::Tresca { bound, regularisation }) => {
                 let key = format!("{}.friction.bound", scene.contact_key(used[g]));
                 let e = Expr::parse(bound, &scene::BODY_FORCE_VARIABLES)

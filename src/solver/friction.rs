@@ -16,7 +16,9 @@
 
 use super::contact::{ContactSetup, Friction, FrictionLaw};
 use super::setup::Simulation;
-use crate::contact::active_set::{ActiveSetSolver, ContactFailure, ContactOutcome, ContactState};
+use crate::contact::active_set::{
+    ActiveSetSolver, ContactFailure, ContactOutcome, ContactState, FrictionRows, FrictionStatus,
+};
 use crate::contact::{ComplianceProfile, ContactLaw, LawTerm, NodalLaws, NormalStiffness, PiecewiseLinear, Symmetry};
 
 /// Rounds of the Coulomb fixed point before the step fails.
@@ -79,30 +81,42 @@ pub(super) fn solve<const D: usize>(
         };
         tangential_law.push(index);
     }
-    // the bound force of each tangential row, given the normal forces (Coulomb)
-    let bound_forces = |normal_force: &[f64]| -> Result<Vec<f64>, String> {
-        friction
-            .normal_row
-            .iter()
-            .zip(&friction.laws)
-            .map(|(&p, (law, _))| match law {
-                FrictionLaw::Coulomb(mu) => Ok(mu * normal_force[p].max(0.0)),
-                FrictionLaw::Tresca(e) => {
-                    let x = sim.mesh.points[setup.nodes.nodes[p]];
-                    let mut vars = [0.0; 4];
-                    vars[..D].copy_from_slice(&x);
-                    vars[3] = t;
-                    let f = e.eval(&vars);
-                    if f.is_finite() && f >= 0.0 {
-                        Ok(setup.nodes.weights[p] * f)
-                    } else {
-                        Err(format!(
-                            "the Tresca bound \"{}\" is {f} at {}, t = {t}: it must be finite and ≥ 0",
-                            e.source(),
-                            crate::mesh::fmt_point(x)
-                        ))
+    // the slip accumulated before this step
+    let k_rows = friction.normal_row.len();
+    let accumulated: Vec<f64> = if state.friction.accumulated.len() == k_rows {
+        state.friction.accumulated.clone()
+    } else {
+        vec![0.0; k_rows]
+    };
+    // the bound force of each tangential row, given the state (Coulomb: its normal force and,
+    // for μ(s), its accumulated slip with this step's increment)
+    let bound_forces = |state: &ContactState| -> Result<Vec<f64>, String> {
+        (0..k_rows)
+            .map(|k| {
+                let p = friction.normal_row[k];
+                let x = sim.mesh.points[setup.nodes.nodes[p]];
+                let (value, what) = match &friction.laws[k].0 {
+                    FrictionLaw::Coulomb(mu) => {
+                        let s = accumulated[k] + (state.normal_displacement[m + k] - offset[m + k]).abs();
+                        (mu.at(s), "the friction coefficient")
                     }
+                    FrictionLaw::Tresca(e) => {
+                        let mut vars = [0.0; 4];
+                        vars[..D].copy_from_slice(&x);
+                        vars[3] = t;
+                        (e.eval(&vars), "the Tresca bound")
+                    }
+                };
+                if !(value.is_finite() && value >= 0.0) {
+                    return Err(format!(
+                        "{what} is {value} at {}, t = {t}: it must be finite and ≥ 0",
+                        crate::mesh::fmt_point(x)
+                    ));
                 }
+                Ok(match &friction.laws[k].0 {
+                    FrictionLaw::Coulomb(_) => value * state.force[p].max(0.0),
+                    FrictionLaw::Tresca(_) => setup.nodes.weights[p] * value,
+                })
             })
             .collect()
     };
@@ -129,10 +143,10 @@ pub(super) fn solve<const D: usize>(
         smallest_residual: f64::INFINITY,
     };
     let coulomb = friction.laws.iter().any(|(l, _)| matches!(l, FrictionLaw::Coulomb(_)));
-    let mut normal_force: Vec<f64> = state.force[..m].to_vec();
+    // Coulomb's first round uses the previous step's normal forces (the warm start)
+    let mut forces = bound_forces(state).map_err(|reason| failure(reason, ContactOutcome::default()))?;
     let mut total = ContactOutcome::default();
     for _ in 0..COULOMB_ROUNDS {
-        let forces = bound_forces(&normal_force).map_err(|reason| failure(reason, total))?;
         let nodal = rows_with(&forces);
         let solver = ActiveSetSolver {
             operator,
@@ -153,19 +167,15 @@ pub(super) fn solve<const D: usize>(
         total.factorisations += outcome.factorisations;
         total.residual = outcome.residual;
         total.active = outcome.active;
-        if !coulomb {
-            return Ok(total);
-        }
-        // the fixed point F = μ λ_ν has settled when the normal forces stop moving
+        let next = bound_forces(state).map_err(|reason| failure(reason, total))?;
+        // the fixed point F = μ(s) λ_ν has settled when the bound forces stop moving
         let scale = state.force[..m].iter().fold(f64::MIN_POSITIVE, |a, b| a.max(b.abs()));
-        let change = state.force[..m]
-            .iter()
-            .zip(&normal_force)
-            .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
-        normal_force.copy_from_slice(&state.force[..m]);
-        if change <= setup.settings.tolerance * scale {
+        let change = next.iter().zip(&forces).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+        if !coulomb || change <= setup.settings.tolerance * scale {
+            record(state, (m, &friction.normal_row), &offset, &accumulated, &forces);
             return Ok(total);
         }
+        forces = next;
     }
     Err(failure(
         format!(
@@ -174,4 +184,36 @@ pub(super) fn solve<const D: usize>(
         ),
         total,
     ))
+}
+
+/// The tangential rows' slip, accumulated slip, bound force and status after the step
+/// (docs/method.md §17): separated where the normal row carries no force, else stick where
+/// |λ_τ| < F (1 − 10⁻⁶), slip at F.
+fn record(
+    state: &mut ContactState,
+    (m, normal_row): (usize, &[usize]),
+    offset: &[f64],
+    accumulated: &[f64],
+    forces: &[f64],
+) {
+    let k_rows = forces.len();
+    let mut rows = FrictionRows {
+        slip: Vec::with_capacity(k_rows),
+        accumulated: Vec::with_capacity(k_rows),
+        bound: forces.to_vec(),
+        status: Vec::with_capacity(k_rows),
+    };
+    for k in 0..k_rows {
+        let slip = state.normal_displacement[m + k] - offset[m + k];
+        rows.slip.push(slip);
+        rows.accumulated.push(accumulated[k] + slip.abs());
+        rows.status.push(if state.force[normal_row[k]] <= 0.0 {
+            FrictionStatus::Separated
+        } else if state.force[m + k].abs() < forces[k] * (1.0 - 1e-6) {
+            FrictionStatus::Stick
+        } else {
+            FrictionStatus::Slip
+        } as i32);
+    }
+    state.friction = rows;
 }
