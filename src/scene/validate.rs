@@ -812,15 +812,6 @@ fn compile_with(
     Ok(e)
 }
 
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn distance_counts_edits() {
-        assert_eq!(super::distance("youngs_modulos", "youngs_modulus"), 1);
-        assert_eq!(super::distance("", "abc"), 3);
-    }
-}
-
 /// A friction table's values (docs/method.md §17): a finite coefficient μ ≥ 0 or a Tresca bound
 /// expression of (x, y, z, t), and a positive regularisation.
 fn check_friction(f: &super::FrictionSpec, origin: &str, at: &str) -> Result<(), SceneError> {
@@ -864,4 +855,13 @@ fn check_friction(f: &super::FrictionSpec, origin: &str, at: &str) -> Result<(),
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn distance_counts_edits() {
+        assert_eq!(super::distance("youngs_modulos", "youngs_modulus"), 1);
+        assert_eq!(super::distance("", "abc"), 3);
+    }
 }

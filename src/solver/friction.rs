@@ -24,8 +24,10 @@ use crate::contact::{ComplianceProfile, ContactLaw, LawTerm, NodalLaws, NormalSt
 /// Rounds of the Coulomb fixed point before the step fails.
 const COULOMB_ROUNDS: usize = 50;
 
-/// The normal rows' law origins and bounds of the step, and the solver's settings.
+/// The condensed operator, the normal rows' law origins and bounds of the step, and whether Q
+/// may be singular (rigid parameters).
 pub(super) struct NormalRows<'a> {
+    pub operator: &'a dyn NormalStiffness,
     pub offset: Option<&'a [f64]>,
     pub bound: Option<&'a [f64]>,
     pub singular: bool,
@@ -37,7 +39,6 @@ pub(super) fn solve<const D: usize>(
     sim: &Simulation<D>,
     setup: &ContactSetup<D>,
     friction: &Friction<D>,
-    operator: &dyn NormalStiffness,
     normal: NormalRows,
     step: usize,
     q: &[f64],
@@ -149,7 +150,7 @@ pub(super) fn solve<const D: usize>(
     for _ in 0..COULOMB_ROUNDS {
         let nodal = rows_with(&forces);
         let solver = ActiveSetSolver {
-            operator,
+            operator: normal.operator,
             laws: &nodal,
             offset: Some(&offset),
             bound: bound.as_deref(),

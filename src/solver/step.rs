@@ -197,8 +197,8 @@ fn contact_solve<const D: usize>(
             sim,
             setup,
             friction,
-            op.stiffness(),
             super::friction::NormalRows {
+                operator: op.stiffness(),
                 offset,
                 bound,
                 singular: op_singular,
