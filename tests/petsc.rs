@@ -171,6 +171,23 @@ fn paper_example_2d_mumps_matches_faer_on_1_and_2_ranks() {
     }
 }
 
+/// Friction (docs/method.md §17) under PETSc: the Cattaneo–Mindlin scene (Coulomb, partial slip)
+/// on 1 and 2 ranks gives the serial Γ₃ to 1e-10 (the tangential rows are condensed with the
+/// normal ones by the same stored responses, and rank 0 runs the same contact solve).
+#[test]
+fn friction_matches_faer_on_1_and_2_ranks() {
+    for (np, (du, df)) in compare(
+        "examples/gallery/cattaneo_2d/cattaneo_2d.msh",
+        Some("examples/gallery/cattaneo_2d/cattaneo_2d.toml"),
+        "mumps",
+    ) {
+        assert!(
+            du <= 1e-10 && df <= 1e-10,
+            "np {np}: u_ν off by {du:.2e}, force by {df:.2e}"
+        );
+    }
+}
+
 #[test]
 fn slab_3d_mumps_matches_faer_on_1_and_2_ranks() {
     for (np, (du, df)) in compare("meshes/slab_q1_h8_z1.msh", Some("examples/slab.toml"), "mumps") {

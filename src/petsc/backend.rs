@@ -405,11 +405,17 @@ impl<const D: usize> PetscBackend<'_, D> {
             Some(c) if !c.nodes.is_empty() => {
                 let keep = keeps_responses(sim.condensation, solver.n(), c.nodes.len(), self.solver_bytes(&solver));
                 Some(Box::new(
-                    DistributedCondensation::new(&c.nodes, solver.clone(), self.petsc.rank() == 0, keep, counters)
-                        .map_err(|e| match e {
-                            Ok(e) => self.error(sim, e),
-                            Err(detail) => SolveError::Setup(detail),
-                        })?,
+                    DistributedCondensation::new(
+                        c.condensed_rows(),
+                        solver.clone(),
+                        self.petsc.rank() == 0,
+                        keep,
+                        counters,
+                    )
+                    .map_err(|e| match e {
+                        Ok(e) => self.error(sim, e),
+                        Err(detail) => SolveError::Setup(detail),
+                    })?,
                 ))
             }
             _ => None,

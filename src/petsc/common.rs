@@ -108,12 +108,6 @@ pub(super) fn unsupported<const D: usize>(
     sim: &Simulation<D>,
 ) -> Result<(), String> {
     let origin = scene_path.map_or(crate::scene::DEFAULT_SCENE_ORIGIN.into(), |p| p.display().to_string());
-    if sim.contact.as_ref().is_some_and(|c| c.friction.is_some()) {
-        return Err(format!(
-            "{origin}: friction (docs/method.md §17) is not supported by the PETSc backend yet; run this scene \
-             without --backend petsc"
-        ));
-    }
     if let Some(p) = sim.dirichlet.rigid.first() {
         return Err(format!(
             "{origin}: {} needs the rigid parameters of docs/method.md §7.7 (force control, or a body only its \
