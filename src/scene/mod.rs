@@ -121,13 +121,16 @@ impl Scene {
     fn read_tables(&mut self, origin: &str, dir: Option<&Path>) -> Result<(), SceneError> {
         let many = self.contact.len() > 1 || self.contact.iter().any(|c| c.group.is_some());
         for (i, c) in self.contact.iter_mut().enumerate() {
+            let at = if many {
+                format!("contact[{i}]")
+            } else {
+                "contact".to_string()
+            };
             if let Some(law) = c.law.as_mut() {
-                let at = if many {
-                    format!("contact[{i}]")
-                } else {
-                    "contact".to_string()
-                };
                 Self::read_table(law, origin, dir, &at)?;
+            }
+            if let Some(FrictionSpec::Potential { law }) = c.friction.as_mut() {
+                Self::read_table(law, origin, dir, &format!("{at}.friction"))?;
             }
         }
         Ok(())

@@ -468,6 +468,9 @@ pub enum FrictionSpec {
         #[serde(default = "default_friction_regularisation")]
         regularisation: f64,
     },
+    /// The hemivariational case: −σ_τ ∈ ∂j_τ(u_τ) with j_τ(ξ) = S ∫₀^{|ξ|} μ(r) dr on the total
+    /// tangential displacement, μ any of the normal laws' profiles (non-monotone ones included).
+    Potential { law: ContactLawSpec },
 }
 
 /// A Coulomb coefficient: a number, or an expression of the accumulated slip `s`.
@@ -489,6 +492,7 @@ impl FrictionSpec {
             FrictionSpec::Tresca { regularisation, .. } | FrictionSpec::Coulomb { regularisation, .. } => {
                 *regularisation
             }
+            FrictionSpec::Potential { law } => law.regularisation,
         }
     }
 }

@@ -53,7 +53,8 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
         "contact.friction" => match kind {
             Some("tresca") => vec!["kind", "bound", "regularisation"],
             Some("coulomb") => vec!["kind", "coefficient", "regularisation"],
-            _ => vec!["kind", "bound", "coefficient", "regularisation"],
+            Some("potential") => vec!["kind", "law"],
+            _ => vec!["kind", "bound", "coefficient", "regularisation", "law"],
         },
         "contact.obstacle" => match kind {
             Some("plane") => vec!["kind", "point", "normal", "motion"],
@@ -61,7 +62,7 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
             Some("sdf") => vec!["kind", "sdf", "motion"],
             _ => vec!["kind", "point", "normal", "centre", "radius", "sdf", "motion"],
         },
-        "contact.law" => {
+        "contact.law" | "contact.friction.law" => {
             let mut keys = vec!["kind", "one_sided", "regularisation", "scale"];
             keys.extend(match kind {
                 Some("paper") => vec!["a", "b", "alpha"],
@@ -843,6 +844,17 @@ fn check_friction(f: &super::FrictionSpec, origin: &str, at: &str) -> Result<(),
             ..
         } => {
             compile_load(origin, &format!("{at}.friction.coefficient"), e, &["s"], &[0.0])?;
+        }
+        super::FrictionSpec::Potential { law } => {
+            if law.one_sided {
+                return Err(invalid(
+                    origin,
+                    &format!("{at}.friction.law.one_sided"),
+                    true,
+                    "a friction potential acts on |u_τ| in both directions: leave one_sided out",
+                ));
+            }
+            check_law(law, origin, &format!("{at}.friction"))?;
         }
         super::FrictionSpec::Tresca { bound, .. } => {
             compile_load(

@@ -61,6 +61,9 @@ pub enum FrictionLaw {
     /// μ, a number or an expression of the accumulated slip s: the row's bound force is
     /// μ λ_ν of its normal row in the same step.
     Coulomb(Coefficient),
+    /// w_p j_τ(u_τ), j_τ an odd law on the total tangential displacement (the hemivariational
+    /// case, docs/method.md §17.1).
+    Potential(ContactLaw),
 }
 
 /// A Coulomb coefficient: constant, or μ(s) of the accumulated slip.
@@ -471,6 +474,15 @@ fn friction_rows<const D: usize>(
                     }
                 };
                 Some((FrictionLaw::Coulomb(mu), *regularisation))
+            }
+            Some(scene::FrictionSpec::Potential { law }) => {
+                let key = format!("{}.friction", scene.contact_key(used[g]));
+                let law = ContactLaw {
+                    symmetry: Symmetry::Odd,
+                    ..law_of(law, &key)?
+                };
+                let eps = law.epsilon;
+                Some((FrictionLaw::Potential(law), eps))
             }
             Some(scene::FrictionSpec::Tresca { bound, regularisation }) => {
                 let key = format!("{}.friction.bound", scene.contact_key(used[g]));

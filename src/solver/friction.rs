@@ -49,12 +49,11 @@ pub(super) fn solve<const D: usize>(
     let all = friction.rows.len();
     // origins: the normal rows' gaps, the tangential rows' displacement of the previous step
     let offset: Vec<f64> = (0..all)
-        .map(|r| {
-            if r < m {
-                normal.offset.map_or(0.0, |o| o[r])
-            } else {
-                state.normal_displacement[r]
-            }
+        .map(|r| match r.checked_sub(m).map(|k| &friction.laws[k].0) {
+            None => normal.offset.map_or(0.0, |o| o[r]),
+            // a potential acts on the total tangential displacement
+            Some(FrictionLaw::Potential(_)) => 0.0,
+            Some(_) => state.normal_displacement[r],
         })
         .collect();
     let bound: Option<Vec<f64>> = normal
@@ -64,7 +63,12 @@ pub(super) fn solve<const D: usize>(
     let mut laws = setup.laws.laws.clone();
     let mut law_of_width: Vec<(f64, usize)> = Vec::new();
     let mut tangential_law = Vec::with_capacity(friction.laws.len());
-    for (_, eps) in &friction.laws {
+    for (law, eps) in &friction.laws {
+        if let FrictionLaw::Potential(l) = law {
+            laws.push(l.clone());
+            tangential_law.push(laws.len() - 1);
+            continue;
+        }
         let index = match law_of_width.iter().find(|(e, _)| e == eps) {
             Some(&(_, i)) => i,
             None => {
@@ -97,6 +101,11 @@ pub(super) fn solve<const D: usize>(
                 let p = friction.normal_row[k];
                 let x = sim.mesh.points[setup.nodes.nodes[p]];
                 let (value, what) = match &friction.laws[k].0 {
+                    // w_p S μ(|u_τ|): the law's strength where the row is
+                    FrictionLaw::Potential(law) => {
+                        let u = state.normal_displacement[m + k].abs();
+                        (law.scale * law.profile.slope(u), "the friction law's μ")
+                    }
                     FrictionLaw::Coulomb(mu) => {
                         let s = accumulated[k] + (state.normal_displacement[m + k] - offset[m + k]).abs();
                         (mu.at(s), "the friction coefficient")
@@ -116,7 +125,7 @@ pub(super) fn solve<const D: usize>(
                 }
                 Ok(match &friction.laws[k].0 {
                     FrictionLaw::Coulomb(_) => value * state.force[p].max(0.0),
-                    FrictionLaw::Tresca(_) => setup.nodes.weights[p] * value,
+                    FrictionLaw::Tresca(_) | FrictionLaw::Potential(_) => setup.nodes.weights[p] * value,
                 })
             })
             .collect()
@@ -130,7 +139,11 @@ pub(super) fn solve<const D: usize>(
                     let k = r - m;
                     vec![LawTerm {
                         law: tangential_law[k],
-                        weight: forces[k],
+                        // a potential's law carries its own scale: the term weighs w_p
+                        weight: match friction.laws[k].0 {
+                            FrictionLaw::Potential(_) => setup.nodes.weights[friction.normal_row[k]],
+                            _ => forces[k],
+                        },
                         group: setup.row_group[friction.normal_row[k]],
                     }]
                 }
@@ -143,6 +156,7 @@ pub(super) fn solve<const D: usize>(
         reason,
         smallest_residual: f64::INFINITY,
     };
+    // (a potential's "bound" is an output only: it does not enter its law)
     let coulomb = friction.laws.iter().any(|(l, _)| matches!(l, FrictionLaw::Coulomb(_)));
     // Coulomb's first round uses the previous step's normal forces (the warm start)
     let mut forces = bound_forces(state).map_err(|reason| failure(reason, ContactOutcome::default()))?;

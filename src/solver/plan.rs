@@ -210,15 +210,17 @@ impl Plan {
             });
         }
         if let Some(f) = sim.contact.as_ref().and_then(|c| c.friction.as_ref()) {
-            let (coulomb, tresca) = f.laws.iter().fold((0, 0), |(c, t), (l, _)| match l {
-                crate::solver::contact::FrictionLaw::Coulomb(_) => (c + 1, t),
-                crate::solver::contact::FrictionLaw::Tresca(_) => (c, t + 1),
+            let (coulomb, tresca, potential) = f.laws.iter().fold((0, 0, 0), |(c, t, p), (l, _)| match l {
+                crate::solver::contact::FrictionLaw::Coulomb(_) => (c + 1, t, p),
+                crate::solver::contact::FrictionLaw::Tresca(_) => (c, t + 1, p),
+                crate::solver::contact::FrictionLaw::Potential(_) => (c, t, p + 1),
             });
             let all = f.rows.len();
             effects.push(Effect {
                 name: "friction",
                 detail: format!(
-                    "{} tangential rows: {coulomb} Coulomb, {tresca} Tresca, on the slip increment of each step",
+                    "{} tangential rows: {coulomb} Coulomb, {tresca} Tresca (on the slip increment of each step), \
+                     {potential} friction potential (on the total tangential displacement)",
                     f.normal_row.len()
                 ),
                 cost: format!(
