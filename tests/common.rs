@@ -176,3 +176,28 @@ pub fn msh22(mesh: &Mesh<2>) -> String {
     }
     s + "$EndElements\n"
 }
+
+/// Moves the interior nodes (on no boundary group) of a mesh pseudo-randomly by up to `amount`
+/// of the cell size.
+pub fn distort_off_groups<const D: usize>(m: &mut Mesh<D>, amount: f64) {
+    let mut boundary = vec![false; m.points.len()];
+    for g in m.groups.iter().filter(|g| (g.dim as usize) < D) {
+        for f in &g.facets {
+            for &p in f.nodes() {
+                boundary[p] = true;
+            }
+        }
+    }
+    let h = m.cell_size().0;
+    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    for (p, x) in m.points.iter_mut().enumerate() {
+        if !boundary[p] {
+            for v in x.iter_mut() {
+                seed ^= seed << 13;
+                seed ^= seed >> 7;
+                seed ^= seed << 17;
+                *v += amount * h * ((seed % 2001) as f64 / 1000.0 - 1.0);
+            }
+        }
+    }
+}

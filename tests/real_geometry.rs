@@ -479,31 +479,6 @@ fn stress_of(a: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
     std::array::from_fn(|i| std::array::from_fn(|j| m * (a[i][j] + a[j][i]) + if i == j { l * tr } else { 0.0 }))
 }
 
-/// Moves the nodes of a 3D mesh on no boundary group's facet pseudo-randomly by up to `amount`
-/// times the smallest cell size in each coordinate (as tests/three_d.rs does).
-fn distort_interior(m: &mut hvi::mesh::Mesh<3>, amount: f64) {
-    let mut boundary = vec![false; m.points.len()];
-    for g in m.groups.iter().filter(|g| g.dim < 3) {
-        for f in &g.facets {
-            for &p in f.nodes() {
-                boundary[p] = true;
-            }
-        }
-    }
-    let h = m.cell_size().0;
-    let mut seed = 0x2545_f491_4f6c_dd1du64;
-    for (p, x) in m.points.iter_mut().enumerate() {
-        if !boundary[p] {
-            for v in x.iter_mut() {
-                seed ^= seed << 13;
-                seed ^= seed >> 7;
-                seed ^= seed << 17;
-                *v += amount * h * ((seed % 2001) as f64 / 1000.0 - 1.0);
-            }
-        }
-    }
-}
-
 /// The linear patch test on gmsh's hexahedron–pyramid–tetrahedron mesh (meshes/pyramid.geo: the
 /// pyramids gmsh puts on the interface quadrangles) with its interior nodes moved by up to 0.2 h,
 /// which bends the pyramids' bases out of plane and moves their apexes: their maps are not
@@ -523,7 +498,7 @@ fn pyramids_pass_the_patch_test_on_the_distorted_hex_pyramid_tet_mesh() {
         "pyramids, hexahedra, tetrahedra: {kinds:?}"
     );
     assert!(m.defects().is_empty(), "{:?}", m.defects());
-    distort_interior(&mut m, 0.2);
+    common::distort_off_groups(&mut m, 0.2);
     // the largest distance of a base's fourth corner from the plane of its first three, relative
     // to the base's diagonal
     let bend = m

@@ -152,31 +152,6 @@ fn contact_law_holds_in_3d_and_both_backends_agree() {
     assert_eq!(stats.newton_iterations, stats_r.newton_iterations);
 }
 
-/// Moves the interior nodes (on no boundary group) of a mesh pseudo-randomly by up to `amount`
-/// of the cell size.
-fn distort<const D: usize>(m: &mut Mesh<D>, amount: f64) {
-    let mut boundary = vec![false; m.points.len()];
-    for g in m.groups.iter().filter(|g| (g.dim as usize) < D) {
-        for f in &g.facets {
-            for &p in f.nodes() {
-                boundary[p] = true;
-            }
-        }
-    }
-    let h = m.cell_size().0;
-    let mut seed = 0x2545_f491_4f6c_dd1du64;
-    for (p, x) in m.points.iter_mut().enumerate() {
-        if !boundary[p] {
-            for v in x.iter_mut() {
-                seed ^= seed << 13;
-                seed ^= seed >> 7;
-                seed ^= seed << 17;
-                *v += amount * h * ((seed % 2001) as f64 / 1000.0 - 1.0);
-            }
-        }
-    }
-}
-
 /// u = A x with a constant (non-symmetric) A, prescribed on every boundary face, is
 /// reproduced to round-off at the interior nodes of distorted tetrahedra and hexahedra.
 #[test]
@@ -193,7 +168,7 @@ fn patch_test_on_distorted_tetrahedra_and_hexahedra() {
         ("prism_tet.msh", vec!["Gamma1", "Gamma2", "Gamma3"]),
     ] {
         let mut m = mesh::<3>(file);
-        distort(&mut m, 0.2);
+        common::distort_off_groups(&mut m, 0.2);
         let mut toml = String::from(
             "[material]\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n[time]\nfinal_time = 1.0\nsteps = 1\n",
         );

@@ -275,34 +275,25 @@ impl<const D: usize> Dirichlet<D> {
     fn pin(&mut self, mesh: &Mesh<D>, dofs: &mut DofMap<D>, free: FreeMotions<D>, contact: &[usize]) {
         let k = free.modes.len();
         let on_contact: std::collections::HashSet<usize> = contact.iter().copied().collect();
-        let mut candidates: Vec<(usize, Vec<f64>)> = (0..dofs.n())
-            .filter(|&d| !dofs.is_prescribed(d) && !on_contact.contains(&(d / D)))
-            .map(|d| {
-                let row = free.row(mesh, d);
-                (
-                    d,
-                    free.modes
-                        .iter()
-                        .map(|m| m.iter().zip(&row).map(|(a, b)| a * b).sum())
-                        .collect(),
-                )
-            })
-            .collect();
-        if candidates.len() < k {
-            // every free unknown is on a contact node: pin there
-            candidates = (0..dofs.n())
-                .filter(|&d| !dofs.is_prescribed(d))
+        // (unknown, the motions' values there)
+        let candidates_where = |keep: &dyn Fn(usize) -> bool| -> Vec<(usize, Vec<f64>)> {
+            (0..dofs.n())
+                .filter(|&d| !dofs.is_prescribed(d) && keep(d))
                 .map(|d| {
                     let row = free.row(mesh, d);
-                    (
-                        d,
-                        free.modes
-                            .iter()
-                            .map(|m| m.iter().zip(&row).map(|(a, b)| a * b).sum())
-                            .collect(),
-                    )
+                    let values = free
+                        .modes
+                        .iter()
+                        .map(|m| m.iter().zip(&row).map(|(a, b)| a * b).sum())
+                        .collect();
+                    (d, values)
                 })
-                .collect();
+                .collect()
+        };
+        let mut candidates = candidates_where(&|d| !on_contact.contains(&(d / D)));
+        if candidates.len() < k {
+            // every free unknown is on a contact node: pin there
+            candidates = candidates_where(&|_| true);
         }
         for _ in 0..k.min(candidates.len()) {
             let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>();
