@@ -350,3 +350,35 @@ fn a_non_monotone_friction_potential_gives_its_law_at_every_node() {
     }
     assert!(checked >= 3 * m, "only {checked} rows were displaced enough to check");
 }
+
+/// The forces add up with friction (docs/method.md §14.4, §17.3): on the Cattaneo–Mindlin scene
+/// (no load) the base's reactions and the contact group's total force — its tangential part
+/// included — cancel in both components at every step, to 1e-10 of the normal force.
+#[test]
+fn reactions_and_contact_forces_balance_with_friction() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/gallery/cattaneo_2d");
+    let scene = Scene::load(Some(&root.join("cattaneo_2d.toml")), &[]).unwrap_or_else(|e| panic!("{e}"));
+    let mesh = read_mesh::<2>(&root.join("cattaneo_2d.msh")).unwrap_or_else(|e| panic!("{e}"));
+    let (_, stats, _) = solve_in_memory(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
+    let last = stats.reactions.last().unwrap().time;
+    let normal = common::reaction(&stats, "Base", "y", last).abs();
+    assert!(normal > 0.0);
+    for r in &stats.reactions {
+        let contact = stats
+            .contact_forces
+            .iter()
+            .find(|c| c.time == r.time && c.component == r.component)
+            .unwrap();
+        assert!(
+            (r.force + contact.force).abs() <= 1e-10 * normal,
+            "t = {}, {}: reaction {:e} + contact {:e}",
+            r.time,
+            r.component,
+            r.force,
+            contact.force
+        );
+    }
+    // the shear step carries a tangential force of about μP/2
+    let shear = common::reaction(&stats, "Base", "x", last).abs();
+    assert!(shear > 0.1 * MU * normal, "shear {shear:e}");
+}
