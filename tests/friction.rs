@@ -311,6 +311,14 @@ fn friction_outputs_from_the_command_line() {
     ] {
         assert!(vtp.contains(field), "{field} missing from the contact dataset");
     }
+    // hvi plot marks the stick and slip zones in gamma3's pressure panel
+    common::hvi_ok(&["plot", out.path().to_str().unwrap()]);
+    let svg = std::fs::read_to_string(out.path().join("gamma3.svg")).unwrap();
+    let lines: Vec<&str> = svg.lines().map(str::trim).collect();
+    assert!(
+        lines.contains(&"stick") && lines.contains(&"slip"),
+        "no zone legend in gamma3.svg"
+    );
 }
 
 /// The hemivariational case (docs/method.md §17.1): a non-monotone friction potential on the total

@@ -19,6 +19,9 @@ pub struct Gamma3Figure {
     pub bound: Option<Vec<f64>>,
     /// (t, u_ν, pressure) at the nodes, per time.
     pub curves: Vec<(f64, Vec<f64>, Vec<f64>)>,
+    /// The friction status at the nodes at the last time drawn (1 stick, 2 slip; other codes are
+    /// not marked), for a run with friction (docs/method.md §17.3).
+    pub zones: Option<Vec<i32>>,
 }
 
 pub(super) const FIG_W: i32 = 1100;
@@ -142,6 +145,20 @@ pub(super) fn draw_gamma3<DB: DrawingBackend>(
             root.draw(&PathElement::new(line, time_colour(i, n).stroke_width(2)))
                 .map_err(err)?;
         }
+        // the stick and slip zones at the last time: a band of marks along the pressure panel's
+        // foot (docs/method.md §17.3)
+        if let (1, Some(zones)) = (k, &figure.zones) {
+            for (&s, &code) in figure.arc.iter().zip(zones) {
+                if let Some(colour) = zone_colour(code) {
+                    let (x, _) = to_px(s, v0);
+                    root.draw(&Rectangle::new(
+                        [(x - 2, top + PANEL_H - 10), (x + 2, top + PANEL_H - 2)],
+                        colour.filled(),
+                    ))
+                    .map_err(err)?;
+                }
+            }
+        }
         // the legend: one entry per time (and the bound)
         let lx = LEFT + pw + 16;
         let mut ly = top + 4;
@@ -171,6 +188,24 @@ pub(super) fn draw_gamma3<DB: DrawingBackend>(
             )?;
             ly += 20;
         }
+        if let (1, Some(_)) = (k, &figure.zones) {
+            for (code, label) in [(1, "stick"), (2, "slip")] {
+                let colour = zone_colour(code).expect("a marked code");
+                root.draw(&Rectangle::new([(lx + 8, ly + 3), (lx + 16, ly + 11)], colour.filled()))
+                    .map_err(err)?;
+                draw_text(root, lettering, label, (lx + 30, ly), HPos::Left, 2, black)?;
+                ly += 20;
+            }
+        }
     }
     Ok(())
+}
+
+/// The colour of a friction status code in the zone band: stick green, slip orange.
+fn zone_colour(code: i32) -> Option<RGBColor> {
+    match code {
+        1 => Some(RGBColor(40, 150, 70)),
+        2 => Some(RGBColor(230, 120, 20)),
+        _ => None,
+    }
 }

@@ -18,6 +18,9 @@ pub struct Gamma3 {
     pub order: Vec<usize>,
     /// Per output time, (u_ν, pressure) of each node.
     pub times: Vec<(f64, Vec<(f64, f64)>)>,
+    /// Per output time, the friction status of each node (0 separated, 1 stick, 2 slip, −1
+    /// none; docs/method.md §17.3); empty for a run without friction.
+    pub friction: Vec<Vec<i32>>,
 }
 
 /// A CSV reader of hvi's tables (`csv` crate: quoted cells, cells trimmed); rows of any length,
@@ -91,19 +94,36 @@ pub fn read_gamma3(csv: &str, mesh: &Mesh<2>) -> Result<Gamma3, String> {
         column("u_nu")?,
         column("pressure")?,
     ];
+    let status = header.iter().position(|c| c == "friction_status");
     let mut times: Vec<(f64, Vec<(f64, f64)>)> = Vec::new();
+    let mut friction: Vec<Vec<i32>> = Vec::new();
     let mut positions: Vec<[f64; 2]> = Vec::new();
     for v in rows {
         let [t, x, y, un, p] = cols.map(|c| v[c]);
         if times.last().is_none_or(|(s, _)| *s != t) {
             times.push((t, Vec::new()));
+            friction.push(Vec::new());
         }
         if times.len() == 1 {
             positions.push([x, y]);
         }
         times.last_mut().expect("pushed above").1.push((un, p));
+        if let Some(c) = status {
+            let code = v[c];
+            friction
+                .last_mut()
+                .expect("pushed above")
+                .push(if code.is_finite() { code as i32 } else { -1 });
+        }
     }
-    times.retain(|(_, rows)| rows.len() == positions.len());
+    let complete: Vec<bool> = times.iter().map(|(_, rows)| rows.len() == positions.len()).collect();
+    let mut keep = complete.iter();
+    times.retain(|_| *keep.next().expect("one flag per time"));
+    let mut keep = complete.iter();
+    friction.retain(|_| *keep.next().expect("one flag per time"));
+    if status.is_none() {
+        friction.clear();
+    }
     if positions.is_empty() || times.is_empty() {
         return Err("gamma3.csv has no complete time block: nothing to draw along Γ₃".into());
     }
@@ -137,6 +157,7 @@ pub fn read_gamma3(csv: &str, mesh: &Mesh<2>) -> Result<Gamma3, String> {
         arc,
         order,
         times,
+        friction,
     })
 }
 

@@ -232,6 +232,10 @@ pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, P
                     )
                 })
                 .collect(),
+            zones: chosen
+                .last()
+                .and_then(|&i| g3.friction.get(i))
+                .map(|codes| g3.order.iter().map(|&k| codes[k]).collect()),
         };
         let (png, svg) = pictures(run_dir, "gamma3")?;
         render_gamma3(&png, Some(&svg), &figure).map_err(fail)?;

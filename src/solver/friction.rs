@@ -202,7 +202,8 @@ pub(super) fn solve<const D: usize>(
 }
 
 /// The tangential rows' slip, accumulated slip, bound force and status after the step
-/// (docs/method.md §17): separated where the normal row carries no force, else stick where
+/// (docs/method.md §17): separated where the normal row carries no force (below 10⁻¹² of the
+/// largest), else stick where
 /// |λ_τ| < F (1 − 10⁻⁶), slip at F.
 fn record(
     state: &mut ContactState,
@@ -212,6 +213,8 @@ fn record(
     forces: &[f64],
 ) {
     let k_rows = forces.len();
+    // a normal force below 1e-12 of the largest is round-off of a node off the bound
+    let largest = normal_row.iter().fold(0.0f64, |a, &p| a.max(state.force[p]));
     let mut rows = FrictionRows {
         slip: Vec::with_capacity(k_rows),
         accumulated: Vec::with_capacity(k_rows),
@@ -222,7 +225,7 @@ fn record(
         let slip = state.normal_displacement[m + k] - offset[m + k];
         rows.slip.push(slip);
         rows.accumulated.push(accumulated[k] + slip.abs());
-        rows.status.push(if state.force[normal_row[k]] <= 0.0 {
+        rows.status.push(if state.force[normal_row[k]] <= 1e-12 * largest {
             FrictionStatus::Separated
         } else if state.force[m + k].abs() < forces[k] * (1.0 - 1e-6) {
             FrictionStatus::Stick
