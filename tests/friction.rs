@@ -390,3 +390,33 @@ fn reactions_and_contact_forces_balance_with_friction() {
     let shear = common::reaction(&stats, "Base", "x", last).abs();
     assert!(shear > 0.1 * MU * normal, "shear {shear:e}");
 }
+
+/// Friction with force control (docs/method.md §7.7 with §17): the Cattaneo–Mindlin block pressed
+/// by the force P that the displacement-controlled run finds at T (its base's y-reaction), its x
+/// still prescribed. The base's reaction is P to 1e-10 at T, and the base moves by the
+/// displacement control's 0.004 there (to 1e-6: the two runs solve the same problem at T, but
+/// the Coulomb history of the pressing step differs because P is applied at t = 1/2 already;
+/// measured 4e-8).
+#[test]
+fn friction_under_force_control_matches_the_displacement_control() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/gallery/cattaneo_2d");
+    let text = std::fs::read_to_string(root.join("cattaneo_2d.toml")).unwrap();
+    let mesh = || read_mesh::<2>(&root.join("cattaneo_2d.msh")).unwrap_or_else(|e| panic!("{e}"));
+    let displaced = Scene::from_toml_str(&text, "cattaneo").unwrap();
+    let (_, stats, _) = solve_in_memory(&displaced, mesh()).unwrap_or_else(|e| panic!("{e}"));
+    let p = common::reaction(&stats, "Base", "y", 1.0);
+    let section = "components = [\"x\", \"y\"]\nvalue = [\"0.001*max(2*t - 1, 0)\", \"0.004*min(2*t, 1)\"]";
+    assert!(text.contains(section), "the gallery scene's base section moved");
+    let forced = text.replace(
+        section,
+        &format!(
+            "components = [\"x\"]\nvalue = [\"0.001*max(2*t - 1, 0)\"]\n\n[[force_control]]\ngroup = \"Base\"\ncomponent = \"y\"\nforce = \"{p:e}*min(2*t, 1)\""
+        ),
+    );
+    let forced = Scene::from_toml_str(&forced, "cattaneo under force control").unwrap_or_else(|e| panic!("{e}"));
+    let (_, stats, sink) = solve_in_memory(&forced, mesh()).unwrap_or_else(|e| panic!("{e}"));
+    let r = common::reaction(&stats, "Base", "y", 1.0);
+    assert!((r - p).abs() <= 1e-10 * p, "reaction {r:e} against P = {p:e}");
+    let delta = sink.steps.last().unwrap().motion[0];
+    assert!((delta / 0.004 - 1.0).abs() <= 1e-6, "δ = {delta:e}");
+}
