@@ -420,3 +420,42 @@ fn friction_under_force_control_matches_the_displacement_control() {
     let delta = sink.steps.last().unwrap().motion[0];
     assert!((delta / 0.004 - 1.0).abs() <= 1e-6, "δ = {delta:e}");
 }
+
+/// Friction with a long memory (the "with the memory term"): the dragged block of a
+/// viscoelastic material (one Prony term), Coulomb μ = 0.3. The memory changes the stresses from
+/// step to step (the normal force relaxes under the fixed compression), and once the whole base
+/// slides the friction force is still μ times the normal force of the same step, to 1e-10.
+#[test]
+fn coulomb_friction_with_memory_follows_the_relaxing_normal_force() {
+    let text = dragged(&format!("{{ kind = \"coulomb\", coefficient = {MU} }}"))
+        + "\n[memory]\nkind = \"exponential\"\nterms = [{ coefficient = -0.3, relaxation_time = 0.5 }]\n";
+    let mesh = rectangle_with_sides(1.0, 0.5, 16, 8, CellShape::Quad);
+    let (sim, _, sink) = solve_in_memory(&scene(&text), mesh).unwrap_or_else(|e| panic!("{e}"));
+    let c = sim.contact.as_ref().unwrap();
+    let m = c.nodes.len();
+    let normals: Vec<f64> = sink
+        .steps
+        .iter()
+        .map(|s| s.contact.as_ref().unwrap().force[..m].iter().sum())
+        .collect();
+    // the memory relaxes the normal force of the held compression
+    assert!(
+        (normals[STEPS] - normals[1]).abs() > 1e-3 * normals[1],
+        "the normal force does not relax: {normals:?}"
+    );
+    for step in &sink.steps[STEPS - 1..] {
+        let state = step.contact.as_ref().unwrap();
+        assert!(
+            state.friction.status.iter().all(|&s| s == 2),
+            "t = {}: not fully sliding",
+            step.time
+        );
+        let normal: f64 = state.force[..m].iter().sum();
+        let tangential: f64 = state.force[m..].iter().sum();
+        assert!(
+            (tangential - MU * normal).abs() <= 1e-10 * MU * normal,
+            "t = {}: friction {tangential:e} against μ × {normal:e}",
+            step.time
+        );
+    }
+}
