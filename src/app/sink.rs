@@ -334,12 +334,8 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
                     f64::from(state.status[k].code()),
                     f64::from(tag),
                 ]);
-                if let Some(f) = &c.friction {
-                    row.extend(friction_columns(
-                        f.rows.len() - f.normal_row.len(),
-                        tangential[k],
-                        state,
-                    ));
+                if c.friction.is_some() {
+                    row.extend(friction_columns(c.nodes.len(), tangential[k], state));
                 }
                 rows.push(row);
             }

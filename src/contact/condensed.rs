@@ -15,7 +15,7 @@
 //! The active set sees only the [`NormalStiffness`] (Q = W⁻¹ and W).
 
 use crate::fem::DofMap;
-use crate::linalg::dense::{matvec_row_major, DenseCholesky};
+use crate::linalg::dense::{matvec_row_major, symmetrise_row_major, DenseCholesky};
 use crate::linalg::{Counters, Factor, Forward, ForwardColumns, LinearSolver};
 use crate::mesh::BoundaryPart;
 use std::sync::Arc;
@@ -334,13 +334,7 @@ impl StoredResponses {
                 w[p * m + q] = row.iter().map(|&(d, c)| c * z[q * n + d]).sum();
             }
         }
-        for p in 0..m {
-            for q in 0..p {
-                let v = 0.5 * (w[p * m + q] + w[q * m + p]);
-                w[p * m + q] = v;
-                w[q * m + p] = v;
-            }
-        }
+        symmetrise_row_major(&mut w, m);
         Ok(StoredResponses {
             solver,
             rows,

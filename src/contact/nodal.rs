@@ -55,6 +55,13 @@ impl NodalLaws {
         NodalLaws::new(vec![law], &rows)
     }
 
+    /// Sets the weight of row p's one term (a row of one term: friction's tangential rows,
+    /// whose bound force changes with the step, docs/method.md §17.2).
+    pub fn set_weight(&mut self, p: usize, weight: f64) {
+        debug_assert_eq!(self.start[p + 1] - self.start[p], 1, "row {p} has one term");
+        self.terms[self.start[p]].weight = weight;
+    }
+
     /// True if no row has a law.
     pub fn is_empty(&self) -> bool {
         self.terms.is_empty()

@@ -49,6 +49,18 @@ impl DenseCholesky {
     }
 }
 
+/// A ← ½(A + Aᵀ) for a row-major n × n matrix: exact symmetry against the round-off of a
+/// product that should be symmetric (W = GᵀG, C Z, Q after an update).
+pub fn symmetrise_row_major(a: &mut [f64], n: usize) {
+    for p in 0..n {
+        for q in 0..p {
+            let v = 0.5 * (a[p * n + q] + a[q * n + p]);
+            a[p * n + q] = v;
+            a[q * n + p] = v;
+        }
+    }
+}
+
 /// y = A x for a row-major n × n matrix `a`: faer's SIMD product, on two threads from n = 512
 /// (the contact solve's products by Q were its largest cost at m in the thousands).
 pub fn matvec_row_major(a: &[f64], n: usize, x: &[f64], y: &mut [f64]) {

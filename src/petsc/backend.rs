@@ -665,13 +665,7 @@ impl PetscSolver {
             }
         }
         if root {
-            for p in 0..m {
-                for q in 0..p {
-                    let v = 0.5 * (w[p * m + q] + w[q * m + p]);
-                    w[p * m + q] = v;
-                    w[q * m + p] = v;
-                }
-            }
+            crate::linalg::dense::symmetrise_row_major(&mut w, m);
         }
         Ok((w, z))
     }

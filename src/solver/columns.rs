@@ -27,16 +27,15 @@ impl PrescribedColumns {
         self.columns.len()
     }
 
-    /// rhs_i −= Σ_j K_ij over the columns `start..start + len` at the free rows i: the lifting
-    /// of the value 1 at those unknowns.
+    /// rhs_i −= Σ_j K_ij over the columns `range` at the free rows i: the lifting of the value 1
+    /// at those unknowns.
     pub(super) fn lift_unit<const D: usize>(
         &self,
-        start: usize,
-        len: usize,
+        range: std::ops::Range<usize>,
         dofs: &crate::fem::DofMap<D>,
         rhs: &mut [f64],
     ) {
-        for (_, col) in &self.columns[start..start + len] {
+        for (_, col) in &self.columns[range] {
             for &(i, v) in col {
                 if !dofs.is_prescribed(i) {
                     rhs[i] -= v;

@@ -6,7 +6,8 @@ use super::error::SolveError;
 use crate::contact::active_set::ContactState;
 use crate::contact::rows::{self, GroupRows};
 use crate::contact::{
-    ComplianceProfile, ContactLaw, ContactNodes, ContactSettings, NodalLaws, Obstacle, PiecewiseLinear, Symmetry,
+    ComplianceProfile, ContactLaw, ContactNodes, ContactSettings, LawTerm, NodalLaws, Obstacle, PiecewiseLinear,
+    Symmetry,
 };
 use crate::fem::DofMap;
 use crate::mesh::Mesh;
@@ -62,8 +63,8 @@ pub enum FrictionLaw {
     /// μ λ_ν of its normal row in the same step.
     Coulomb(Coefficient),
     /// w_p j_τ(u_τ), j_τ an odd law on the total tangential displacement (the hemivariational
-    /// case, docs/method.md §17.1).
-    Potential(ContactLaw),
+    /// case, docs/method.md §17.1); the law is the row's term in [`Friction::laws_of_rows`].
+    Potential,
 }
 
 /// A Coulomb coefficient: constant, or μ(s) of the accumulated slip.
@@ -91,8 +92,13 @@ pub struct Friction<const D: usize> {
     pub rows: ContactNodes<D>,
     /// Per tangential row: its normal row.
     pub normal_row: Vec<usize>,
-    /// Per tangential row: its law and its smoothing width ε.
-    pub laws: Vec<(FrictionLaw, f64)>,
+    /// Per tangential row: its law.
+    pub laws: Vec<FrictionLaw>,
+    /// The laws of every row, built once: the normal rows' terms, then one term per tangential
+    /// row — the odd law of constant profile μ ≡ 1 and the group's ε for Tresca and Coulomb
+    /// (its weight, the bound force, set every step), the group's own law with weight w_p for a
+    /// potential (docs/method.md §17.2).
+    pub laws_of_rows: NodalLaws,
 }
 
 impl<const D: usize> Friction<D> {
@@ -403,9 +409,10 @@ pub fn build<const D: usize>(
     let bound: Vec<f64> = gap.iter().zip(&layer).map(|(g, l)| g + l).collect();
     let terms: Vec<_> = kept.iter().map(|&k| rows.terms[k].clone()).collect();
     let row_group: Vec<usize> = kept.iter().map(|&k| rows.group[k]).collect();
-    let friction = friction_rows(scene, &used, &nodes, &row_group, dofs, origin)?;
+    let laws = NodalLaws::new(laws, &terms);
+    let friction = friction_rows(scene, &used, (&nodes, &laws, &row_group), dofs, origin)?;
     Ok(Some(ContactSetup {
-        laws: NodalLaws::new(laws, &terms),
+        laws,
         bound: bound.iter().any(|g| g.is_finite()).then_some(bound),
         gap: any_obstacle.then_some(gap),
         layer,
@@ -440,8 +447,7 @@ pub fn build<const D: usize>(
 fn friction_rows<const D: usize>(
     scene: &Scene,
     used: &[usize],
-    nodes: &ContactNodes<D>,
-    row_group: &[usize],
+    (nodes, normal_laws, row_group): (&ContactNodes<D>, &NodalLaws, &[usize]),
     dofs: &DofMap<D>,
     origin: &str,
 ) -> Result<Option<Friction<D>>, SolveError> {
@@ -473,7 +479,7 @@ fn friction_rows<const D: usize>(
                         )
                     }
                 };
-                Some((FrictionLaw::Coulomb(mu), *regularisation))
+                Some((FrictionLaw::Coulomb(mu), constant_law(*regularisation)))
             }
             Some(scene::FrictionSpec::Potential { law }) => {
                 let key = format!("{}.friction", scene.contact_key(used[g]));
@@ -481,14 +487,13 @@ fn friction_rows<const D: usize>(
                     symmetry: Symmetry::Odd,
                     ..law_of(law, &key)?
                 };
-                let eps = law.epsilon;
-                Some((FrictionLaw::Potential(law), eps))
+                Some((FrictionLaw::Potential, law))
             }
             Some(scene::FrictionSpec::Tresca { bound, regularisation }) => {
                 let key = format!("{}.friction.bound", scene.contact_key(used[g]));
                 let e = Expr::parse(bound, &scene::BODY_FORCE_VARIABLES)
                     .map_err(|e| SolveError::Setup(format!("{origin}: {key} = \"{bound}\": {e}")))?;
-                Some((FrictionLaw::Tresca(e), *regularisation))
+                Some((FrictionLaw::Tresca(e), constant_law(*regularisation)))
             }
         });
     }
@@ -519,13 +524,51 @@ fn friction_rows<const D: usize>(
         )));
     }
     let tangential: Vec<usize> = kept[m..].iter().map(|&k| with[k - m]).collect();
-    let laws = tangential
+    // one law per group with friction, after the normal rows' laws
+    let mut all_laws = normal_laws.laws.clone();
+    let law_index: Vec<Option<usize>> = laws_of_group
         .iter()
-        .map(|&p| laws_of_group[row_group[p]].clone().expect("a row with friction"))
+        .map(|l| {
+            l.as_ref().map(|(_, law)| {
+                all_laws.push(law.clone());
+                all_laws.len() - 1
+            })
+        })
         .collect();
+    let mut terms: Vec<Vec<LawTerm>> = (0..m).map(|p| normal_laws.terms(p).to_vec()).collect();
+    let mut laws = Vec::with_capacity(tangential.len());
+    for &p in &tangential {
+        let group = row_group[p];
+        let (kind, _) = laws_of_group[group].as_ref().expect("a row with friction");
+        terms.push(vec![LawTerm {
+            law: law_index[group].expect("a row with friction"),
+            // a potential's law carries its own scale; the others' weight is set every step
+            weight: if matches!(kind, FrictionLaw::Potential) {
+                nodes.weights[p]
+            } else {
+                0.0
+            },
+            group,
+        }]);
+        laws.push(kind.clone());
+    }
     Ok(Some(Friction {
         rows,
         normal_row: tangential,
         laws,
+        laws_of_rows: NodalLaws::new(all_laws, &terms),
     }))
+}
+
+/// The odd law of constant profile μ ≡ 1 with smoothing width ε: Tresca's and Coulomb's
+/// F ρ_ε(Δu_τ) with F the term's weight (docs/method.md §17.2).
+fn constant_law(epsilon: f64) -> ContactLaw {
+    ContactLaw {
+        scale: 1.0,
+        profile: ComplianceProfile::PiecewiseLinear {
+            table: PiecewiseLinear::new(&[(0.0, 1.0)]).expect("a constant profile"),
+        },
+        symmetry: Symmetry::Odd,
+        epsilon,
+    }
 }

@@ -130,9 +130,7 @@ impl<const D: usize> Dirichlet<D> {
                 return Ok(false);
             }
             set_by.insert(d, (who.to_string(), text.to_string(), expr));
-            dofs.prescribe(node, c);
-            out.entries.push((d, expr));
-            out.at.push(mesh.points[node]);
+            out.add_entry(dofs, mesh, d, expr);
             Ok(true)
         };
         if let Some(sel) = clamped {
@@ -234,11 +232,10 @@ impl<const D: usize> Dirichlet<D> {
                         fc.group
                     )));
                 }
-                set_by.insert(dofs.index(p, c), (format!("force_control[{i}]"), "δ(t)".into(), None));
-                dofs.prescribe(p, c);
-                out.entries.push((dofs.index(p, c), None));
-                out.at.push(mesh.points[p]);
-                unknowns.push(dofs.index(p, c));
+                let d = dofs.index(p, c);
+                set_by.insert(d, (format!("force_control[{i}]"), "δ(t)".into(), None));
+                out.add_entry(&mut dofs, mesh, d, None);
+                unknowns.push(d);
             }
             out.reaction_groups.push(ReactionGroup {
                 group: group_name(&fc.group),
@@ -266,6 +263,14 @@ impl<const D: usize> Dirichlet<D> {
             }
         }
         Ok((dofs, out))
+    }
+
+    /// Prescribes unknown d (node d / D, component d % D) with the value of expression `expr`
+    /// (None: zero).
+    fn add_entry(&mut self, dofs: &mut DofMap<D>, mesh: &Mesh<D>, d: usize, expr: Option<usize>) {
+        dofs.prescribe(d / D, d % D);
+        self.entries.push((d, expr));
+        self.at.push(mesh.points[d / D]);
     }
 
     /// One pinned component per rigid motion only the contact holds (docs/method.md §7.7): the
@@ -312,9 +317,7 @@ impl<const D: usize> Dirichlet<D> {
                 let dot: f64 = w.iter().zip(&unit).map(|(a, b)| a * b).sum();
                 w.iter_mut().zip(&unit).for_each(|(a, b)| *a -= dot * b);
             }
-            dofs.prescribe(d / D, d % D);
-            self.entries.push((d, None));
-            self.at.push(mesh.points[d / D]);
+            self.add_entry(dofs, mesh, d, None);
             self.rigid.push(RigidParameter {
                 name: format!(
                     "a pin of {} at the node at {} ({})",

@@ -19,7 +19,7 @@ use super::setup::Simulation;
 use crate::contact::active_set::{
     ActiveSetSolver, ContactFailure, ContactOutcome, ContactState, FrictionRows, FrictionStatus,
 };
-use crate::contact::{ComplianceProfile, ContactLaw, LawTerm, NodalLaws, NormalStiffness, PiecewiseLinear, Symmetry};
+use crate::contact::NormalStiffness;
 
 /// Rounds of the Coulomb fixed point before the step fails.
 const COULOMB_ROUNDS: usize = 50;
@@ -49,43 +49,18 @@ pub(super) fn solve<const D: usize>(
     let all = friction.rows.len();
     // origins: the normal rows' gaps, the tangential rows' displacement of the previous step
     let offset: Vec<f64> = (0..all)
-        .map(|r| match r.checked_sub(m).map(|k| &friction.laws[k].0) {
+        .map(|r| match r.checked_sub(m).map(|k| &friction.laws[k]) {
             None => normal.offset.map_or(0.0, |o| o[r]),
             // a potential acts on the total tangential displacement
-            Some(FrictionLaw::Potential(_)) => 0.0,
+            Some(FrictionLaw::Potential) => 0.0,
             Some(_) => state.normal_displacement[r],
         })
         .collect();
     let bound: Option<Vec<f64>> = normal
         .bound
         .map(|g| (0..all).map(|r| if r < m { g[r] } else { f64::INFINITY }).collect());
-    // the laws: the normal rows' own, then one odd law of constant profile per width ε
-    let mut laws = setup.laws.laws.clone();
-    let mut law_of_width: Vec<(f64, usize)> = Vec::new();
-    let mut tangential_law = Vec::with_capacity(friction.laws.len());
-    for (law, eps) in &friction.laws {
-        if let FrictionLaw::Potential(l) = law {
-            laws.push(l.clone());
-            tangential_law.push(laws.len() - 1);
-            continue;
-        }
-        let index = match law_of_width.iter().find(|(e, _)| e == eps) {
-            Some(&(_, i)) => i,
-            None => {
-                laws.push(ContactLaw {
-                    scale: 1.0,
-                    profile: ComplianceProfile::PiecewiseLinear {
-                        table: PiecewiseLinear::new(&[(0.0, 1.0)]).expect("a constant profile"),
-                    },
-                    symmetry: Symmetry::Odd,
-                    epsilon: *eps,
-                });
-                law_of_width.push((*eps, laws.len() - 1));
-                laws.len() - 1
-            }
-        };
-        tangential_law.push(index);
-    }
+    // the laws of all rows, built once; the bound forces of Tresca and Coulomb set below
+    let mut laws = friction.laws_of_rows.clone();
     // the slip accumulated before this step
     let k_rows = friction.normal_row.len();
     let accumulated: Vec<f64> = if state.friction.accumulated.len() == k_rows {
@@ -100,9 +75,11 @@ pub(super) fn solve<const D: usize>(
             .map(|k| {
                 let p = friction.normal_row[k];
                 let x = sim.mesh.points[setup.nodes.nodes[p]];
-                let (value, what) = match &friction.laws[k].0 {
+                let (value, what) = match &friction.laws[k] {
                     // w_p S μ(|u_τ|): the law's strength where the row is
-                    FrictionLaw::Potential(law) => {
+                    FrictionLaw::Potential => {
+                        let rows = &friction.laws_of_rows;
+                        let law = &rows.laws[rows.terms(m + k)[0].law];
                         let u = state.normal_displacement[m + k].abs();
                         (law.scale * law.profile.slope(u), "the friction law's μ")
                     }
@@ -123,49 +100,32 @@ pub(super) fn solve<const D: usize>(
                         crate::mesh::fmt_point(x)
                     ));
                 }
-                Ok(match &friction.laws[k].0 {
+                Ok(match &friction.laws[k] {
                     FrictionLaw::Coulomb(_) => value * state.force[p].max(0.0),
-                    FrictionLaw::Tresca(_) | FrictionLaw::Potential(_) => setup.nodes.weights[p] * value,
+                    FrictionLaw::Tresca(_) | FrictionLaw::Potential => setup.nodes.weights[p] * value,
                 })
             })
             .collect()
-    };
-    let rows_with = |forces: &[f64]| -> NodalLaws {
-        let rows: Vec<Vec<LawTerm>> = (0..all)
-            .map(|r| {
-                if r < m {
-                    setup.laws.terms(r).to_vec()
-                } else {
-                    let k = r - m;
-                    vec![LawTerm {
-                        law: tangential_law[k],
-                        // a potential's law carries its own scale: the term weighs w_p
-                        weight: match friction.laws[k].0 {
-                            FrictionLaw::Potential(_) => setup.nodes.weights[friction.normal_row[k]],
-                            _ => forces[k],
-                        },
-                        group: setup.row_group[friction.normal_row[k]],
-                    }]
-                }
-            })
-            .collect();
-        NodalLaws::new(laws.clone(), &rows)
     };
     let failure = |reason: String, outcome: ContactOutcome| ContactFailure {
         outcome,
         reason,
         smallest_residual: f64::INFINITY,
     };
-    // (a potential's "bound" is an output only: it does not enter its law)
-    let coulomb = friction.laws.iter().any(|(l, _)| matches!(l, FrictionLaw::Coulomb(_)));
+    let coulomb = friction.laws.iter().any(|l| matches!(l, FrictionLaw::Coulomb(_)));
     // Coulomb's first round uses the previous step's normal forces (the warm start)
     let mut forces = bound_forces(state).map_err(|reason| failure(reason, ContactOutcome::default()))?;
     let mut total = ContactOutcome::default();
     for _ in 0..COULOMB_ROUNDS {
-        let nodal = rows_with(&forces);
+        // (a potential's "bound" is an output only: its term keeps the weight w_p)
+        for (k, law) in friction.laws.iter().enumerate() {
+            if !matches!(law, FrictionLaw::Potential) {
+                laws.set_weight(m + k, forces[k]);
+            }
+        }
         let solver = ActiveSetSolver {
             operator: normal.operator,
-            laws: &nodal,
+            laws: &laws,
             offset: Some(&offset),
             bound: bound.as_deref(),
             settings: setup.settings,

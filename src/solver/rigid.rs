@@ -20,12 +20,13 @@ use super::columns::PrescribedColumns;
 use super::error::SolveError;
 use crate::contact::{Condensation, ContactNodes, NormalStiffness};
 use crate::fem::DofMap;
+use crate::linalg::dense::symmetrise_row_major;
 use crate::linalg::{Counters, LinearSolver};
 
 /// What a step operator keeps for its rigid parameters.
 pub(super) struct RigidResponses {
-    /// The unknowns of each parameter.
-    unknowns: Vec<Vec<usize>>,
+    /// Each parameter's columns in `columns`.
+    ranges: Vec<std::ops::Range<usize>>,
     /// v_i over all unknowns (1 at the parameter's unknowns, 0 at the other prescribed ones).
     v: Vec<Vec<f64>>,
     /// The unmodified step matrix's columns at every parameter's unknowns, parameter after
@@ -55,33 +56,31 @@ impl RigidResponses {
     ) -> Self {
         let k = parameters.len();
         let n = solver.n();
-        let unknowns: Vec<Vec<usize>> = parameters.iter().map(|p| p.unknowns.clone()).collect();
-        let offsets: Vec<usize> = unknowns
+        // the columns hold the parameters' unknowns one parameter after the other
+        let ranges: Vec<std::ops::Range<usize>> = parameters
             .iter()
-            .scan(0, |s, u| {
-                let o = *s;
-                *s += u.len();
-                Some(o)
+            .scan(0, |start, p| {
+                let range = *start..*start + p.unknowns.len();
+                *start = range.end;
+                Some(range)
             })
             .collect();
         // (K x)_d at every parameter's unknowns, summed per parameter
         let per_parameter = |x: &[f64]| -> Vec<f64> {
             let mut at = vec![0.0; columns.len()];
             columns.add_product(x, &mut at);
-            (0..k)
-                .map(|i| at[offsets[i]..offsets[i] + unknowns[i].len()].iter().sum())
-                .collect()
+            ranges.iter().map(|r| at[r.clone()].iter().sum()).collect()
         };
         let mut v = Vec::with_capacity(k);
         let mut reference = Vec::with_capacity(k);
-        for u in &unknowns {
+        for (i, p) in parameters.iter().enumerate() {
+            let u = &p.unknowns;
             let mut e = vec![0.0; n];
             u.iter().for_each(|&d| e[d] = 1.0);
-            let i = v.len();
             reference.push(per_parameter(&e)[i].abs());
             // the lifting of e_i: rhs_f = −K_fP e_i, rhs_P = e_i
             let mut rhs = vec![0.0; n];
-            columns.lift_unit(offsets[i], u.len(), dofs, &mut rhs);
+            columns.lift_unit(ranges[i].clone(), dofs, &mut rhs);
             u.iter().for_each(|&d| rhs[d] = 1.0);
             let mut x = vec![0.0; n];
             solver.solve(&rhs, &mut x, counters);
@@ -120,13 +119,7 @@ impl RigidResponses {
             }
         }
         // S symmetrised; its eigenvalues against the parameters' own stiffness tell what is held
-        for i in 0..k {
-            for j in 0..i {
-                let avg = 0.5 * (s[i * k + j] + s[j * k + i]);
-                s[i * k + j] = avg;
-                s[j * k + i] = avg;
-            }
-        }
+        symmetrise_row_major(&mut s, k);
         let eigen = nalgebra::DMatrix::from_row_slice(k, k, &s).symmetric_eigen();
         let scale = reference.iter().fold(f64::MIN_POSITIVE, |a, &b| a.max(b));
         let mut s_plus = vec![0.0; k * k];
@@ -161,17 +154,10 @@ impl RigidResponses {
                     q[p * m + r] -= (0..k).map(|j| y[j][p] * q_d[j][r]).sum::<f64>();
                 }
             }
-            // symmetric against round-off
-            for p in 0..m {
-                for r in 0..p {
-                    let avg = 0.5 * (q[p * m + r] + q[r * m + p]);
-                    q[p * m + r] = avg;
-                    q[r * m + p] = avg;
-                }
-            }
+            symmetrise_row_major(q, m);
         }
         RigidResponses {
-            unknowns,
+            ranges,
             v,
             columns,
             s_plus,
@@ -188,8 +174,8 @@ impl RigidResponses {
 
     /// p̂ = P(t) − R⁰ with R⁰_i = −v_i·rhs + Σ_{d ∈ i} (K g)_d − f̃_i, the reactions with a = 0
     /// and no contact force: `rhs` lifted, `g` the prescribed values (None: 0), `loads` the
-    /// unlifted f̃ summed over each parameter's unknowns ([`Self::loads`]). A load along a motion
-    /// nothing holds is an error.
+    /// unlifted f̃ summed over each parameter's unknowns (the time loop's `rigid_loads`). A load
+    /// along a motion nothing holds is an error.
     pub(super) fn balance(
         &self,
         forces: &[f64],
@@ -202,16 +188,14 @@ impl RigidResponses {
         if let Some(g) = g {
             self.columns.add_product(g, &mut kg);
         }
-        let mut start = 0;
-        let mut p = Vec::with_capacity(k);
-        for i in 0..k {
-            let len = self.unknowns[i].len();
-            let r0 = -self.v[i].iter().zip(rhs).map(|(a, b)| a * b).sum::<f64>()
-                + kg[start..start + len].iter().sum::<f64>()
-                - loads[i];
-            start += len;
-            p.push(forces[i] - r0);
-        }
+        let p: Vec<f64> = (0..k)
+            .map(|i| {
+                let r0 = -self.v[i].iter().zip(rhs).map(|(a, b)| a * b).sum::<f64>()
+                    + kg[self.ranges[i].clone()].iter().sum::<f64>()
+                    - loads[i];
+                forces[i] - r0
+            })
+            .collect();
         let size = p.iter().chain(forces).chain(loads).fold(0.0f64, |a, b| a.max(b.abs()));
         for (u, name) in &self.unheld {
             let along: f64 = u.iter().zip(&p).map(|(a, b)| a * b).sum();
