@@ -980,6 +980,7 @@ fn case8_several_local_minima() {
             bound: Some(g),
             settings: c.settings,
             singular: false,
+            pairs: None,
         };
         let energy = |r: &[f64]| {
             let diff: Vec<f64> = r.iter().zip(&d).map(|(a, b)| a - b).collect();

@@ -624,6 +624,7 @@ fn a_stalled_contact_solve_names_the_tolerance_that_converges() {
             offset: None,
             bound: Some(&bound),
             singular: false,
+            pairs: None,
             settings: ContactSettings {
                 tolerance,
                 max_iterations: 100,

@@ -184,8 +184,8 @@ impl<const D: usize> FileSink<D> {
                 columns.truncate(1 + D);
                 columns.extend(["u_nu", "force", "pressure", "status", "group"]);
                 if sim.contact.as_ref().is_some_and(|c| c.friction.is_some()) {
-                    // docs/method.md §17: along τ = (−ν_y, ν_x)
-                    columns.extend(FRICTION_COLUMNS);
+                    // docs/method.md §17: along τ = (−ν_y, ν_x) in 2D, vectors in 3D
+                    columns.extend(if D == 2 { &FRICTION_COLUMNS[..] } else { &FRICTION_COLUMNS_3D[..] });
                 }
                 manifest.add("gamma3.csv")?;
                 Some(CsvTable::create(&dir.join("gamma3.csv"), &columns)?)
@@ -319,7 +319,7 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
             let mut normal = vec![0.0; c.nodes.len()];
             c.nodes.normal_displacements(view.displacement, &mut normal);
             let mut rows = Vec::with_capacity(c.nodes.len());
-            let tangential = c.friction.as_ref().map_or(Vec::new(), |f| f.row_of(c.nodes.len()));
+            let tangential = c.friction.as_ref().map_or(Vec::new(), |f| f.rows_of(c.nodes.len()));
             for (k, &p) in c.nodes.nodes.iter().enumerate() {
                 let pressure = state.force[k] / c.nodes.weights[k];
                 let mut row = vec![view.time];
@@ -334,8 +334,8 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
                     f64::from(state.status[k].code()),
                     f64::from(tag),
                 ]);
-                if c.friction.is_some() {
-                    row.extend(friction_columns(c.nodes.len(), tangential[k], state));
+                if let Some(f) = &c.friction {
+                    row.extend(friction_columns(f, &tangential[k], state));
                 }
                 rows.push(row);
             }
@@ -519,8 +519,9 @@ fn write_contact_frame<const D: usize>(
             };
             let tau = f.rows.normals[m + k];
             for d in 0..D {
-                slip[3 * i + d] = state.friction.slip[k] * tau[d];
-                force_tau[3 * i + d] = -state.force[m + k] * tau[d];
+                // (in 3D the node's two rows add up to the vectors)
+                slip[3 * i + d] += state.friction.slip[k] * tau[d];
+                force_tau[3 * i + d] -= state.force[m + k] * tau[d];
             }
             bound[i] = state.friction.bound[k];
             accumulated[i] = state.friction.accumulated[k];
@@ -561,7 +562,7 @@ fn write_contact_frame<const D: usize>(
     Ok(())
 }
 
-/// gamma3.csv's friction columns (docs/method.md §17).
+/// gamma3.csv's friction columns (docs/method.md §17): 2D, along τ.
 const FRICTION_COLUMNS: [&str; 6] = [
     "u_tau",
     "slip",
@@ -571,18 +572,57 @@ const FRICTION_COLUMNS: [&str; 6] = [
     "friction_status",
 ];
 
-/// The friction columns of normal row `k` with tangential row `tangential` (NaN and status −1
-/// where the row has none: its group has no friction, or its tangential direction is prescribed).
-fn friction_columns(m: usize, tangential: Option<usize>, state: &ContactState) -> [f64; 6] {
-    match tangential {
-        Some(t) if state.friction.slip.len() > t => [
-            state.normal_displacement[m + t],
-            state.friction.slip[t],
-            state.force[m + t],
-            state.friction.bound[t],
-            state.friction.accumulated[t],
-            f64::from(state.friction.status[t]),
-        ],
-        _ => [f64::NAN, f64::NAN, f64::NAN, f64::NAN, f64::NAN, -1.0],
+/// gamma3.csv's friction columns in 3D: the tangential displacement, slip increment and friction
+/// force as vectors (docs/method.md §17.3).
+const FRICTION_COLUMNS_3D: [&str; 12] = [
+    "u_tau_x",
+    "u_tau_y",
+    "u_tau_z",
+    "slip_x",
+    "slip_y",
+    "slip_z",
+    "force_tau_x",
+    "force_tau_y",
+    "force_tau_z",
+    "friction_bound",
+    "accumulated_slip",
+    "friction_status",
+];
+
+/// The friction columns of a normal row with tangential rows `tangential` (NaN and status −1
+/// where it has none: its group has no friction, or its tangential directions are prescribed).
+/// In 3D the vectors are Σ_k value_k τ_k over the row's tangential rows.
+fn friction_columns<const D: usize>(f: &crate::solver::contact::Friction<D>, tangential: &[usize], state: &ContactState) -> Vec<f64> {
+    let m = f.rows.len() - f.normal_row.len();
+    let Some(&first) = tangential.first().filter(|&&t| state.friction.slip.len() > t) else {
+        let width = if D == 2 { FRICTION_COLUMNS.len() } else { FRICTION_COLUMNS_3D.len() };
+        let mut row = vec![f64::NAN; width];
+        row[width - 1] = -1.0;
+        return row;
+    };
+    let values: [&dyn Fn(usize) -> f64; 3] = [
+        &|t| state.normal_displacement[m + t],
+        &|t| state.friction.slip[t],
+        &|t| state.force[m + t],
+    ];
+    let mut row = Vec::with_capacity(12);
+    for value in values {
+        if D == 2 {
+            row.push(value(first));
+        } else {
+            let mut v = [0.0; 3];
+            for &t in tangential {
+                for (d, vd) in v.iter_mut().enumerate().take(D) {
+                    *vd += value(t) * f.rows.normals[m + t][d];
+                }
+            }
+            row.extend(v);
+        }
     }
+    row.extend([
+        state.friction.bound[first],
+        state.friction.accumulated[first],
+        f64::from(state.friction.status[first]),
+    ]);
+    row
 }

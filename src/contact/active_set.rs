@@ -230,6 +230,22 @@ pub struct ActiveSetSolver<'a> {
     /// proximal shift min(10⁻⁶, relative residual) · Q_pp, which bounds the first steps of a body
     /// not yet touching and vanishes as the solve converges.
     pub singular: bool,
+    /// Per row, its partner in a pair whose law acts on the pair's length (usize::MAX: none), or
+    /// `None` for no pairs: 3D friction's two tangential rows, whose slip is a vector in the
+    /// tangent plane (docs/method.md §17.3). Paired rows have no bound and the same one term;
+    /// their energy is w j(|(s_p, s_q)|).
+    pub pairs: Option<&'a [usize]>,
+}
+
+/// The Hessian of the laws on the Newton system's free rows: diagonal, the coupling of each
+/// row to its pair's other row (at `partner`, the free index, usize::MAX: none), and both
+/// convexified (the laws' negative curvatures dropped).
+struct LawHessian {
+    diagonal: Vec<f64>,
+    coupling: Vec<f64>,
+    convex_diagonal: Vec<f64>,
+    convex_coupling: Vec<f64>,
+    partner: Vec<usize>,
 }
 
 const ARMIJO: f64 = 1e-4;
@@ -254,9 +270,34 @@ impl ActiveSetSolver<'_> {
         self.offset.map_or(0.0, |o| o[p])
     }
 
+    /// Row p's partner in a pair (docs/method.md §17.3).
     #[inline]
-    fn law_derivative(&self, p: usize, r: f64) -> f64 {
-        self.laws.force(p, r - self.origin(p))
+    fn partner(&self, p: usize) -> Option<usize> {
+        self.pairs.map(|q| q[p]).filter(|&q| q != usize::MAX)
+    }
+
+    /// The pair (s_p, s_q) of penetrations past the origins and its length ρ.
+    #[inline]
+    fn pair_at(&self, r: &[f64], p: usize, q: usize) -> ([f64; 2], f64) {
+        let x = [r[p] - self.origin(p), r[q] - self.origin(q)];
+        (x, x[0].hypot(x[1]))
+    }
+
+    /// The laws' force on row p at r: w j'(s_p), or for a pair the component
+    /// w j'(ρ) s_p / ρ of the force along the pair's vector (docs/method.md §17.3).
+    #[inline]
+    fn law_force(&self, r: &[f64], p: usize) -> f64 {
+        match self.partner(p) {
+            None => self.laws.force(p, r[p] - self.origin(p)),
+            Some(q) => {
+                let (x, rho) = self.pair_at(r, p, q);
+                if rho > 0.0 {
+                    self.laws.force(p, rho) * x[0] / rho
+                } else {
+                    0.0
+                }
+            }
+        }
     }
 
     /// Q r − q (= Q(r − d), minus the contact force λ) and the gradient G of E at r.
@@ -264,8 +305,53 @@ impl ActiveSetSolver<'_> {
         self.operator.apply_q(r, qrd);
         for p in 0..self.m() {
             qrd[p] -= q[p];
-            grad[p] = qrd[p] + self.law_derivative(p, r[p]);
+            grad[p] = qrd[p] + self.law_force(r, p);
         }
+    }
+
+    /// The laws' Hessian on the free rows at r. A pair's block is a n nᵀ + b (I − n nᵀ), n the
+    /// unit vector of the pair, a = w j''(ρ) along it and b = w j'(ρ)/ρ across it (the slip
+    /// direction's turning stiffness; w j''(0) at ρ = 0, where the smoothed law is isotropic);
+    /// convexified, a and b each by max(·, 0) (docs/method.md §17.3).
+    fn law_hessian(&self, r: &[f64], free: &[usize]) -> LawHessian {
+        let nf = free.len();
+        let mut h = LawHessian {
+            diagonal: vec![0.0; nf],
+            coupling: vec![0.0; nf],
+            convex_diagonal: vec![0.0; nf],
+            convex_coupling: vec![0.0; nf],
+            partner: vec![usize::MAX; nf],
+        };
+        let mut index = Vec::new();
+        if self.pairs.is_some() {
+            index = vec![usize::MAX; self.m()];
+            for (i, &p) in free.iter().enumerate() {
+                index[p] = i;
+            }
+        }
+        for (i, &p) in free.iter().enumerate() {
+            match self.partner(p) {
+                None => {
+                    let e = self.laws.stiffness(p, r[p] - self.origin(p));
+                    h.diagonal[i] = e;
+                    h.convex_diagonal[i] = e.max(0.0);
+                }
+                Some(q) => {
+                    let (x, rho) = self.pair_at(r, p, q);
+                    let a = self.laws.stiffness(p, rho);
+                    let (b, n) = if rho > 0.0 {
+                        (self.laws.force(p, rho) / rho, [x[0] / rho, x[1] / rho])
+                    } else {
+                        (a, [1.0, 0.0])
+                    };
+                    let block = |a: f64, b: f64| (b + (a - b) * n[0] * n[0], (a - b) * n[0] * n[1]);
+                    (h.diagonal[i], h.coupling[i]) = block(a, b);
+                    (h.convex_diagonal[i], h.convex_coupling[i]) = block(a.max(0.0), b.max(0.0));
+                    h.partner[i] = index[q];
+                }
+            }
+        }
+        h
     }
 
     /// max_p |min(c_p(g_p − r_p), −G_p)| (|G_p| without a bound), in force units.
@@ -298,10 +384,30 @@ impl ActiveSetSolver<'_> {
         for p in 0..m {
             change += delta[p] * (grad[p] + 0.5 * qdelta[p]);
             if !self.laws.is_empty() {
-                change += self.laws.energy_increment(p, r[p] - self.origin(p), delta[p]);
+                change += match self.partner(p) {
+                    None => self.laws.energy_increment(p, r[p] - self.origin(p), delta[p]),
+                    Some(q) if q > p => self.pair_energy_increment(r, delta, p, q),
+                    Some(_) => 0.0,
+                };
             }
         }
         change
+    }
+
+    /// A pair's w [j(ρ') − j(ρ) − j'(ρ) n·Δ], ρ' = |x + Δ|: the radial part from
+    /// [`NodalLaws::energy_increment`], plus w j'(ρ) [(ρ' − ρ) − n·Δ] written as
+    /// |Δ|²/(ρ + ρ') + (x·Δ)(ρ − ρ')/(ρ(ρ + ρ')), second order with no cancellation.
+    fn pair_energy_increment(&self, r: &[f64], delta: &[f64], p: usize, q: usize) -> f64 {
+        let (x, rho) = self.pair_at(r, p, q);
+        let dx = [delta[p], delta[q]];
+        let moved = (x[0] + dx[0]).hypot(x[1] + dx[1]);
+        let radial = self.laws.energy_increment(p, rho, moved - rho);
+        if rho == 0.0 {
+            return radial;
+        }
+        let (dd, xd) = (dx[0] * dx[0] + dx[1] * dx[1], x[0] * dx[0] + x[1] * dx[1]);
+        let sum = rho + moved;
+        radial + self.laws.force(p, rho) * (dd / sum + xd * (rho - moved) / (rho * sum))
     }
 
     /// The complementarity residual at r + Δ.
@@ -438,15 +544,12 @@ impl ActiveSetSolver<'_> {
             } else {
                 0.0
             };
-            let curvature: Vec<f64> = free
-                .iter()
-                .map(|&p| self.laws.stiffness(p, r[p] - self.origin(p)))
-                .collect();
+            let hessian = self.law_hessian(r, &free);
             // (kept through the convexification, which drops only the laws' negative part)
             let proximal: Vec<f64> = free.iter().map(|&p| proximal * self.c(p)).collect();
             let free_dir = self.newton_direction(
                 &free,
-                (&curvature, &proximal),
+                (&hessian, &proximal),
                 &grad,
                 &mut outcome,
                 &mut state.newton_factor,
@@ -468,7 +571,8 @@ impl ActiveSetSolver<'_> {
                 for p in 0..m {
                     let mut moved = (r[p] - alpha * direction[p]).min(self.g(p));
                     let o = self.origin(p);
-                    if !active[p] && (r[p] - o).abs() > kink[p] && (moved - o) * (r[p] - o) < 0.0 {
+                    let single = self.partner(p).is_none();
+                    if single && !active[p] && (r[p] - o).abs() > kink[p] && (moved - o) * (r[p] - o) < 0.0 {
                         // stop at the kink: the first-order decrease is that of the shorter move
                         decrease_bound += grad[p] * (r[p] - o - alpha * direction[p]);
                         moved = o;
@@ -476,6 +580,20 @@ impl ActiveSetSolver<'_> {
                     trial[p] = moved - r[p];
                     if active[p] {
                         decrease_bound -= grad[p] * trial[p];
+                    }
+                }
+                // a pair's path x − s d stops where it passes the origin (x·(x − αd) < 0), at
+                // its nearest point s* = x·d/|d|² (docs/method.md §17.3)
+                for p in (0..m).filter(|&p| self.partner(p).is_some_and(|q| q > p)) {
+                    let q = self.partner(p).expect("a pair");
+                    let (x, rho) = self.pair_at(r, p, q);
+                    let d = [direction[p], direction[q]];
+                    let along = x[0] * d[0] + x[1] * d[1];
+                    if rho > kink[p] && rho * rho < alpha * along {
+                        let nearest = along / (d[0] * d[0] + d[1] * d[1]);
+                        decrease_bound += (nearest - alpha) * (grad[p] * d[0] + grad[q] * d[1]);
+                        trial[p] = -nearest * d[0];
+                        trial[q] = -nearest * d[1];
                     }
                 }
                 let change = self.energy_change(r, &trial, &grad);
@@ -514,14 +632,14 @@ impl ActiveSetSolver<'_> {
         Ok(outcome)
     }
 
-    /// Solves (Q_ℐℐ + diag(curvature + proximal)) x = G_ℐ, convexifying the curvature (the laws'
-    /// part) when indefinite. Above
+    /// Solves (Q_ℐℐ + H + diag(proximal)) x = G_ℐ, H the laws' Hessian (diagonal, and 2 × 2
+    /// blocks on pairs), convexifying H when the matrix is indefinite. Above
     /// `dense_limit` free nodes the factorisation is kept in `kept` and reused by
     /// [`Self::preconditioned_cg`] until it no longer serves (docs/method.md §9.2).
     fn newton_direction(
         &self,
         free: &[usize],
-        (curvature, proximal): (&[f64], &[f64]),
+        (hessian, proximal): (&LawHessian, &[f64]),
         grad: &[f64],
         outcome: &mut ContactOutcome,
         kept: &mut KeptFactor,
@@ -531,34 +649,42 @@ impl ActiveSetSolver<'_> {
         if nf == 0 {
             return Vec::new();
         }
-        let exact: Vec<f64> = curvature.iter().zip(proximal).map(|(e, p)| e + p).collect();
+        let exact: Vec<f64> = hessian.diagonal.iter().zip(proximal).map(|(e, p)| e + p).collect();
         let reuse = nf > self.settings.dense_limit;
         let reused = (kept.0.as_ref())
             .filter(|k| reuse && k.fingerprint == fingerprint)
-            .and_then(|k| self.preconditioned_cg(k, free, &exact, grad));
+            .and_then(|k| self.preconditioned_cg(k, free, (&exact, hessian), grad));
         if let Some(x) = reused {
             outcome.iterative += 1;
             return x;
         }
         outcome.factorisations += 1;
         let rhs: Vec<f64> = (0..nf).map(|i| grad[free[i]]).collect();
-        let build = |diag: &[f64]| {
+        let build = |diag: &[f64], coupling: &[f64]| {
             DenseCholesky::new(nf, |i, j| {
-                self.operator.q(free[i], free[j]) + if i == j { diag[i] } else { 0.0 }
+                self.operator.q(free[i], free[j])
+                    + if i == j {
+                        diag[i]
+                    } else if hessian.partner[i] == j {
+                        coupling[i]
+                    } else {
+                        0.0
+                    }
             })
         };
-        let (llt, diagonal) = match build(&exact) {
+        let (llt, diagonal) = match build(&exact, &hessian.coupling) {
             Some(llt) => (llt, exact),
             None => {
                 outcome.convexified += 1;
                 let mut shift = 0.0;
                 loop {
-                    let diagonal: Vec<f64> = curvature
+                    let diagonal: Vec<f64> = hessian
+                        .convex_diagonal
                         .iter()
                         .zip(proximal)
-                        .map(|(e, p)| e.max(0.0) + p + shift)
+                        .map(|(e, p)| e + p + shift)
                         .collect();
-                    if let Some(llt) = build(&diagonal) {
+                    if let Some(llt) = build(&diagonal, &hessian.convex_coupling) {
                         break (llt, diagonal);
                     }
                     shift = if shift == 0.0 {
@@ -608,7 +734,7 @@ impl ActiveSetSolver<'_> {
         &self,
         kept: &ReusedFactor,
         free: &[usize],
-        curvature: &[f64],
+        (curvature, hessian): (&[f64], &LawHessian),
         grad: &[f64],
     ) -> Option<Vec<f64>> {
         let (m, nf) = (self.m(), free.len());
@@ -635,6 +761,9 @@ impl ActiveSetSolver<'_> {
             self.operator.apply_q(&full, &mut product);
             for (i, &p) in free.iter().enumerate() {
                 y[i] = product[p] + curvature[i] * x[i];
+                if let Some(&j) = hessian.partner.get(i).filter(|&&j| j != usize::MAX) {
+                    y[i] += hessian.coupling[i] * x[j];
+                }
             }
         };
         let mut kept_rhs = vec![0.0; kept.diagonal.len()];
@@ -708,7 +837,7 @@ impl ActiveSetSolver<'_> {
         for p in 0..m {
             let r = state.normal_displacement[p];
             let lambda = -qrd_final[p];
-            let xi = self.law_derivative(p, r);
+            let xi = self.law_force(&state.normal_displacement, p);
             let on_bound = r >= self.g(p);
             state.force[p] = lambda;
             state.compliance_force[p] = xi;
@@ -776,6 +905,7 @@ mod tests {
                 offset: None,
                 bound: Some(&bound),
                 singular: false,
+                pairs: None,
                 settings: ContactSettings {
                     tolerance: 1e-12,
                     max_iterations: 100,

@@ -92,6 +92,10 @@ pub struct Friction<const D: usize> {
     pub rows: ContactNodes<D>,
     /// Per tangential row: its normal row.
     pub normal_row: Vec<usize>,
+    /// Over all rows: the other tangential row of the same normal row in 3D (usize::MAX:
+    /// none), whose slip with this one is a vector of the tangent plane (docs/method.md §17.3);
+    /// None in 2D.
+    pub pairs: Option<Vec<usize>>,
     /// Per tangential row: its law.
     pub laws: Vec<FrictionLaw>,
     /// The laws of every row, built once: the normal rows' terms, then one term per tangential
@@ -102,21 +106,53 @@ pub struct Friction<const D: usize> {
 }
 
 impl<const D: usize> Friction<D> {
-    /// The tangential row of each of the m normal rows (None: it has none).
-    pub fn row_of(&self, m: usize) -> Vec<Option<usize>> {
-        let mut out = vec![None; m];
+    /// The tangential rows of each of the m normal rows (none, one, or in 3D two).
+    pub fn rows_of(&self, m: usize) -> Vec<Vec<usize>> {
+        let mut out = vec![Vec::new(); m];
         for (k, &p) in self.normal_row.iter().enumerate() {
-            out[p] = Some(k);
+            out[p].push(k);
         }
         out
     }
 
-    /// The unit tangent of a 2D normal ν: τ = (−ν_y, ν_x).
-    fn tangent(nu: [f64; D]) -> [f64; D] {
+    /// The other tangential row of tangential row k's pair (3D), if it has one.
+    pub fn partner(&self, k: usize) -> Option<usize> {
+        let m = self.rows.len() - self.normal_row.len();
+        self.pairs.as_ref().map(|p| p[m + k]).filter(|&q| q != usize::MAX).map(|q| q - m)
+    }
+
+    /// The length of tangential row k's value v(k): |v(k)|, or in 3D the length of its pair's
+    /// vector (docs/method.md §17.3).
+    pub fn length(&self, k: usize, v: impl Fn(usize) -> f64) -> f64 {
+        match self.partner(k) {
+            Some(j) => v(k).hypot(v(j)),
+            None => v(k).abs(),
+        }
+    }
+
+    /// The fixed unit tangents of a normal ν (docs/method.md §17.3). 2D: τ = (−ν_y, ν_x). 3D:
+    /// τ₁ the axis e_k least aligned with ν (the first of equals) made orthogonal to it,
+    /// τ₁ = (e_k − ν_k ν)/|e_k − ν_k ν|, and τ₂ = ν × τ₁; so a face normal to an axis gets
+    /// axis tangents, and a symmetry plane's prescribed component is one whole tangential row.
+    pub fn tangents(nu: [f64; D]) -> Vec<[f64; D]> {
         let mut t = [0.0; D];
-        t[0] = -nu[1];
-        t[1] = nu[0];
-        t
+        if D == 2 {
+            t[0] = -nu[1];
+            t[1] = nu[0];
+            return vec![t];
+        }
+        let k = (0..D).fold(0, |k, c| if nu[c].abs() < nu[k].abs() { c } else { k });
+        for c in 0..D {
+            t[c] = f64::from(u8::from(c == k)) - nu[k] * nu[c];
+        }
+        let norm = t.iter().map(|v| v * v).sum::<f64>().sqrt();
+        t.iter_mut().for_each(|v| *v /= norm);
+        let mut t2 = [0.0; D];
+        for c in 0..D {
+            let (a, b) = ((c + 1) % D, (c + 2) % D);
+            t2[c] = nu[a] * t[b] - nu[b] * t[a];
+        }
+        vec![t, t2]
     }
 }
 
@@ -455,12 +491,6 @@ fn friction_rows<const D: usize>(
     if specs.iter().all(|f| f.is_none()) {
         return Ok(None);
     }
-    if D != 2 {
-        return Err(SolveError::Setup(format!(
-            "{origin}: friction is solved in 2D so far (docs/method.md §17); in 3D the slip is a vector in the \
-             tangent plane, which the contact solve does not handle yet: remove the friction table or run a 2D model"
-        )));
-    }
     let mut laws_of_group = Vec::with_capacity(specs.len());
     for (g, spec) in specs.iter().enumerate() {
         laws_of_group.push(match spec {
@@ -498,24 +528,28 @@ fn friction_rows<const D: usize>(
         });
     }
     let m = nodes.len();
-    let with: Vec<usize> = (0..m).filter(|&p| laws_of_group[row_group[p]].is_some()).collect();
+    // the candidate tangential rows: (normal row, tangent), D − 1 per normal row with friction
+    let with: Vec<(usize, [f64; D])> = (0..m)
+        .filter(|&p| laws_of_group[row_group[p]].is_some())
+        .flat_map(|p| Friction::<D>::tangents(nodes.normals[p]).into_iter().map(move |t| (p, t)))
+        .collect();
     let all_nodes: Vec<usize> = nodes
         .nodes
         .iter()
         .copied()
-        .chain(with.iter().map(|&p| nodes.nodes[p]))
+        .chain(with.iter().map(|&(p, _)| nodes.nodes[p]))
         .collect();
     let weights: Vec<f64> = nodes
         .weights
         .iter()
         .copied()
-        .chain(with.iter().map(|&p| nodes.weights[p]))
+        .chain(with.iter().map(|&(p, _)| nodes.weights[p]))
         .collect();
     let directions: Vec<[f64; D]> = nodes
         .normals
         .iter()
         .copied()
-        .chain(with.iter().map(|&p| Friction::<D>::tangent(nodes.normals[p])))
+        .chain(with.iter().map(|&(_, t)| t))
         .collect();
     let (rows, kept) = ContactNodes::from_rows(&all_nodes, &weights, &directions, dofs);
     if kept[..m.min(kept.len())] != (0..m).collect::<Vec<_>>()[..] {
@@ -523,7 +557,17 @@ fn friction_rows<const D: usize>(
             "{origin}: the contact rows changed when their tangential rows were added (a bug: please report it)"
         )));
     }
-    let tangential: Vec<usize> = kept[m..].iter().map(|&k| with[k - m]).collect();
+    let tangential: Vec<usize> = kept[m..].iter().map(|&k| with[k - m].0).collect();
+    // 3D: the two kept tangential rows of a normal row form a pair (docs/method.md §17.3)
+    let pairs = (D == 3).then(|| {
+        let mut pairs = vec![usize::MAX; m + tangential.len()];
+        for k in 1..tangential.len() {
+            if tangential[k] == tangential[k - 1] {
+                (pairs[m + k - 1], pairs[m + k]) = (m + k, m + k - 1);
+            }
+        }
+        pairs
+    });
     // one law per group with friction, after the normal rows' laws
     let mut all_laws = normal_laws.laws.clone();
     let law_index: Vec<Option<usize>> = laws_of_group
@@ -555,6 +599,7 @@ fn friction_rows<const D: usize>(
     Ok(Some(Friction {
         rows,
         normal_row: tangential,
+        pairs,
         laws,
         laws_of_rows: NodalLaws::new(all_laws, &terms),
     }))

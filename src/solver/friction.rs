@@ -71,6 +71,7 @@ pub(super) fn solve<const D: usize>(
     // the bound force of each tangential row, given the state (Coulomb: its normal force and,
     // for μ(s), its accumulated slip with this step's increment)
     let bound_forces = |state: &ContactState| -> Result<Vec<f64>, String> {
+        let slip = |k: usize| state.normal_displacement[m + k] - offset[m + k];
         (0..k_rows)
             .map(|k| {
                 let p = friction.normal_row[k];
@@ -80,11 +81,11 @@ pub(super) fn solve<const D: usize>(
                     FrictionLaw::Potential => {
                         let rows = &friction.laws_of_rows;
                         let law = &rows.laws[rows.terms(m + k)[0].law];
-                        let u = state.normal_displacement[m + k].abs();
+                        let u = friction.length(k, |k| state.normal_displacement[m + k]);
                         (law.scale * law.profile.slope(u), "the friction law's μ")
                     }
                     FrictionLaw::Coulomb(mu) => {
-                        let s = accumulated[k] + (state.normal_displacement[m + k] - offset[m + k]).abs();
+                        let s = accumulated[k] + friction.length(k, slip);
                         (mu.at(s), "the friction coefficient")
                     }
                     FrictionLaw::Tresca(e) => {
@@ -130,6 +131,7 @@ pub(super) fn solve<const D: usize>(
             bound: bound.as_deref(),
             settings: setup.settings,
             singular: normal.singular,
+            pairs: friction.pairs.as_deref(),
         };
         let outcome = solver.solve_forces(q, state).map_err(|mut f| {
             f.outcome.iterations += total.iterations;
@@ -147,7 +149,7 @@ pub(super) fn solve<const D: usize>(
         let scale = state.force[..m].iter().fold(f64::MIN_POSITIVE, |a, b| a.max(b.abs()));
         let change = next.iter().zip(&forces).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
         if !coulomb || change <= setup.settings.tolerance * scale {
-            record(state, (m, &friction.normal_row), &offset, &accumulated, &forces);
+            record(state, friction, &offset, &accumulated, &forces);
             return Ok(total);
         }
         forces = next;
@@ -163,31 +165,35 @@ pub(super) fn solve<const D: usize>(
 
 /// The tangential rows' slip, accumulated slip, bound force and status after the step
 /// (docs/method.md §17): separated where the normal row carries no force (below 10⁻¹² of the
-/// largest), else stick where
-/// |λ_τ| < F (1 − 10⁻⁶), slip at F.
-fn record(
+/// largest), else stick where |λ_τ| < F (1 − 10⁻⁶), slip at F; |·| the length of the pair's
+/// vector in 3D, whose two rows get the same accumulated slip and status.
+fn record<const D: usize>(
     state: &mut ContactState,
-    (m, normal_row): (usize, &[usize]),
+    friction: &Friction<D>,
     offset: &[f64],
     accumulated: &[f64],
     forces: &[f64],
 ) {
     let k_rows = forces.len();
+    let m = friction.rows.len() - k_rows;
+    let normal_row = &friction.normal_row;
     // a normal force below 1e-12 of the largest is round-off of a node off the bound
     let largest = normal_row.iter().fold(0.0f64, |a, &p| a.max(state.force[p]));
+    let slip: Vec<f64> = (0..k_rows)
+        .map(|k| state.normal_displacement[m + k] - offset[m + k])
+        .collect();
     let mut rows = FrictionRows {
-        slip: Vec::with_capacity(k_rows),
+        slip: slip.clone(),
         accumulated: Vec::with_capacity(k_rows),
         bound: forces.to_vec(),
         status: Vec::with_capacity(k_rows),
     };
     for k in 0..k_rows {
-        let slip = state.normal_displacement[m + k] - offset[m + k];
-        rows.slip.push(slip);
-        rows.accumulated.push(accumulated[k] + slip.abs());
+        rows.accumulated.push(accumulated[k] + friction.length(k, |k| slip[k]));
+        let force = friction.length(k, |k| state.force[m + k]);
         rows.status.push(if state.force[normal_row[k]] <= 1e-12 * largest {
             FrictionStatus::Separated
-        } else if state.force[m + k].abs() < forces[k] * (1.0 - 1e-6) {
+        } else if force < forces[k] * (1.0 - 1e-6) {
             FrictionStatus::Stick
         } else {
             FrictionStatus::Slip

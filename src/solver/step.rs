@@ -214,6 +214,7 @@ fn contact_solve<const D: usize>(
             bound,
             settings: setup.settings,
             singular: op_singular,
+            pairs: None,
         }
         .solve_forces(q, state),
     };
