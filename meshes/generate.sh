@@ -119,6 +119,16 @@ python3 check_orientation.py | grep -E '^[^ ]|ERROR'
     echo "wrote hertz_3d.msh ($(wc -c <hertz_3d.msh) bytes)"
 )
 
+# The gallery's Cattaneo–Mindlin meshes (examples/gallery/cattaneo_2d, cattaneo_3d; tests/friction.rs).
+(
+    cd ../examples/gallery/cattaneo_2d
+    gmsh -2 cattaneo_2d.geo -format msh41 -o cattaneo_2d.msh >/dev/null
+    echo "wrote cattaneo_2d.msh ($(wc -c <cattaneo_2d.msh) bytes)"
+    cd ../cattaneo_3d
+    gmsh -3 cattaneo_3d.geo -format msh41 -o cattaneo_3d.msh >/dev/null
+    echo "wrote cattaneo_3d.msh ($(wc -c <cattaneo_3d.msh) bytes)"
+)
+
 # The gallery's two contact zones (examples/gallery/two_zones): Q1, h = 0.05, 0.02 at the right foot.
 (
     cd ../examples/gallery/two_zones
