@@ -245,7 +245,10 @@ fn cattaneo_mindlin_stick_zone_in_3d() {
         x0 / a
     );
     assert!((0.3..0.7).contains(&ratio), "Q/(μP) = {ratio}: not a partial-slip load");
-    assert!(sticking > 50 && sticking < m, "partial slip expected: {sticking} of {m} stick");
+    assert!(
+        sticking > 50 && sticking < m,
+        "partial slip expected: {sticking} of {m} stick"
+    );
     assert!((a / a_hertz - 1.0).abs() < 0.03, "a = {a} against Hertz {a_hertz}");
     assert!(
         (stick / a / mindlin - 1.0).abs() < 0.05,
@@ -431,7 +434,7 @@ fn a_non_monotone_friction_potential_gives_its_law_at_every_node() {
     assert!(checked >= 3 * m, "only {checked} rows were displaced enough to check");
 }
 
-/// The forces add up with friction (docs/method.md §14.4, §17.3): on the Cattaneo–Mindlin scene
+/// The forces add up with friction (docs/method.md §14.4, §17.5): on the Cattaneo–Mindlin scene
 /// (no load) the base's reactions and the contact group's total force — its tangential part
 /// included — cancel in both components at every step, to 1e-10 of the normal force.
 #[test]
@@ -620,7 +623,11 @@ tolerance = 1e-12
                     s => panic!("{name}: base node {p} has status {s}"),
                 }
             }
-            assert!(step.time < 0.25 || sliding == m, "{name} t = {}: {sliding} of {m} slide", step.time);
+            assert!(
+                step.time < 0.25 || sliding == m,
+                "{name} t = {}: {sliding} of {m} slide",
+                step.time
+            );
         }
         let state = sink.steps[STEPS].contact.as_ref().unwrap();
         let normal: f64 = state.force[..m].iter().sum();
@@ -650,5 +657,206 @@ tolerance = 1e-12
         }
         eprintln!("{name}: the base's slip at T differs from the top's increment by {worst:.1e} of it");
         assert!(worst <= 1e-3, "{name}: {worst:e}");
+    }
+}
+
+/// A block on a bilateral support (docs/method.md §17.4): the base of (0, 1) × (0, 0.5) cannot
+/// leave y = 0 nor press into it, its top pulled up by 0.001 and dragged along x by 0.01 t.
+fn bilateral(friction: &str, steps: usize) -> String {
+    format!(
+        r#"
+[material]
+plane = "strain"
+youngs_modulus = 1.0
+poisson_ratio = 0.3
+
+[time]
+final_time = 1.0
+steps = {steps}
+
+[[dirichlet]]
+group = "Gamma2_top"
+components = ["x", "y"]
+value = ["0.01*t", "0.001"]
+
+[contact]
+bilateral = true
+friction = {friction}
+
+[solver]
+tolerance = 1e-13
+"#
+    )
+}
+
+/// Bilateral contact with a non-monotone friction potential, the hemivariational case of the
+/// literature (docs/method.md §17.4). The base holds u_ν = 0 at every row (to 1e-15 of the top's
+/// drag) while the pulled top makes the normal forces tensile (λ_ν < 0, which a one-sided
+/// contact cannot carry), and at every row and step the tangential force lies in the Clarke
+/// subdifferential w_p S ∂j_τ(u_τ) of the unregularised law — at the paper's softening profile
+/// μ(ρ) = 0.5 e^{−100ρ} + 0.5 — widened by what the smoothing ρ_ε = √(u² + ε²) − ε changes:
+/// w_p S (|μ'| ε + μ ε²/(2u²)) ≤ w_p S (50 ε + ε²/u²), ε = 1e-8, plus the solve's 1e-13.
+/// With a monotone μ (piecewise linear from 0.5 up to 1) the potential is convex and the problem
+/// at T has one solution, whatever the path: one step and eight steps to T agree to 1e-9, where
+/// the non-monotone law's two paths need not.
+#[test]
+fn bilateral_contact_with_a_non_monotone_friction_potential() {
+    use hvi::contact::ContactLaw;
+    let paper = "{ kind = \"potential\", law = { kind = \"paper\", scale = 1e-3, a = 1.0, b = 0.5, alpha = 100.0 } }";
+    let mesh = || rectangle_with_sides(1.0, 0.5, 16, 8, CellShape::Quad);
+    let (sim, _, sink) = solve_in_memory(&scene(&bilateral(paper, 8)), mesh()).unwrap_or_else(|e| panic!("{e}"));
+    let c = sim.contact.as_ref().unwrap();
+    let f = c.friction.as_ref().unwrap();
+    let m = c.nodes.len();
+    let rows = &f.laws_of_rows;
+    let law: &ContactLaw = &rows.laws[rows.terms(m)[0].law];
+    let (mut checked, mut tensile) = (0, 0);
+    for step in &sink.steps[1..] {
+        let state = step.contact.as_ref().unwrap();
+        for p in 0..m {
+            assert!(
+                state.normal_displacement[p].abs() <= 1e-15 * 0.01,
+                "t = {}: u_ν = {:e} on the bilateral base",
+                step.time,
+                state.normal_displacement[p]
+            );
+            tensile += usize::from(state.force[p] < 0.0);
+        }
+        for (k, &p) in f.normal_row.iter().enumerate() {
+            let (u, got) = (state.normal_displacement[m + k], state.force[m + k]);
+            let w = c.nodes.weights[p];
+            let (lo, hi) = law.clarke_interval(u);
+            let slack = w * 1e-3 * (50.0 * 1e-8 + if u == 0.0 { 0.0 } else { (1e-8 / u).powi(2).min(1.0) }) + 1e-13;
+            assert!(
+                got >= w * lo - slack && got <= w * hi + slack,
+                "t = {}: row {k} at u_τ = {u:e} carries {got:e}, outside w S ∂j = [{:e}, {:e}]",
+                step.time,
+                w * lo,
+                w * hi
+            );
+            checked += 1;
+        }
+    }
+    assert!(tensile > 0, "the pulled top should make some normal forces tensile");
+    assert!(checked >= 8 * m);
+    // monotone μ: the convex problem's one solution, by two paths
+    let convex = "{ kind = \"potential\", law = { kind = \"piecewise_linear\", scale = 1e-3, table = [[0.0, 0.5], [0.002, 1.0], [1.0, 1.0]] } }";
+    let last = |steps: usize| {
+        let (_, _, sink) = solve_in_memory(&scene(&bilateral(convex, steps)), mesh()).unwrap_or_else(|e| panic!("{e}"));
+        sink.steps.last().unwrap().displacement.clone()
+    };
+    let (one, eight) = (last(1), last(8));
+    let scale = one.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    let diff = one.iter().zip(&eight).fold(0.0f64, |a, (x, y)| a.max((x - y).abs())) / scale;
+    eprintln!("bilateral, monotone μ: one step against eight, max |Δu| / max |u| = {diff:.1e}");
+    assert!(diff <= 1e-9, "{diff:e}");
+}
+
+/// Bilateral contact holds u_ν = 0: a law or a bound beside it is refused by key and fix.
+#[test]
+fn bilateral_contact_with_a_law_or_a_bound_is_refused_by_name() {
+    for extra in [
+        "bound = \"0.1\"",
+        "law = { kind = \"power\", scale = 1.0, exponent = 1.0 }",
+    ] {
+        let text = bilateral("{ kind = \"coulomb\", coefficient = 0.3 }", 2)
+            .replace("[contact]", &format!("[contact]\n{extra}"));
+        let message = Scene::from_toml_str(&text, "t.toml")
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.contains("contact.bilateral") && message.contains("remove its law and its bound"),
+            "{extra}: {message}"
+        );
+    }
+}
+
+/// Convergence in h with Tresca friction (docs/method.md §17.6): the smooth
+/// u = k ((1 + x/2)(1 + y)², x² y), k = 0.01, on (0, 1) × (0, 0.5), plane stress E = 1, ν = 0.3,
+/// held by its values on x = 0, the tractions of its stress on the right and the top, the body
+/// force −div σ, and on the base y = 0 bilateral contact (u_y = 0 there) with Tresca's bound
+/// F_b = σ_xy(x, 0) = 2Gk(1 + x/2). The base slips forward (u_x(x, 0) = k(1 + x/2) > 0) in the one
+/// step, so friction's traction −F_b is the exact solution's: u is the solution of the Tresca
+/// problem, and the elements must approach it at order 1 in the energy (H¹) norm and 2 in L²
+/// (fitted on h = 1/8 … 1/64, ±0.1, as the frictionless manufactured test). Every base row
+/// slips: the test reaches the law's slip branch, not a Neumann condition in disguise.
+#[test]
+fn tresca_friction_converges_at_order_one_in_the_energy_norm() {
+    use hvi::fem::norms::{errors, fitted_order};
+    let (nu, k): (f64, f64) = (0.3, 0.01);
+    let c = 1.0 / (1.0 - nu * nu);
+    let g = 1.0 / (2.0 * (1.0 + nu));
+    let s11 = format!("t*{c:e}*({k:e}/2*(1 + y)^2 + {nu:e}*{k:e}*x^2)");
+    let s22 = format!("t*{c:e}*({nu:e}*{k:e}/2*(1 + y)^2 + {k:e}*x^2)");
+    let s12 = format!("t*{g:e}*(2*{k:e}*(1 + x/2)*(1 + y) + 2*{k:e}*x*y)");
+    let f1 = format!("-t*(2*{c:e}*{nu:e}*{k:e}*x + {g:e}*(2*{k:e}*(1 + x/2) + 2*{k:e}*x))");
+    let f2 = format!("-t*({g:e}*({k:e}*(1 + y) + 2*{k:e}*y) + {c:e}*{nu:e}*{k:e}*(1 + y))");
+    let text = format!(
+        r#"
+[material]
+plane = "stress"
+youngs_modulus = 1.0
+poisson_ratio = {nu}
+
+[time]
+final_time = 1.0
+steps = 1
+
+[[dirichlet]]
+group = "Gamma1"
+components = ["x", "y"]
+value = ["t*{k:e}*(1 + y)^2", "0"]
+
+[[traction]]
+group = "Right"
+value = ["{s11}", "{s12}"]
+
+[[traction]]
+group = "Gamma2_top"
+value = ["{s12}", "{s22}"]
+
+[body_force]
+value = ["{f1}", "{f2}"]
+
+[contact]
+bilateral = true
+friction = {{ kind = "tresca", bound = "t*{g:e}*2*{k:e}*(1 + x/2)" }}
+
+[solver]
+tolerance = 1e-12
+"#
+    );
+    let exact = |x: [f64; 2]| -> ([f64; 2], [[f64; 2]; 2]) {
+        let (a, b) = (x[0], x[1]);
+        (
+            [k * (1.0 + a / 2.0) * (1.0 + b).powi(2), k * a * a * b],
+            [
+                [k / 2.0 * (1.0 + b).powi(2), 2.0 * k * (1.0 + a / 2.0) * (1.0 + b)],
+                [2.0 * k * a * b, k * a * a],
+            ],
+        )
+    };
+    for shape in [CellShape::Quad, CellShape::Tri] {
+        let (mut hs, mut h1, mut l2) = (vec![], vec![], vec![]);
+        for n in [8, 16, 32, 64] {
+            let mesh = rectangle_with_sides(1.0, 0.5, n, n / 2, shape);
+            let (sim, _, sink) = solve_in_memory(&scene(&text), mesh).unwrap_or_else(|e| panic!("{e}"));
+            let state = sink.steps.last().unwrap().contact.as_ref().unwrap();
+            assert!(
+                !state.friction.status.is_empty() && state.friction.status.iter().all(|&s| s == 2),
+                "{shape:?} n = {n}: every base row should slip: {:?}",
+                state.friction.status
+            );
+            let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
+            let e = errors(&sim.mesh.cells, &sim.mesh.points, &u, exact);
+            hs.push(1.0 / n as f64);
+            h1.push(e.h1_seminorm);
+            l2.push(e.l2);
+        }
+        let (p1, p2) = (fitted_order(&hs, &h1), fitted_order(&hs, &l2));
+        eprintln!("Tresca, {shape:?}: H¹ order {p1:.3}, L² order {p2:.3} (H¹ errors {h1:?})");
+        assert!((p1 - 1.0).abs() <= 0.1, "{shape:?}: H¹ order {p1} (errors {h1:?})");
+        assert!((p2 - 2.0).abs() <= 0.1, "{shape:?}: L² order {p2} (errors {l2:?})");
     }
 }

@@ -981,6 +981,7 @@ fn case8_several_local_minima() {
             settings: c.settings,
             singular: false,
             pairs: None,
+            fixed: None,
         };
         let energy = |r: &[f64]| {
             let diff: Vec<f64> = r.iter().zip(&d).map(|(a, b)| a - b).collect();

@@ -625,6 +625,7 @@ fn a_stalled_contact_solve_names_the_tolerance_that_converges() {
             bound: Some(&bound),
             singular: false,
             pairs: None,
+            fixed: None,
             settings: ContactSettings {
                 tolerance,
                 max_iterations: 100,

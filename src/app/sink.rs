@@ -185,7 +185,11 @@ impl<const D: usize> FileSink<D> {
                 columns.extend(["u_nu", "force", "pressure", "status", "group"]);
                 if sim.contact.as_ref().is_some_and(|c| c.friction.is_some()) {
                     // docs/method.md §17: along τ = (−ν_y, ν_x) in 2D, vectors in 3D
-                    columns.extend(if D == 2 { &FRICTION_COLUMNS[..] } else { &FRICTION_COLUMNS_3D[..] });
+                    columns.extend(if D == 2 {
+                        &FRICTION_COLUMNS[..]
+                    } else {
+                        &FRICTION_COLUMNS_3D[..]
+                    });
                 }
                 manifest.add("gamma3.csv")?;
                 Some(CsvTable::create(&dir.join("gamma3.csv"), &columns)?)
@@ -573,7 +577,7 @@ const FRICTION_COLUMNS: [&str; 6] = [
 ];
 
 /// gamma3.csv's friction columns in 3D: the tangential displacement, slip increment and friction
-/// force as vectors (docs/method.md §17.3).
+/// force as vectors (docs/method.md §17.5).
 const FRICTION_COLUMNS_3D: [&str; 12] = [
     "u_tau_x",
     "u_tau_y",
@@ -592,10 +596,18 @@ const FRICTION_COLUMNS_3D: [&str; 12] = [
 /// The friction columns of a normal row with tangential rows `tangential` (NaN and status −1
 /// where it has none: its group has no friction, or its tangential directions are prescribed).
 /// In 3D the vectors are Σ_k value_k τ_k over the row's tangential rows.
-fn friction_columns<const D: usize>(f: &crate::solver::contact::Friction<D>, tangential: &[usize], state: &ContactState) -> Vec<f64> {
+fn friction_columns<const D: usize>(
+    f: &crate::solver::contact::Friction<D>,
+    tangential: &[usize],
+    state: &ContactState,
+) -> Vec<f64> {
     let m = f.rows.len() - f.normal_row.len();
     let Some(&first) = tangential.first().filter(|&&t| state.friction.slip.len() > t) else {
-        let width = if D == 2 { FRICTION_COLUMNS.len() } else { FRICTION_COLUMNS_3D.len() };
+        let width = if D == 2 {
+            FRICTION_COLUMNS.len()
+        } else {
+            FRICTION_COLUMNS_3D.len()
+        };
         let mut row = vec![f64::NAN; width];
         row[width - 1] = -1.0;
         return row;

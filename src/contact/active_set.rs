@@ -235,6 +235,9 @@ pub struct ActiveSetSolver<'a> {
     /// tangent plane (docs/method.md §17.3). Paired rows have no bound and the same one term;
     /// their energy is w j(|(s_p, s_q)|).
     pub pairs: Option<&'a [usize]>,
+    /// Per row, whether it is held at its bound from both sides (bilateral contact, u_ν = g_p:
+    /// always active, its force of either sign; docs/method.md §17.4), or `None` for none.
+    pub fixed: Option<&'a [bool]>,
 }
 
 /// The Hessian of the laws on the Newton system's free rows: diagonal, the coupling of each
@@ -263,6 +266,12 @@ impl ActiveSetSolver<'_> {
 
     fn g(&self, p: usize) -> f64 {
         self.bound.map_or(f64::INFINITY, |g| g[p])
+    }
+
+    /// True if row p is held at its bound (bilateral).
+    #[inline]
+    fn is_fixed(&self, p: usize) -> bool {
+        self.fixed.is_some_and(|f| f[p])
     }
 
     #[inline]
@@ -359,7 +368,9 @@ impl ActiveSetSolver<'_> {
         (0..self.m())
             .map(|p| {
                 let g = self.g(p);
-                if g.is_finite() {
+                if self.is_fixed(p) {
+                    self.c(p) * (g - r[p]).abs()
+                } else if g.is_finite() {
                     (self.c(p) * (g - r[p])).min(-grad[p]).abs()
                 } else {
                     grad[p].abs()
@@ -458,7 +469,7 @@ impl ActiveSetSolver<'_> {
         let fingerprint = self.fingerprint();
         let r = &mut state.normal_displacement;
         for (p, rp) in r.iter_mut().enumerate() {
-            *rp = rp.min(self.g(p));
+            *rp = if self.is_fixed(p) { self.g(p) } else { rp.min(self.g(p)) };
         }
         let scale = self.force_scale(d);
         let tol = self.settings.tolerance * scale;
@@ -533,7 +544,8 @@ impl ActiveSetSolver<'_> {
             let active: Vec<bool> = (0..m)
                 .map(|p| {
                     let g = self.g(p);
-                    g.is_finite() && (r[p] - grad[p] / self.c(p) >= g || (g - r[p] <= delta && grad[p] < 0.0))
+                    self.is_fixed(p)
+                        || g.is_finite() && (r[p] - grad[p] / self.c(p) >= g || (g - r[p] <= delta && grad[p] < 0.0))
                 })
                 .collect();
             let free: Vec<usize> = (0..m).filter(|&p| !active[p]).collect();
@@ -569,7 +581,11 @@ impl ActiveSetSolver<'_> {
             loop {
                 let mut decrease_bound = alpha * predicted_slope;
                 for p in 0..m {
-                    let mut moved = (r[p] - alpha * direction[p]).min(self.g(p));
+                    let mut moved = if self.is_fixed(p) {
+                        self.g(p)
+                    } else {
+                        (r[p] - alpha * direction[p]).min(self.g(p))
+                    };
                     let o = self.origin(p);
                     let single = self.partner(p).is_none();
                     if single && !active[p] && (r[p] - o).abs() > kink[p] && (moved - o) * (r[p] - o) < 0.0 {
@@ -906,6 +922,7 @@ mod tests {
                 bound: Some(&bound),
                 singular: false,
                 pairs: None,
+                fixed: None,
                 settings: ContactSettings {
                     tolerance: 1e-12,
                     max_iterations: 100,

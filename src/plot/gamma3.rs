@@ -1,7 +1,7 @@
 //! The Γ₃ figure of a 2D run: u_ν and the contact pressure against arc length at chosen times,
 //! with the bound g.
 
-use super::kit::{draw_text, draw_x_ticks, err, field_range, linear_ticks, tick_label, Lettering};
+use super::kit::{draw_text, draw_x_ticks, err, field_range, linear_ticks, tick_label, zone_colour, Lettering};
 use crate::plot::colour_map;
 use crate::plot::kit::sci_text;
 use plotters::coord::Shift;
@@ -20,7 +20,7 @@ pub struct Gamma3Figure {
     /// (t, u_ν, pressure) at the nodes, per time.
     pub curves: Vec<(f64, Vec<f64>, Vec<f64>)>,
     /// The friction status at the nodes at the last time drawn (1 stick, 2 slip; other codes are
-    /// not marked), for a run with friction (docs/method.md §17.3).
+    /// not marked), for a run with friction (docs/method.md §17.5).
     pub zones: Option<Vec<i32>>,
 }
 
@@ -146,7 +146,7 @@ pub(super) fn draw_gamma3<DB: DrawingBackend>(
                 .map_err(err)?;
         }
         // the stick and slip zones at the last time: a band of marks along the pressure panel's
-        // foot (docs/method.md §17.3)
+        // foot (docs/method.md §17.5)
         if let (1, Some(zones)) = (k, &figure.zones) {
             for (&s, &code) in figure.arc.iter().zip(zones) {
                 if let Some(colour) = zone_colour(code) {
@@ -199,13 +199,4 @@ pub(super) fn draw_gamma3<DB: DrawingBackend>(
         }
     }
     Ok(())
-}
-
-/// The colour of a friction status code in the zone band: stick green, slip orange.
-fn zone_colour(code: i32) -> Option<RGBColor> {
-    match code {
-        1 => Some(RGBColor(40, 150, 70)),
-        2 => Some(RGBColor(230, 120, 20)),
-        _ => None,
-    }
 }

@@ -311,3 +311,13 @@ pub(super) fn bounding_box(points: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
     }
     (lo, hi)
 }
+
+/// The colour of a friction status code (docs/method.md §17.5) in the zone band of gamma3.png and
+/// the zone panel of gamma3_map.png: stick green, slip orange; None for separated and no friction.
+pub fn zone_colour(code: i32) -> Option<RGBColor> {
+    match code {
+        1 => Some(RGBColor(40, 150, 70)),
+        2 => Some(RGBColor(230, 120, 20)),
+        _ => None,
+    }
+}

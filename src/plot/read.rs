@@ -19,7 +19,7 @@ pub struct Gamma3 {
     /// Per output time, (u_ν, pressure) of each node.
     pub times: Vec<(f64, Vec<(f64, f64)>)>,
     /// Per output time, the friction status of each node (0 separated, 1 stick, 2 slip, −1
-    /// none; docs/method.md §17.3); empty for a run without friction.
+    /// none; docs/method.md §17.5); empty for a run without friction.
     pub friction: Vec<Vec<i32>>,
 }
 

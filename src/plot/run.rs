@@ -345,10 +345,15 @@ pub(super) fn plot_3d(run_dir: &Path, last: &str) -> Result<Vec<PathBuf>, PlotEr
         column("pressure")?,
         column("status")?,
     ];
+    // a run with friction: its status column (docs/method.md §17.5)
+    let friction = header.iter().position(|c| *c == "friction_status");
     // the rows of the last time (rows are written time by time)
-    let mut rows: Vec<[f64; 7]> = Vec::new();
+    let mut rows: Vec<[f64; 8]> = Vec::new();
     for v in table {
-        let row = cols.map(|c| v[c]);
+        let picked = cols.map(|c| v[c]);
+        let mut row = [0.0; 8];
+        row[..7].copy_from_slice(&picked);
+        row[7] = friction.map_or(-1.0, |c| v[c]);
         if rows.first().is_some_and(|r| r[0] != row[0]) {
             rows.clear();
         }
@@ -364,11 +369,12 @@ pub(super) fn plot_3d(run_dir: &Path, last: &str) -> Result<Vec<PathBuf>, PlotEr
         u_nu: rows.iter().map(|r| r[4]).collect(),
         pressure: rows.iter().map(|r| r[5]).collect(),
         status: rows.iter().map(|r| r[6]).collect(),
+        friction: friction.map(|_| rows.iter().map(|r| r[7]).collect()),
     });
     let (axes, projected) = project_surface(&surface.points);
     let t = sci(time);
     let by_faces = !surface.faces.is_empty();
-    let map = SurfaceMap {
+    let mut map = SurfaceMap {
         faces: surface.faces,
         axes: axes.map(|a| ["x", "y", "z"][a].to_string()),
         points: projected,
@@ -383,14 +389,25 @@ pub(super) fn plot_3d(run_dir: &Path, last: &str) -> Result<Vec<PathBuf>, PlotEr
                 title: format!("Normal displacement u_ν on Γ₃ at t = {t}"),
                 name: format!("u_ν at t = {t}"),
                 values: surface.u_nu,
+                zones: false,
             },
             MapPanel {
                 title: format!("Contact pressure on Γ₃ at t = {t}"),
                 name: format!("pressure at t = {t}"),
                 values: surface.pressure,
+                zones: false,
             },
         ],
     };
+    // with friction, a third panel: the stick and slip zones (docs/method.md §17.5)
+    if let Some(zones) = surface.friction {
+        map.panels.push(MapPanel {
+            title: format!("Stick and slip on Γ₃ at t = {t}"),
+            name: "friction status".into(),
+            values: zones,
+            zones: true,
+        });
+    }
     let (png, svg) = pictures(run_dir, "gamma3_map")?;
     render_surface_map(&png, Some(&svg), &map).map_err(fail)?;
     Ok(vec![png, svg])
@@ -406,6 +423,8 @@ struct ContactSurface {
     u_nu: Vec<f64>,
     pressure: Vec<f64>,
     status: Vec<f64>,
+    /// The friction status codes (a run with friction; −1 where a node has none).
+    friction: Option<Vec<f64>>,
 }
 
 fn contact_surface(run_dir: &Path, time: f64) -> Option<ContactSurface> {
@@ -435,6 +454,7 @@ fn contact_surface(run_dir: &Path, time: f64) -> Option<ContactSurface> {
         u_nu: field("u_nu")?,
         pressure: field("pressure")?,
         status: field("status")?,
+        friction: field("friction_status"),
         points: frame.points,
         faces,
     })

@@ -3,7 +3,7 @@
 
 use super::kit::{
     colour_map, draw_text, draw_x_ticks, err, field_range, linear_ticks, minus_sign, sci, text_width, tick_label,
-    Lettering,
+    zone_colour, Lettering,
 };
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -37,6 +37,9 @@ pub struct MapPanel {
     pub title: String,
     pub name: String,
     pub values: Vec<f64>,
+    /// The values are friction status codes (docs/method.md §17.5): each piece takes its
+    /// heaviest node's zone colour (stick, slip, else light grey), with a legend for a bar.
+    pub zones: bool,
 }
 
 /// Nodal fields over a surface projected onto a plane: node `i` at `points[i]`, drawn as its
@@ -317,8 +320,25 @@ fn draw_surface_map<DB: DrawingBackend>(
             if piece.polygon.len() < 3 {
                 continue;
             }
-            let v: f64 = piece.weights.iter().map(|&(n, w)| w * panel.values[n]).sum();
-            let colour = colour_map((v - vmin) / range);
+            let colour = if panel.zones {
+                // the zone of the node that weighs most in the piece: sharp zone edges
+                let heaviest =
+                    piece.weights.iter().fold(
+                        (usize::MAX, f64::NEG_INFINITY),
+                        |a, &(n, w)| {
+                            if w > a.1 {
+                                (n, w)
+                            } else {
+                                a
+                            }
+                        },
+                    );
+                let code = panel.values.get(heaviest.0).map_or(-1, |&v| v as i32);
+                zone_colour(code).unwrap_or(RGBColor(215, 215, 215))
+            } else {
+                let v: f64 = piece.weights.iter().map(|&(n, w)| w * panel.values[n]).sum();
+                colour_map((v - vmin) / range)
+            };
             let poly: Vec<(i32, i32)> = piece.polygon.iter().map(|&q| to_px(q)).collect();
             root.draw(&Polygon::new(poly.clone(), colour.filled())).map_err(err)?;
             let mut closed = poly;
@@ -408,9 +428,22 @@ fn draw_surface_map<DB: DrawingBackend>(
             2,
             black,
         )?;
-        // the colour bar: the field's name above, its min and max below
+        // the colour bar: the field's name above, its min and max below (zones: their legend)
         let (bx, by) = (left, top + ph + 78);
         draw_text(root, lettering, &panel.name, (bx, by - 20), HPos::Left, 2, black)?;
+        if panel.zones {
+            let mut x = bx;
+            for (code, label) in [(1, "stick"), (2, "slip"), (0, "separated")] {
+                let colour = zone_colour(code).unwrap_or(RGBColor(215, 215, 215));
+                root.draw(&Rectangle::new([(x, by), (x + 16, by + 16)], colour.filled()))
+                    .map_err(err)?;
+                root.draw(&Rectangle::new([(x, by), (x + 16, by + 16)], grey.stroke_width(1)))
+                    .map_err(err)?;
+                draw_text(root, lettering, label, (x + 22, by + 1), HPos::Left, 2, black)?;
+                x += 30 + text_width(label, 2);
+            }
+            continue;
+        }
         for i in 0..BAR_WIDTH {
             let colour = colour_map(i as f64 / (BAR_WIDTH - 1) as f64);
             root.draw(&Rectangle::new([(bx + i, by), (bx + i + 1, by + 16)], colour.filled()))

@@ -447,6 +447,18 @@ pub struct ContactSpec {
     /// A tangential law beside the normal one (docs/method.md §17); absent: frictionless.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub friction: Option<FrictionSpec>,
+    /// Bilateral contact: u_ν = 0 on the group (the body slides along the surface and cannot
+    /// leave it), the normal condition of the non-monotone friction examples (docs/method.md
+    /// §17.4); no law and no bound beside it.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub bilateral: bool,
+}
+
+impl ContactSpec {
+    /// True if the section poses contact: a law, a bound, an obstacle or bilateral contact.
+    pub fn is_posed(&self) -> bool {
+        self.bound.is_some() || self.law.is_some() || self.obstacle.is_some() || self.bilateral
+    }
 }
 
 /// The friction law of a contact group, acting on the slip increment of a step

@@ -49,7 +49,15 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
         "dirichlet" => vec!["group", "components", "value"],
         "force_control" => vec!["group", "component", "force"],
         "body_force" => vec!["value"],
-        "contact" => vec!["group", "bound", "law", "obstacle", "direction", "friction"],
+        "contact" => vec![
+            "group",
+            "bound",
+            "law",
+            "obstacle",
+            "direction",
+            "friction",
+            "bilateral",
+        ],
         "contact.friction" => match kind {
             Some("tresca") => vec!["kind", "bound", "regularisation"],
             Some("coulomb") => vec!["kind", "coefficient", "regularisation"],
@@ -342,7 +350,15 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
         if let Some(f) = &c.friction {
             check_friction(f, origin, &at)?;
         }
-        if many && c.bound.is_none() && c.law.is_none() && c.obstacle.is_none() {
+        if c.bilateral && (c.bound.is_some() || c.law.is_some()) {
+            return Err(invalid(
+                origin,
+                &format!("{at}.bilateral"),
+                true,
+                "bilateral contact holds u_ν = 0 on the group: remove its law and its bound, or remove bilateral",
+            ));
+        }
+        if many && !c.is_posed() {
             // a section naming a group and nothing else would be left out without a word
             return Err(invalid(
                 origin,

@@ -52,6 +52,9 @@ pub struct ContactSetup<const D: usize> {
     pub settings: ContactSettings,
     /// The tangential rows of the groups with friction (docs/method.md §17); None: frictionless.
     pub friction: Option<Friction<D>>,
+    /// Per normal row, whether its group is bilateral (u_ν = g_p, held from both sides,
+    /// docs/method.md §17.4); None when no group is.
+    pub bilateral: Option<Vec<bool>>,
 }
 
 /// The friction law of one tangential row.
@@ -118,7 +121,11 @@ impl<const D: usize> Friction<D> {
     /// The other tangential row of tangential row k's pair (3D), if it has one.
     pub fn partner(&self, k: usize) -> Option<usize> {
         let m = self.rows.len() - self.normal_row.len();
-        self.pairs.as_ref().map(|p| p[m + k]).filter(|&q| q != usize::MAX).map(|q| q - m)
+        self.pairs
+            .as_ref()
+            .map(|p| p[m + k])
+            .filter(|&q| q != usize::MAX)
+            .map(|q| q - m)
     }
 
     /// The length of tangential row k's value v(k): |v(k)|, or in 3D the length of its pair's
@@ -306,10 +313,7 @@ pub(crate) fn obstacle_of<const D: usize>(
 
 /// True if some contact section has a law, a bound or an obstacle (else there is no contact).
 pub fn is_posed(scene: &Scene) -> bool {
-    scene
-        .contact
-        .iter()
-        .any(|c| c.bound.is_some() || c.law.is_some() || c.obstacle.is_some())
+    scene.contact.iter().any(|c| c.is_posed())
 }
 
 /// The contact of `scene` on `mesh` (None when no section has a law or a bound or an obstacle).
@@ -320,10 +324,7 @@ pub fn build<const D: usize>(
     origin: &str,
 ) -> Result<Option<ContactSetup<D>>, SolveError> {
     let used: Vec<usize> = (0..scene.contact.len())
-        .filter(|&i| {
-            let c = &scene.contact[i];
-            c.bound.is_some() || c.law.is_some() || c.obstacle.is_some()
-        })
+        .filter(|&i| scene.contact[i].is_posed())
         .collect();
     if used.is_empty() {
         return Ok(None);
@@ -420,6 +421,8 @@ pub fn build<const D: usize>(
                 &format!("{}.bound", scene.contact_key(i)),
             )?,
             (None, Some(_), None) => vec![0.0; n],
+            // bilateral: u_ν = o_p exactly (docs/method.md §17.4)
+            _ if c.bilateral => vec![0.0; n],
             _ => vec![f64::INFINITY; n],
         };
         let key = match &c.obstacle {
@@ -447,7 +450,9 @@ pub fn build<const D: usize>(
     let row_group: Vec<usize> = kept.iter().map(|&k| rows.group[k]).collect();
     let laws = NodalLaws::new(laws, &terms);
     let friction = friction_rows(scene, &used, (&nodes, &laws, &row_group), dofs, origin)?;
+    let bilateral: Vec<bool> = row_group.iter().map(|&g| scene.contact[used[g]].bilateral).collect();
     Ok(Some(ContactSetup {
+        bilateral: bilateral.contains(&true).then_some(bilateral),
         laws,
         bound: bound.iter().any(|g| g.is_finite()).then_some(bound),
         gap: any_obstacle.then_some(gap),
@@ -531,7 +536,11 @@ fn friction_rows<const D: usize>(
     // the candidate tangential rows: (normal row, tangent), D − 1 per normal row with friction
     let with: Vec<(usize, [f64; D])> = (0..m)
         .filter(|&p| laws_of_group[row_group[p]].is_some())
-        .flat_map(|p| Friction::<D>::tangents(nodes.normals[p]).into_iter().map(move |t| (p, t)))
+        .flat_map(|p| {
+            Friction::<D>::tangents(nodes.normals[p])
+                .into_iter()
+                .map(move |t| (p, t))
+        })
         .collect();
     let all_nodes: Vec<usize> = nodes
         .nodes

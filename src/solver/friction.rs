@@ -59,6 +59,16 @@ pub(super) fn solve<const D: usize>(
     let bound: Option<Vec<f64>> = normal
         .bound
         .map(|g| (0..all).map(|r| if r < m { g[r] } else { f64::INFINITY }).collect());
+    // bilateral normal rows (docs/method.md §17.4), over all rows
+    let fixed: Option<Vec<bool>> = setup
+        .bilateral
+        .as_ref()
+        .map(|b| (0..all).map(|r| r < m && b[r]).collect());
+    // the normal force that presses row p: λ_ν, or |λ_ν| where the contact is bilateral
+    let pressing = |state: &ContactState, p: usize| match &setup.bilateral {
+        Some(b) if b[p] => state.force[p].abs(),
+        _ => state.force[p].max(0.0),
+    };
     // the laws of all rows, built once; the bound forces of Tresca and Coulomb set below
     let mut laws = friction.laws_of_rows.clone();
     // the slip accumulated before this step
@@ -102,7 +112,7 @@ pub(super) fn solve<const D: usize>(
                     ));
                 }
                 Ok(match &friction.laws[k] {
-                    FrictionLaw::Coulomb(_) => value * state.force[p].max(0.0),
+                    FrictionLaw::Coulomb(_) => value * pressing(state, p),
                     FrictionLaw::Tresca(_) | FrictionLaw::Potential => setup.nodes.weights[p] * value,
                 })
             })
@@ -132,6 +142,7 @@ pub(super) fn solve<const D: usize>(
             settings: setup.settings,
             singular: normal.singular,
             pairs: friction.pairs.as_deref(),
+            fixed: fixed.as_deref(),
         };
         let outcome = solver.solve_forces(q, state).map_err(|mut f| {
             f.outcome.iterations += total.iterations;
@@ -149,7 +160,8 @@ pub(super) fn solve<const D: usize>(
         let scale = state.force[..m].iter().fold(f64::MIN_POSITIVE, |a, b| a.max(b.abs()));
         let change = next.iter().zip(&forces).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
         if !coulomb || change <= setup.settings.tolerance * scale {
-            record(state, friction, &offset, &accumulated, &forces);
+            let pressed: Vec<f64> = friction.normal_row.iter().map(|&p| pressing(state, p)).collect();
+            record(state, friction, (&offset, &pressed), &accumulated, &forces);
             return Ok(total);
         }
         forces = next;
@@ -164,21 +176,20 @@ pub(super) fn solve<const D: usize>(
 }
 
 /// The tangential rows' slip, accumulated slip, bound force and status after the step
-/// (docs/method.md §17): separated where the normal row carries no force (below 10⁻¹² of the
-/// largest), else stick where |λ_τ| < F (1 − 10⁻⁶), slip at F; |·| the length of the pair's
+/// (docs/method.md §17): separated where the normal row presses with no force (λ_ν, |λ_ν| where
+/// bilateral, below 10⁻¹² of the largest), else stick where |λ_τ| < F (1 − 10⁻⁶), slip at F; |·| the length of the pair's
 /// vector in 3D, whose two rows get the same accumulated slip and status.
 fn record<const D: usize>(
     state: &mut ContactState,
     friction: &Friction<D>,
-    offset: &[f64],
+    (offset, pressed): (&[f64], &[f64]),
     accumulated: &[f64],
     forces: &[f64],
 ) {
     let k_rows = forces.len();
     let m = friction.rows.len() - k_rows;
-    let normal_row = &friction.normal_row;
     // a normal force below 1e-12 of the largest is round-off of a node off the bound
-    let largest = normal_row.iter().fold(0.0f64, |a, &p| a.max(state.force[p]));
+    let largest = pressed.iter().fold(0.0f64, |a, &v| a.max(v));
     let slip: Vec<f64> = (0..k_rows)
         .map(|k| state.normal_displacement[m + k] - offset[m + k])
         .collect();
@@ -191,7 +202,7 @@ fn record<const D: usize>(
     for k in 0..k_rows {
         rows.accumulated.push(accumulated[k] + friction.length(k, |k| slip[k]));
         let force = friction.length(k, |k| state.force[m + k]);
-        rows.status.push(if state.force[normal_row[k]] <= 1e-12 * largest {
+        rows.status.push(if pressed[k] <= 1e-12 * largest {
             FrictionStatus::Separated
         } else if force < forces[k] * (1.0 - 1e-6) {
             FrictionStatus::Stick

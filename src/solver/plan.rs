@@ -164,7 +164,13 @@ impl Plan {
         if let Some(c) = &sim.contact {
             let m = c.nodes.len();
             let mut parts = Vec::new();
-            if let Some(g) = &c.bound {
+            let bilateral = c.bilateral.as_ref().map_or(0, |b| b.iter().filter(|&&v| v).count());
+            if bilateral > 0 {
+                parts.push(format!(
+                    "bilateral u_ν = 0 on {bilateral} nodes (a normal force of either sign, docs/method.md §17.4)"
+                ));
+            }
+            if let Some(g) = c.bound.as_ref().filter(|_| bilateral < m) {
                 let (lo, hi) = g
                     .iter()
                     .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));

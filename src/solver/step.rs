@@ -215,6 +215,7 @@ fn contact_solve<const D: usize>(
             settings: setup.settings,
             singular: op_singular,
             pairs: None,
+            fixed: setup.bilateral.as_deref(),
         }
         .solve_forces(q, state),
     };
