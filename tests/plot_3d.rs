@@ -187,3 +187,66 @@ fn tiles_of_a_grid_are_the_squares_of_its_spacing() {
     }
     assert!(covered > 1900, "{covered} of 2000 covered");
 }
+
+/// A 3D run with friction (docs/method.md §17.5): the map gets a third panel, the stick and
+/// slip zones at the last time, each piece in its node's zone colour, with their legend.
+#[test]
+fn a_3d_run_with_friction_maps_its_stick_and_slip_zones() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("slab_coulomb.toml");
+    let text = std::fs::read_to_string(root("examples/slab.toml")).unwrap();
+    assert!(text.contains("[contact]\n"));
+    std::fs::write(
+        &scene,
+        text.replace(
+            "[contact]\n",
+            "[contact]\nfriction = { kind = \"coulomb\", coefficient = 0.3 }\n",
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("slab");
+    let out_s = out.to_str().unwrap();
+    run(&[
+        "solve",
+        &root("meshes/slab_q1_h8_z1.msh"),
+        "--scene",
+        scene.to_str().unwrap(),
+        "--set",
+        "time.steps=4",
+        "--out",
+        out_s,
+        "--quiet",
+    ]);
+    run(&["plot", out_s]);
+    let csv = std::fs::read_to_string(out.join("gamma3.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let status = header
+        .iter()
+        .position(|c| *c == "friction_status")
+        .expect("friction columns");
+    assert!(
+        header.contains(&"slip_x") && header.contains(&"force_tau_z"),
+        "{header:?}"
+    );
+    let codes: Vec<&str> = csv
+        .lines()
+        .filter(|l| l.starts_with("1,"))
+        .map(|l| l.split(',').nth(status).unwrap())
+        .collect();
+    assert!(
+        codes.iter().any(|c| *c == "1" || *c == "2"),
+        "no node sticks or slips: {codes:?}"
+    );
+    let svg = std::fs::read_to_string(out.join("gamma3_map.svg")).unwrap();
+    // three maps of the strip's 16 faces, each face as 4 × 4 pieces
+    assert_eq!(svg.matches("<polygon").count(), 3 * 16 * 16);
+    for text in [
+        "Stick and slip on Γ₃ at t = 1",
+        "friction status",
+        ">\nstick\n<",
+        ">\nslip\n<",
+        ">\nseparated\n<",
+    ] {
+        assert!(svg.contains(text), "no {text:?} in the SVG");
+    }
+}
