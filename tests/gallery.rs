@@ -322,3 +322,68 @@ fn two_contact_zones() {
     // after), in the layer, and on the bound (the left foot's end near x = 1.2, the roller's top)
     assert_eq!(seen, [[true; 3]; 2], "statuses met (left, right): {seen:?}");
 }
+
+/// The paper's example with Coulomb friction (examples/gallery/paper_coulomb, README "Friction
+/// with the memory term"): run as README says, `hvi plot` draws gamma3_zones, and at every
+/// output time each node that slips carries |λ_τ| = μ λ_ν (to 1e-6 relative: the smoothing
+/// ε²/(2Δ²) of slips above 1e-6 and the solve's 1e-10 of the force scale) while each that sticks
+/// carries less; both zones exist at T, and the stick zone moves over time (the memory term
+/// changes the stresses under the growing load).
+#[test]
+fn paper_example_with_coulomb_friction() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("paper_coulomb");
+    run_files(
+        "meshes/rect_q1_h32.msh",
+        Some("examples/gallery/paper_coulomb/paper_coulomb.toml"),
+        &out,
+    );
+    let pictures = hvi::plot::plot_run(&out, &hvi::plot::PlotOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert!(pictures.iter().any(|p| p.ends_with("gamma3_zones.png")), "{pictures:?}");
+    let text = std::fs::read_to_string(out.join("gamma3.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|c| *c == name).unwrap();
+    let (time, force, tau, slip, status) = (
+        col("time"),
+        col("force"),
+        col("force_tau"),
+        col("slip"),
+        col("friction_status"),
+    );
+    let mut zones: Vec<(f64, Vec<i32>)> = Vec::new();
+    let scale = 1e-3;
+    for line in lines {
+        let v: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+        if zones.last().is_none_or(|z| z.0 != v[time]) {
+            zones.push((v[time], Vec::new()));
+        }
+        let code = v[status] as i32;
+        zones.last_mut().unwrap().1.push(code);
+        match code {
+            2 if v[slip].abs() > 1e-6 => assert!(
+                (v[tau].abs() - 0.3 * v[force]).abs() <= 1e-6 * (0.3 * v[force]) + 1e-10 * scale,
+                "t = {}: a slipping node carries {:e} against μλ_ν = {:e}",
+                v[time],
+                v[tau],
+                0.3 * v[force]
+            ),
+            1 => assert!(
+                v[tau].abs() < 0.3 * v[force],
+                "t = {}: a sticking node at its bound",
+                v[time]
+            ),
+            _ => {}
+        }
+    }
+    let last = &zones.last().unwrap().1;
+    assert!(last.contains(&1) && last.contains(&2), "both zones at T: {last:?}");
+    let sticking: Vec<usize> = zones
+        .iter()
+        .map(|(_, z)| z.iter().filter(|&&c| c == 1).count())
+        .collect();
+    assert!(
+        sticking.iter().any(|&n| n != sticking[sticking.len() / 2]),
+        "the stick zone does not change: {sticking:?}"
+    );
+}

@@ -8,7 +8,10 @@
 //! * 2D, `gamma3.png`/`.svg`: u_ν and the contact pressure along Γ₃ against arc length (so a
 //!   vertical or curved Γ₃ works) at chosen times (`--times`; for the paper's scene the times of
 //!   its Fig. 2, docs/example.md), with the bound g in the u_ν panel.
-//! * 3D, `gamma3_map.png`/`.svg`: u_ν and the pressure over Γ₃ as colour maps.
+//! * 2D with friction, `gamma3_zones.png`/`.svg`: the stick, slip and separated nodes along Γ₃
+//!   at every output time (docs/method.md §17.5).
+//! * 3D, `gamma3_map.png`/`.svg`: u_ν and the pressure over Γ₃ as colour maps (with friction, a
+//!   third panel: the stick and slip zones).
 //!
 //! Everything is read from the run directory: `solution.pvd` and its last `.vtu`,
 //! `gamma3.csv`, `scene.toml` (the effective scene) and `summary.json`. Text in the PNG files is
@@ -28,6 +31,8 @@ mod read;
 mod run;
 
 pub mod surface;
+
+mod zones;
 
 pub use deformed::{render_deformed, DeformedPicture};
 pub use error::PlotError;

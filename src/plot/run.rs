@@ -240,6 +240,23 @@ pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, P
         let (png, svg) = pictures(run_dir, "gamma3")?;
         render_gamma3(&png, Some(&svg), &figure).map_err(fail)?;
         written.extend([png, svg]);
+        // with friction: the zones at every output time (docs/method.md §17.5)
+        if g3.friction.len() == g3.times.len() && !g3.friction.is_empty() {
+            let zones = super::zones::ZonesFigure {
+                title: format!("{name}: stick and slip along Γ₃ over time"),
+                x_label: figure.x_label.clone(),
+                arc: figure.arc.clone(),
+                times: g3
+                    .times
+                    .iter()
+                    .zip(&g3.friction)
+                    .map(|((t, _), codes)| (*t, g3.order.iter().map(|&k| codes[k]).collect()))
+                    .collect(),
+            };
+            let (png, svg) = pictures(run_dir, "gamma3_zones")?;
+            super::zones::render_zones(&png, Some(&svg), &zones).map_err(fail)?;
+            written.extend([png, svg]);
+        }
     }
     Ok(written)
 }

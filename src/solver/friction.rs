@@ -44,16 +44,59 @@ pub(super) fn solve<const D: usize>(
     q: &[f64],
     state: &mut ContactState,
 ) -> Result<ContactOutcome, ContactFailure> {
+    let m = setup.nodes.len();
+    let all = friction.rows.len();
+    // The rows of Tresca and Coulomb are solved for their slip increment r − u_τ(t_{n−1}), not
+    // for u_τ: E(r) with r = s + shift is ½ sᵀQs − (q − Q shift)ᵀs + Σ w j(s) up to a constant.
+    // Their laws then act at s = 0 exactly, and a sticking row's stiffness F/ε multiplies the
+    // rounding of s (the step's slip) instead of that of u_τ (all the slip so far, which can be
+    // ten thousand times larger and made the residual stall at 1e-10, docs/method.md §17.2).
+    let shift: Vec<f64> = (0..all)
+        .map(|r| match r.checked_sub(m).map(|k| &friction.laws[k]) {
+            Some(FrictionLaw::Tresca(_) | FrictionLaw::Coulomb(_)) => state.normal_displacement[r],
+            _ => 0.0,
+        })
+        .collect();
+    let mut shifted = vec![0.0; all];
+    normal.operator.apply_q(&shift, &mut shifted);
+    shifted.iter_mut().zip(q).for_each(|(s, q)| *s = q - *s);
+    state
+        .normal_displacement
+        .iter_mut()
+        .zip(&shift)
+        .for_each(|(r, s)| *r -= s);
+    let solved = solve_increment(sim, setup, friction, normal, step, &shifted, state);
+    state
+        .normal_displacement
+        .iter_mut()
+        .zip(&shift)
+        .for_each(|(r, s)| *r += s);
+    solved
+}
+
+/// [`solve`] in the frame of the slip increments: Tresca's and Coulomb's tangential rows hold
+/// r − u_τ(t_{n−1}) (their origin 0), the other rows their displacements.
+fn solve_increment<const D: usize>(
+    sim: &Simulation<D>,
+    setup: &ContactSetup<D>,
+    friction: &Friction<D>,
+    normal: NormalRows,
+    step: usize,
+    q: &[f64],
+    state: &mut ContactState,
+) -> Result<ContactOutcome, ContactFailure> {
     let t = sim.time.time(step);
     let m = setup.nodes.len();
     let all = friction.rows.len();
-    // origins: the normal rows' gaps, the tangential rows' displacement of the previous step
+    // origins: the normal rows' gaps; 0 on the tangential rows (Tresca and Coulomb: their slip
+    // increment; a potential: the total tangential displacement)
     let offset: Vec<f64> = (0..all)
-        .map(|r| match r.checked_sub(m).map(|k| &friction.laws[k]) {
-            None => normal.offset.map_or(0.0, |o| o[r]),
-            // a potential acts on the total tangential displacement
-            Some(FrictionLaw::Potential) => 0.0,
-            Some(_) => state.normal_displacement[r],
+        .map(|r| {
+            if r < m {
+                normal.offset.map_or(0.0, |o| o[r])
+            } else {
+                0.0
+            }
         })
         .collect();
     let bound: Option<Vec<f64>> = normal
