@@ -127,6 +127,8 @@ python3 check_orientation.py | grep -E '^[^ ]|ERROR'
     cd ../cattaneo_3d
     gmsh -3 cattaneo_3d.geo -format msh41 -o cattaneo_3d.msh >/dev/null
     echo "wrote cattaneo_3d.msh ($(wc -c <cattaneo_3d.msh) bytes)"
+    gmsh -3 cattaneo_3d.geo -setnumber hf 0.009 -format msh41 -o cattaneo_3d_coarse.msh >/dev/null
+    echo "wrote cattaneo_3d_coarse.msh ($(wc -c <cattaneo_3d_coarse.msh) bytes)"
 )
 
 # The gallery's two contact zones (examples/gallery/two_zones): Q1, h = 0.05, 0.02 at the right foot.

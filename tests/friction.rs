@@ -860,3 +860,75 @@ tolerance = 1e-12
         assert!((p2 - 2.0).abs() <= 0.1, "{shape:?}: L² order {p2} (errors {l2:?})");
     }
 }
+
+/// 3D friction with a long memory (examples/gallery/cattaneo_3d/cattaneo_3d_memory.toml): the
+/// Cattaneo–Mindlin block made viscoelastic (B(s) = −e^{−s/0.3} A), pressed, sheared, then held.
+/// After the shear the contact's edge slips; in the hold the memory relaxes the tractions: the
+/// normal force falls at every step, no node slips any more (a held body relaxing below the
+/// Coulomb bound), and the tangential force that friction locked in stays above half of μ times
+/// the normal force (frictionless, it would be zero) while it relaxes. At every step the base's
+/// and the symmetry plane's reactions and the contact forces balance to 1e-10 of P.
+#[test]
+fn friction_with_memory_in_3d_locks_the_shear_in_while_the_body_relaxes() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/gallery/cattaneo_3d");
+    let scene = Scene::load(Some(&root.join("cattaneo_3d_memory.toml")), &[]).unwrap_or_else(|e| panic!("{e}"));
+    let mesh = read_mesh::<3>(&root.join("cattaneo_3d_coarse.msh")).unwrap_or_else(|e| panic!("{e}"));
+    let (sim, stats, sink) = solve_in_memory(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
+    let mu = 0.6;
+    let c = sim.contact.as_ref().unwrap();
+    let f = c.friction.as_ref().unwrap();
+    let m = c.nodes.len();
+    let totals: Vec<(f64, f64)> = sink
+        .steps
+        .iter()
+        .map(|s| {
+            let state = s.contact.as_ref().unwrap();
+            let p: f64 = state.force[..m].iter().sum();
+            let q: f64 = (0..f.normal_row.len())
+                .map(|k| state.force[m + k] * f.rows.normals[m + k][0])
+                .sum();
+            (p, q)
+        })
+        .collect();
+    let sheared = sink.steps[2].contact.as_ref().unwrap();
+    assert!(sheared.friction.status.contains(&2), "the shear step slips at the edge");
+    for n in 3..sink.steps.len() {
+        let state = sink.steps[n].contact.as_ref().unwrap();
+        let (p, q) = totals[n];
+        assert!(
+            p < totals[n - 1].0,
+            "step {n}: the normal force does not relax: {totals:?}"
+        );
+        assert!(
+            !state.friction.status.contains(&2),
+            "step {n}: a node slips in the hold"
+        );
+        assert!(
+            q > 0.5 * mu * p && q < mu * p,
+            "step {n}: Q = {q:e} against μP = {:e}",
+            mu * p
+        );
+    }
+    let p0 = totals[2].0;
+    for r in &stats.reactions {
+        let contact: f64 = stats
+            .contact_forces
+            .iter()
+            .filter(|c| c.time == r.time && c.component == r.component)
+            .map(|c| c.force)
+            .sum();
+        let reactions: f64 = stats
+            .reactions
+            .iter()
+            .filter(|s| s.time == r.time && s.component == r.component)
+            .map(|s| s.force)
+            .sum();
+        assert!(
+            (reactions + contact).abs() <= 1e-10 * p0,
+            "t = {}, {}: reactions {reactions:e} + contact {contact:e}",
+            r.time,
+            r.component
+        );
+    }
+    eprintln!("3D Cattaneo–Mindlin with memory, (P, Q) per step: {totals:?}");
+}
