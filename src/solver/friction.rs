@@ -17,7 +17,7 @@
 use super::contact::{ContactSetup, Friction, FrictionLaw};
 use super::setup::Simulation;
 use crate::contact::active_set::{
-    ActiveSetSolver, ContactFailure, ContactOutcome, ContactState, FrictionRows, FrictionStatus,
+    ActiveSetSolver, ContactFailure, ContactOutcome, ContactSettings, ContactState, FrictionRows, FrictionStatus,
 };
 use crate::contact::NormalStiffness;
 
@@ -170,6 +170,11 @@ fn solve_increment<const D: usize>(
     // Coulomb's first round uses the previous step's normal forces (the warm start)
     let mut forces = bound_forces(state).map_err(|reason| failure(reason, ContactOutcome::default()))?;
     let mut total = ContactOutcome::default();
+    // Coulomb's rounds are solved inexactly while the bound forces still move: to 10⁻² of their
+    // last change (at most 10⁻³, the first round), and at the solver's tolerance once they
+    // settle, which the last round always is (docs/method.md §17.2)
+    let tolerance = setup.settings.tolerance;
+    let mut round_tolerance = if coulomb { tolerance.max(1e-3) } else { tolerance };
     for _ in 0..COULOMB_ROUNDS {
         // (a potential's "bound" is an output only: its term keeps the weight w_p)
         for (k, law) in friction.laws.iter().enumerate() {
@@ -182,7 +187,10 @@ fn solve_increment<const D: usize>(
             laws: &laws,
             offset: Some(&offset),
             bound: bound.as_deref(),
-            settings: setup.settings,
+            settings: ContactSettings {
+                tolerance: round_tolerance,
+                ..setup.settings
+            },
             singular: normal.singular,
             pairs: friction.pairs.as_deref(),
             fixed: fixed.as_deref(),
@@ -202,11 +210,17 @@ fn solve_increment<const D: usize>(
         // the fixed point F = μ(s) λ_ν has settled when the bound forces stop moving
         let scale = state.force[..m].iter().fold(f64::MIN_POSITIVE, |a, b| a.max(b.abs()));
         let change = next.iter().zip(&forces).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
-        if !coulomb || change <= setup.settings.tolerance * scale {
+        let settled = change <= tolerance * scale;
+        if !coulomb || (settled && round_tolerance == tolerance) {
             let pressed: Vec<f64> = friction.normal_row.iter().map(|&p| pressing(state, p)).collect();
             record(state, friction, (&offset, &pressed), &accumulated, &forces);
             return Ok(total);
         }
+        round_tolerance = if settled {
+            tolerance
+        } else {
+            tolerance.max((1e-2 * change / scale).min(1e-3))
+        };
         forces = next;
     }
     Err(failure(
