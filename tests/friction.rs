@@ -932,3 +932,76 @@ fn friction_with_memory_in_3d_locks_the_shear_in_while_the_body_relaxes() {
     }
     eprintln!("3D Cattaneo–Mindlin with memory, (P, Q) per step: {totals:?}");
 }
+
+/// A semi-coercive body held by its friction (docs/method.md §7.7, §17.7): the block's top is
+/// pressed down by a prescribed u_y and nothing prescribes x, so the translation in x is a free
+/// rigid motion (pinned by a rigid parameter) that only Coulomb friction on the base can hold.
+/// A sideways load on the left side below μ × the normal force is held: the base's friction
+/// force balances it to 1e-10 at every step (the first guess of such a body's Coulomb fixed
+/// point is full stick: with no normal force yet, friction of bound 0 would hold nothing). Ten
+/// times the load exceeds μP: the run stops with the message that names the motion and friction.
+#[test]
+fn friction_holds_a_semi_coercive_body_up_to_its_bound() {
+    let text = |load: f64| {
+        format!(
+            r#"
+[material]
+plane = "strain"
+youngs_modulus = 1.0
+poisson_ratio = 0.3
+
+[time]
+final_time = 1.0
+steps = 2
+
+[[dirichlet]]
+group = "Gamma2_top"
+components = ["y"]
+value = ["-0.002*t"]
+
+[[traction]]
+group = "Gamma1"
+value = ["{load}*t", "0"]
+
+[contact]
+bound = "0"
+friction = {{ kind = "coulomb", coefficient = {MU} }}
+
+[solver]
+tolerance = 1e-12
+"#
+        )
+    };
+    let mesh = || rectangle_with_sides(2.0, 1.0, 16, 8, CellShape::Quad);
+    let load = 0.0003;
+    let (sim, stats, _) = solve_in_memory(&scene(&text(load)), mesh()).unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        !sim.dirichlet.held_by_contact.is_empty(),
+        "x should be held by the contact only"
+    );
+    for t in [0.5, 1.0] {
+        let force = |component: &str| {
+            stats
+                .contact_forces
+                .iter()
+                .find(|c| c.time == t && c.component == component)
+                .unwrap()
+                .force
+        };
+        let (fx, fy) = (force("x"), force("y"));
+        assert!(
+            (fx + load * t).abs() <= 1e-10 * fy,
+            "t = {t}: friction {fx:e} against the load {:e}",
+            load * t
+        );
+        assert!(fx.abs() < MU * fy, "t = {t}: held below μP");
+    }
+    let err = solve_in_memory(&scene(&text(10.0 * load)), mesh())
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("translation in x") && err.contains("friction holds at most"),
+        "{err}"
+    );
+}

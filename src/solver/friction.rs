@@ -170,6 +170,38 @@ fn solve_increment<const D: usize>(
     // Coulomb's first round uses the previous step's normal forces (the warm start)
     let mut forces = bound_forces(state).map_err(|reason| failure(reason, ContactOutcome::default()))?;
     let mut total = ContactOutcome::default();
+    // A body that only its contact holds (rigid parameters, docs/method.md §7.7) and no normal
+    // force yet: friction of bound 0 would hold nothing and a tangential load would have no
+    // equilibrium. The first guess is then full stick — the tangential rows held at their
+    // origin like bilateral rows — whose normal forces give the first bound forces.
+    if coulomb && normal.singular && forces.iter().all(|&f| f == 0.0) {
+        let stick_bound: Vec<f64> = (0..all)
+            .map(|r| {
+                if r < m {
+                    bound.as_ref().map_or(f64::INFINITY, |g| g[r])
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let stick: Vec<bool> = (0..all)
+            .map(|r| r >= m || fixed.as_ref().is_some_and(|f| f[r]))
+            .collect();
+        let predictor = ActiveSetSolver {
+            operator: normal.operator,
+            laws: &laws,
+            offset: Some(&offset),
+            bound: Some(&stick_bound),
+            settings: setup.settings,
+            singular: normal.singular,
+            pairs: None,
+            fixed: Some(&stick),
+        };
+        let outcome = predictor.solve_forces(q, state)?;
+        total.iterations += outcome.iterations;
+        total.factorisations += outcome.factorisations;
+        forces = bound_forces(state).map_err(|reason| failure(reason, total))?;
+    }
     // Coulomb's rounds are solved inexactly while the bound forces still move: to 10⁻² of their
     // last change (at most 10⁻³, the first round), and at the solver's tolerance once they
     // settle, which the last round always is (docs/method.md §17.2)

@@ -226,6 +226,20 @@ fn contact_solve<const D: usize>(
     // A body only its contact holds, every node separated when the solve gave up: the load
     // pulls it off its support, and no contact force can balance that (docs/method.md §7.7).
     let separated = (0..setup.nodes.len()).all(|p| state.normal_displacement[p] <= offset.map_or(0.0, |o| o[p]));
+    // with friction the body may instead slide away: a tangential load above what friction
+    // holds (docs/method.md §17.7)
+    if op_singular && setup.friction.is_some() {
+        let motions = sim.dirichlet.held_by_contact.join(", ");
+        return Err(super::rigid::unbalanced(
+            step,
+            t,
+            format!(
+                "the contact cannot balance the load along {motions}: friction holds at most μ times the normal \
+                 force (or the Tresca bound) against a sliding body, and the load exceeds it or pulls the body off \
+                 its support; hold the motion with prescribed components, or reduce the tangential load"
+            ),
+        ));
+    }
     if op_singular && separated {
         let mut motions: Vec<String> = sim.dirichlet.held_by_contact.clone();
         motions.extend(
