@@ -321,3 +321,53 @@ pub fn zone_colour(code: i32) -> Option<RGBColor> {
         _ => None,
     }
 }
+
+/// Tick marks left of a vertical axis at pixel column `x`, and their labels: one per
+/// (pixel row, value) of `ticks`, labelled by [`tick_label`] at the ticks' `step`.
+pub(crate) fn draw_y_ticks<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    lettering: Lettering,
+    ticks: &[(i32, f64)],
+    step: f64,
+    x: i32,
+    grey: RGBColor,
+    black: RGBColor,
+) -> Result<(), String> {
+    for &(y, v) in ticks {
+        root.draw(&PathElement::new(vec![(x - 5, y), (x, y)], grey.stroke_width(1)))
+            .map_err(err)?;
+        draw_text(
+            root,
+            lettering,
+            &tick_label(v, step),
+            (x - 9, y - 7),
+            HPos::Right,
+            2,
+            black,
+        )?;
+    }
+    Ok(())
+}
+
+/// The legend of the friction zones (stick, slip, separated swatches) from (x, y).
+pub(crate) fn draw_zone_legend<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    lettering: Lettering,
+    (mut x, y): (i32, i32),
+    grey: RGBColor,
+    black: RGBColor,
+) -> Result<(), String> {
+    for (code, label) in [(1, "stick"), (2, "slip"), (0, "separated")] {
+        let colour = zone_colour(code).unwrap_or(SEPARATED);
+        root.draw(&Rectangle::new([(x, y), (x + 16, y + 16)], colour.filled()))
+            .map_err(err)?;
+        root.draw(&Rectangle::new([(x, y), (x + 16, y + 16)], grey.stroke_width(1)))
+            .map_err(err)?;
+        draw_text(root, lettering, label, (x + 22, y + 1), HPos::Left, 2, black)?;
+        x += 30 + text_width(label, 2);
+    }
+    Ok(())
+}
+
+/// The colour of a separated node in the zone maps.
+pub const SEPARATED: RGBColor = RGBColor(215, 215, 215);

@@ -2,8 +2,8 @@
 //! surface projected on its best plane, each node's tile, and the panels with a colour bar.
 
 use super::kit::{
-    colour_map, draw_text, draw_x_ticks, err, field_range, linear_ticks, minus_sign, sci, text_width, tick_label,
-    zone_colour, Lettering,
+    colour_map, draw_text, draw_x_ticks, draw_y_ticks, draw_zone_legend, err, field_range, linear_ticks, minus_sign,
+    sci, text_width, zone_colour, Lettering, SEPARATED,
 };
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -334,7 +334,7 @@ fn draw_surface_map<DB: DrawingBackend>(
                         },
                     );
                 let code = panel.values.get(heaviest.0).map_or(-1, |&v| v as i32);
-                zone_colour(code).unwrap_or(RGBColor(215, 215, 215))
+                zone_colour(code).unwrap_or(SEPARATED)
             } else {
                 let v: f64 = piece.weights.iter().map(|&(n, w)| w * panel.values[n]).sum();
                 colour_map((v - vmin) / range)
@@ -396,20 +396,8 @@ fn draw_surface_map<DB: DrawingBackend>(
         let xt: Vec<(i32, f64)> = xt.into_iter().map(|v| (to_px([v, layout.lo[1]]).0, v)).collect();
         draw_x_ticks(root, lettering, &xt, xstep, top + ph, grey, black)?;
         let (yt, ystep) = linear_ticks(y_range.0, y_range.1, (ph / 45).clamp(1, 6) as usize);
-        for v in yt {
-            let (_, y) = to_px([layout.lo[0], v]);
-            root.draw(&PathElement::new(vec![(left - 5, y), (left, y)], grey.stroke_width(1)))
-                .map_err(err)?;
-            draw_text(
-                root,
-                lettering,
-                &tick_label(v, ystep),
-                (left - 9, y - 7),
-                HPos::Right,
-                2,
-                black,
-            )?;
-        }
+        let yt: Vec<(i32, f64)> = yt.into_iter().map(|v| (to_px([layout.lo[0], v]).1, v)).collect();
+        draw_y_ticks(root, lettering, &yt, ystep, left, grey, black)?;
         draw_text(
             root,
             lettering,
@@ -432,16 +420,7 @@ fn draw_surface_map<DB: DrawingBackend>(
         let (bx, by) = (left, top + ph + 78);
         draw_text(root, lettering, &panel.name, (bx, by - 20), HPos::Left, 2, black)?;
         if panel.zones {
-            let mut x = bx;
-            for (code, label) in [(1, "stick"), (2, "slip"), (0, "separated")] {
-                let colour = zone_colour(code).unwrap_or(RGBColor(215, 215, 215));
-                root.draw(&Rectangle::new([(x, by), (x + 16, by + 16)], colour.filled()))
-                    .map_err(err)?;
-                root.draw(&Rectangle::new([(x, by), (x + 16, by + 16)], grey.stroke_width(1)))
-                    .map_err(err)?;
-                draw_text(root, lettering, label, (x + 22, by + 1), HPos::Left, 2, black)?;
-                x += 30 + text_width(label, 2);
-            }
+            draw_zone_legend(root, lettering, (bx, by), grey, black)?;
             continue;
         }
         for i in 0..BAR_WIDTH {

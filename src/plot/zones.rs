@@ -2,7 +2,9 @@
 //! arc length along Γ₃ across, time up, each node's cell from midpoint to midpoint coloured by
 //! its friction status at each output time (stick green, slip orange, separated grey).
 
-use super::kit::{draw_text, draw_x_ticks, err, linear_ticks, tick_label, zone_colour, Lettering};
+use super::kit::{
+    draw_text, draw_x_ticks, draw_y_ticks, draw_zone_legend, err, linear_ticks, zone_colour, Lettering, SEPARATED,
+};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::HPos;
@@ -27,7 +29,7 @@ const BOTTOM: i32 = 120;
 
 /// The colour of a status code: stick, slip, separated (light grey), none (white).
 fn colour(code: i32) -> RGBColor {
-    zone_colour(code).unwrap_or(if code == 0 { RGBColor(215, 215, 215) } else { WHITE })
+    zone_colour(code).unwrap_or(if code == 0 { SEPARATED } else { WHITE })
 }
 
 /// Draws the figure to a PNG and, if given, an SVG file.
@@ -107,20 +109,8 @@ fn draw_zones<DB: DrawingBackend>(
     let xt: Vec<(i32, f64)> = xt.into_iter().map(|v| (x_px(v), v)).collect();
     draw_x_ticks(root, lettering, &xt, xstep, TOP + ph, grey, black)?;
     let (yt, ystep) = linear_ticks(t0, t1, 6);
-    for v in yt {
-        let y = y_px(v);
-        root.draw(&PathElement::new(vec![(LEFT - 5, y), (LEFT, y)], grey.stroke_width(1)))
-            .map_err(err)?;
-        draw_text(
-            root,
-            lettering,
-            &tick_label(v, ystep),
-            (LEFT - 9, y - 7),
-            HPos::Right,
-            2,
-            black,
-        )?;
-    }
+    let yt: Vec<(i32, f64)> = yt.into_iter().map(|v| (y_px(v), v)).collect();
+    draw_y_ticks(root, lettering, &yt, ystep, LEFT, grey, black)?;
     draw_text(root, lettering, "t", (30, TOP + ph / 2 - 7), HPos::Left, 2, black)?;
     draw_text(
         root,
@@ -131,15 +121,5 @@ fn draw_zones<DB: DrawingBackend>(
         2,
         black,
     )?;
-    // the legend
-    let (mut x, y) = (LEFT, TOP + ph + 70);
-    for (code, label) in [(1, "stick"), (2, "slip"), (0, "separated")] {
-        root.draw(&Rectangle::new([(x, y), (x + 16, y + 16)], colour(code).filled()))
-            .map_err(err)?;
-        root.draw(&Rectangle::new([(x, y), (x + 16, y + 16)], grey.stroke_width(1)))
-            .map_err(err)?;
-        draw_text(root, lettering, label, (x + 22, y + 1), HPos::Left, 2, black)?;
-        x += 30 + super::kit::text_width(label, 2);
-    }
-    Ok(())
+    draw_zone_legend(root, lettering, (LEFT, TOP + ph + 70), grey, black)
 }
