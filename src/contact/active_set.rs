@@ -972,4 +972,91 @@ mod tests {
         }
         assert!(active_sets.len() >= 4, "the active set moved: {active_sets:?}");
     }
+
+    /// The vector law of a pair (docs/method.md §17.3): k pairs with an isotropic compliance
+    /// W = W₁ ⊗ I₂ (each pair's two rows see the same scalar coupling) and Tresca's law F ρ_ε(|s|).
+    /// The problem is then equivariant under a rotation of every pair's plane: the free
+    /// displacements rotated by θ give the solution rotated by θ (to 1e-12), which two scalar
+    /// laws on the rows would break (their square cone has axes). At every pair the force is the
+    /// law's, F ρ/√(ρ² + ε²) along the slip where it slips, shorter than F where it sticks, and
+    /// both kinds occur.
+    #[test]
+    fn a_pair_law_acts_on_the_vector_and_is_isotropic() {
+        use crate::contact::law::{ComplianceProfile, ContactLaw, PiecewiseLinear, Symmetry};
+        let k = 40;
+        let m = 2 * k;
+        let scalar = operator(k);
+        let w: Vec<f64> = (0..m * m)
+            .map(|i| {
+                let (p, q) = (i / m, i % m);
+                if p % 2 == q % 2 {
+                    scalar.w[(p / 2) * k + q / 2]
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let op = DenseNormalStiffness::from_w(w, m).unwrap();
+        let epsilon = 1e-8;
+        let law = ContactLaw {
+            scale: 1.0,
+            profile: ComplianceProfile::PiecewiseLinear {
+                table: PiecewiseLinear::new(&[(0.0, 1.0)]).unwrap(),
+            },
+            symmetry: Symmetry::Odd,
+            epsilon,
+        };
+        let bound_force = 0.3;
+        let laws = NodalLaws::uniform(law, &vec![bound_force; m]);
+        let pairs: Vec<usize> = (0..m).map(|p| p ^ 1).collect();
+        let solve = |theta: f64| {
+            let (c, s) = (theta.cos(), theta.sin());
+            // a slip field that is large at one end and small at the other: both zones
+            let d: Vec<f64> = (0..k)
+                .flat_map(|i| {
+                    let x = i as f64 / k as f64;
+                    let (a, b) = (1.2 * x * x, 0.4 * x);
+                    [c * a - s * b, s * a + c * b]
+                })
+                .collect();
+            let solver = ActiveSetSolver {
+                operator: &op,
+                laws: &laws,
+                offset: None,
+                bound: None,
+                singular: false,
+                pairs: Some(&pairs),
+                fixed: None,
+                settings: ContactSettings {
+                    tolerance: 1e-13,
+                    max_iterations: 100,
+                    dense_limit: usize::MAX,
+                },
+            };
+            let mut state = ContactState::new(m);
+            solver.solve(&d, &mut state).unwrap();
+            state
+        };
+        let base = solve(0.0);
+        let theta: f64 = 0.7;
+        let turned = solve(theta);
+        let (c, s) = (theta.cos(), theta.sin());
+        let scale = base.normal_displacement.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let (mut stick, mut slip) = (0, 0);
+        for i in 0..k {
+            let (x, y) = (base.normal_displacement[2 * i], base.normal_displacement[2 * i + 1]);
+            let (u, v) = (turned.normal_displacement[2 * i], turned.normal_displacement[2 * i + 1]);
+            assert!((c * x - s * y - u).abs() <= 1e-12 * scale && (s * x + c * y - v).abs() <= 1e-12 * scale);
+            let (f, g) = (base.force[2 * i], base.force[2 * i + 1]);
+            let rho = x.hypot(y);
+            let along = bound_force / rho.hypot(epsilon);
+            if f.hypot(g) < bound_force * (1.0 - 1e-6) {
+                stick += 1;
+            } else {
+                slip += 1;
+                assert!((f - along * x).abs() <= 1e-10 * bound_force && (g - along * y).abs() <= 1e-10 * bound_force);
+            }
+        }
+        assert!(stick > 0 && slip > 0, "{stick} stick, {slip} slip");
+    }
 }
