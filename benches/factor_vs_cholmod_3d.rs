@@ -30,6 +30,9 @@
 //! - "exact": the structural nnz(L) of the permutation, no relaxation (faer's simplicial analysis
 //!   of the permutation each side used) — what compares the orderings alone.
 //!
+//! Both sides see the pattern hvi analyses: the couplings of a prescribed component's identity
+//! row (stored zeros) are left out (`Structure`), as src/linalg/factor.rs does.
+//!
 //! hvi's `Analysis` does not expose its permutation or supernodes, so the bench recomputes hvi's
 //! node orderings the way `src/linalg/factor.rs` does (AMD and METIS NodeND on the node graph,
 //! expanded to the unknowns) and checks that faer's analysis of them has exactly
@@ -93,7 +96,57 @@ impl Perm {
 }
 
 /// faer's symbolic Cholesky of the matrix under `perm`, supernodal (hvi's parameters) or simplicial.
-fn symbolic(matrix: &SymmetricMatrix, perm: &Perm, supernodal: bool) -> SymbolicCholesky<usize> {
+/// The matrix's pattern as hvi's analysis sees it (src/linalg/factor.rs): an unknown whose
+/// column holds only its diagonal (the identity row of a prescribed component, whose couplings
+/// are stored zeros) is decoupled, its couplings left out. Counting the factor on the stored
+/// pattern instead made the bench's copy of hvi's orderings (which put those unknowns first)
+/// fill 20× more than hvi's factor. CHOLMOD is given the same pattern.
+struct Structure {
+    n: usize,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    values: Vec<f64>,
+    decoupled: Vec<bool>,
+}
+
+impl Structure {
+    fn of(matrix: &SymmetricMatrix) -> Self {
+        let sym = matrix.pattern.symbolic();
+        let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+        let n = matrix.n();
+        let decoupled: Vec<bool> = (0..n)
+            .map(|j| (cp[j]..cp[j + 1]).all(|k| ri[k] == j || matrix.values[k] == 0.0))
+            .collect();
+        let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::with_capacity(ri.len()), Vec::new());
+        for j in 0..n {
+            for (&i, &v) in ri[cp[j]..cp[j + 1]].iter().zip(&matrix.values[cp[j]..cp[j + 1]]) {
+                if i == j || !(decoupled[i] || decoupled[j]) {
+                    row_idx.push(i);
+                    values.push(v);
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+        Structure {
+            n,
+            col_ptr,
+            row_idx,
+            values,
+            decoupled,
+        }
+    }
+
+    fn symbolic(&self) -> faer::sparse::SymbolicSparseColMatRef<'_, usize> {
+        faer::sparse::SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx)
+    }
+
+    /// The matrix on this pattern (both triangles), for faer's numeric factorisation.
+    fn matrix(&self) -> faer::sparse::SparseColMatRef<'_, usize, f64> {
+        faer::sparse::SparseColMatRef::new(self.symbolic(), &self.values)
+    }
+}
+
+fn symbolic(structure: &Structure, perm: &Perm, supernodal: bool) -> SymbolicCholesky<usize> {
     let params = CholeskySymbolicParams {
         supernodal_flop_ratio_threshold: if supernodal {
             SupernodalThreshold::FORCE_SUPERNODAL
@@ -103,7 +156,7 @@ fn symbolic(matrix: &SymmetricMatrix, perm: &Perm, supernodal: bool) -> Symbolic
         ..Default::default()
     };
     factorize_symbolic_cholesky(
-        matrix.pattern.symbolic(),
+        structure.symbolic(),
         Side::Lower,
         SymmetricOrdering::Custom(perm.as_faer()),
         params,
@@ -121,13 +174,13 @@ struct Counts {
 }
 
 /// faer's counts under `perm`, with the exact column counts (permuted order).
-fn faer_counts(matrix: &SymmetricMatrix, perm: &Perm) -> (Counts, Vec<usize>) {
-    let simplicial = symbolic(matrix, perm, false);
+fn faer_counts(structure: &Structure, perm: &Perm) -> (Counts, Vec<usize>) {
+    let simplicial = symbolic(structure, perm, false);
     let col_counts: Vec<usize> = match simplicial.raw() {
         SymbolicCholeskyRaw::Simplicial(s) => s.col_ptr().windows(2).map(|w| w[1] - w[0]).collect(),
         SymbolicCholeskyRaw::Supernodal(_) => unreachable!("forced simplicial"),
     };
-    let supernodal = symbolic(matrix, perm, true);
+    let supernodal = symbolic(structure, perm, true);
     let SymbolicCholeskyRaw::Supernodal(sn) = supernodal.raw() else {
         unreachable!("forced supernodal")
     };
@@ -147,8 +200,8 @@ fn faer_counts(matrix: &SymmetricMatrix, perm: &Perm) -> (Counts, Vec<usize>) {
 }
 
 /// The elimination tree of the matrix under `perm` (parent in permuted order, NONE for roots).
-fn etree(matrix: &SymmetricMatrix, perm: &Perm) -> Vec<usize> {
-    let sym = matrix.pattern.symbolic();
+fn etree(structure: &Structure, perm: &Perm) -> Vec<usize> {
+    let sym = structure.symbolic();
     let (cp, ri) = (sym.col_ptr(), sym.row_idx());
     let n = perm.fwd.len();
     let (mut parent, mut ancestor) = (vec![NONE; n], vec![NONE; n]);
@@ -172,9 +225,9 @@ fn etree(matrix: &SymmetricMatrix, perm: &Perm) -> Vec<usize> {
 
 /// `perm` followed by a postorder of its elimination tree with each node's children in increasing
 /// column count (the heaviest child next to its parent), as cholmod_analyze postorders.
-fn postordered(matrix: &SymmetricMatrix, perm: &Perm, col_counts: &[usize]) -> Perm {
+fn postordered(structure: &Structure, perm: &Perm, col_counts: &[usize]) -> Perm {
     let n = perm.fwd.len();
-    let parent = etree(matrix, perm);
+    let parent = etree(structure, perm);
     let mut by_weight: Vec<usize> = (0..n).collect();
     by_weight.sort_by_key(|&j| std::cmp::Reverse(col_counts[j]));
     let (mut head, mut next) = (vec![NONE; n + 1], vec![NONE; n]);
@@ -202,7 +255,7 @@ fn postordered(matrix: &SymmetricMatrix, perm: &Perm, col_counts: &[usize]) -> P
 
 /// One numeric factorisation with faer's mid-level API, as `Factor::new` does it (values
 /// allocated and zeroed, workspace allocated, supernodal LLᵀ): seconds.
-fn faer_numeric(symbolic: &SymbolicCholesky<usize>, matrix: &SymmetricMatrix) -> f64 {
+fn faer_numeric(symbolic: &SymbolicCholesky<usize>, structure: &Structure) -> f64 {
     let t = Instant::now();
     let mut values = Vec::new();
     values.resize(symbolic.len_val(), 0.0f64);
@@ -211,7 +264,7 @@ fn faer_numeric(symbolic: &SymbolicCholesky<usize>, matrix: &SymmetricMatrix) ->
     symbolic
         .factorize_numeric_llt::<f64>(
             &mut values,
-            matrix.as_faer(),
+            structure.matrix(),
             Side::Lower,
             Default::default(),
             par,
@@ -225,11 +278,12 @@ fn faer_numeric(symbolic: &SymbolicCholesky<usize>, matrix: &SymmetricMatrix) ->
 }
 
 /// The lower triangle of the matrix as MatrixMarket (shortest round-trip decimals: exact).
-fn write_matrix_market(matrix: &SymmetricMatrix, path: &Path) -> std::io::Result<usize> {
+fn write_matrix_market(matrix: &SymmetricMatrix, structure: &Structure, path: &Path) -> std::io::Result<usize> {
     let sym = matrix.pattern.symbolic();
     let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+    let kept = |i: usize, j: usize| i >= j && (i == j || !(structure.decoupled[i] || structure.decoupled[j]));
     let entries = (0..matrix.n())
-        .map(|j| ri[cp[j]..cp[j + 1]].iter().filter(|&&i| i >= j).count())
+        .map(|j| ri[cp[j]..cp[j + 1]].iter().filter(|&&i| kept(i, j)).count())
         .sum();
     let mut file = BufWriter::new(std::fs::File::create(path)?);
     writeln!(
@@ -240,7 +294,7 @@ fn write_matrix_market(matrix: &SymmetricMatrix, path: &Path) -> std::io::Result
     )?;
     for j in 0..matrix.n() {
         for (&i, v) in ri[cp[j]..cp[j + 1]].iter().zip(&matrix.values[cp[j]..cp[j + 1]]) {
-            if i >= j {
+            if kept(i, j) {
                 writeln!(file, "{} {} {v:e}", i + 1, j + 1)?;
             }
         }
@@ -411,6 +465,7 @@ fn main() {
             matrix.n() - sim.dofs.n_free(),
             matrix.values.len()
         );
+        let structure = Structure::of(&matrix);
         let counters = Counters::default();
         let rhs: Vec<f64> = {
             let mut y = vec![0.0; matrix.n()];
@@ -432,7 +487,7 @@ fn main() {
             let analysis = Factor::analyse_with(&matrix, ordering).expect("analysis");
             let seconds = t.elapsed().as_secs_f64();
             let perm = Perm::from_fwd(analysis.permutation().0.to_vec()).unwrap();
-            let (counts, col_counts) = faer_counts(&matrix, &perm);
+            let (counts, col_counts) = faer_counts(&structure, &perm);
             if counts.storage != analysis.factor_entries() {
                 println!(
                     "  warning: the bench's copy of {label} gives {} entries, hvi {}: its lower/exact counts are not hvi's",
@@ -458,7 +513,7 @@ fn main() {
             let t = Instant::now();
             let analysis = Factor::analyse_with_last(&matrix, &last).expect("analysis");
             let seconds = t.elapsed().as_secs_f64();
-            let counts = Some(faer_counts(&matrix, &Perm::from_fwd(analysis.permutation().0.to_vec()).unwrap()).0)
+            let counts = Some(faer_counts(&structure, &Perm::from_fwd(analysis.permutation().0.to_vec()).unwrap()).0)
                 .filter(|c| c.storage == analysis.factor_entries());
             if counts.is_none() {
                 println!("  warning: the bench's copy of the solver's ordering does not give hvi's factor");
@@ -479,10 +534,10 @@ fn main() {
             let perm = &perm;
             let col_counts = &col_counts;
             let t = Instant::now();
-            let post = postordered(&matrix, perm, col_counts);
-            let sym = symbolic(&matrix, &post, true);
+            let post = postordered(&structure, perm, col_counts);
+            let sym = symbolic(&structure, &post, true);
             let seconds = t.elapsed().as_secs_f64();
-            let (counts, _) = faer_counts(&matrix, &post);
+            let (counts, _) = faer_counts(&structure, &post);
             rows.push(row(
                 "faer, hvi ND postordered",
                 Method::Faer(Box::new(sym)),
@@ -496,7 +551,7 @@ fn main() {
         let dir = std::env::temp_dir().join(format!("hvi_factor3d_{}_{n}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("temp dir");
         let mtx: PathBuf = dir.join("K.mtx");
-        let entries = write_matrix_market(&matrix, &mtx).expect("writing the MatrixMarket file");
+        let entries = write_matrix_market(&matrix, &structure, &mtx).expect("writing the MatrixMarket file");
         let mut cholmod = match Cholmod::start(&mtx, &dir, threads) {
             Ok((server, ready)) => {
                 println!(
@@ -514,7 +569,7 @@ fn main() {
                         .map(|c| i64::from_le_bytes(c.try_into().unwrap()) as usize)
                         .collect();
                     let perm = Perm::from_fwd(fwd).expect("CHOLMOD's P()");
-                    let (counts, _) = faer_counts(&matrix, &perm);
+                    let (counts, _) = faer_counts(&structure, &perm);
                     // CHOLMOD's own lower/storage/supernodes come with "finish"; keep faer's exact count
                     let own = Counts {
                         exact: counts.exact,
@@ -546,7 +601,7 @@ fn main() {
                 // diagnostic: faer's supernodes and kernels on CHOLMOD's best permutation (exact count)
                 let (name, perm, counts) = cholmod_perms.iter().min_by_key(|(_, _, c)| c.exact).unwrap();
                 let t = Instant::now();
-                let sym = symbolic(&matrix, perm, true);
+                let sym = symbolic(&structure, perm, true);
                 let seconds = t.elapsed().as_secs_f64();
                 rows.push(row(
                     format!("faer, CHOLMOD {name} permutation"),
@@ -581,7 +636,7 @@ fn main() {
                         }
                         seconds
                     }
-                    Method::Faer(sym) => faer_numeric(sym, &matrix),
+                    Method::Faer(sym) => faer_numeric(sym, &structure),
                     Method::Cholmod(name) => {
                         let Some(server) = cholmod.as_mut() else { continue };
                         match server.request(&format!("factor {name}")) {
