@@ -49,7 +49,7 @@ use faer::sparse::linalg::SupernodalThreshold;
 use faer::Side;
 use hvi::fem::assembly::assemble_stiffness;
 use hvi::fem::SymmetricMatrix;
-use hvi::linalg::{Analysis, Counters, Factor, NodeOrdering};
+use hvi::linalg::{decoupled_unknowns, Analysis, Counters, Factor, NodeOrdering};
 use hvi::material::IDENTITY_TENSOR;
 use hvi::mesh::structured::{block, SolidShape};
 use hvi::scene::Scene;
@@ -96,9 +96,9 @@ impl Perm {
 }
 
 /// faer's symbolic Cholesky of the matrix under `perm`, supernodal (hvi's parameters) or simplicial.
-/// The matrix's pattern as hvi's analysis sees it (src/linalg/factor.rs): an unknown whose
-/// column holds only its diagonal (the identity row of a prescribed component, whose couplings
-/// are stored zeros) is decoupled, its couplings left out. Counting the factor on the stored
+/// The matrix's pattern as hvi's analysis sees it (src/linalg/factor.rs): the unknowns
+/// [`decoupled_unknowns`] finds (prescribed components' identity rows, whose couplings are
+/// stored zeros) have their couplings left out. Counting the factor on the stored
 /// pattern instead made the bench's copy of hvi's orderings (which put those unknowns first)
 /// fill 20× more than hvi's factor. CHOLMOD is given the same pattern.
 struct Structure {
@@ -114,9 +114,7 @@ impl Structure {
         let sym = matrix.pattern.symbolic();
         let (cp, ri) = (sym.col_ptr(), sym.row_idx());
         let n = matrix.n();
-        let decoupled: Vec<bool> = (0..n)
-            .map(|j| (cp[j]..cp[j + 1]).all(|k| ri[k] == j || matrix.values[k] == 0.0))
-            .collect();
+        let decoupled = decoupled_unknowns(matrix);
         let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::with_capacity(ri.len()), Vec::new());
         for j in 0..n {
             for (&i, &v) in ri[cp[j]..cp[j + 1]].iter().zip(&matrix.values[cp[j]..cp[j + 1]]) {

@@ -600,8 +600,7 @@ impl ActiveSetSolver<'_> {
                 }
                 // a pair's path x − s d stops where it passes the origin (x·(x − αd) < 0), at
                 // its nearest point s* = x·d/|d|² (docs/method.md §17.3)
-                for p in (0..m).filter(|&p| self.partner(p).is_some_and(|q| q > p)) {
-                    let q = self.partner(p).expect("a pair");
+                for (p, q) in (0..m).filter_map(|p| self.partner(p).filter(|&q| q > p).map(|q| (p, q))) {
                     let (x, rho) = self.pair_at(r, p, q);
                     let d = [direction[p], direction[q]];
                     let along = x[0] * d[0] + x[1] * d[1];
@@ -982,7 +981,7 @@ mod tests {
     /// both kinds occur.
     #[test]
     fn a_pair_law_acts_on_the_vector_and_is_isotropic() {
-        use crate::contact::law::{ComplianceProfile, ContactLaw, PiecewiseLinear, Symmetry};
+        use crate::contact::law::ContactLaw;
         let k = 40;
         let m = 2 * k;
         let scalar = operator(k);
@@ -998,14 +997,7 @@ mod tests {
             .collect();
         let op = DenseNormalStiffness::from_w(w, m).unwrap();
         let epsilon = 1e-8;
-        let law = ContactLaw {
-            scale: 1.0,
-            profile: ComplianceProfile::PiecewiseLinear {
-                table: PiecewiseLinear::new(&[(0.0, 1.0)]).unwrap(),
-            },
-            symmetry: Symmetry::Odd,
-            epsilon,
-        };
+        let law = ContactLaw::smoothed_magnitude(epsilon);
         let bound_force = 0.3;
         let laws = NodalLaws::uniform(law, &vec![bound_force; m]);
         let pairs: Vec<usize> = (0..m).map(|p| p ^ 1).collect();

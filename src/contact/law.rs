@@ -151,6 +151,20 @@ pub struct ContactLaw {
 }
 
 impl ContactLaw {
+    /// The odd law of constant profile μ ≡ 1 and smoothing width ε: ρ_ε(r) = √(r² + ε²) − ε, the
+    /// smoothed |r| that Tresca's and Coulomb's F ρ_ε(Δu_τ) scale by the bound force F
+    /// (docs/method.md §17.2).
+    pub fn smoothed_magnitude(epsilon: f64) -> Self {
+        ContactLaw {
+            scale: 1.0,
+            profile: ComplianceProfile::PiecewiseLinear {
+                table: PiecewiseLinear::new(&[(0.0, 1.0)]).expect("a constant profile"),
+            },
+            symmetry: Symmetry::Odd,
+            epsilon,
+        }
+    }
+
     /// (ρ_ε, ρ_ε', ρ_ε'') at r, computed without cancellation.
     #[inline]
     fn magnitude(&self, r: f64) -> (f64, f64, f64) {

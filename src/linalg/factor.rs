@@ -483,11 +483,7 @@ struct Decoupling {
 
 impl Decoupling {
     fn of(matrix: &SymmetricMatrix) -> Self {
-        let sym = matrix.pattern.symbolic();
-        let (cp, ri) = (sym.col_ptr(), sym.row_idx());
-        let decoupled: Vec<bool> = (0..matrix.n())
-            .map(|j| (cp[j]..cp[j + 1]).all(|k| ri[k] == j || matrix.values[k] == 0.0))
-            .collect();
+        let decoupled = decoupled_unknowns(matrix);
         let pattern = decoupled
             .iter()
             .any(|&b| b)
@@ -497,6 +493,17 @@ impl Decoupling {
             pattern,
         }
     }
+}
+
+/// The unknowns the factor decouples (docs/method.md §9.1): those whose column holds nothing
+/// but zeros off the diagonal (a prescribed component's identity row). Their couplings are left
+/// out of the factor's pattern and they are ordered first.
+pub fn decoupled_unknowns(matrix: &SymmetricMatrix) -> Vec<bool> {
+    let sym = matrix.pattern.symbolic();
+    let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+    (0..matrix.n())
+        .map(|j| (cp[j]..cp[j + 1]).all(|k| ri[k] == j || matrix.values[k] == 0.0))
+        .collect()
 }
 
 /// The pattern of `matrix` (full storage) without the couplings of the `decoupled` unknowns

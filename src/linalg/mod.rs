@@ -41,7 +41,7 @@ mod schedule;
 pub mod sparse;
 mod supernodes;
 
-pub use factor::{set_parallelism, Analysis, Counters, Factor, FactorError, Forward, NodeOrdering};
+pub use factor::{decoupled_unknowns, set_parallelism, Analysis, Counters, Factor, FactorError, Forward, NodeOrdering};
 pub use forward_columns::{forward_columns_entries, ForwardColumns};
 
 /// Solves with a fixed matrix K (docs/method.md §9): the seam a second linear-algebra backend

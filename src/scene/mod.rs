@@ -119,13 +119,8 @@ impl Scene {
     /// Reads a tabulated law's CSV (`s,mu` rows, `#` comments, an optional header) into a
     /// piecewise-linear table, relative to the scene's directory.
     fn read_tables(&mut self, origin: &str, dir: Option<&Path>) -> Result<(), SceneError> {
-        let many = self.contact.len() > 1 || self.contact.iter().any(|c| c.group.is_some());
-        for (i, c) in self.contact.iter_mut().enumerate() {
-            let at = if many {
-                format!("contact[{i}]")
-            } else {
-                "contact".to_string()
-            };
+        let keys: Vec<String> = (0..self.contact.len()).map(|i| self.contact_key(i)).collect();
+        for (c, at) in self.contact.iter_mut().zip(keys) {
             if let Some(law) = c.law.as_mut() {
                 Self::read_table(law, origin, dir, &at)?;
             }

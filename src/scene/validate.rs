@@ -342,11 +342,7 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
     }
     let many = scene.contact.len() > 1 || scene.contact.iter().any(|c| c.group.is_some());
     for (i, c) in scene.contact.iter().enumerate() {
-        let at = if many {
-            format!("contact[{i}]")
-        } else {
-            "contact".to_string()
-        };
+        let at = scene.contact_key(i);
         if let Some(f) = &c.friction {
             check_friction(f, origin, &at)?;
         }
@@ -365,7 +361,8 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
                 &format!("{at}.group"),
                 c.group.as_ref().map_or("(none)".to_string(), |g| g.to_string()),
                 "this contact section has no bound, law or obstacle, so it would impose nothing: give it a `bound`, a \
-                 [contact.law] or an `obstacle` (docs/method.md §14.1), or remove the section",
+                 [contact.law], an `obstacle` (docs/method.md §14.1) or `bilateral = true` (§17.4), or remove the \
+                 section",
             ));
         }
         match &c.bound {

@@ -514,7 +514,10 @@ fn friction_rows<const D: usize>(
                         )
                     }
                 };
-                Some((FrictionLaw::Coulomb(mu), constant_law(*regularisation)))
+                Some((
+                    FrictionLaw::Coulomb(mu),
+                    ContactLaw::smoothed_magnitude(*regularisation),
+                ))
             }
             Some(scene::FrictionSpec::Potential { law }) => {
                 let key = format!("{}.friction", scene.contact_key(used[g]));
@@ -528,7 +531,7 @@ fn friction_rows<const D: usize>(
                 let key = format!("{}.friction.bound", scene.contact_key(used[g]));
                 let e = Expr::parse(bound, &scene::BODY_FORCE_VARIABLES)
                     .map_err(|e| SolveError::Setup(format!("{origin}: {key} = \"{bound}\": {e}")))?;
-                Some((FrictionLaw::Tresca(e), constant_law(*regularisation)))
+                Some((FrictionLaw::Tresca(e), ContactLaw::smoothed_magnitude(*regularisation)))
             }
         });
     }
@@ -612,17 +615,4 @@ fn friction_rows<const D: usize>(
         laws,
         laws_of_rows: NodalLaws::new(all_laws, &terms),
     }))
-}
-
-/// The odd law of constant profile μ ≡ 1 with smoothing width ε: Tresca's and Coulomb's
-/// F ρ_ε(Δu_τ) with F the term's weight (docs/method.md §17.2).
-fn constant_law(epsilon: f64) -> ContactLaw {
-    ContactLaw {
-        scale: 1.0,
-        profile: ComplianceProfile::PiecewiseLinear {
-            table: PiecewiseLinear::new(&[(0.0, 1.0)]).expect("a constant profile"),
-        },
-        symmetry: Symmetry::Odd,
-        epsilon,
-    }
 }
