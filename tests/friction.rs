@@ -432,6 +432,22 @@ fn a_non_monotone_friction_potential_gives_its_law_at_every_node() {
         }
     }
     assert!(checked >= 3 * m, "only {checked} rows were displaced enough to check");
+    // the slip written out is the step's increment of u_τ (the law acts on u_τ itself), and the
+    // accumulated slip grows by its size
+    for pair in sink.steps.windows(2) {
+        let (a, b) = (pair[0].contact.as_ref().unwrap(), pair[1].contact.as_ref().unwrap());
+        for k in 0..f.normal_row.len() {
+            let increment = b.normal_displacement[m + k] - a.normal_displacement[m + k];
+            assert!(
+                (b.friction.slip[k] - increment).abs() <= 1e-15,
+                "t = {}: row {k} slip {:e}, u_τ moved {increment:e}",
+                pair[1].time,
+                b.friction.slip[k]
+            );
+            let before = a.friction.accumulated.get(k).copied().unwrap_or(0.0);
+            assert!((b.friction.accumulated[k] - before - increment.abs()).abs() <= 1e-15);
+        }
+    }
 }
 
 /// The forces add up with friction (docs/method.md §14.4, §17.5): on the Cattaneo–Mindlin scene

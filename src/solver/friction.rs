@@ -114,8 +114,11 @@ fn solve_increment<const D: usize>(
     };
     // the laws of all rows, built once; the bound forces of Tresca and Coulomb set below
     let mut laws = friction.laws_of_rows.clone();
-    // the slip accumulated before this step
+    // the slip accumulated before this step, and the tangential rows' values at its start (0 for
+    // Tresca and Coulomb in this frame, u_τ(t_{n−1}) for a potential): the step's slip is
+    // measured from them
     let k_rows = friction.normal_row.len();
+    let before = state.normal_displacement[m..].to_vec();
     let accumulated: Vec<f64> = if state.friction.accumulated.len() == k_rows {
         state.friction.accumulated.clone()
     } else {
@@ -124,7 +127,7 @@ fn solve_increment<const D: usize>(
     // the bound force of each tangential row, given the state (Coulomb: its normal force and,
     // for μ(s), its accumulated slip with this step's increment)
     let bound_forces = |state: &ContactState| -> Result<Vec<f64>, String> {
-        let slip = |k: usize| state.normal_displacement[m + k] - offset[m + k];
+        let slip = |k: usize| state.normal_displacement[m + k] - before[k];
         (0..k_rows)
             .map(|k| {
                 let p = friction.normal_row[k];
@@ -245,7 +248,7 @@ fn solve_increment<const D: usize>(
         let settled = change <= tolerance * scale;
         if !coulomb || (settled && round_tolerance == tolerance) {
             let pressed: Vec<f64> = friction.normal_row.iter().map(|&p| pressing(state, p)).collect();
-            record(state, friction, (&offset, &pressed), &accumulated, &forces);
+            record(state, friction, (&before, &pressed), &accumulated, &forces);
             return Ok(total);
         }
         round_tolerance = if settled {
@@ -264,14 +267,14 @@ fn solve_increment<const D: usize>(
     ))
 }
 
-/// The tangential rows' slip, accumulated slip, bound force and status after the step
-/// (docs/method.md §17): separated where the normal row presses with no force (λ_ν, |λ_ν| where
+/// The tangential rows' slip (their change from `before`, their values at the step's start),
+/// accumulated slip, bound force and status after the step (docs/method.md §17): separated where the normal row presses with no force (λ_ν, |λ_ν| where
 /// bilateral, below 10⁻¹² of the largest), else stick where |λ_τ| < F (1 − 10⁻⁶), slip at F; |·| the length of the pair's
 /// vector in 3D, whose two rows get the same accumulated slip and status.
 fn record<const D: usize>(
     state: &mut ContactState,
     friction: &Friction<D>,
-    (offset, pressed): (&[f64], &[f64]),
+    (before, pressed): (&[f64], &[f64]),
     accumulated: &[f64],
     forces: &[f64],
 ) {
@@ -280,7 +283,7 @@ fn record<const D: usize>(
     // a normal force below 1e-12 of the largest is round-off of a node off the bound
     let largest = pressed.iter().fold(0.0f64, |a, &v| a.max(v));
     let slip: Vec<f64> = (0..k_rows)
-        .map(|k| state.normal_displacement[m + k] - offset[m + k])
+        .map(|k| state.normal_displacement[m + k] - before[k])
         .collect();
     let mut rows = FrictionRows {
         slip: slip.clone(),
