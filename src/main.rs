@@ -127,6 +127,15 @@ enum SolverArg {
     Gamg,
 }
 
+/// `error: <message>` on stderr in one write: under mpirun, whose own messages share the
+/// stream, an `eprintln!` that writes the prefix and the message separately can be split by
+/// them (tests/petsc.rs saw "error: ----" followed by mpirun's banner).
+fn report_error(e: &dyn std::fmt::Display) {
+    use std::io::Write;
+    let line = format!("error: {e}\n");
+    let _ = std::io::stderr().lock().write_all(line.as_bytes());
+}
+
 #[cfg(feature = "petsc")]
 fn petsc_solver(solver: Option<SolverArg>) -> hvi::petsc::SolverChoice {
     match solver {
@@ -146,7 +155,7 @@ fn petsc_exit<T>(
     let (rank, result) = match started {
         Ok(run) => run,
         Err(e) => {
-            eprintln!("error: {e}");
+            report_error(&e);
             return ExitCode::FAILURE;
         }
     };
@@ -165,7 +174,7 @@ fn petsc_exit<T>(
         }
         Err(e) => {
             if rank == 0 {
-                eprintln!("error: {e}");
+                report_error(&e);
             }
             ExitCode::FAILURE
         }
@@ -242,7 +251,7 @@ fn main() -> ExitCode {
                 return solve_petsc(&opts, solver);
             }
             if solver.is_some() {
-                eprintln!("error: --solver chooses the PETSc solver: use it with --backend petsc");
+                report_error(&"--solver chooses the PETSc solver: use it with --backend petsc");
                 return ExitCode::FAILURE;
             }
             let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::Relaxed));
@@ -256,7 +265,7 @@ fn main() -> ExitCode {
                     ExitCode::from(130)
                 }
                 Err(e) => {
-                    eprintln!("error: {e}");
+                    report_error(&e);
                     ExitCode::FAILURE
                 }
             }
@@ -279,7 +288,7 @@ fn main() -> ExitCode {
                     ExitCode::SUCCESS
                 }
                 Err(e) => {
-                    eprintln!("error: {e}");
+                    report_error(&e);
                     ExitCode::FAILURE
                 }
             }
@@ -293,7 +302,7 @@ fn main() -> ExitCode {
                     ExitCode::SUCCESS
                 }
                 Err(e) => {
-                    eprintln!("error: {e}");
+                    report_error(&e);
                     ExitCode::FAILURE
                 }
             }
@@ -310,7 +319,7 @@ fn main() -> ExitCode {
                 return check_petsc(&mesh, scene.as_deref(), &overrides, solver, accept_mesh_defects);
             }
             if solver.is_some() {
-                eprintln!("error: --solver chooses the PETSc solver: use it with --backend petsc");
+                report_error(&"--solver chooses the PETSc solver: use it with --backend petsc");
                 return ExitCode::FAILURE;
             }
             match hvi::app::check(&mesh, scene.as_deref(), &overrides, accept_mesh_defects) {
@@ -319,7 +328,7 @@ fn main() -> ExitCode {
                     ExitCode::SUCCESS
                 }
                 Err(e) => {
-                    eprintln!("error: {e}");
+                    report_error(&e);
                     ExitCode::FAILURE
                 }
             }

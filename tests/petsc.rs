@@ -13,7 +13,6 @@ const HVI: &str = env!("CARGO_BIN_EXE_hvi");
 /// instead of stalling CI).
 const TIMEOUT: &str = "120";
 
-/// `mpirun -np <np> hvi <args>` as root on an oversubscribed machine, ranks yielding the CPU
 /// The one `error:` line of a failed run's stderr (every rank holds the error, rank 0 prints it)
 /// and the whole stderr, for messages.
 fn the_one_error(out: &Output) -> (String, String) {
@@ -23,13 +22,24 @@ fn the_one_error(out: &Output) -> (String, String) {
     (errors[0].to_string(), err)
 }
 
+/// A session directory of Open MPI's own for one launch. The tests run in parallel, and launches
+/// that share the default one (/tmp/ompi.<host>.<uid>) race: one that ends removes it while
+/// another creates its `pid.N` below it, and that launch dies in `orte_init` ("A call to mkdir
+/// was unable to create the desired directory"), as CI saw once.
+fn session_dir() -> tempfile::TempDir {
+    tempfile::tempdir().expect("a session directory for mpirun")
+}
+
+/// `mpirun -np <np> hvi <args>` as root on an oversubscribed machine, ranks yielding the CPU
 /// while they wait (2 ranks share 2 cores with everything else here), under a timeout.
 fn mpirun(np: usize, args: &[&str], env: &[(&str, &str)]) -> Output {
     let np = np.to_string();
+    let session = session_dir();
     let mut cmd = Command::new("timeout");
     cmd.args(["-k", "10", TIMEOUT, "mpirun", "--allow-run-as-root", "--oversubscribe"])
         .args(["--mca", "mpi_yield_when_idle", "1", "-np", &np, HVI])
         .args(args)
+        .env("OMPI_MCA_orte_tmpdir_base", session.path())
         .env_remove("PETSC_OPTIONS");
     for (k, v) in env {
         cmd.env(k, v);
@@ -276,7 +286,9 @@ fn a_rank_that_reads_a_bad_mesh_stops_every_rank() {
     std::fs::write(bad.join("mesh.msh"), &text[..text.len() / 2]).unwrap();
     let out_dir = tmp.path().join("out").display().to_string();
     let args = ["solve", "mesh.msh", "--quiet", "--backend", "petsc", "--out", &out_dir];
+    let session = session_dir();
     let mut cmd = Command::new("timeout");
+    cmd.env("OMPI_MCA_orte_tmpdir_base", session.path());
     cmd.args(["-k", "10", TIMEOUT, "mpirun", "--allow-run-as-root", "--oversubscribe"])
         .args(["--mca", "mpi_yield_when_idle", "1"])
         .args(["-np", "1", "-wdir", &good.display().to_string(), HVI])
@@ -727,7 +739,9 @@ fn memory_of_two_channels_is_refused_by_solve_and_check() {
 fn ctrl_c_on_mpirun_stops_every_rank_with_the_interrupted_summary() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("run");
+    let session = session_dir();
     let mut child = Command::new("mpirun")
+        .env("OMPI_MCA_orte_tmpdir_base", session.path())
         .args([
             "--allow-run-as-root",
             "--oversubscribe",

@@ -29,6 +29,7 @@
 
 use super::condensed::NormalStiffness;
 use super::nodal::NodalLaws;
+use super::schur::{self, Curvature};
 use crate::linalg::dense::DenseCholesky;
 
 /// Tolerance and iteration cap of the contact solve.
@@ -169,13 +170,15 @@ pub struct ContactOutcome {
     /// Dense Cholesky factorisations of the Newton matrix (one per direction below
     /// `dense_limit`; above it, only when the reused one no longer serves).
     pub factorisations: usize,
+    /// Of those, the factorisations of the Newton system in W (docs/method.md §4.6).
+    pub in_w: usize,
     /// Nodes on the bound at the end.
     pub active: usize,
 }
 
 impl ContactOutcome {
     /// How many numbers [`Self::to_numbers`] gives (a broadcast of the outcome, src/petsc).
-    pub const NUMBERS: usize = 7;
+    pub const NUMBERS: usize = 8;
 
     /// The outcome as numbers, in the order [`Self::from_numbers`] reads them.
     pub fn to_numbers(&self) -> [f64; Self::NUMBERS] {
@@ -186,6 +189,7 @@ impl ContactOutcome {
             self.convexified as f64,
             self.iterative as f64,
             self.factorisations as f64,
+            self.in_w as f64,
             self.active as f64,
         ]
     }
@@ -199,7 +203,8 @@ impl ContactOutcome {
             convexified: n[3] as usize,
             iterative: n[4] as usize,
             factorisations: n[5] as usize,
-            active: n[6] as usize,
+            in_w: n[6] as usize,
+            active: n[7] as usize,
         }
     }
 }
@@ -249,6 +254,8 @@ struct LawHessian {
     convex_diagonal: Vec<f64>,
     convex_coupling: Vec<f64>,
     partner: Vec<usize>,
+    /// Per row of a pair: a, b and the pair's unit vector n (the block a nnᵀ + b (I − nnᵀ)).
+    pair: Vec<(f64, f64, [f64; 2])>,
 }
 
 const ARMIJO: f64 = 1e-4;
@@ -330,6 +337,7 @@ impl ActiveSetSolver<'_> {
             convex_diagonal: vec![0.0; nf],
             convex_coupling: vec![0.0; nf],
             partner: vec![usize::MAX; nf],
+            pair: vec![(0.0, 0.0, [1.0, 0.0]); nf],
         };
         let mut index = Vec::new();
         if self.pairs.is_some() {
@@ -357,6 +365,7 @@ impl ActiveSetSolver<'_> {
                     (h.diagonal[i], h.coupling[i]) = block(a, b);
                     (h.convex_diagonal[i], h.convex_coupling[i]) = block(a.max(0.0), b.max(0.0));
                     h.partner[i] = index[q];
+                    h.pair[i] = (a, b, n);
                 }
             }
         }
@@ -664,6 +673,11 @@ impl ActiveSetSolver<'_> {
         if nf == 0 {
             return Vec::new();
         }
+        if let Some(x) = self.direction_in_w(free, hessian, grad) {
+            outcome.factorisations += 1;
+            outcome.in_w += 1;
+            return x;
+        }
         let exact: Vec<f64> = hessian.diagonal.iter().zip(proximal).map(|(e, p)| e + p).collect();
         let reuse = nf > self.settings.dense_limit;
         let reused = (kept.0.as_ref())
@@ -724,6 +738,73 @@ impl ActiveSetSolver<'_> {
             });
         }
         x
+    }
+
+    /// The Newton direction in W (docs/method.md §4.6, src/contact/schur.rs) where it applies and
+    /// pays: Q = W⁻¹ exactly (no rigid parameter eliminated from Q), the laws' curvature H ≥ 0
+    /// (no convexification to decide), and few enough directions of positive curvature beside
+    /// the held rows.
+    fn direction_in_w(&self, free: &[usize], hessian: &LawHessian, grad: &[f64]) -> Option<Vec<f64>> {
+        let w = self.operator.w().filter(|_| !self.singular)?;
+        let m = self.m();
+        // a curvature below 10⁻⁸ of the direction's least stiffness 1/(eᵀWe) counts as none
+        let negligible = |h: f64, e: &Curvature| h * e.compliance(w, m) <= 1e-8;
+        let mut curvature: Vec<Curvature> = Vec::new();
+        for (i, &p) in free.iter().enumerate() {
+            let j = hessian.partner[i];
+            if j == usize::MAX {
+                let h = hessian.diagonal[i];
+                if h < 0.0 {
+                    return None;
+                }
+                let e = Curvature::row(p, 1.0 / h);
+                if !negligible(h, &e) {
+                    curvature.push(e);
+                }
+            } else if i < j {
+                // a pair's block a nnᵀ + b (I − nnᵀ): directions n and t = n rotated by 90°,
+                // both curved (sticking): its two rows coupled by the block's inverse
+                let (a, b, n) = hessian.pair[i];
+                if a < 0.0 || b < 0.0 {
+                    return None;
+                }
+                let rows = [p, free[j]];
+                let t = [-n[1], n[0]];
+                let along = Curvature::pair(rows, n, 1.0 / a);
+                let across = Curvature::pair(rows, t, 1.0 / b);
+                match (negligible(a, &along), negligible(b, &across)) {
+                    (true, true) => {}
+                    (false, true) => curvature.push(along),
+                    (true, false) => curvature.push(across),
+                    (false, false) => {
+                        let (ia, ib) = (1.0 / a, 1.0 / b);
+                        let k = curvature.len();
+                        let coupling = (ia - ib) * n[0] * n[1];
+                        for (r, (row, partner)) in [(p, k + 1), (free[j], k)].into_iter().enumerate() {
+                            curvature.push(Curvature {
+                                partner,
+                                coupling,
+                                ..Curvature::row(row, ib + (ia - ib) * n[r] * n[r])
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        if tracing() {
+            let singles = curvature.iter().filter(|c| c.rows[1] == usize::MAX).count();
+            eprintln!(
+                "  in W: free {} directions {} (single rows {singles}) held {}",
+                free.len(),
+                curvature.len(),
+                m - free.len()
+            );
+        }
+        if !schur::pays(m, free.len(), curvature.len()) {
+            return None;
+        }
+        let b: Vec<f64> = free.iter().map(|&p| grad[p]).collect();
+        schur::direction((w, m), free, &curvature, &b)
     }
 
     /// m and the bits of Σ_p Q_pp: a kept factorisation of another operator (step 0's K_A, or
@@ -897,7 +978,8 @@ mod tests {
             convexified: 4,
             iterative: 5,
             factorisations: 6,
-            active: 7,
+            in_w: 7,
+            active: 8,
         };
         let back = ContactOutcome::from_numbers(&o.to_numbers());
         assert_eq!(format!("{back:?}"), format!("{o:?}"));
@@ -970,6 +1052,109 @@ mod tests {
             active_sets.insert(b.status.iter().filter(|s| **s == NodeStatus::OnBound).count());
         }
         assert!(active_sets.len() >= 4, "the active set moved: {active_sets:?}");
+    }
+
+    /// Q without W: the solver cannot take the Newton system in W.
+    struct OnlyQ<'a>(&'a DenseNormalStiffness);
+
+    impl NormalStiffness for OnlyQ<'_> {
+        fn m(&self) -> usize {
+            self.0.m
+        }
+        fn apply_q(&self, x: &[f64], y: &mut [f64]) {
+            self.0.apply_q(x, y)
+        }
+        fn q(&self, p: usize, r: usize) -> f64 {
+            self.0.q(p, r)
+        }
+    }
+
+    /// The Newton system in W (docs/method.md §4.6) against the one in Q: k nodes with a normal
+    /// row on a bound and two tangential rows with Tresca's pair law, a bound force on a third
+    /// of the nodes only (the others' tangential rows and the separated normal rows carry no
+    /// curvature and drop out of the system in W). Over steps of a growing load that moves the
+    /// active set, both give the same solution to 1e-10 — while the system in W is used for
+    /// most directions, with the same number of Newton iterations — and the law holds at every
+    /// pair. (src/contact/schur.rs tests the direction itself.)
+    #[test]
+    fn the_newton_system_in_w_gives_the_directions_in_q() {
+        use crate::contact::law::ContactLaw;
+        let k = 60;
+        let m = 3 * k;
+        let op = operator(m);
+        let epsilon = 1e-8;
+        let force = |i: usize| if i < k / 3 { 0.05 } else { 0.0 };
+        let weights: Vec<f64> = (0..m).map(|p| if p < k { 0.0 } else { force((p - k) / 2) }).collect();
+        let laws = NodalLaws::uniform(ContactLaw::smoothed_magnitude(epsilon), &weights);
+        let pairs: Vec<usize> = (0..m)
+            .map(|p| if p < k { usize::MAX } else { k + ((p - k) ^ 1) })
+            .collect();
+        let bound: Vec<f64> = (0..m).map(|p| if p < k { 0.2 } else { f64::INFINITY }).collect();
+        let solve = |operator: &dyn NormalStiffness| {
+            let solver = ActiveSetSolver {
+                operator,
+                laws: &laws,
+                offset: None,
+                bound: Some(&bound),
+                singular: false,
+                pairs: Some(&pairs),
+                fixed: None,
+                settings: ContactSettings {
+                    tolerance: 1e-12,
+                    max_iterations: 100,
+                    dense_limit: usize::MAX,
+                },
+            };
+            let mut state = ContactState::new(m);
+            let (mut steps, mut in_w, mut directions) = (Vec::new(), 0, 0);
+            for n in 1..=6 {
+                let t = n as f64 / 6.0;
+                let d: Vec<f64> = (0..m)
+                    .map(|p| {
+                        let x = (p % k) as f64 / k as f64;
+                        let shape = t * (std::f64::consts::PI * x).sin() * (1.0 + 0.3 * (7.0 * x + t).cos());
+                        if p < k {
+                            0.5 * shape
+                        } else {
+                            0.1 * shape * if p % 2 == 0 { 1.0 } else { -0.5 }
+                        }
+                    })
+                    .collect();
+                let outcome = solver.solve(&d, &mut state).unwrap();
+                in_w += outcome.in_w;
+                directions += outcome.iterations;
+                steps.push(state.clone());
+            }
+            (steps, in_w, directions)
+        };
+        let (in_q, q_in_w, q_directions) = solve(&OnlyQ(&op));
+        let (with_w, in_w, directions) = solve(&op);
+        assert_eq!(q_in_w, 0);
+        // the same directions up to rounding: the same iterates
+        assert_eq!(q_directions, directions);
+        assert!(2 * in_w > directions, "{in_w} of {directions} directions in W");
+        let mut active_sets = std::collections::HashSet::new();
+        let (mut stick, mut slip) = (0, 0);
+        for (a, b) in in_q.iter().zip(&with_w) {
+            let scale = a.normal_displacement.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+            for p in 0..m {
+                let (x, y) = (a.normal_displacement[p], b.normal_displacement[p]);
+                assert!((x - y).abs() <= 1e-10 * scale, "row {p}: {x} in Q, {y} in W");
+            }
+            for i in 0..k / 3 {
+                let (p, q) = (k + 2 * i, k + 2 * i + 1);
+                let length = b.force[p].hypot(b.force[q]);
+                assert!(length <= force(i) * (1.0 + 1e-9), "pair {i}: |λ_τ| {length}");
+                if length < force(i) * (1.0 - 1e-6) {
+                    stick += 1;
+                } else {
+                    slip += 1;
+                }
+            }
+            active_sets.insert(b.status[..k].iter().filter(|s| **s == NodeStatus::OnBound).count());
+        }
+        assert!(stick > 0 && slip > 0, "stick {stick}, slip {slip}");
+        assert!(active_sets.len() >= 3, "the active set moved: {active_sets:?}");
     }
 
     /// The vector law of a pair (docs/method.md §17.3): k pairs with an isotropic compliance

@@ -137,6 +137,10 @@ pub trait NormalStiffness {
     fn apply_q(&self, x: &[f64], y: &mut [f64]);
     /// Entry (p, r) of Q.
     fn q(&self, p: usize, r: usize) -> f64;
+    /// W (row-major), where Q = W⁻¹ exactly: the Newton system in W (docs/method.md §4.6).
+    fn w(&self) -> Option<&[f64]> {
+        None
+    }
 }
 
 /// W and Q = W⁻¹, dense (m × m, row-major).
@@ -147,6 +151,8 @@ pub struct DenseNormalStiffness {
     /// Q = W⁻¹: the Schur-complement stiffness on the contact normals.
     pub q: Vec<f64>,
     pub m: usize,
+    /// Whether Q is W⁻¹ (false once rigid parameters are eliminated from Q, docs/method.md §7.7).
+    pub q_inverts_w: bool,
 }
 
 impl DenseNormalStiffness {
@@ -155,7 +161,12 @@ impl DenseNormalStiffness {
         let llt = DenseCholesky::new(m, |i, j| w[i * m + j])
             .ok_or_else(|| "the condensed contact operator W = C K⁻¹ Cᵀ is not positive definite (are two contact nodes sharing one position, or is a contact node's normal fully constrained?)".to_string())?;
         let q = llt.symmetric_inverse();
-        Ok(DenseNormalStiffness { w, q, m })
+        Ok(DenseNormalStiffness {
+            w,
+            q,
+            m,
+            q_inverts_w: true,
+        })
     }
 
     /// λ_max(D^{1/2} W D^{1/2}) with D = diag(w): the largest ratio Σ_p w_p u_ν,p² / (uᵀ K u).
@@ -201,6 +212,10 @@ impl NormalStiffness for DenseNormalStiffness {
 
     fn q(&self, p: usize, r: usize) -> f64 {
         self.q[p * self.m + r]
+    }
+
+    fn w(&self) -> Option<&[f64]> {
+        self.q_inverts_w.then_some(&self.w[..])
     }
 }
 

@@ -9,6 +9,7 @@ pub mod law;
 pub mod nodal;
 pub mod obstacle;
 pub mod rows;
+pub mod schur;
 
 pub use active_set::{ActiveSetSolver, ContactOutcome, ContactSettings, FrictionRows, FrictionStatus, NodeStatus};
 pub use condensed::{Condensation, ContactNodes, DenseNormalStiffness, NormalStiffness, SplitSweeps, StoredResponses};

@@ -721,6 +721,7 @@ impl DistributedCondensation {
                 w: Vec::new(),
                 q: Vec::new(),
                 m: 0,
+                q_inverts_w: false,
             }),
         };
         let mut message = match &stiffness {

@@ -203,6 +203,7 @@ fn solve_increment<const D: usize>(
         let outcome = predictor.solve_forces(q, state)?;
         total.iterations += outcome.iterations;
         total.factorisations += outcome.factorisations;
+        total.in_w += outcome.in_w;
         forces = bound_forces(state).map_err(|reason| failure(reason, total))?;
     }
     // Coulomb's rounds are solved inexactly while the bound forces still move: to 10⁻² of their
@@ -239,6 +240,7 @@ fn solve_increment<const D: usize>(
         total.convexified += outcome.convexified;
         total.iterative += outcome.iterative;
         total.factorisations += outcome.factorisations;
+        total.in_w += outcome.in_w;
         total.residual = outcome.residual;
         total.active = outcome.active;
         let next = bound_forces(state).map_err(|reason| failure(reason, total))?;

@@ -140,6 +140,7 @@ impl RigidResponses {
         // Q̂ = Q − Q D_a S⁺ (Q D_a)ᵀ in the condensation (a eliminated, docs/method.md §7.7)
         if let Some((nodes, op)) = condensed {
             let m = nodes.len();
+            op.stiffness_mut().q_inverts_w = false;
             let q = &mut op.stiffness_mut().q;
             // Y = Q D_a S⁺ (m × k), then Q −= Y (Q D_a)ᵀ
             let y: Vec<Vec<f64>> = (0..k)
