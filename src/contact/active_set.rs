@@ -28,9 +28,9 @@
 //! its unit tests.
 
 use super::condensed::NormalStiffness;
+use super::newton_w::{self, Curvature};
 use super::nodal::NodalLaws;
-use super::schur::{self, Curvature};
-use crate::linalg::dense::DenseCholesky;
+use crate::linalg::dense::{DenseCholesky, FactorBuffer};
 
 /// Tolerance and iteration cap of the contact solve.
 #[derive(Clone, Copy, Debug)]
@@ -84,6 +84,8 @@ pub struct ContactState {
     /// The last factorisation of the Newton matrix, kept above `dense_limit` free nodes as the
     /// preconditioner of later Newton systems (docs/method.md §9.2).
     pub newton_factor: KeptFactor,
+    /// The storage of the Newton system in W, kept between its factorisations (§4.6).
+    pub buffer: FactorBuffer,
     /// Per tangential row of a contact with friction, after the step (empty without friction;
     /// docs/method.md §17).
     pub friction: FrictionRows,
@@ -124,6 +126,7 @@ impl ContactState {
             bound_force: vec![0.0; m],
             status: vec![NodeStatus::Separated; m],
             newton_factor: KeptFactor::default(),
+            buffer: FactorBuffer::default(),
             friction: FrictionRows::default(),
         }
     }
@@ -573,7 +576,7 @@ impl ActiveSetSolver<'_> {
                 (&hessian, &proximal),
                 &grad,
                 &mut outcome,
-                &mut state.newton_factor,
+                (&mut state.newton_factor, &mut state.buffer),
                 fingerprint,
             );
             let mut predicted_slope = 0.0;
@@ -666,14 +669,14 @@ impl ActiveSetSolver<'_> {
         (hessian, proximal): (&LawHessian, &[f64]),
         grad: &[f64],
         outcome: &mut ContactOutcome,
-        kept: &mut KeptFactor,
+        (kept, buffer): (&mut KeptFactor, &mut FactorBuffer),
         fingerprint: (usize, u64),
     ) -> Vec<f64> {
         let nf = free.len();
         if nf == 0 {
             return Vec::new();
         }
-        if let Some(x) = self.direction_in_w(free, hessian, grad) {
+        if let Some(x) = self.direction_in_w(free, hessian, grad, buffer) {
             outcome.factorisations += 1;
             outcome.in_w += 1;
             return x;
@@ -740,11 +743,17 @@ impl ActiveSetSolver<'_> {
         x
     }
 
-    /// The Newton direction in W (docs/method.md §4.6, src/contact/schur.rs) where it applies and
+    /// The Newton direction in W (docs/method.md §4.6, src/contact/newton_w.rs) where it applies and
     /// pays: Q = W⁻¹ exactly (no rigid parameter eliminated from Q), the laws' curvature H ≥ 0
     /// (no convexification to decide), and few enough directions of positive curvature beside
     /// the held rows.
-    fn direction_in_w(&self, free: &[usize], hessian: &LawHessian, grad: &[f64]) -> Option<Vec<f64>> {
+    fn direction_in_w(
+        &self,
+        free: &[usize],
+        hessian: &LawHessian,
+        grad: &[f64],
+        buffer: &mut FactorBuffer,
+    ) -> Option<Vec<f64>> {
         let w = self.operator.w().filter(|_| !self.singular)?;
         let m = self.m();
         // a curvature below 10⁻⁸ of the direction's least stiffness 1/(eᵀWe) counts as none
@@ -800,11 +809,11 @@ impl ActiveSetSolver<'_> {
                 m - free.len()
             );
         }
-        if !schur::pays(m, free.len(), curvature.len()) {
+        if !newton_w::pays(m, free.len(), curvature.len()) {
             return None;
         }
         let b: Vec<f64> = free.iter().map(|&p| grad[p]).collect();
-        schur::direction((w, m), free, &curvature, &b)
+        newton_w::direction((w, m), free, &curvature, &b, buffer)
     }
 
     /// m and the bits of Σ_p Q_pp: a kept factorisation of another operator (step 0's K_A, or
@@ -1075,7 +1084,7 @@ mod tests {
     /// curvature and drop out of the system in W). Over steps of a growing load that moves the
     /// active set, both give the same solution to 1e-10 — while the system in W is used for
     /// most directions, with the same number of Newton iterations — and the law holds at every
-    /// pair. (src/contact/schur.rs tests the direction itself.)
+    /// pair. (src/contact/newton_w.rs tests the direction itself.)
     #[test]
     fn the_newton_system_in_w_gives_the_directions_in_q() {
         use crate::contact::law::ContactLaw;

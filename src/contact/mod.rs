@@ -6,10 +6,10 @@
 pub mod active_set;
 pub mod condensed;
 pub mod law;
+pub mod newton_w;
 pub mod nodal;
 pub mod obstacle;
 pub mod rows;
-pub mod schur;
 
 pub use active_set::{ActiveSetSolver, ContactOutcome, ContactSettings, FrictionRows, FrictionStatus, NodeStatus};
 pub use condensed::{Condensation, ContactNodes, DenseNormalStiffness, NormalStiffness, SplitSweeps, StoredResponses};

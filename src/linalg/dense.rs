@@ -49,6 +49,56 @@ impl DenseCholesky {
     }
 }
 
+/// A dense Cholesky factorisation L Lᵀ in place, in a buffer kept from one factorisation to the
+/// next: the contact solve factors a new matrix of about the same order at every Newton
+/// iteration, and a fresh allocation each time (n² numbers, tens of MB) cost page faults worth
+/// a third of the 3D friction solve's time (docs/method.md §4.6). A cache: a clone starts empty.
+#[derive(Debug, Default)]
+pub struct FactorBuffer {
+    n: usize,
+    values: Vec<f64>,
+}
+
+impl Clone for FactorBuffer {
+    fn clone(&self) -> Self {
+        FactorBuffer::default()
+    }
+}
+
+impl FactorBuffer {
+    /// Factors the symmetric n × n matrix whose lower triangle `fill` writes into a zeroed
+    /// column-major slice (column j at j n..(j + 1) n); false if it is not (numerically)
+    /// positive definite.
+    pub fn factor(&mut self, n: usize, fill: impl FnOnce(&mut [f64])) -> bool {
+        use faer::dyn_stack::{MemBuffer, MemStack};
+        use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch};
+        self.n = n;
+        self.values.clear();
+        self.values.resize(n * n, 0.0);
+        fill(&mut self.values);
+        let par = faer::Par::Seq;
+        let mut scratch = MemBuffer::new(cholesky_in_place_scratch::<f64>(n, par, Default::default()));
+        let a = MatMut::from_column_major_slice_mut(&mut self.values, n, n);
+        cholesky_in_place(
+            a,
+            Default::default(),
+            par,
+            MemStack::new(&mut scratch),
+            Default::default(),
+        )
+        .is_ok()
+    }
+
+    /// x ← A⁻¹ x for the matrix last factored.
+    pub fn solve_in_place(&self, x: &mut [f64]) {
+        use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
+        let l = faer::MatRef::from_column_major_slice(&self.values, self.n, self.n);
+        let mut rhs = MatMut::from_column_major_slice_mut(x, self.n, 1);
+        solve_lower_triangular_in_place(l, rhs.as_mut(), faer::Par::Seq);
+        solve_upper_triangular_in_place(l.transpose(), rhs, faer::Par::Seq);
+    }
+}
+
 /// A ← ½(A + Aᵀ) for a row-major n × n matrix: exact symmetry against the round-off of a
 /// product that should be symmetric (W = GᵀG, C Z, Q after an update).
 pub fn symmetrise_row_major(a: &mut [f64], n: usize) {

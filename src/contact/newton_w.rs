@@ -14,13 +14,14 @@
 //! (W is, B has full column rank), its entries are W's own (a pair's direction combines two
 //! rows), and it has K + |𝒜| rows instead of |ℐ|: the free rows without curvature (a separated
 //! normal row, the tangential rows of a node without a friction bound) drop out, as they do
-//! from the dual problem in the contact forces. Nothing is formed or kept between directions.
+//! from the dual problem in the contact forces. Nothing computed is kept between directions,
+//! only the storage of the factorisation (`FactorBuffer`).
 //!
 //! Derivation: with z = W⁻¹ x, x = Δ on ℐ and 0 on 𝒜, Q_ℐℐ Δ = z_ℐ, so the system is
 //! z_ℐ + H Δ = g, i.e. z_ℐ = g − Σ_k e_k η_k with η_k = h_k e_kᵀΔ; W z = x reads
 //! e_kᵀ(W z) = η_k / h_k and (W z)_𝒜 = 0, and with y = (η, −z_𝒜) that is the system above.
 
-use crate::linalg::dense::{matvec_row_major, DenseCholesky};
+use crate::linalg::dense::{matvec_row_major, FactorBuffer};
 
 /// A direction of positive curvature h of the laws' Hessian: rows (the second usize::MAX for a
 /// single row) and the unit vector's components on them. A pair with both directions curved
@@ -96,7 +97,13 @@ pub fn pays(m: usize, free: usize, directions: usize) -> bool {
 /// Δ on ℐ with (Q_ℐℐ + H) Δ = g, for W (row-major m × m, Q = W⁻¹ exactly) and H given by its
 /// directions of positive curvature; None if the system is not numerically positive definite
 /// (the caller solves in Q).
-pub fn direction((w, m): (&[f64], usize), free: &[usize], curvature: &[Curvature], g: &[f64]) -> Option<Vec<f64>> {
+pub fn direction(
+    (w, m): (&[f64], usize),
+    free: &[usize],
+    curvature: &[Curvature],
+    g: &[f64],
+    buffer: &mut FactorBuffer,
+) -> Option<Vec<f64>> {
     let mut spread = vec![0.0; m];
     let mut is_free = vec![false; m];
     for (&p, v) in free.iter().zip(g) {
@@ -122,28 +129,31 @@ pub fn direction((w, m): (&[f64], usize), free: &[usize], curvature: &[Curvature
         .iter()
         .map(|c| if c.rows[1] == usize::MAX { [1.0, 0.0] } else { c.along })
         .collect();
-    let mut matrix = vec![0.0; n * n];
-    for (l, column) in matrix.chunks_exact_mut(n.max(1)).enumerate() {
-        for (row, a) in [(first[l], weights[l][0]), (second[l], weights[l][1])] {
-            if a == 0.0 {
-                continue;
+    let fill = |matrix: &mut [f64]| {
+        for (l, column) in matrix.chunks_exact_mut(n.max(1)).enumerate() {
+            for (row, a) in [(first[l], weights[l][0]), (second[l], weights[l][1])] {
+                if a == 0.0 {
+                    continue;
+                }
+                let row = &w[row * m..(row + 1) * m];
+                for k in l..n {
+                    column[k] += a * (weights[k][0] * row[first[k]] + weights[k][1] * row[second[k]]);
+                }
             }
-            let row = &w[row * m..(row + 1) * m];
-            for k in l..n {
-                column[k] += a * (weights[k][0] * row[first[k]] + weights[k][1] * row[second[k]]);
+            column[l] += columns[l].inverse;
+            if columns[l].partner != usize::MAX && columns[l].partner > l {
+                column[columns[l].partner] += columns[l].coupling;
             }
         }
-        column[l] += columns[l].inverse;
-        if columns[l].partner != usize::MAX && columns[l].partner > l {
-            column[columns[l].partner] += columns[l].coupling;
-        }
+    };
+    if !buffer.factor(n, fill) {
+        return None;
     }
-    let system = DenseCholesky::new(n, |k, l| matrix[l * n + k])?;
-    let rhs: Vec<f64> = columns
+    let mut y: Vec<f64> = columns
         .iter()
         .map(|c| c.entries().map(|(p, a)| a * wg[p]).sum())
         .collect();
-    let y = system.solve(&rhs);
+    buffer.solve_in_place(&mut y);
     for (c, v) in columns.iter().zip(&y) {
         for (p, a) in c.entries() {
             spread[p] -= a * v;
@@ -156,6 +166,7 @@ pub fn direction((w, m): (&[f64], usize), free: &[usize], curvature: &[Curvature
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::linalg::dense::DenseCholesky;
 
     /// The direction in W against the dense solve of (Q_ℐℐ + H) Δ = g, Q = W⁻¹: W a smooth
     /// kernel on m rows, a quarter of them held (𝒜), H with single rows, pairs by their two
@@ -217,14 +228,14 @@ mod tests {
         let dense = DenseCholesky::new(nf, |i, j| q[free[i] * m + free[j]] + h[i * nf + j]).unwrap();
         let rhs: Vec<f64> = (0..nf).map(|i| (0.37 * i as f64).sin()).collect();
         let expected = dense.solve(&rhs);
-        let got = direction((&w, m), &free, &curvature, &rhs).unwrap();
+        let got = direction((&w, m), &free, &curvature, &rhs, &mut FactorBuffer::default()).unwrap();
         let scale = expected.iter().fold(0.0f64, |s, v| s.max(v.abs()));
         for (e, g) in expected.iter().zip(&got) {
             assert!((e - g).abs() <= 1e-10 * scale, "{e} against {g}");
         }
         let all: Vec<usize> = (0..m).collect();
         let g: Vec<f64> = (0..m).map(|i| (0.21 * i as f64).cos()).collect();
-        let got = direction((&w, m), &all, &[], &g).unwrap();
+        let got = direction((&w, m), &all, &[], &g, &mut FactorBuffer::default()).unwrap();
         for (p, v) in got.iter().enumerate() {
             let wg: f64 = (0..m).map(|q| w[p * m + q] * g[q]).sum();
             assert!((v - wg).abs() <= 1e-12 * wg.abs().max(1.0), "{v} against {wg}");
