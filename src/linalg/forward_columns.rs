@@ -125,6 +125,9 @@ impl ForwardColumns {
             .into_par_iter()
             .map(|t| {
                 let mut w = vec![0.0; m * m];
+                // G_s and G_sᵀG_s in storage kept from supernode to supernode (the trailing
+                // supernodes' blocks are tens of MB: fresh ones cost page faults)
+                let (mut g, mut block) = (Vec::new(), Vec::new());
                 for list in on.iter().skip(t).step_by(threads) {
                     if list.is_empty() {
                         continue;
@@ -133,18 +136,29 @@ impl ForwardColumns {
                     // rows above its start being zeros of G.
                     let top = list.iter().map(|&(_, k)| self.segments[k].start).min().unwrap_or(0);
                     let end = self.segments[list[0].1].start + self.segments[list[0].1].len;
-                    let g = faer::Mat::<f64>::from_fn(end - top, list.len(), |r, c| {
-                        let segment = &self.segments[list[c].1];
-                        match (top + r).checked_sub(segment.start) {
-                            Some(k) => self.segment_values(segment)[k],
-                            None => 0.0,
-                        }
-                    });
-                    let block = g.transpose() * &g;
+                    let (rows, k) = (end - top, list.len());
+                    g.clear();
+                    g.resize(rows * k, 0.0);
+                    for (c, &(_, s)) in list.iter().enumerate() {
+                        let segment = &self.segments[s];
+                        let skip = segment.start - top;
+                        g[c * rows + skip..(c + 1) * rows].copy_from_slice(self.segment_values(segment));
+                    }
+                    block.clear();
+                    block.resize(k * k, 0.0);
+                    let g = faer::MatRef::from_column_major_slice(&g, rows, k);
+                    faer::linalg::matmul::matmul(
+                        faer::MatMut::from_column_major_slice_mut(&mut block, k, k),
+                        faer::Accum::Replace,
+                        g.transpose(),
+                        g,
+                        1.0,
+                        faer::get_global_parallelism(),
+                    );
                     for (a, &(ca, _)) in list.iter().enumerate() {
                         let row = &mut w[ca * m..(ca + 1) * m];
                         for (b, &(cb, _)) in list.iter().enumerate() {
-                            row[cb] += block[(a, b)];
+                            row[cb] += block[b * k + a];
                         }
                     }
                 }
