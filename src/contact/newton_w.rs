@@ -170,8 +170,8 @@ mod tests {
 
     /// The direction in W against the dense solve of (Q_ℐℐ + H) Δ = g, Q = W⁻¹: W a smooth
     /// kernel on m rows, a quarter of them held (𝒜), H with single rows, pairs by their two
-    /// eigendirections, by one, and by their two rows coupled by H⁻¹, and rows without curvature. To 1e-10 of Δ; and with
-    /// no curvature and nothing held, Δ = W g.
+    /// eigendirections, by one, and by their two rows coupled by H⁻¹, and rows without
+    /// curvature. To 1e-10 of Δ; and with no curvature and nothing held, Δ = W g.
     #[test]
     fn the_direction_in_w_solves_the_newton_system_in_q() {
         let m = 48;

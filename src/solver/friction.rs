@@ -270,8 +270,9 @@ fn solve_increment<const D: usize>(
 }
 
 /// The tangential rows' slip (their change from `before`, their values at the step's start),
-/// accumulated slip, bound force and status after the step (docs/method.md §17): separated where the normal row presses with no force (λ_ν, |λ_ν| where
-/// bilateral, below 10⁻¹² of the largest), else stick where |λ_τ| < F (1 − 10⁻⁶), slip at F; |·| the length of the pair's
+/// accumulated slip, bound force and status after the step (docs/method.md §17): separated
+/// where the normal row presses with no force (λ_ν, |λ_ν| where bilateral, below 10⁻¹² of the
+/// largest), else stick where |λ_τ| < F (1 − 10⁻⁶), slip at F; |·| the length of the pair's
 /// vector in 3D, whose two rows get the same accumulated slip and status.
 fn record<const D: usize>(
     state: &mut ContactState,

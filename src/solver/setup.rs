@@ -212,8 +212,9 @@ impl<const D: usize> Simulation<D> {
     /// contact normals (docs/method.md §9.1: G and W then live in the factor's trailing block),
     /// else none. Only the unknowns a row uses (non-zero coefficient): a row lists every free
     /// component of its node, and ordering the zero ones last too cost 13–17 % more fill (box
-    /// n = 32: 30.05 M → 26.54 M entries below the diagonal; n = 40: 91.1 M → 77.8 M stored). Measured: m = 1 248 (slab 96x48x12) condensation 12.0 s → 3.4 s; m = 4 096 (box
-    /// 64x4x63) 16.5 s → 49 s, because the sparse sweeps then run through a dense m × m block.
+    /// n = 32: 30.05 M → 26.54 M entries below the diagonal; n = 40: 91.1 M → 77.8 M stored).
+    /// Measured: m = 1 248 (slab 96x48x12) condensation 12.0 s → 3.4 s; m = 4 096 (box 64x4x63)
+    /// 16.5 s → 49 s, because the sparse sweeps then run through a dense m × m block.
     pub fn unknowns_ordered_last(&self) -> Vec<usize> {
         match &self.contact {
             Some(c) if D == 3 && c.nodes.len() <= 2000 => {
