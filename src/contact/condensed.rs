@@ -168,35 +168,6 @@ impl DenseNormalStiffness {
             q_inverts_w: true,
         })
     }
-
-    /// λ_max(D^{1/2} W D^{1/2}) with D = diag(w): the largest ratio Σ_p w_p u_ν,p² / (uᵀ K u).
-    /// The step energy ½uᵀKu + Σ w_p j(u_ν,p) is convex when α_j times this is below 1 —
-    /// the discrete form of the smallness condition α_j c_j² < m_A (docs/method.md §1).
-    pub fn trace_constant(&self, weights: &[f64]) -> f64 {
-        let m = self.m;
-        if m == 0 {
-            return 0.0;
-        }
-        let sq: Vec<f64> = weights.iter().map(|w| w.sqrt()).collect();
-        let mut x = vec![1.0 / (m as f64).sqrt(); m];
-        let mut lambda = 0.0;
-        for _ in 0..500 {
-            let y: Vec<f64> = (0..m)
-                .map(|p| sq[p] * (0..m).map(|q| self.w[p * m + q] * sq[q] * x[q]).sum::<f64>())
-                .collect();
-            let norm = y.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if norm == 0.0 {
-                return 0.0;
-            }
-            let next = y.iter().zip(&x).map(|(a, b)| a * b).sum::<f64>();
-            x = y.iter().map(|v| v / norm).collect();
-            if (next - lambda).abs() <= 1e-10 * next.abs() {
-                return next;
-            }
-            lambda = next;
-        }
-        lambda
-    }
 }
 
 impl NormalStiffness for DenseNormalStiffness {
@@ -215,7 +186,7 @@ impl NormalStiffness for DenseNormalStiffness {
     }
 
     fn w(&self) -> Option<&[f64]> {
-        self.q_inverts_w.then_some(&self.w[..])
+        (self.q_inverts_w && !self.w.is_empty()).then_some(&self.w[..])
     }
 }
 
@@ -231,6 +202,49 @@ pub trait Condensation: Send {
     fn free_normal(&mut self, rhs: &[f64], d: &mut [f64], counters: &Counters);
     /// Completes it: u = K⁻¹ (rhs − Cᵀ λ) for the rhs of the last [`Self::free_normal`].
     fn recover(&mut self, lambda: &[f64], u: &mut [f64], counters: &Counters);
+
+    /// y = W x (W = C K⁻¹ Cᵀ, whether or not it was formed).
+    fn apply_w(&self, x: &[f64], y: &mut [f64]) {
+        let s = self.stiffness();
+        matvec_row_major(&s.w, s.m, x, y);
+    }
+
+    /// λ_max(D^{1/2} W D^{1/2}) with D = diag(w): the largest ratio Σ_p w_p u_ν,p² / (uᵀ K u).
+    /// The step energy ½uᵀKu + Σ w_p j(u_ν,p) is convex when α_j times this is below 1 —
+    /// the discrete form of the smallness condition α_j c_j² < m_A (docs/method.md §1).
+    /// A power iteration, each step a product by W.
+    fn trace_constant(&self, weights: &[f64]) -> f64 {
+        let m = weights.len();
+        if m == 0 || weights.iter().all(|&w| w == 0.0) {
+            return 0.0;
+        }
+        let sq: Vec<f64> = weights.iter().map(|w| w.sqrt()).collect();
+        let mut x = vec![1.0 / (m as f64).sqrt(); m];
+        let (mut v, mut y) = (vec![0.0; m], vec![0.0; m]);
+        let mut lambda = 0.0;
+        for _ in 0..500 {
+            for ((vp, s), xp) in v.iter_mut().zip(&sq).zip(&x) {
+                *vp = s * xp;
+            }
+            self.apply_w(&v, &mut y);
+            for (yp, s) in y.iter_mut().zip(&sq) {
+                *yp *= s;
+            }
+            let norm = y.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if norm == 0.0 {
+                return 0.0;
+            }
+            let next = y.iter().zip(&x).map(|(a, b)| a * b).sum::<f64>();
+            for (xp, yp) in x.iter_mut().zip(&y) {
+                *xp = yp / norm;
+            }
+            if (next - lambda).abs() <= 1e-10 * next.abs() {
+                return next;
+            }
+            lambda = next;
+        }
+        lambda
+    }
 }
 
 /// The one-solve path of the faer factor: forward sweep, contact, backward sweep.

@@ -124,7 +124,7 @@ impl Forward {
 /// A cached Cholesky factor K = Pᵀ L Lᵀ P.
 pub struct Factor {
     analysis: Analysis,
-    values: Vec<f64>,
+    pub(super) values: Vec<f64>,
     n: usize,
 }
 

@@ -9,6 +9,8 @@
 //!   the root of the elimination tree. With it, C K⁻¹ r = Gᵀ (L⁻¹ P r) and
 //!   K⁻¹ (r − Cᵀ λ) = Pᵀ L⁻ᵀ (L⁻¹ P r − G λ): a contact step costs one forward and one backward
 //!   sweep, the cost of a single solve, and W = C K⁻¹ Cᵀ = Gᵀ G.
+//! * [`TrailingBlock`]: L_cc, the factor's block of the unknowns ordered last, with the Schur
+//!   complement L_cc L_ccᵀ and its inverse as dense products (docs/method.md §9.4).
 //!
 //! ```
 //! use hvi::fem::{assembly::assemble_stiffness, DofMap};
@@ -40,9 +42,11 @@ mod forward_columns;
 mod schedule;
 pub mod sparse;
 mod supernodes;
+mod trailing;
 
 pub use factor::{decoupled_unknowns, set_parallelism, Analysis, Counters, Factor, FactorError, Forward, NodeOrdering};
 pub use forward_columns::{forward_columns_entries, ForwardColumns};
+pub use trailing::TrailingBlock;
 
 /// Solves with a fixed matrix K (docs/method.md §9): the seam a second linear-algebra backend
 /// plugs into. The cached faer [`Factor`] is one implementation.

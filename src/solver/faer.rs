@@ -219,11 +219,11 @@ impl ElasticCheck {
             mesh: sim.mesh.path.display().to_string(),
             detail: e.to_string(),
         })?;
-        let op = crate::contact::SplitSweeps::new(&c.nodes, std::sync::Arc::new(factor), &counters)
-            .map_err(SolveError::Setup)?;
-        use crate::contact::Condensation;
-        Ok(op
-            .stiffness()
-            .trace_constant(&c.laws.monotonicity_weights(c.nodes.len())))
+        let op =
+            super::operator::condensation(sim, &std::sync::Arc::new(factor), &counters).map_err(SolveError::Setup)?;
+        // (the tangential rows of friction, after the normal ones, have no normal law)
+        let mut weights = c.laws.monotonicity_weights(c.nodes.len());
+        weights.resize(c.condensed_rows().len(), 0.0);
+        Ok(op.trace_constant(&weights))
     }
 }

@@ -8,7 +8,8 @@
 //! * the matrices: K_A (kept for the reactions and step 0), the step matrix while it is
 //!   factorised, the memory terms' K_j (node blocks): 16 per stored entry of K_A each;
 //! * G = L⁻¹PCᵀ: 8 per value of its supernode paths ([`forward_columns_entries`]), twice while
-//!   its columns are gathered; or Z = K⁻¹Cᵀ, 8·n·m, when the scene stores the responses;
+//!   its columns are gathered; or, where Q is read off the factor's trailing block
+//!   (docs/method.md §9.4), L_cc, 8·m²; or Z = K⁻¹Cᵀ, 8·n·m, when the scene stores the responses;
 //! * the dense contact matrices: W and its Cholesky inverse Q, the partial W of each thread
 //!   while W = GᵀG is summed, the Newton matrix of the active-set method and its factor (kept
 //!   above `solver.dense_newton_limit` free nodes): 8·m² each, `DENSE_COPIES` of them;
@@ -55,6 +56,10 @@ impl MemoryEstimate {
         if let Some(c) = &sim.contact {
             let m = c.condensed_rows().len() as u64;
             let responses = match sim.condensation {
+                // L_cc, dense (docs/method.md §9.4); its products are among the dense copies
+                CondensationKind::SplitSweeps if sim.trailing_block() => {
+                    ("L_cc (the factor's trailing block)", 8 * m * m)
+                }
                 CondensationKind::SplitSweeps => (
                     "G = L⁻¹PCᵀ",
                     2 * 8 * forward_columns_entries(analysis, c.condensed_rows().rows()) as u64,

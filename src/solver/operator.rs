@@ -6,7 +6,7 @@ use super::columns::PrescribedColumns;
 use super::error::SolveError;
 use super::setup::Simulation;
 use super::stats::{timed, RunStats};
-use crate::contact::{Condensation, SplitSweeps, StoredResponses};
+use crate::contact::{Condensation, SplitSweeps, StoredResponses, TrailingSweeps};
 use crate::fem::SymmetricMatrix;
 use crate::linalg::{Analysis, Counters, Factor, LinearSolver};
 use crate::scene::CondensationKind;
@@ -90,18 +90,7 @@ impl StepOperator {
             Some(c) if !c.nodes.is_empty() => Some(
                 timed(
                     &mut stats.phases.condensation,
-                    || -> Result<Box<dyn Condensation>, String> {
-                        Ok(match sim.condensation {
-                            CondensationKind::SplitSweeps => {
-                                Box::new(SplitSweeps::new(c.condensed_rows(), factor.clone(), counters)?)
-                            }
-                            kind @ (CondensationKind::StoredResponses | CondensationKind::RecoverySolve) => {
-                                let solver: Arc<dyn LinearSolver> = factor.clone();
-                                let keep = kind == CondensationKind::StoredResponses;
-                                Box::new(StoredResponses::new(c.condensed_rows(), solver, keep, counters)?)
-                            }
-                        })
-                    },
+                    || -> Result<Box<dyn Condensation>, String> { condensation(sim, &factor, counters) },
                 )
                 .map_err(SolveError::Setup)?,
             ),
@@ -204,4 +193,36 @@ pub fn singularity_verdict(error: f64) -> Result<(), String> {
             "the stiffness matrix is singular or nearly so (a probe solve is off by {error:.1e} relative): the body is not held against rigid motions; clamp a part of the boundary (groups.clamped) that stops translations and rotations"
         ))
     }
+}
+
+/// The condensation of `sim` on `factor` (docs/method.md §9): Q read off the factor's trailing
+/// block where [`Simulation::trailing_block`] says so, with W beside it only with friction
+/// (where the Newton system in W pays, §4.6; elsewhere W is applied by triangular solves);
+/// else G by sparse sweeps, or the stored responses the scene asks for.
+pub fn condensation<const D: usize>(
+    sim: &Simulation<D>,
+    factor: &Arc<Factor>,
+    counters: &crate::linalg::Counters,
+) -> Result<Box<dyn Condensation>, String> {
+    let Some(c) = &sim.contact else {
+        return Err("no contact to condense".into());
+    };
+    let rows = c.condensed_rows();
+    Ok(match sim.condensation {
+        CondensationKind::SplitSweeps => {
+            // (None only when L_cc's k² numbers cannot be allocated: the sweeps then)
+            let trailing = sim
+                .trailing_block()
+                .then(|| TrailingSweeps::new(rows, factor.clone(), c.friction.is_some()));
+            match trailing.flatten() {
+                Some(op) => Box::new(op),
+                None => Box::new(SplitSweeps::new(rows, factor.clone(), counters)?),
+            }
+        }
+        kind @ (CondensationKind::StoredResponses | CondensationKind::RecoverySolve) => {
+            let solver: Arc<dyn LinearSolver> = factor.clone();
+            let keep = kind == CondensationKind::StoredResponses;
+            Box::new(StoredResponses::new(rows, solver, keep, counters)?)
+        }
+    })
 }

@@ -214,10 +214,12 @@ impl<const D: usize> Simulation<D> {
     /// component of its node, and ordering the zero ones last too cost 13–17 % more fill (box
     /// n = 32: 30.05 M → 26.54 M entries below the diagonal; n = 40: 91.1 M → 77.8 M stored).
     /// Measured: m = 1 248 (slab 96x48x12) condensation 12.0 s → 3.4 s; m = 4 096 (box 64x4x63)
-    /// 16.5 s → 49 s, because the sparse sweeps then run through a dense m × m block.
+    /// 16.5 s → 49 s, because the sparse sweeps then run through a dense m × m block. Since
+    /// 2026-12-03 also at any m where Q is read off the trailing block ([`Self::trailing_block`],
+    /// docs/method.md §9.4): no sweeps at all there.
     pub fn unknowns_ordered_last(&self) -> Vec<usize> {
         match &self.contact {
-            Some(c) if D == 3 && c.nodes.len() <= 2000 => {
+            Some(c) if D == 3 && (c.nodes.len() <= 2000 || self.trailing_block()) => {
                 let mut dofs: Vec<usize> = c
                     .condensed_rows()
                     .rows()
@@ -232,6 +234,19 @@ impl<const D: usize> Simulation<D> {
             }
             _ => Vec::new(),
         }
+    }
+
+    /// Whether the condensation reads Q off the factor's trailing block (docs/method.md §9.4): in
+    /// 3D, by split sweeps, with each contact node's rows using as many unknowns as there are
+    /// rows (a face normal to an axis; with friction, any frame). The one place this is decided:
+    /// the ordering, the condensation, the memory prediction and the plan follow it.
+    pub fn trailing_block(&self) -> bool {
+        D == 3
+            && self.condensation == scene::CondensationKind::SplitSweeps
+            && self
+                .contact
+                .as_ref()
+                .is_some_and(|c| !c.nodes.is_empty() && crate::contact::trailing_block_applies(c.condensed_rows()))
     }
 
     /// True if step n is written (every `output_every`-th step and always the last).

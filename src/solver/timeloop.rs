@@ -138,7 +138,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
                 // (the tangential rows of friction, after the normal ones, have no normal law)
                 let mut weights = c.laws.monotonicity_weights(c.nodes.len());
                 weights.resize(c.condensed_rows().len(), 0.0);
-                stats.smallness = Some(op.stiffness().trace_constant(&weights));
+                stats.smallness = Some(op.trace_constant(&weights));
             }
         }
         let history = sim.memory.as_ref().map(|m| History::new(m, n_dof, sim.time.step()));
