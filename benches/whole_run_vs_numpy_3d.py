@@ -2,7 +2,7 @@
 reference (benches/numpy_reference_3d.py) on the 3D slab, interleaved.
 
     python3 benches/whole_run_vs_numpy_3d.py --n 32 --hvi "target/release/hvi solve meshes/slab_n32.msh \
-        --scene examples/slab.toml --out /tmp/x --quiet" [--repeats 3] [--steps 32] [--numpy-args "..."] \
+        --scene examples/slab.toml --out /tmp/x --overwrite --quiet" [--repeats 3] [--steps 32] [--numpy-args "..."] \
         [--compare /tmp/x]
 
 Each repeat runs the reference (`numpy_reference_3d.py --n N --steps S --save FILE`) and then the hvi
