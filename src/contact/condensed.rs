@@ -14,6 +14,7 @@
 //!
 //! The active set sees only the [`NormalStiffness`] (Q = W⁻¹ and W).
 
+use super::trailing::TrailingColumns;
 use crate::fem::DofMap;
 use crate::linalg::dense::{matvec_row_major, symmetrise_row_major, DenseCholesky};
 use crate::linalg::{Counters, Factor, Forward, ForwardColumns, LinearSolver};
@@ -97,6 +98,13 @@ impl<const D: usize> ContactNodes<D> {
     /// The rows of C over the free unknowns.
     pub fn rows(&self) -> &[Vec<(usize, f64)>] {
         &self.rows
+    }
+
+    /// Whether each node's rows use exactly as many unknowns as there are rows (a face normal to
+    /// an axis; with friction, a frame per node): then Q can be read off the factor's trailing
+    /// block (docs/method.md §9.4).
+    pub fn trailing_block_applies(&self) -> bool {
+        super::trailing::applies(&self.nodes, &self.rows)
     }
 
     /// The normal displacements u_ν = ν·u at the contact nodes of a full displacement vector.
@@ -250,10 +258,17 @@ pub trait Condensation: Send {
 /// The one-solve path of the faer factor: forward sweep, contact, backward sweep.
 pub struct SplitSweeps {
     factor: Arc<Factor>,
-    /// G = L⁻¹ P Cᵀ, one sparse column per contact node.
-    columns: ForwardColumns,
+    columns: Columns,
     stiffness: DenseNormalStiffness,
     y: Forward,
+}
+
+/// How the split sweeps reach the contact rows from a forward-swept vector.
+enum Columns {
+    /// G = L⁻¹ P Cᵀ, one sparse column per contact row.
+    Sparse(ForwardColumns),
+    /// L_cc, the factor's trailing block (docs/method.md §9.4).
+    Trailing(TrailingColumns),
 }
 
 impl SplitSweeps {
@@ -265,19 +280,45 @@ impl SplitSweeps {
     ) -> Result<Self, String> {
         let columns = ForwardColumns::new(&factor, nodes.rows(), counters);
         let stiffness = DenseNormalStiffness::from_w(columns.gram(), nodes.len())?;
-        let y = Forward::zeros(factor.n());
-        Ok(SplitSweeps {
+        Ok(Self::with(factor, Columns::Sparse(columns), stiffness))
+    }
+
+    /// Q (and W with `with_w`) read off the factor's trailing block (docs/method.md §9.4); None
+    /// where that does not apply ([`ContactNodes::trailing_block_applies`], or the rows'
+    /// unknowns were not ordered last).
+    pub fn off_trailing_block<const D: usize>(
+        nodes: &ContactNodes<D>,
+        factor: Arc<Factor>,
+        with_w: bool,
+    ) -> Option<Self> {
+        let (columns, q, w) = TrailingColumns::new(&nodes.nodes, nodes.rows(), &factor, with_w)?;
+        let stiffness = DenseNormalStiffness {
+            w,
+            q,
+            m: nodes.len(),
+            q_inverts_w: true,
+        };
+        Some(Self::with(factor, Columns::Trailing(columns), stiffness))
+    }
+
+    fn with(factor: Arc<Factor>, columns: Columns, stiffness: DenseNormalStiffness) -> Self {
+        SplitSweeps {
+            y: Forward::zeros(factor.n()),
             factor,
             columns,
             stiffness,
-            y,
-        })
+        }
     }
 }
 
 impl Condensation for SplitSweeps {
     fn name(&self) -> &'static str {
-        "split sweeps (G = L⁻¹PCᵀ, one solve per step)"
+        match self.columns {
+            Columns::Sparse(_) => "split sweeps (G = L⁻¹PCᵀ, one solve per step)",
+            Columns::Trailing(_) => {
+                "split sweeps (Q = T⁻ᵀ L_cc L_ccᵀ T⁻¹ read off the factor's trailing block, one solve per step)"
+            }
+        }
     }
 
     fn stiffness(&self) -> &DenseNormalStiffness {
@@ -290,12 +331,26 @@ impl Condensation for SplitSweeps {
 
     fn free_normal(&mut self, rhs: &[f64], d: &mut [f64], _counters: &Counters) {
         self.factor.forward_into(rhs, &mut self.y);
-        self.columns.transpose_apply(&self.y, d);
+        match &mut self.columns {
+            Columns::Sparse(g) => g.transpose_apply(&self.y, d),
+            Columns::Trailing(t) => t.free_normal(&self.y, d),
+        }
     }
 
     fn recover(&mut self, lambda: &[f64], u: &mut [f64], counters: &Counters) {
-        self.columns.subtract_apply(lambda, &mut self.y);
+        match &mut self.columns {
+            Columns::Sparse(g) => g.subtract_apply(lambda, &mut self.y),
+            Columns::Trailing(t) => t.subtract(lambda, &mut self.y),
+        }
         self.factor.backward_from(&mut self.y, u, counters);
+    }
+
+    /// W x from W where it was formed, else by two triangular solves with L_cc.
+    fn apply_w(&self, x: &[f64], y: &mut [f64]) {
+        match &self.columns {
+            Columns::Trailing(t) if self.stiffness.w.is_empty() => t.apply_w(x, y),
+            _ => matvec_row_major(&self.stiffness.w, self.stiffness.m, x, y),
+        }
     }
 }
 
@@ -409,5 +464,127 @@ impl Condensation for StoredResponses {
         } else {
             subtract_responses(&self.u_free, &self.z, lambda, u);
         }
+    }
+}
+
+#[cfg(test)]
+mod trailing_tests {
+    //! The split sweeps off the trailing block (docs/method.md §9.4) against the sparse sweeps.
+    use super::*;
+    use crate::fem::{assembly::assemble_stiffness, DofMap};
+    use crate::material::Elasticity;
+    use crate::mesh::structured::{block, SolidShape};
+    use crate::mesh::GroupSelector;
+
+    /// An elastic box clamped at x = 0 with rows on its face y = 0: the normal (0, −1, 0) alone,
+    /// or each node's frame (the normal and two tangents turned by 30° about it), or a normal
+    /// that is not along an axis (two unknowns for one row). The factor orders the rows'
+    /// unknowns last.
+    fn case(rows: &str) -> (ContactNodes<3>, Arc<Factor>) {
+        let mesh = block([2.0, 1.0, 0.5], [6, 3, 2], SolidShape::Hex);
+        let clamped = mesh.group_nodes(&GroupSelector::Name("Gamma1".into())).unwrap();
+        let dofs = DofMap::<3>::new(mesh.points.len(), &clamped);
+        let elasticity = Elasticity {
+            youngs_modulus: 1.0,
+            poisson_ratio: 0.3,
+            plane: None,
+        };
+        let [k] = assemble_stiffness(&mesh.cells, &mesh.points, &dofs, &[elasticity.tensor()]);
+        let k = k.with_identity_rows(&dofs);
+        let surface = mesh.group_nodes(&GroupSelector::Name("Gamma3".into())).unwrap();
+        let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+        let frame: Vec<[f64; 3]> = match rows {
+            "normal" => vec![[0.0, -1.0, 0.0]],
+            "frame" => vec![[0.0, -1.0, 0.0], [c, 0.0, s], [-s, 0.0, c]],
+            _ => vec![[0.6, -0.8, 0.0]],
+        };
+        let (mut nodes, mut directions) = (Vec::new(), Vec::new());
+        for &p in &surface {
+            for d in &frame {
+                nodes.push(p);
+                directions.push(*d);
+            }
+        }
+        let weights = vec![1.0; nodes.len()];
+        let (rows, _) = ContactNodes::from_rows(&nodes, &weights, &directions, &dofs);
+        let mut last: Vec<usize> = rows
+            .rows()
+            .iter()
+            .flatten()
+            .filter(|(_, c)| *c != 0.0)
+            .map(|&(i, _)| i)
+            .collect();
+        last.sort_unstable();
+        last.dedup();
+        let analysis = Factor::analyse_with_last(&k, &last).unwrap();
+        let factor = Factor::new(&analysis, &k, &Counters::default()).unwrap();
+        (rows, Arc::new(factor))
+    }
+
+    fn max_relative(a: &[f64], b: &[f64]) -> f64 {
+        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / scale
+    }
+
+    /// Q, W, the free normal displacements and the recovery of the trailing block against the
+    /// sparse sweeps' G on the same factor.
+    #[test]
+    fn the_trailing_block_agrees_with_the_sparse_sweeps() {
+        for rows in ["normal", "frame"] {
+            let (nodes, factor) = case(rows);
+            let m = nodes.len();
+            assert!(nodes.trailing_block_applies());
+            let counters = Counters::default();
+            let mut split = SplitSweeps::new(&nodes, factor.clone(), &counters).unwrap();
+            let mut trailing = SplitSweeps::off_trailing_block(&nodes, factor.clone(), true).unwrap();
+            let lean = SplitSweeps::off_trailing_block(&nodes, factor.clone(), false).unwrap();
+            let (a, b) = (trailing.stiffness(), split.stiffness());
+            assert!(
+                max_relative(&a.q, &b.q) < 1e-11,
+                "{rows}: Q {:e}",
+                max_relative(&a.q, &b.q)
+            );
+            assert!(
+                max_relative(&a.w, &b.w) < 1e-11,
+                "{rows}: W {:e}",
+                max_relative(&a.w, &b.w)
+            );
+            assert!(lean.stiffness().w.is_empty());
+            // W x without W formed: by two triangular solves
+            let x: Vec<f64> = (0..m).map(|p| ((p as f64) * 0.71).sin()).collect();
+            let (mut wx, mut wx_lean) = (vec![0.0; m], vec![0.0; m]);
+            split.apply_w(&x, &mut wx);
+            lean.apply_w(&x, &mut wx_lean);
+            assert!(max_relative(&wx_lean, &wx) < 1e-12);
+            let weights: Vec<f64> = (0..m).map(|p| 1.0 + (p % 3) as f64).collect();
+            let (t_split, t_lean) = (split.trace_constant(&weights), lean.trace_constant(&weights));
+            assert!((t_split - t_lean).abs() < 1e-9 * t_split, "{t_split} {t_lean}");
+            // a step: d, then u for some forces
+            let n = factor.n();
+            let rhs: Vec<f64> = (0..n).map(|i| ((i as f64) * 0.37).cos()).collect();
+            let lambda: Vec<f64> = (0..m).map(|p| ((p as f64) * 1.3).sin().max(0.0)).collect();
+            let (mut d_split, mut d_trailing) = (vec![0.0; m], vec![0.0; m]);
+            split.free_normal(&rhs, &mut d_split, &counters);
+            trailing.free_normal(&rhs, &mut d_trailing, &counters);
+            assert!(max_relative(&d_trailing, &d_split) < 1e-12);
+            let (mut u_split, mut u_trailing) = (vec![0.0; n], vec![0.0; n]);
+            split.recover(&lambda, &mut u_split, &counters);
+            trailing.recover(&lambda, &mut u_trailing, &counters);
+            assert!(max_relative(&u_trailing, &u_split) < 1e-12);
+            // and u is the displacement of those forces: C u = d − W λ
+            let mut u_nu = vec![0.0; m];
+            nodes.normal_displacements(&u_trailing, &mut u_nu);
+            let mut w_lambda = vec![0.0; m];
+            trailing.apply_w(&lambda, &mut w_lambda);
+            let expected: Vec<f64> = d_split.iter().zip(&w_lambda).map(|(d, w)| d - w).collect();
+            assert!(max_relative(&u_nu, &expected) < 1e-12);
+        }
+    }
+
+    #[test]
+    fn a_row_over_two_unknowns_is_left_to_the_sparse_sweeps() {
+        let (nodes, factor) = case("oblique");
+        assert!(!nodes.trailing_block_applies());
+        assert!(SplitSweeps::off_trailing_block(&nodes, factor, true).is_none());
     }
 }

@@ -10,11 +10,10 @@ pub mod newton_w;
 pub mod nodal;
 pub mod obstacle;
 pub mod rows;
-pub mod trailing;
+mod trailing;
 
 pub use active_set::{ActiveSetSolver, ContactOutcome, ContactSettings, FrictionRows, FrictionStatus, NodeStatus};
 pub use condensed::{Condensation, ContactNodes, DenseNormalStiffness, NormalStiffness, SplitSweeps, StoredResponses};
 pub use law::{ComplianceProfile, ContactLaw, PiecewiseLinear, Symmetry};
 pub use nodal::{LawTerm, NodalLaws};
 pub use obstacle::{Gap, Obstacle};
-pub use trailing::{trailing_block_applies, TrailingSweeps};

@@ -6,7 +6,7 @@ use super::columns::PrescribedColumns;
 use super::error::SolveError;
 use super::setup::Simulation;
 use super::stats::{timed, RunStats};
-use crate::contact::{Condensation, SplitSweeps, StoredResponses, TrailingSweeps};
+use crate::contact::{Condensation, SplitSweeps, StoredResponses};
 use crate::fem::SymmetricMatrix;
 use crate::linalg::{Analysis, Counters, Factor, LinearSolver};
 use crate::scene::CondensationKind;
@@ -213,7 +213,7 @@ pub fn condensation<const D: usize>(
             // (None only when L_cc's k² numbers cannot be allocated: the sweeps then)
             let trailing = sim
                 .trailing_block()
-                .then(|| TrailingSweeps::new(rows, factor.clone(), c.friction.is_some()));
+                .then(|| SplitSweeps::off_trailing_block(rows, factor.clone(), c.friction.is_some()));
             match trailing.flatten() {
                 Some(op) => Box::new(op),
                 None => Box::new(SplitSweeps::new(rows, factor.clone(), counters)?),

@@ -246,7 +246,7 @@ impl<const D: usize> Simulation<D> {
             && self
                 .contact
                 .as_ref()
-                .is_some_and(|c| !c.nodes.is_empty() && crate::contact::trailing_block_applies(c.condensed_rows()))
+                .is_some_and(|c| !c.nodes.is_empty() && c.condensed_rows().trailing_block_applies())
     }
 
     /// True if step n is written (every `output_every`-th step and always the last).
