@@ -221,9 +221,10 @@ pub trait Condensation: Send {
     /// The step energy ½uᵀKu + Σ w_p j(u_ν,p) is convex when α_j times this is below 1 —
     /// the discrete form of the smallness condition α_j c_j² < m_A (docs/method.md §1).
     /// A power iteration, each step a product by W.
+    /// Zero where this process holds no contact matrices (the PETSc backend's ranks but the first).
     fn trace_constant(&self, weights: &[f64]) -> f64 {
-        let m = weights.len();
-        if m == 0 || weights.iter().all(|&w| w == 0.0) {
+        let m = self.stiffness().m;
+        if m == 0 || m != weights.len() || weights.iter().all(|&w| w == 0.0) {
             return 0.0;
         }
         let sq: Vec<f64> = weights.iter().map(|w| w.sqrt()).collect();
