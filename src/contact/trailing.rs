@@ -103,8 +103,8 @@ fn congruence(mut s: Vec<f64>, blocks: &[NodeBlock], b: impl Fn(&NodeBlock, usiz
             }
         }
     }
-    // (Bᵀ X)ᵗ = Xᵀ B: row p of the result from row p of Xᵗ, into M's storage
-    s.fill(0.0);
+    // (Bᵀ X)ᵗ = Xᵀ B: row p of the result from row p of Xᵗ, into M's storage (every entry is
+    // written: the blocks' rows are all k rows)
     for p in 0..k {
         let row = &xt[p * k..(p + 1) * k];
         let out = &mut s[p * k..(p + 1) * k];
@@ -177,41 +177,49 @@ impl TrailingColumns {
         Some((columns, q, w))
     }
 
-    /// d = T L_cc⁻ᵀ y_c for a forward-swept y.
-    pub(super) fn free_normal(&mut self, y: &Forward, d: &mut [f64]) {
-        self.work.copy_from_slice(self.block.part(y));
-        self.block.solve_upper(&mut self.work);
-        for (dp, row) in d.iter_mut().zip(&self.rows) {
-            *dp = row.iter().map(|&(q, c)| c * self.work[q]).sum();
+    /// out = T z (z over the trailing positions, out over the rows).
+    fn apply_t(&self, z: &[f64], out: &mut [f64]) {
+        for (o, row) in out.iter_mut().zip(&self.rows) {
+            *o = row.iter().map(|&(q, c)| c * z[q]).sum();
         }
     }
 
-    /// y_c ← y_c − L_cc⁻¹ Tᵀ λ.
-    pub(super) fn subtract(&mut self, lambda: &[f64], y: &mut Forward) {
-        self.work.fill(0.0);
-        for (&l, row) in lambda.iter().zip(&self.rows) {
-            for &(q, c) in row {
-                self.work[q] += c * l;
-            }
-        }
-        self.block.solve_lower(&mut self.work);
-        for (yc, z) in self.block.part_mut(y).iter_mut().zip(&self.work) {
-            *yc -= z;
-        }
-    }
-
-    /// y = W x = T L_cc⁻ᵀ L_cc⁻¹ Tᵀ x by two triangular solves.
-    pub(super) fn apply_w(&self, x: &[f64], y: &mut [f64]) {
-        let mut z = vec![0.0; self.block.len()];
+    /// z = Tᵀ x (x over the rows, z over the trailing positions).
+    fn apply_t_transpose(&self, x: &[f64], z: &mut [f64]) {
+        z.fill(0.0);
         for (&l, row) in x.iter().zip(&self.rows) {
             for &(q, c) in row {
                 z[q] += c * l;
             }
         }
+    }
+
+    /// d = T L_cc⁻ᵀ y_c for a forward-swept y.
+    pub(super) fn free_normal(&mut self, y: &Forward, d: &mut [f64]) {
+        let mut z = std::mem::take(&mut self.work);
+        z.copy_from_slice(self.block.part(y));
+        self.block.solve_upper(&mut z);
+        self.apply_t(&z, d);
+        self.work = z;
+    }
+
+    /// y_c ← y_c − L_cc⁻¹ Tᵀ λ.
+    pub(super) fn subtract(&mut self, lambda: &[f64], y: &mut Forward) {
+        let mut z = std::mem::take(&mut self.work);
+        self.apply_t_transpose(lambda, &mut z);
+        self.block.solve_lower(&mut z);
+        for (yc, zc) in self.block.part_mut(y).iter_mut().zip(&z) {
+            *yc -= zc;
+        }
+        self.work = z;
+    }
+
+    /// y = W x = T L_cc⁻ᵀ L_cc⁻¹ Tᵀ x by two triangular solves.
+    pub(super) fn apply_w(&self, x: &[f64], y: &mut [f64]) {
+        let mut z = vec![0.0; self.block.len()];
+        self.apply_t_transpose(x, &mut z);
         self.block.solve_lower(&mut z);
         self.block.solve_upper(&mut z);
-        for (yp, row) in y.iter_mut().zip(&self.rows) {
-            *yp = row.iter().map(|&(q, c)| c * z[q]).sum();
-        }
+        self.apply_t(&z, y);
     }
 }

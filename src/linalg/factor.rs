@@ -124,7 +124,7 @@ impl Forward {
 /// A cached Cholesky factor K = Pᵀ L Lᵀ P.
 pub struct Factor {
     analysis: Analysis,
-    pub(super) values: Vec<f64>,
+    values: Vec<f64>,
     n: usize,
 }
 
@@ -315,7 +315,7 @@ impl Factor {
         self.n
     }
 
-    #[cfg(test)]
+    /// L's values in the supernodes' blocks.
     pub(super) fn values(&self) -> &[f64] {
         &self.values
     }

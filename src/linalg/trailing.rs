@@ -6,7 +6,6 @@
 //! G = L⁻¹PCᵀ by sparse sweeps.
 
 use super::factor::{Factor, Forward};
-use super::supernodes::Supernodes;
 use faer::linalg::matmul::triangular::{matmul, BlockStructure};
 use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
 use faer::{Accum, MatMut, MatRef, Par};
@@ -31,7 +30,8 @@ impl TrailingBlock {
     /// Copies the last k columns of L (k: how many unknowns the analysis ordered last; None when
     /// none was). A column's rows in the factor are its supernode's rows from the column on,
     /// all inside the trailing block.
-    pub(super) fn of(factor: &Factor, values: &[f64], supernodes: &Supernodes) -> Option<Self> {
+    fn of(factor: &Factor) -> Option<Self> {
+        let (values, supernodes) = (factor.values(), factor.analysis().supernodes());
         let (n, k) = (factor.n(), factor.analysis().ordered_last());
         if k == 0 {
             return None;
@@ -167,7 +167,7 @@ impl Factor {
     /// L_cc, the block of the unknowns ordered last (None when none was, or when k² numbers
     /// cannot be allocated).
     pub fn trailing_block(&self) -> Option<TrailingBlock> {
-        TrailingBlock::of(self, &self.values, self.analysis().supernodes())
+        TrailingBlock::of(self)
     }
 }
 

@@ -219,19 +219,7 @@ impl<const D: usize> Simulation<D> {
     /// docs/method.md §9.4): no sweeps at all there.
     pub fn unknowns_ordered_last(&self) -> Vec<usize> {
         match &self.contact {
-            Some(c) if D == 3 && (c.nodes.len() <= 2000 || self.trailing_block()) => {
-                let mut dofs: Vec<usize> = c
-                    .condensed_rows()
-                    .rows()
-                    .iter()
-                    .flatten()
-                    .filter(|&&(_, v)| v != 0.0)
-                    .map(|&(d, _)| d)
-                    .collect();
-                dofs.sort_unstable();
-                dofs.dedup();
-                dofs
-            }
+            Some(c) if D == 3 && (c.nodes.len() <= 2000 || self.trailing_block()) => c.condensed_rows().unknowns(),
             _ => Vec::new(),
         }
     }
