@@ -20,6 +20,7 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::{Par, Side};
+use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
@@ -185,10 +186,12 @@ impl Factor {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
             ..Default::default()
         };
+        let first = decoupling.pattern.as_ref().map(|_| &decoupling.decoupled[..]);
         let node_order = match ordering {
             NodeOrdering::Amd => amd_ordering(&matrix.pattern),
             NodeOrdering::NestedDissection => Some(
-                nested_dissection(&matrix.pattern).ok_or_else(|| FactorError::Other("METIS NodeND failed".into()))?,
+                nested_dissection(&matrix.pattern, first, last)
+                    .ok_or_else(|| FactorError::Other("METIS NodeND failed".into()))?,
             ),
         };
         // The identity rows of prescribed components couple with nothing but their zeros: out of
@@ -254,10 +257,9 @@ impl Factor {
         Self::from_permuted(analysis, lower, block, counters)
     }
 
-    /// The numeric factorisation of P K Pᵀ (its lower triangle): faer's supernodal kernel
-    /// called directly, since faer's whole-matrix entry point would make a permuted copy of
-    /// its own next to the caller's matrix. The entries and the kernel are faer's, so the factor
-    /// is the same to the bit.
+    /// The numeric factorisation of P K Pᵀ (its lower triangle): hvi's tree-parallel kernel
+    /// (numeric.rs) or faer's supernodal kernel called directly, since faer's whole-matrix
+    /// entry point would make a permuted copy of its own next to the caller's matrix.
     fn from_permuted(
         analysis: &Analysis,
         lower: PermutedLower,
@@ -273,36 +275,76 @@ impl Factor {
         // (a failure is this message, not the allocator's end of the process: src/alloc.rs)
         crate::alloc::fallible(|| values.try_reserve_exact(symbolic.len_val()))
             .map_err(|_| FactorError::Other(format!("out of memory for {} factor entries", symbolic.len_val())))?;
-        values.resize(symbolic.len_val(), 0.0);
-        // 3D factors have large dense supernodes, where faer's parallel kernels pay off (box
-        // 96x48x12, 208 M entries: 13.1 s on one thread, 8.5 s on two); the small supernodes of 2D
-        // factors measured faster sequentially (the crate measurements in the README).
-        let par = if block == 3 && rayon::current_num_threads() > 1 {
-            Par::rayon(rayon::current_num_threads())
+        // 3D factors have large dense supernodes and an elimination tree that splits into
+        // subtrees: with more than one thread, hvi's left-looking kernel factors the subtrees in
+        // parallel (numeric.rs, docs/method.md §9.5). Elsewhere faer's supernodal kernel, the
+        // same method supernode after supernode, which is faster on one thread and bit for bit
+        // what 2D runs had before.
+        let threads = rayon::current_num_threads();
+        let schedule = analysis.schedule.as_deref().filter(|_| block == 3 && threads > 1);
+        let len = symbolic.len_val();
+        if schedule.is_some() {
+            // the first touch of the values' pages (their zeroing) on the threads: on this
+            // machine's virtual memory, page faults cost 2–3 s of the n = 48 slab's 1.3 GB
+            // sequentially and ≈ 1 s on two threads (docs/method.md §9.5)
+            values.spare_capacity_mut()[..len]
+                .par_chunks_mut(1 << 18)
+                .for_each(|chunk| chunk.iter_mut().for_each(|v| _ = v.write(0.0)));
+            // SAFETY: the first `len` entries were just written
+            unsafe { values.set_len(len) };
         } else {
-            faer::get_global_parallelism()
-        };
-        let mut buffer = MemBuffer::try_new(supernodal::factorize_supernodal_numeric_llt_scratch::<usize, f64>(
-            supernodal,
-            par,
-            Default::default(),
-        ))
-        .map_err(|e| FactorError::Other(format!("workspace: {e:?}")))?;
+            values.resize(len, 0.0);
+        }
+        match schedule {
+            Some(schedule) => {
+                let lower = super::numeric::Lower {
+                    col_ptr: &lower.col_ptr,
+                    row_idx: &lower.row_idx,
+                    values: &lower.values,
+                };
+                let sn = &analysis.supernodes;
+                let updates = super::numeric::Updates::new(sn);
+                super::numeric::factorize(sn, &updates, Some(schedule), &lower, &mut values, Par::rayon(threads))
+                    .map_err(|_| FactorError::NotPositiveDefinite)?;
+            }
+            None => {
+                // (3D on several threads without a split tree: faer's kernels on the threads)
+                let par = if block == 3 && threads > 1 {
+                    Par::rayon(threads)
+                } else {
+                    faer::get_global_parallelism()
+                };
+                let mut buffer =
+                    MemBuffer::try_new(supernodal::factorize_supernodal_numeric_llt_scratch::<usize, f64>(
+                        supernodal,
+                        par,
+                        Default::default(),
+                    ))
+                    .map_err(|e| FactorError::Other(format!("workspace: {e:?}")))?;
+                let n = symbolic.nrows();
+                let a = faer::sparse::SparseColMatRef::new(
+                    faer::sparse::SymbolicSparseColMatRef::new_unsorted_checked(
+                        n,
+                        n,
+                        &lower.col_ptr,
+                        None,
+                        &lower.row_idx,
+                    ),
+                    &lower.values,
+                );
+                supernodal::factorize_supernodal_numeric_llt::<usize, f64>(
+                    &mut values,
+                    a,
+                    Default::default(),
+                    supernodal,
+                    par,
+                    MemStack::new(&mut buffer),
+                    Default::default(),
+                )
+                .map_err(|_: LltError| FactorError::NotPositiveDefinite)?;
+            }
+        }
         let n = symbolic.nrows();
-        let a = faer::sparse::SparseColMatRef::new(
-            faer::sparse::SymbolicSparseColMatRef::new_unsorted_checked(n, n, &lower.col_ptr, None, &lower.row_idx),
-            &lower.values,
-        );
-        supernodal::factorize_supernodal_numeric_llt::<usize, f64>(
-            &mut values,
-            a,
-            Default::default(),
-            supernodal,
-            par,
-            MemStack::new(&mut buffer),
-            Default::default(),
-        )
-        .map_err(|_: LltError| FactorError::NotPositiveDefinite)?;
         Ok(Factor {
             analysis: analysis.clone(),
             values,
@@ -556,33 +598,68 @@ fn expand(fwd: &[usize], d: usize) -> (Vec<usize>, Vec<usize>) {
 
 /// Nested dissection of the node graph by METIS (written by hand only as the unsafe call: the
 /// `metis` crate wraps partitioning but not NodeND), expanded to the unknowns.
-fn nested_dissection(pattern: &super::sparse::Pattern) -> Option<(Vec<usize>, Vec<usize>)> {
+///
+/// Each node weighs what it puts into the ordered part of the factor (docs/method.md §9.1):
+/// its unknowns that are neither decoupled (`first`) nor ordered `last`. Nodes that weigh
+/// nothing (fully clamped) are left out of METIS's graph and put first; a contact node whose
+/// normal goes last weighs D − 1, as in the graph of the unknowns CHOLMOD's METIS orders.
+fn nested_dissection(
+    pattern: &super::sparse::Pattern,
+    first: Option<&[bool]>,
+    last: &[usize],
+) -> Option<(Vec<usize>, Vec<usize>)> {
     use metis_sys::idx_t;
+    let d = pattern.block;
     let graph = pattern.node_graph();
-    let n = graph.len();
+    let mut weight = vec![d as idx_t; graph.len()];
+    let mut lighten = |i: usize| weight[i / d] -= 1;
+    if let Some(first) = first {
+        first
+            .iter()
+            .enumerate()
+            .filter(|(_, &f)| f)
+            .for_each(|(i, _)| lighten(i));
+    }
+    last.iter()
+        .filter(|&&i| !first.is_some_and(|f| f[i]))
+        .for_each(|&i| lighten(i));
+    // METIS's vertices: the nodes that weigh something, renumbered.
+    let kept: Vec<usize> = (0..graph.len()).filter(|&k| weight[k] > 0).collect();
+    let mut local = vec![idx_t::MAX; graph.len()];
+    for (v, &k) in kept.iter().enumerate() {
+        local[k] = v as idx_t;
+    }
+    let n = kept.len();
     if n == 0 || n > idx_t::MAX as usize || graph.nodes.len() > idx_t::MAX as usize {
         return None;
     }
     // METIS wants the adjacency without self loops.
     let mut xadj: Vec<idx_t> = Vec::with_capacity(n + 1);
     let mut adjncy: Vec<idx_t> = Vec::with_capacity(graph.nodes.len());
+    let mut vwgt: Vec<idx_t> = kept.iter().map(|&k| weight[k]).collect();
     xadj.push(0);
-    for k in 0..n {
-        adjncy.extend(graph.coupled(k).iter().filter(|&&q| q != k).map(|&q| q as idx_t));
+    for &k in &kept {
+        adjncy.extend(
+            graph
+                .coupled(k)
+                .iter()
+                .filter(|&&q| q != k && local[q] != idx_t::MAX)
+                .map(|&q| local[q]),
+        );
         xadj.push(adjncy.len() as idx_t);
     }
     let mut nvtxs = n as idx_t;
     let (mut perm, mut iperm) = (vec![0 as idx_t; n], vec![0 as idx_t; n]);
     let mut options = [0 as idx_t; metis_sys::METIS_NOPTIONS as usize];
     // SAFETY: every array has the length METIS reads or writes: options METIS_NOPTIONS, xadj
-    // n + 1, adjncy xadj[n], perm and iperm n; a null vwgt means unit weights.
+    // n + 1, adjncy xadj[n], vwgt, perm and iperm n.
     let status = unsafe {
         metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
         metis_sys::METIS_NodeND(
             &mut nvtxs,
             xadj.as_mut_ptr(),
             adjncy.as_mut_ptr(),
-            std::ptr::null_mut(),
+            vwgt.as_mut_ptr(),
             options.as_mut_ptr(),
             perm.as_mut_ptr(),
             iperm.as_mut_ptr(),
@@ -592,8 +669,11 @@ fn nested_dissection(pattern: &super::sparse::Pattern) -> Option<(Vec<usize>, Ve
         return None;
     }
     // Row i of the permuted matrix is row perm[i] of the original: perm is faer's forward array.
-    let fwd: Vec<usize> = perm.iter().map(|&p| p as usize).collect();
-    Some(expand(&fwd, pattern.block))
+    let fwd: Vec<usize> = (0..graph.len())
+        .filter(|&k| weight[k] == 0)
+        .chain(perm.iter().map(|&p| kept[p as usize]))
+        .collect();
+    Some(expand(&fwd, d))
 }
 
 /// AMD on the node graph of the pattern, expanded to the D unknowns of each node, kept
@@ -661,6 +741,72 @@ mod schedule_tests {
             k.matvec(&x, &mut kx);
             let residual = kx.iter().zip(&r).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
             assert!(residual < 1e-9, "residual {residual:e}");
+        }
+    }
+}
+
+#[cfg(test)]
+mod numeric_tests {
+    //! hvi's left-looking kernel (numeric.rs), sequential and on the tree's pieces, against
+    //! faer's supernodal kernel on the same analysis.
+    use super::super::numeric::{factorize, Lower, Updates};
+    use super::super::sparse::test_matrices::{grid_stiffness, relative_difference};
+    use super::*;
+
+    fn ours(analysis: &Analysis, k: &SymmetricMatrix, schedule: Option<&Schedule>, par: Par) -> Result<Vec<f64>, ()> {
+        let lower = PermutedLower::new(analysis, k).unwrap();
+        let lower = Lower {
+            col_ptr: &lower.col_ptr,
+            row_idx: &lower.row_idx,
+            values: &lower.values,
+        };
+        let sn = &analysis.supernodes;
+        let mut values = vec![0.0; analysis.factor_entries()];
+        factorize(sn, &Updates::new(sn), schedule, &lower, &mut values, par).map_err(|_| ())?;
+        Ok(values)
+    }
+
+    #[test]
+    fn the_tree_parallel_kernel_gives_faers_factor() {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        for quads in [true, false] {
+            // 2D, so that Factor::new runs faer's kernel: the reference
+            let k = grid_stiffness(96, 48, quads);
+            let analysis = Factor::analyse(&k).unwrap();
+            let schedule = analysis.schedule.as_deref().expect("a factor this size is split");
+            let faer = Factor::new(&analysis, &k, &Counters::default()).unwrap();
+            let sequential = ours(&analysis, &k, None, Par::Seq).unwrap();
+            let parallel = pool
+                .install(|| ours(&analysis, &k, Some(schedule), Par::rayon(2)))
+                .unwrap();
+            // the same products, summed in another order: round-off
+            for (what, values) in [("sequential", &sequential), ("parallel", &parallel)] {
+                let diff = relative_difference(values, faer.values());
+                assert!(diff <= 1e-13, "{what} (quads {quads}): {diff:e}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_tree_parallel_kernel_refuses_a_matrix_that_is_not_positive_definite() {
+        let mut k = grid_stiffness(96, 48, true);
+        let analysis = Factor::analyse(&k).unwrap();
+        let schedule = analysis.schedule.as_deref().unwrap();
+        // a diagonal entry of a free unknown made negative, in a piece or in the top
+        for i in [k.n() / 2 + 1, k.n() - 1] {
+            assert!(!(i / 2).is_multiple_of(97), "a free unknown");
+            let sym = k.pattern.symbolic();
+            let at = (sym.col_ptr()[i]..sym.col_ptr()[i + 1])
+                .find(|&p| sym.row_idx()[p] == i)
+                .unwrap();
+            let saved = k.values[at];
+            k.values[at] = -1.0;
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+            assert!(pool
+                .install(|| ours(&analysis, &k, Some(schedule), Par::rayon(2)))
+                .is_err());
+            assert!(ours(&analysis, &k, None, Par::Seq).is_err());
+            k.values[at] = saved;
         }
     }
 }

@@ -164,6 +164,16 @@ impl Schedule {
         out
     }
 
+    /// The pieces' supernodes (each a subtree: a contiguous range in postorder).
+    pub fn piece_supernodes(&self) -> impl Iterator<Item = Range<usize>> + '_ {
+        self.pieces.iter().map(|p| p.supernodes.clone())
+    }
+
+    /// The supernodes above the pieces, ascending.
+    pub fn top(&self) -> &[usize] {
+        &self.top
+    }
+
     /// How many subtrees the sweeps run in parallel.
     #[cfg(test)]
     pub fn pieces(&self) -> usize {
