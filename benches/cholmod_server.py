@@ -2,7 +2,11 @@
 analyses one MatrixMarket matrix with several orderings once, then refactorises on request, so
 that the bench can interleave CHOLMOD's numeric factorisations with hvi's in one run.
 
-    python3 benches/cholmod_server.py MATRIX.mtx OUTDIR default,amd,metis,nesdis
+    python3 benches/cholmod_server.py MATRIX.mtx OUTDIR default,amd,metis,nesdis,metis_last [LAST.bin]
+
+An ordering NAME_last is the peer's (benches/numpy_reference_3d.py): CHOLMOD's ordering NAME of
+K without the unknowns listed in LAST.bin (little-endian int64), those unknowns appended in their
+order, and the permuted matrix analysed with the natural ordering.
 
 Protocol (one JSON line out per line in):
   start        -> {"ready": true, "n", "nnz", "blas", "orderings": {name: {"symbolic", "perm"}}}
@@ -86,15 +90,30 @@ def reply(obj):
 
 def main():
     path, outdir, names = sys.argv[1], sys.argv[2], sys.argv[3].split(",")
+    last = np.fromfile(sys.argv[4], dtype="<i8") if len(sys.argv) > 4 else np.zeros(0, dtype="<i8")
     matrix = scipy.sparse.csc_matrix(scipy.io.mmread(path))
     rhs = matrix @ np.ones(matrix.shape[0])
-    factors, orderings = {}, {}
+    factors, orderings, matrices = {}, {}, {}
     for name in names:
         t = time.perf_counter()
-        factor = analyze(matrix, mode="supernodal", ordering_method=name)
+        if name.endswith("_last"):
+            keep = np.ones(matrix.shape[0], dtype=bool)
+            keep[last] = False
+            inner = np.flatnonzero(keep)
+            p_inner = analyze(matrix[inner][:, inner].tocsc(), mode="supernodal", ordering_method=name[:-5]).P()
+            perm = np.concatenate([inner[p_inner], last])
+            permuted = matrix[perm][:, perm].tocsc()
+            factor = analyze(permuted, mode="supernodal", ordering_method="natural")
+            if not np.array_equal(factor.P(), np.arange(matrix.shape[0])):
+                raise RuntimeError("CHOLMOD permuted the natural ordering")
+            matrices[name] = (permuted, perm)
+        else:
+            factor = analyze(matrix, mode="supernodal", ordering_method=name)
+            perm = factor.P()
+            matrices[name] = (matrix, None)
         symbolic = time.perf_counter() - t
         perm_path = os.path.join(outdir, f"perm_{name}.bin")
-        np.asarray(factor.P(), dtype="<i8").tofile(perm_path)
+        np.asarray(perm, dtype="<i8").tofile(perm_path)
         factors[name] = factor
         orderings[name] = {"symbolic": symbolic, "perm": perm_path}
     reply({"ready": True, "n": matrix.shape[0], "nnz": int(matrix.nnz), "blas": blas_in_use(), "orderings": orderings})
@@ -105,13 +124,14 @@ def main():
         if words[0] == "factor":
             factor = factors[words[1]]
             t = time.perf_counter()
-            factor.cholesky_inplace(matrix)
+            factor.cholesky_inplace(matrices[words[1]][0])
             reply({"numeric": time.perf_counter() - t})
         elif words[0] == "finish":
             out = {}
             for name in names:
                 factor = factors.pop(name)
-                error = float(abs(factor(rhs) - 1.0).max())
+                permuted, perm = matrices.pop(name)
+                error = float(abs(factor(rhs if perm is None else rhs[perm]) - 1.0).max())
                 L = factor.L()  # converts the factor to simplicial form: last use of it
                 del factor
                 supernodes, storage = supernodal_counts(L)

@@ -30,6 +30,11 @@
 //! - "exact": the structural nnz(L) of the permutation, no relaxation (faer's simplicial analysis
 //!   of the permutation each side used) — what compares the orderings alone.
 //!
+//! The solver's factor orders the contact rows' unknowns last; the rows `CHOLMOD metis_last` and
+//! `CHOLMOD nesdis_last` hold CHOLMOD to the same constraint the way the peer
+//! (benches/numpy_reference_3d.py) does — its ordering of K without those unknowns, them appended
+//! — and the last line compares the solver's factor with the better of them (issue 22).
+//!
 //! Both sides see the pattern hvi analyses: the couplings of a prescribed component's identity
 //! row (stored zeros) are left out (`Structure`), as src/linalg/factor.rs does.
 //!
@@ -62,6 +67,13 @@ use std::time::Instant;
 const NONE: usize = usize::MAX;
 const OPENBLAS_DIR: &str = "/usr/lib/x86_64-linux-gnu/openblas-pthread";
 const CHOLMOD_ORDERINGS: [&str; 4] = ["default", "amd", "metis", "nesdis"];
+/// The peer's orderings (benches/numpy_reference_3d.py): CHOLMOD's METIS or NESDIS on K without
+/// the unknowns the solver orders last, those appended — what the solver's factor is held to.
+const CHOLMOD_LAST: [&str; 2] = ["metis_last", "nesdis_last"];
+
+fn constrained(name: &str) -> bool {
+    name.ends_with("_last")
+}
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
@@ -310,14 +322,21 @@ struct Cholmod {
 }
 
 impl Cholmod {
-    fn start(mtx: &Path, dir: &Path, threads: usize) -> Result<(Cholmod, serde_json::Value), String> {
+    fn start(
+        mtx: &Path,
+        dir: &Path,
+        threads: usize,
+        names: &[&str],
+        last: Option<&Path>,
+    ) -> Result<(Cholmod, serde_json::Value), String> {
         let script = concat!(env!("CARGO_MANIFEST_DIR"), "/benches/cholmod_server.py");
         let python = std::env::var("HVI_PYTHON").unwrap_or_else(|_| "python3".into());
         let mut cmd = Command::new(&python);
         cmd.arg(script)
             .arg(mtx)
             .arg(dir)
-            .arg(CHOLMOD_ORDERINGS.join(","))
+            .arg(names.join(","))
+            .args(last)
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped());
@@ -550,7 +569,16 @@ fn main() {
         std::fs::create_dir_all(&dir).expect("temp dir");
         let mtx: PathBuf = dir.join("K.mtx");
         let entries = write_matrix_market(&matrix, &structure, &mtx).expect("writing the MatrixMarket file");
-        let mut cholmod = match Cholmod::start(&mtx, &dir, threads) {
+        let last_path = dir.join("last.bin");
+        let names: Vec<&'static str> = if last.is_empty() {
+            CHOLMOD_ORDERINGS.to_vec()
+        } else {
+            let bytes: Vec<u8> = last.iter().flat_map(|&i| (i as i64).to_le_bytes()).collect();
+            std::fs::write(&last_path, bytes).expect("writing the contact unknowns");
+            CHOLMOD_ORDERINGS.iter().chain(&CHOLMOD_LAST).copied().collect()
+        };
+        let last_arg = (!last.is_empty()).then_some(last_path.as_path());
+        let mut cholmod = match Cholmod::start(&mtx, &dir, threads, &names, last_arg) {
             Ok((server, ready)) => {
                 println!(
                     "  CHOLMOD: {} unknowns, {} entries read (file: {entries} lower); BLAS: {}",
@@ -559,7 +587,7 @@ fn main() {
                     blas_summary(&ready["blas"])
                 );
                 let mut cholmod_perms = Vec::new();
-                for name in CHOLMOD_ORDERINGS {
+                for &name in &names {
                     let info = &ready["orderings"][name];
                     let bytes = std::fs::read(info["perm"].as_str().unwrap()).expect("permutation file");
                     let fwd: Vec<usize> = bytes
@@ -584,7 +612,7 @@ fn main() {
                 }
                 let same: Vec<&str> = CHOLMOD_ORDERINGS[1..]
                     .iter()
-                    .zip(&cholmod_perms[1..])
+                    .zip(&cholmod_perms[1..CHOLMOD_ORDERINGS.len()])
                     .filter(|(_, (_, p, _))| p.fwd == cholmod_perms[0].1.fwd)
                     .map(|(name, _)| *name)
                     .collect();
@@ -597,7 +625,11 @@ fn main() {
                     }
                 );
                 // diagnostic: faer's supernodes and kernels on CHOLMOD's best permutation (exact count)
-                let (name, perm, counts) = cholmod_perms.iter().min_by_key(|(_, _, c)| c.exact).unwrap();
+                let (name, perm, counts) = cholmod_perms
+                    .iter()
+                    .filter(|(name, _, _)| !constrained(name))
+                    .min_by_key(|(_, _, c)| c.exact)
+                    .unwrap();
                 let t = Instant::now();
                 let sym = symbolic(&structure, perm, true);
                 let seconds = t.elapsed().as_secs_f64();
@@ -678,8 +710,14 @@ fn main() {
         // the table
         let cholmod_rows: Vec<&Row> = rows
             .iter()
-            .filter(|r| matches!(r.method, Method::Cholmod(_)) && r.numeric.len() == repeats)
+            .filter(|r| matches!(r.method, Method::Cholmod(name) if !constrained(name)) && r.numeric.len() == repeats)
             .collect();
+        let best_last = rows
+            .iter()
+            .filter(|r| matches!(r.method, Method::Cholmod(name) if constrained(name)))
+            .filter_map(|r| r.counts.map(|c| c.lower))
+            .filter(|&v| v > 0)
+            .min();
         let best_lower = cholmod_rows
             .iter()
             .filter_map(|r| r.counts.map(|c| c.lower))
@@ -741,7 +779,9 @@ fn main() {
         }
         println!(
             "  * = Factor::analyse's choice (symbolic {auto_symbolic:.3} s, both orderings tried). /b = over CHOLMOD's best \
-             ordering by that column (lower: L().nnz; exact: structural; time: fastest median); numeric s = median, min s = fastest."
+             unconstrained ordering by that column (lower: L().nnz; exact: structural; time: fastest median); numeric s = \
+             median, min s = fastest. NAME_last: CHOLMOD's NAME on K without the solver's last unknowns, those appended \
+             (the peer's factor)."
         );
         let errors: Vec<String> = rows
             .iter()
@@ -761,6 +801,15 @@ fn main() {
                     if ht <= 1.0 { "met" } else { "NOT met" }
                 );
             }
+        }
+        if let (Some(bl), Some(h)) = (best_last, solver_row.map(|i| &rows[i])) {
+            let hl = h.counts.map_or(f64::NAN, |c| c.lower as f64 / bl as f64);
+            println!(
+                "  issue 22 (nnz(L) ≤ CHOLMOD's with the same unknowns last), the solver's factor: {} against {}, {hl:.3} {}",
+                millions(h.counts.map_or(0, |c| c.lower)),
+                millions(bl),
+                if hl <= 1.0 { "met" } else { "NOT met" }
+            );
         }
         println!(
             "  (this size: {:.0} s in all, {timed_seconds:.0} s in the interleaved factorisations)",
