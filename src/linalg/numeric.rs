@@ -120,26 +120,7 @@ pub(super) fn factorize(
     let max_width = sn.width.iter().copied().max().unwrap_or(0);
     let Some(schedule) = schedule.filter(|_| par.degree() > 1) else {
         let mut work = Work::new(n, max_width, par);
-        for s in 0..sn.len() {
-            let (head, tail) = values.split_at_mut(sn.value_start[s]);
-            let block = &mut tail[..sn.entries(s)];
-            work.enter(sn, s);
-            assemble(sn, lower, s, (block, 0..sn.width[s]), &work);
-            for &d in updates.of(s) {
-                update(
-                    sn,
-                    s,
-                    (block, 0..sn.width[s]),
-                    d,
-                    &head[sn.value_start[d]..],
-                    &mut work,
-                    par,
-                );
-            }
-            work.leave(sn, s);
-            factor(sn, s, block, &mut work, par)?;
-        }
-        return Ok(());
+        return in_order(sn, updates, Some(lower), 0..sn.len(), |_| true, values, &mut work, par);
     };
     let top = schedule.top();
     let mut in_top = vec![false; sn.len()];
@@ -211,23 +192,44 @@ pub(super) fn factorize(
     drop(finished_of);
     // 3. the top in order
     let mut work = Work::new(n, max_width, par);
-    for &s in top {
+    in_order(
+        sn,
+        updates,
+        None,
+        top.iter().copied(),
+        |d| in_top[d],
+        values,
+        &mut work,
+        par,
+    )
+}
+
+/// The supernodes `supernodes` in order, each: its columns of `lower` (if given, else gathered
+/// already), the updates of its descendants d with `from(d)`, its factorisation.
+#[allow(clippy::too_many_arguments)]
+fn in_order(
+    sn: &Supernodes,
+    updates: &Updates,
+    lower: Option<&Lower>,
+    supernodes: impl Iterator<Item = usize>,
+    from: impl Fn(usize) -> bool,
+    values: &mut [f64],
+    work: &mut Work,
+    par: Par,
+) -> Result<(), NotPositiveDefinite> {
+    for s in supernodes {
         let (head, tail) = values.split_at_mut(sn.value_start[s]);
         let block = &mut tail[..sn.entries(s)];
         work.enter(sn, s);
-        for &d in updates.of(s).iter().filter(|&&d| in_top[d]) {
-            update(
-                sn,
-                s,
-                (block, 0..sn.width[s]),
-                d,
-                &head[sn.value_start[d]..],
-                &mut work,
-                par,
-            );
+        if let Some(lower) = lower {
+            assemble(sn, lower, s, (block, 0..sn.width[s]), work);
+        }
+        for &d in updates.of(s).iter().filter(|&&d| from(d)) {
+            let columns = (&mut *block, 0..sn.width[s]);
+            update(sn, s, columns, d, &head[sn.value_start[d]..], work, par);
         }
         work.leave(sn, s);
-        factor(sn, s, block, &mut work, par)?;
+        factor(sn, s, block, work, par)?;
     }
     Ok(())
 }
@@ -282,92 +284,96 @@ fn update(
     par: Par,
 ) {
     let rows = sn.rows(s);
+    let one = OneUpdate { sn, s, d, d_block, par };
     let mut first = columns.start;
     for slice in block.chunks_mut(UPDATE_COLUMNS * rows) {
         let last = first + slice.len() / rows;
-        update_columns(sn, s, (slice, first..last), d, d_block, work, par);
+        one.apply(slice, first..last, work);
         first = last;
     }
 }
 
-/// [`update`] on one slice of columns.
-#[allow(clippy::too_many_arguments)]
-fn update_columns(
-    sn: &Supernodes,
+/// Descendant d's update of supernode s, applied a slice of s's columns at a time.
+struct OneUpdate<'a> {
+    sn: &'a Supernodes,
     s: usize,
-    (block, columns): (&mut [f64], Range<usize>),
     d: usize,
-    d_block: &[f64],
-    work: &mut Work,
+    d_block: &'a [f64],
     par: Par,
-) {
-    let (start, rows) = (sn.start[s], sn.rows(s));
-    let d_pattern = sn.pattern(d);
-    // d's rows from the first of these columns on, and how many of them are these columns
-    let first = d_pattern.partition_point(|&r| r < start + columns.start);
-    let mid = d_pattern[first..].partition_point(|&r| r < start + columns.end);
-    if mid == 0 {
-        return;
-    }
-    let (d_width, d_rows) = (sn.width[d], sn.rows(d));
-    let below = d_pattern.len() - first;
-    let d_block = &d_block[..d_rows * d_width];
-    work.rows.clear();
-    let local = &work.local;
-    let end = start + sn.width[s];
-    work.rows.extend(
-        d_pattern[first..]
-            .iter()
-            .map(|&r| if r < end { r - start } else { local[r] }),
-    );
-    let column_of = |j: usize| (work.rows[j] - columns.start) * rows;
-    if below * mid * d_width <= SMALL_UPDATE {
-        // a few numbers: straight loops beat a dense product's set-up
-        let at = |k: usize, i: usize| d_block[k * d_rows + d_width + first + i];
-        for j in 0..mid {
-            let column = column_of(j);
-            for i in j..below {
-                let sum: f64 = (0..d_width).map(|k| at(k, i) * at(k, j)).sum();
-                block[column + work.rows[i]] -= sum;
-            }
+}
+
+impl OneUpdate<'_> {
+    /// [`update`] on the columns `columns` of s, held by `block`.
+    fn apply(&self, block: &mut [f64], columns: Range<usize>, work: &mut Work) {
+        let OneUpdate { sn, s, d, d_block, par } = *self;
+        let (start, rows) = (sn.start[s], sn.rows(s));
+        let d_pattern = sn.pattern(d);
+        // d's rows from the first of these columns on, and how many of them are these columns
+        let first = d_pattern.partition_point(|&r| r < start + columns.start);
+        let mid = d_pattern[first..].partition_point(|&r| r < start + columns.end);
+        if mid == 0 {
+            return;
         }
-        return;
-    }
-    let d_below = MatRef::from_column_major_slice_with_stride(&d_block[d_width + first..], below, d_width, d_rows);
-    let d_mid = d_below.subrows(0, mid);
-    if work.product.len() < below * mid {
-        work.product.resize(below * mid, 0.0);
-    }
-    let product = &mut work.product[..below * mid];
-    let par = if below * mid * d_width > PARALLEL_UPDATE {
-        par
-    } else {
-        Par::Seq
-    };
-    matmul(
-        MatMut::from_column_major_slice_mut(product, below, mid),
-        Accum::Replace,
-        d_below,
-        d_mid.transpose(),
-        1.0,
-        par,
-    );
-    // scattered by runs of rows that are adjacent in both blocks (a node's D rows, a
-    // supernode's columns): slices the compiler vectorises
-    for j in 0..mid {
-        let column = &mut block[column_of(j)..column_of(j) + rows];
-        let product = &product[j * below..(j + 1) * below];
-        let mut i = j;
-        while i < below {
-            let (from, to) = (i, work.rows[i]);
-            i += 1;
-            while i < below && work.rows[i] == to + (i - from) {
-                i += 1;
+        let (d_width, d_rows) = (sn.width[d], sn.rows(d));
+        let below = d_pattern.len() - first;
+        let d_block = &d_block[..d_rows * d_width];
+        work.rows.clear();
+        let local = &work.local;
+        let end = start + sn.width[s];
+        work.rows.extend(
+            d_pattern[first..]
+                .iter()
+                .map(|&r| if r < end { r - start } else { local[r] }),
+        );
+        let column_of = |j: usize| (work.rows[j] - columns.start) * rows;
+        if below * mid * d_width <= SMALL_UPDATE {
+            // a few numbers: straight loops beat a dense product's set-up
+            let at = |k: usize, i: usize| d_block[k * d_rows + d_width + first + i];
+            for j in 0..mid {
+                let column = column_of(j);
+                for i in j..below {
+                    let sum: f64 = (0..d_width).map(|k| at(k, i) * at(k, j)).sum();
+                    block[column + work.rows[i]] -= sum;
+                }
             }
-            column[to..to + (i - from)]
-                .iter_mut()
-                .zip(&product[from..i])
-                .for_each(|(c, p)| *c -= p);
+            return;
+        }
+        let d_below = MatRef::from_column_major_slice_with_stride(&d_block[d_width + first..], below, d_width, d_rows);
+        let d_mid = d_below.subrows(0, mid);
+        if work.product.len() < below * mid {
+            work.product.resize(below * mid, 0.0);
+        }
+        let product = &mut work.product[..below * mid];
+        let par = if below * mid * d_width > PARALLEL_UPDATE {
+            par
+        } else {
+            Par::Seq
+        };
+        matmul(
+            MatMut::from_column_major_slice_mut(product, below, mid),
+            Accum::Replace,
+            d_below,
+            d_mid.transpose(),
+            1.0,
+            par,
+        );
+        // scattered by runs of rows that are adjacent in both blocks (a node's D rows, a
+        // supernode's columns): slices the compiler vectorises
+        for j in 0..mid {
+            let column = &mut block[column_of(j)..column_of(j) + rows];
+            let product = &product[j * below..(j + 1) * below];
+            let mut i = j;
+            while i < below {
+                let (from, to) = (i, work.rows[i]);
+                i += 1;
+                while i < below && work.rows[i] == to + (i - from) {
+                    i += 1;
+                }
+                column[to..to + (i - from)]
+                    .iter_mut()
+                    .zip(&product[from..i])
+                    .for_each(|(c, p)| *c -= p);
+            }
         }
     }
 }
