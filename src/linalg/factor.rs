@@ -5,9 +5,11 @@
 //!
 //! faer's high-level `Llt` solves only whole systems; the split sweeps and the sparse
 //! forward sweeps of [`super::ForwardColumns`] need the supernodal factor itself, so this
-//! module drives faer's mid-level API (`factorize_symbolic_cholesky`, `factorize_numeric_llt`),
-//! forcing the supernodal structure so that one code path serves every size, and sweeps the
-//! factor with the kernels of `supernodes.rs` on the schedule of `schedule.rs`.
+//! module drives faer's mid-level API (`factorize_symbolic_cholesky`, the supernodal numeric
+//! kernel), forcing the supernodal structure so that one code path serves every size; 3D factors
+//! on several threads are factored by `numeric.rs` on the subtrees of the elimination tree
+//! (docs/method.md §9.5). The factor is swept with the kernels of `supernodes.rs` on the
+//! schedule of `schedule.rs`.
 
 use super::schedule::{backward_sequential, forward_sequential, forward_supernode, Schedule};
 use super::sparse::SymmetricMatrix;
