@@ -48,7 +48,10 @@ Install (Debian 12; its SuiteSparse 5.12 needs scikit-sparse < 0.5):
 Strongly advised, a 5x faster CHOLMOD (Debian's libcholmod otherwise runs on the reference BLAS):
     apt-get install -y libopenblas0-pthread
 This script then loads OpenBLAS for itself only (--blas auto, by LD_LIBRARY_PATH and one re-exec),
-whatever the system's libblas.so.3 alternative points to.
+whatever the system's libblas.so.3 alternative points to. On a virtual machine whose processor
+OpenBLAS does not recognise (it then says "core Prescott" and runs without AVX), set
+OPENBLAS_CORETYPE to the processor's family (e.g. SkylakeX where /proc/cpuinfo lists avx512f):
+at n = 32 the factorisation went 5.3 s -> 2.4 s (docs/method.md §9.5).
 """
 import argparse
 import ctypes
