@@ -569,16 +569,18 @@ fn main() {
         std::fs::create_dir_all(&dir).expect("temp dir");
         let mtx: PathBuf = dir.join("K.mtx");
         let entries = write_matrix_market(&matrix, &structure, &mtx).expect("writing the MatrixMarket file");
-        let last_path = dir.join("last.bin");
-        let names: Vec<&'static str> = if last.is_empty() {
-            CHOLMOD_ORDERINGS.to_vec()
-        } else {
+        // the unknowns the solver orders last, for the constrained rows
+        let last_path = (!last.is_empty()).then(|| {
+            let path = dir.join("last.bin");
             let bytes: Vec<u8> = last.iter().flat_map(|&i| (i as i64).to_le_bytes()).collect();
-            std::fs::write(&last_path, bytes).expect("writing the contact unknowns");
-            CHOLMOD_ORDERINGS.iter().chain(&CHOLMOD_LAST).copied().collect()
+            std::fs::write(&path, bytes).expect("writing the contact unknowns");
+            path
+        });
+        let names: Vec<&'static str> = match last_path {
+            Some(_) => CHOLMOD_ORDERINGS.iter().chain(&CHOLMOD_LAST).copied().collect(),
+            None => CHOLMOD_ORDERINGS.to_vec(),
         };
-        let last_arg = (!last.is_empty()).then_some(last_path.as_path());
-        let mut cholmod = match Cholmod::start(&mtx, &dir, threads, &names, last_arg) {
+        let mut cholmod = match Cholmod::start(&mtx, &dir, threads, &names, last_path.as_deref()) {
             Ok((server, ready)) => {
                 println!(
                     "  CHOLMOD: {} unknowns, {} entries read (file: {entries} lower); BLAS: {}",

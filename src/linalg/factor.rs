@@ -285,20 +285,16 @@ impl Factor {
         let threads = rayon::current_num_threads();
         let schedule = analysis.schedule.as_deref().filter(|_| block == 3 && threads > 1);
         let len = symbolic.len_val();
-        if schedule.is_some() {
-            // the first touch of the values' pages (their zeroing) on the threads: on this
-            // machine's virtual memory, page faults cost 2–3 s of the n = 48 slab's 1.3 GB
-            // sequentially and ≈ 1 s on two threads (docs/method.md §9.5)
-            values.spare_capacity_mut()[..len]
-                .par_chunks_mut(1 << 18)
-                .for_each(|chunk| chunk.iter_mut().for_each(|v| _ = v.write(0.0)));
-            // SAFETY: the first `len` entries were just written
-            unsafe { values.set_len(len) };
-        } else {
-            values.resize(len, 0.0);
-        }
         match schedule {
             Some(schedule) => {
+                // the first touch of the values' pages (their zeroing) on the threads: on this
+                // machine's virtual memory, page faults cost 2–3 s of the n = 48 slab's 1.3 GB
+                // sequentially and ≈ 1 s on two threads (docs/method.md §9.5)
+                values.spare_capacity_mut()[..len]
+                    .par_chunks_mut(1 << 18)
+                    .for_each(|chunk| chunk.iter_mut().for_each(|v| _ = v.write(0.0)));
+                // SAFETY: the first `len` entries were just written
+                unsafe { values.set_len(len) };
                 let lower = super::numeric::Lower {
                     col_ptr: &lower.col_ptr,
                     row_idx: &lower.row_idx,
@@ -310,6 +306,7 @@ impl Factor {
                     .map_err(|_| FactorError::NotPositiveDefinite)?;
             }
             None => {
+                values.resize(len, 0.0);
                 // (3D on several threads without a split tree: faer's kernels on the threads)
                 let par = if block == 3 && threads > 1 {
                     Par::rayon(threads)

@@ -120,11 +120,39 @@ pub(super) fn factorize(
     let max_width = sn.width.iter().copied().max().unwrap_or(0);
     let Some(schedule) = schedule.filter(|_| par.degree() > 1) else {
         let mut work = Work::new(n, max_width, par);
-        return in_order(sn, updates, Some(lower), 0..sn.len(), |_| true, values, &mut work, par);
+        return in_order(
+            sn,
+            updates,
+            Some(lower),
+            0..sn.len(),
+            |_| true,
+            (values, 0),
+            &mut work,
+            par,
+        );
     };
     let top = schedule.top();
     let mut in_top = vec![false; sn.len()];
     top.iter().for_each(|&s| in_top[s] = true);
+    // 1. the pieces: a piece's values are consecutive, and its supernodes read only each other
+    let mut pieces = Vec::new();
+    let mut tail: &mut [f64] = values;
+    let mut taken = 0;
+    for piece in schedule.piece_supernodes() {
+        let (base, end) = (
+            sn.value_start[piece.start],
+            sn.value_start[piece.end - 1] + sn.entries(piece.end - 1),
+        );
+        let (_, after) = std::mem::take(&mut tail).split_at_mut(base - taken);
+        let (mine, after) = after.split_at_mut(end - base);
+        pieces.push((piece, (mine, base)));
+        tail = after;
+        taken = end;
+    }
+    pieces.into_par_iter().try_for_each_init(
+        || Work::new(n, max_width, Par::Seq),
+        |work, (piece, values)| in_order(sn, updates, Some(lower), piece, |_| true, values, work, Par::Seq),
+    )?;
     // each supernode's block, apart
     let mut blocks: Vec<&mut [f64]> = Vec::with_capacity(sn.len());
     let mut tail: &mut [f64] = values;
@@ -133,34 +161,6 @@ pub(super) fn factorize(
         blocks.push(block);
         tail = rest;
     }
-    // 1. the pieces: a piece's blocks are consecutive, and its supernodes read only each other
-    let mut rest = blocks.as_mut_slice();
-    let mut pieces = Vec::new();
-    let mut taken = 0;
-    for piece in schedule.piece_supernodes() {
-        let (_, after) = std::mem::take(&mut rest).split_at_mut(piece.start - taken);
-        let (mine, after) = after.split_at_mut(piece.len());
-        pieces.push((piece.start, mine));
-        rest = after;
-        taken = piece.end;
-    }
-    pieces.into_par_iter().try_for_each_init(
-        || Work::new(n, max_width, Par::Seq),
-        |work, (first, mine)| {
-            for k in 0..mine.len() {
-                let (done, now) = mine.split_at_mut(k);
-                let (s, block) = (first + k, &mut *now[0]);
-                work.enter(sn, s);
-                assemble(sn, lower, s, (block, 0..sn.width[s]), work);
-                for &d in updates.of(s) {
-                    update(sn, s, (block, 0..sn.width[s]), d, done[d - first], work, Par::Seq);
-                }
-                work.leave(sn, s);
-                factor(sn, s, block, work, Par::Seq)?;
-            }
-            Ok(())
-        },
-    )?;
     // 2. the top gathers the pieces' updates, in slices of its supernodes' columns on the
     //    threads (an update writes only the columns of the rows it is made of)
     type Blocks<'v> = Vec<(usize, &'v mut [f64])>;
@@ -198,14 +198,16 @@ pub(super) fn factorize(
         None,
         top.iter().copied(),
         |d| in_top[d],
-        values,
+        (values, 0),
         &mut work,
         par,
     )
 }
 
 /// The supernodes `supernodes` in order, each: its columns of `lower` (if given, else gathered
-/// already), the updates of its descendants d with `from(d)`, its factorisation.
+/// already), the updates of its descendants d with `from(d)`, its factorisation. `values` holds
+/// the factor's values from value `base` on (a piece's, or all of them), the supernodes' blocks
+/// and their descendants' among them.
 #[allow(clippy::too_many_arguments)]
 fn in_order(
     sn: &Supernodes,
@@ -213,12 +215,12 @@ fn in_order(
     lower: Option<&Lower>,
     supernodes: impl Iterator<Item = usize>,
     from: impl Fn(usize) -> bool,
-    values: &mut [f64],
+    (values, base): (&mut [f64], usize),
     work: &mut Work,
     par: Par,
 ) -> Result<(), NotPositiveDefinite> {
     for s in supernodes {
-        let (head, tail) = values.split_at_mut(sn.value_start[s]);
+        let (head, tail) = values.split_at_mut(sn.value_start[s] - base);
         let block = &mut tail[..sn.entries(s)];
         work.enter(sn, s);
         if let Some(lower) = lower {
@@ -226,7 +228,7 @@ fn in_order(
         }
         for &d in updates.of(s).iter().filter(|&&d| from(d)) {
             let columns = (&mut *block, 0..sn.width[s]);
-            update(sn, s, columns, d, &head[sn.value_start[d]..], work, par);
+            update(sn, s, columns, d, &head[sn.value_start[d] - base..], work, par);
         }
         work.leave(sn, s);
         factor(sn, s, block, work, par)?;
