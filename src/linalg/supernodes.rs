@@ -170,16 +170,94 @@ pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
     ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7])) + tail
 }
 
-/// Dot product taken from the last entries to the first (addresses descending).
+/// Dot product taken from the last entries to the first (addresses descending), in eight
+/// lanes: the chunks of eight from the end, then the first `len % 8` entries, then the lanes
+/// summed pairwise.
 #[inline(always)]
 fn dot_descending(a: &[f64], b: &[f64]) -> f64 {
-    let (ca, cb) = (a.rchunks_exact(8), b.rchunks_exact(8));
-    let tail: f64 = ca.remainder().iter().zip(cb.remainder()).map(|(x, y)| x * y).sum();
+    let r = a.len() % 8;
     let mut acc = [0.0; 8];
-    for (x, y) in ca.zip(cb) {
-        for k in (0..8).rev() {
+    accumulate_descending(a, b, &mut acc);
+    let tail: f64 = a[..r].iter().zip(&b[..r]).map(|(x, y)| x * y).sum();
+    ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7])) + tail
+}
+
+/// The chunks of eight of a and b from the end into the lanes `acc` (the first `len % 8`
+/// entries are left); lane k takes entry k of each chunk, as a separate multiply and add.
+#[inline(always)]
+fn accumulate_descending(a: &[f64], b: &[f64], acc: &mut [f64; 8]) {
+    debug_assert_eq!(a.len(), b.len());
+    #[cfg(target_arch = "x86_64")]
+    if has_avx2() {
+        // SAFETY: AVX2 was detected at run time.
+        return unsafe { accumulate_descending_avx2(a, b, acc) };
+    }
+    accumulate_descending_generic(a, b, acc)
+}
+
+#[inline(always)]
+fn accumulate_descending_generic(a: &[f64], b: &[f64], acc: &mut [f64; 8]) {
+    for (x, y) in a.rchunks_exact(8).zip(b.rchunks_exact(8)) {
+        for k in 0..8 {
             acc[k] += x[k] * y[k];
         }
     }
-    ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7])) + tail
+}
+
+/// [`accumulate_descending`] with AVX2 loads and arithmetic, lane for lane the same sums: LLVM
+/// compiled the scalar form to 128-bit shuffles, which made the backward sweep 40 % slower than
+/// the forward one on the same entries.
+///
+/// # Safety
+/// The processor must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn accumulate_descending_avx2(a: &[f64], b: &[f64], acc: &mut [f64; 8]) {
+    use std::arch::x86_64::{_mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_storeu_pd};
+    let n = a.len().min(b.len());
+    let r = n % 8;
+    let (pa, pb, pacc) = (a.as_ptr(), b.as_ptr(), acc.as_mut_ptr());
+    // SAFETY: acc holds eight values; base + 8 <= n, within both slices
+    unsafe {
+        let (mut lo, mut hi) = (_mm256_loadu_pd(pacc), _mm256_loadu_pd(pacc.add(4)));
+        let mut base = n;
+        while base >= r + 8 {
+            base -= 8;
+            lo = _mm256_add_pd(
+                lo,
+                _mm256_mul_pd(_mm256_loadu_pd(pa.add(base)), _mm256_loadu_pd(pb.add(base))),
+            );
+            hi = _mm256_add_pd(
+                hi,
+                _mm256_mul_pd(_mm256_loadu_pd(pa.add(base + 4)), _mm256_loadu_pd(pb.add(base + 4))),
+            );
+        }
+        _mm256_storeu_pd(pacc, lo);
+        _mm256_storeu_pd(pacc.add(4), hi);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The AVX2 lanes are the scalar lanes to the bit, at every length around the chunk size
+    /// (values of mixed sign and magnitude, so that a different order of the sums would show).
+    #[test]
+    fn descending_lanes_with_avx2_are_the_scalar_ones() {
+        if !has_avx2() {
+            eprintln!("skipped: the processor has no AVX2");
+            return;
+        }
+        let value = |i: usize, s: f64| ((i as f64 * 0.7548776662 + s).fract() - 0.5) * 10f64.powi((i % 7) as i32 - 3);
+        for n in 0..=41 {
+            let a: Vec<f64> = (0..n).map(|i| value(i, 0.1)).collect();
+            let b: Vec<f64> = (0..n).map(|i| value(i, 0.6)).collect();
+            let (mut scalar, mut vector) = ([0.25; 8], [0.25; 8]);
+            accumulate_descending_generic(&a, &b, &mut scalar);
+            // SAFETY: AVX2 was detected above.
+            unsafe { accumulate_descending_avx2(&a, &b, &mut vector) };
+            assert_eq!(scalar.map(f64::to_bits), vector.map(f64::to_bits), "length {n}");
+        }
+    }
 }
