@@ -1,7 +1,7 @@
 //! Global assembly of the stiffness matrices K_A (elasticity A) and K_B (memory tensor B₀)
 //! (docs/method.md §3, §8), written once for any dimension D. Local matrices are computed in
-//! parallel with rayon; the scatter into the shared pattern is a sequential pass over
-//! precomputed positions.
+//! parallel with rayon, each with its positions in the shared pattern; the scatter is a
+//! sequential pass in cell order.
 
 use super::dofs::DofMap;
 use crate::linalg::sparse::{Pattern, SymmetricMatrix};
@@ -78,65 +78,49 @@ pub fn assemble_stiffness<const D: usize, const M: usize>(
     dofs: &DofMap<D>,
     cs: &[Isotropic; M],
 ) -> [SymmetricMatrix; M] {
-    let mut pattern = Pattern::new(cells, dofs.n_nodes(), D);
-    let values = assemble_values(&pattern, cells, points, cs);
-    // The scatter map (D²·n² positions per cell: 255 MB for 55 k hexahedra) is not needed after
-    // assembly; the matrices keep the pattern without it.
-    pattern.release_scatter();
-    let pattern = Arc::new(pattern);
-    values.map(|values| SymmetricMatrix {
-        pattern: pattern.clone(),
-        values,
-    })
-}
-
-/// Assembles on an existing pattern with its scatter map (re-assembly: build the pattern with
-/// [`Pattern::new`] and keep it).
-pub fn assemble_on<const D: usize, const M: usize>(
-    pattern: &Arc<Pattern>,
-    cells: &[Cell],
-    points: &[[f64; D]],
-    cs: &[Isotropic; M],
-) -> [SymmetricMatrix; M] {
-    assemble_values(pattern, cells, points, cs).map(|values| SymmetricMatrix {
+    let pattern = Arc::new(Pattern::new(cells, dofs.n_nodes(), D));
+    assemble_values(&pattern, cells, points, cs).map(|values| SymmetricMatrix {
         pattern: pattern.clone(),
         values,
     })
 }
 
 /// The values of the stiffness matrices on `pattern`. Cells are done in chunks, each chunk's
-/// local matrices computed in parallel into one buffer, so that the local matrices held at once
-/// stay bounded.
+/// local matrices and their positions computed in parallel into two buffers kept across
+/// chunks, so that what is held at once stays bounded; the sums then go in cell by cell.
 fn assemble_values<const D: usize, const M: usize>(
     pattern: &Pattern,
     cells: &[Cell],
     points: &[[f64; D]],
     cs: &[Isotropic; M],
 ) -> [Vec<f64>; M] {
-    assert!(
-        pattern.has_scatter(),
-        "assembly needs the pattern's scatter map (a pattern from assemble_stiffness has released it)"
-    );
     let mut out: [Vec<f64>; M] = std::array::from_fn(|_| vec![0.0; pattern.nnz()]);
     let nl_max = D * cells.iter().map(|c| c.nodes().len()).max().unwrap_or(0);
     let stride = nl_max * nl_max;
     const CHUNK: usize = 4096;
-    let mut buffer = vec![0.0; CHUNK.min(cells.len()) * M * stride];
-    for (chunk, cell_chunk) in cells.chunks(CHUNK).enumerate() {
+    let chunk_len = CHUNK.min(cells.len());
+    let mut buffer = vec![0.0; chunk_len * M * stride];
+    let mut positions = vec![0usize; chunk_len * stride];
+    for cell_chunk in cells.chunks(CHUNK) {
         buffer
             .par_chunks_mut(M * stride)
+            .zip(positions.par_chunks_mut(stride))
             .zip(cell_chunk.par_iter())
-            .for_each(|(local, cell)| {
+            .for_each(|((local, at), cell)| {
                 let mut parts = local.chunks_mut(stride);
                 let mut views: [&mut [f64]; M] = std::array::from_fn(|_| parts.next().expect("M parts"));
                 local_stiffness(cell, points, cs, &mut views);
+                pattern.cell_positions(cell.nodes(), at);
             });
-        for (k, (cell, local)) in cell_chunk.iter().zip(buffer.chunks(M * stride)).enumerate() {
+        for ((cell, local), at) in cell_chunk
+            .iter()
+            .zip(buffer.chunks(M * stride))
+            .zip(positions.chunks(stride))
+        {
             let nl = D * cell.nodes().len();
-            let pos = pattern.cell_scatter(chunk * CHUNK + k);
             for (m, mat) in out.iter_mut().enumerate() {
                 let km = &local[m * stride..m * stride + nl * nl];
-                for (p, v) in pos.iter().zip(km) {
+                for (p, v) in at[..nl * nl].iter().zip(km) {
                     mat[*p] += v;
                 }
             }
