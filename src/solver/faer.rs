@@ -32,7 +32,9 @@ impl<const D: usize> MemoryStiffness<D> {
 
 /// The serial backend: what it has assembled and analysed, once its first operator is built.
 pub struct FaerBackend<const D: usize> {
-    /// K_A, unmodified (step 0's own factor and the products).
+    /// K_A, unmodified (the products, and the factor of K_A alone). Not kept beside a step
+    /// matrix with memory: such a run needs K_A alone only at a loaded step 0, which assembles it
+    /// again (docs/method.md §16.1).
     k_a: Option<SymmetricMatrix>,
     /// K_j of each memory channel, for the memory load K_j h_n of every step.
     k_b: Vec<MemoryStiffness<D>>,
@@ -135,8 +137,10 @@ impl<const D: usize> FaerBackend<D> {
         estimate
             .check_fits(sim.contact.as_ref().map_or(0, |c| c.condensed_rows().len()))
             .map_err(|e| SolveError::OutOfMemory(format!("{}: {e}", sim.mesh.path.display())))?;
+        // with memory, K_A would sit beside the factor for nothing (a fifth of the n = 40 slab's
+        // peak besides the factor): dropped before the factorisation
+        self.k_a = memory.is_empty().then_some(k_a);
         let operator = StepOperator::factored(sim, &symbolic, system, counters, stats)?;
-        self.k_a = Some(k_a);
         self.symbolic = Some(symbolic);
         Ok(operator)
     }
@@ -150,15 +154,27 @@ impl<const D: usize> Backend<D> for FaerBackend<D> {
         counters: &Counters,
         stats: &mut RunStats,
     ) -> Result<StepOperator, SolveError> {
-        match (&self.k_a, &self.symbolic) {
-            (Some(k_a), Some(symbolic)) if memory.is_empty() => {
+        match &self.symbolic {
+            None => self.first_operator(sim, memory, counters, stats),
+            Some(symbolic) if memory.is_empty() => {
+                let assembled;
+                let k_a = match &self.k_a {
+                    Some(k_a) => k_a,
+                    None => {
+                        let tensor = sim.elasticity.tensor();
+                        let [k_a] = timed(&mut stats.phases.assembly, || {
+                            assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[tensor])
+                        });
+                        assembled = k_a;
+                        &assembled
+                    }
+                };
                 StepOperator::factored(sim, symbolic, system_matrix(sim, k_a), counters, stats)
             }
-            (Some(_), _) => Err(SolveError::Setup(
+            Some(_) => Err(SolveError::Setup(
                 "the faer backend factors one step matrix with memory per run (its K_j are held in node blocks only)"
                     .into(),
             )),
-            (None, _) => self.first_operator(sim, memory, counters, stats),
         }
     }
 
