@@ -74,7 +74,7 @@ impl Pattern {
     /// over its D·n local unknowns: local entry (i, j) = (node b comp c', node a comp c) sits at
     /// `col_ptr[D·a + c] + D·(position of b among a's couplings) + c'`. Computed per cell (a
     /// binary search per node pair) rather than stored: a stored map is D²·n² positions per
-    /// cell, 147 MB of fresh pages for 32 000 hexahedra.
+    /// cell, 147 MB of fresh pages for 32 000 hexahedra (docs/method.md §9.6).
     pub fn cell_positions(&self, nodes: &[usize], out: &mut [usize]) {
         let d = self.block;
         let nl = d * nodes.len();

@@ -34,7 +34,7 @@ impl<const D: usize> MemoryStiffness<D> {
 pub struct FaerBackend<const D: usize> {
     /// K_A, unmodified (the products, and the factor of K_A alone). Not kept beside a step
     /// matrix with memory: such a run needs K_A alone only at a loaded step 0, which assembles it
-    /// again (docs/method.md §16.1).
+    /// again (docs/method.md §9.6).
     k_a: Option<SymmetricMatrix>,
     /// K_j of each memory channel, for the memory load K_j h_n of every step.
     k_b: Vec<MemoryStiffness<D>>,
