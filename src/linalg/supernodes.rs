@@ -125,13 +125,20 @@ fn forward_block_generic(block: &[f64], width: usize, t: &mut [f64]) {
     }
 }
 
+/// The backward kernel with the dot products' lanes taken by `accumulate` (the processor's
+/// choice is made once per block, in [`backward_block`]).
 #[inline(always)]
-fn backward_block_generic(block: &[f64], width: usize, t: &mut [f64]) {
+fn backward_block_with(block: &[f64], width: usize, t: &mut [f64], accumulate: impl Fn(&[f64], &[f64], &mut [f64; 8])) {
     let rows = t.len();
     for j in (0..width).rev() {
         let column = &block[j * rows..(j + 1) * rows];
-        t[j] = (t[j] - dot_descending(&column[j + 1..], &t[j + 1..])) / column[j];
+        t[j] = (t[j] - dot_descending(&column[j + 1..], &t[j + 1..], &accumulate)) / column[j];
     }
+}
+
+#[inline(always)]
+fn backward_block_generic(block: &[f64], width: usize, t: &mut [f64]) {
+    backward_block_with(block, width, t, accumulate_descending_generic)
 }
 
 #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2"))]
@@ -141,6 +148,12 @@ unsafe fn forward_block_avx2(block: &[f64], width: usize, t: &mut [f64]) {
 
 #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2"))]
 unsafe fn backward_block_avx2(block: &[f64], width: usize, t: &mut [f64]) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: this function runs only where AVX2 was detected
+    backward_block_with(block, width, t, |a, b, acc| unsafe {
+        accumulate_descending_avx2(a, b, acc)
+    });
+    #[cfg(not(target_arch = "x86_64"))]
     backward_block_generic(block, width, t)
 }
 
@@ -174,10 +187,10 @@ pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// lanes: the chunks of eight from the end, then the first `len % 8` entries, then the lanes
 /// summed pairwise.
 #[inline(always)]
-fn dot_descending(a: &[f64], b: &[f64]) -> f64 {
+fn dot_descending(a: &[f64], b: &[f64], accumulate: impl Fn(&[f64], &[f64], &mut [f64; 8])) -> f64 {
     let r = a.len() % 8;
     let mut acc = [0.0; 8];
-    accumulate_descending(a, b, &mut acc);
+    accumulate(a, b, &mut acc);
     let tail: f64 = a[..r].iter().zip(&b[..r]).map(|(x, y)| x * y).sum();
     ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7])) + tail
 }
@@ -185,18 +198,8 @@ fn dot_descending(a: &[f64], b: &[f64]) -> f64 {
 /// The chunks of eight of a and b from the end into the lanes `acc` (the first `len % 8`
 /// entries are left); lane k takes entry k of each chunk, as a separate multiply and add.
 #[inline(always)]
-fn accumulate_descending(a: &[f64], b: &[f64], acc: &mut [f64; 8]) {
-    debug_assert_eq!(a.len(), b.len());
-    #[cfg(target_arch = "x86_64")]
-    if has_avx2() {
-        // SAFETY: AVX2 was detected at run time.
-        return unsafe { accumulate_descending_avx2(a, b, acc) };
-    }
-    accumulate_descending_generic(a, b, acc)
-}
-
-#[inline(always)]
 fn accumulate_descending_generic(a: &[f64], b: &[f64], acc: &mut [f64; 8]) {
+    debug_assert_eq!(a.len(), b.len());
     for (x, y) in a.rchunks_exact(8).zip(b.rchunks_exact(8)) {
         for k in 0..8 {
             acc[k] += x[k] * y[k];
@@ -204,7 +207,7 @@ fn accumulate_descending_generic(a: &[f64], b: &[f64], acc: &mut [f64; 8]) {
     }
 }
 
-/// [`accumulate_descending`] with AVX2 loads and arithmetic, lane for lane the same sums: LLVM
+/// [`accumulate_descending_generic`] with AVX2 loads and arithmetic, lane for lane the same sums: LLVM
 /// compiled the scalar form to 128-bit shuffles, which made the backward sweep 40 % slower than
 /// the forward one on the same entries (docs/method.md §9.6).
 ///
