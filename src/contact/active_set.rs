@@ -692,16 +692,20 @@ impl ActiveSetSolver<'_> {
         }
         outcome.factorisations += 1;
         let rhs: Vec<f64> = (0..nf).map(|i| grad[free[i]]).collect();
-        let build = |diag: &[f64], coupling: &[f64]| {
-            DenseCholesky::new(nf, |i, j| {
-                self.operator.q(free[i], free[j])
-                    + if i == j {
-                        diag[i]
-                    } else if hessian.partner[i] == j {
-                        coupling[i]
-                    } else {
-                        0.0
+        // the matrix's lower triangle column by column, column j from Q's row free[j] (Q is
+        // symmetric), in storage kept between factorisations (docs/method.md §9.2)
+        let mut build = |diag: &[f64], coupling: &[f64]| {
+            buffer.factor(nf, |matrix| {
+                for (j, column) in matrix.chunks_exact_mut(nf).enumerate() {
+                    let p = free[j];
+                    for (i, v) in column.iter_mut().enumerate().skip(j) {
+                        *v = self.operator.q(p, free[i]);
                     }
+                    column[j] += diag[j];
+                    if hessian.partner[j] != usize::MAX && hessian.partner[j] > j {
+                        column[hessian.partner[j]] += coupling[hessian.partner[j]];
+                    }
+                }
             })
         };
         let (llt, diagonal) = match build(&exact, &hessian.coupling) {
@@ -733,12 +737,17 @@ impl ActiveSetSolver<'_> {
             for (i, &p) in free.iter().enumerate() {
                 row[p] = i;
             }
-            kept.0 = Some(ReusedFactor {
+            let old = kept.0.replace(ReusedFactor {
                 fingerprint,
                 row,
                 diagonal,
                 factor: llt,
             });
+            if let Some(old) = old {
+                buffer.recycle(old.factor);
+            }
+        } else {
+            buffer.recycle(llt);
         }
         x
     }
@@ -754,8 +763,13 @@ impl ActiveSetSolver<'_> {
         grad: &[f64],
         buffer: &mut FactorBuffer,
     ) -> Option<Vec<f64>> {
-        let w = self.operator.w().filter(|_| !self.singular)?;
+        if self.singular {
+            return None;
+        }
         let m = self.m();
+        let Some(w) = self.operator.w() else {
+            return self.direction_without_w(free, hessian, grad);
+        };
         // a curvature below 10⁻⁸ of the direction's least stiffness 1/(eᵀWe) counts as none
         let negligible = |h: f64, e: &Curvature| h * e.compliance(w, m) <= 1e-8;
         let mut curvature: Vec<Curvature> = Vec::new();
@@ -814,6 +828,22 @@ impl ActiveSetSolver<'_> {
         }
         let b: Vec<f64> = free.iter().map(|&p| grad[p]).collect();
         newton_w::direction((w, m), free, &curvature, &b, buffer)
+    }
+
+    /// The direction in W where W was not formed (docs/method.md §4.6, §9.4): where no row is
+    /// held and none has curvature (a surface that starts a step apart, under a law without
+    /// curvature off contact) the system in W has no rows and Δ = W G, two triangular solves
+    /// in place of a factorisation of Q; elsewhere None (the caller solves in Q).
+    fn direction_without_w(&self, free: &[usize], hessian: &LawHessian, grad: &[f64]) -> Option<Vec<f64>> {
+        let m = self.m();
+        let curved = hessian.diagonal.iter().any(|&h| h != 0.0) || hessian.partner.iter().any(|&j| j != usize::MAX);
+        if free.len() != m || curved {
+            return None;
+        }
+        let mut x = vec![0.0; m];
+        self.operator
+            .apply_w(grad, &mut x)
+            .then(|| free.iter().map(|&p| x[p]).collect())
     }
 
     /// m and the bits of Σ_p Q_pp: a kept factorisation of another operator (step 0's K_A, or
@@ -1075,6 +1105,118 @@ mod tests {
         }
         fn q(&self, p: usize, r: usize) -> f64 {
             self.0.q(p, r)
+        }
+    }
+
+    /// Q with products by W but W not formed (the trailing block's condensation, docs/method.md
+    /// §9.4): the Newton system in W only where it has no rows.
+    struct ProductsByW<'a>(&'a DenseNormalStiffness);
+
+    impl NormalStiffness for ProductsByW<'_> {
+        fn m(&self) -> usize {
+            self.0.m
+        }
+        fn apply_q(&self, x: &[f64], y: &mut [f64]) {
+            self.0.apply_q(x, y)
+        }
+        fn q(&self, p: usize, r: usize) -> f64 {
+            self.0.q(p, r)
+        }
+        fn apply_w(&self, x: &[f64], y: &mut [f64]) -> bool {
+            crate::linalg::dense::matvec_row_major(&self.0.w, self.0.m, x, y);
+            true
+        }
+    }
+
+    /// A surface that starts apart against a rigid bound, no law: the first direction has every
+    /// row free and none curved, so with products by W (and no W) it is Δ = W G. Over steps of a
+    /// growing load that moves the active set, the solutions are those of the path in Q to
+    /// 1e-10 with the same Newton iterations, and only such directions go by W (the others need
+    /// W's entries).
+    #[test]
+    fn a_direction_without_rows_in_w_is_a_product_by_w() {
+        let m = 240;
+        let op = operator(m);
+        let bound = vec![0.2; m];
+        let laws = NodalLaws::default();
+        let solve = |operator: &dyn NormalStiffness| {
+            let solver = ActiveSetSolver {
+                operator,
+                laws: &laws,
+                offset: None,
+                bound: Some(&bound),
+                singular: false,
+                pairs: None,
+                fixed: None,
+                settings: ContactSettings {
+                    tolerance: 1e-12,
+                    max_iterations: 100,
+                    dense_limit: usize::MAX,
+                },
+            };
+            let mut state = ContactState::new(m);
+            let (mut steps, mut in_w, mut directions) = (Vec::new(), 0, 0);
+            for n in 1..=6 {
+                let t = n as f64 / 6.0;
+                let d: Vec<f64> = (0..m)
+                    .map(|p| {
+                        let x = p as f64 / m as f64;
+                        0.5 * t * (std::f64::consts::PI * x).sin() * (1.0 + 0.3 * (7.0 * x + t).cos())
+                    })
+                    .collect();
+                let outcome = solver.solve(&d, &mut state).unwrap();
+                in_w += outcome.in_w;
+                directions += outcome.iterations;
+                steps.push(state.clone());
+            }
+            (steps, in_w, directions)
+        };
+        // the direction itself: Q Δ = G on all rows, to round-off
+        let solver = ActiveSetSolver {
+            operator: &ProductsByW(&op),
+            laws: &laws,
+            offset: None,
+            bound: Some(&bound),
+            singular: false,
+            pairs: None,
+            fixed: None,
+            settings: ContactSettings {
+                tolerance: 1e-12,
+                max_iterations: 100,
+                dense_limit: usize::MAX,
+            },
+        };
+        let free: Vec<usize> = (0..m).collect();
+        let g: Vec<f64> = (0..m).map(|p| (0.05 * p as f64).cos()).collect();
+        let hessian = solver.law_hessian(&vec![0.0; m], &free);
+        let x = solver
+            .direction_in_w(&free, &hessian, &g, &mut FactorBuffer::default())
+            .unwrap();
+        let mut qx = vec![0.0; m];
+        op.apply_q(&x, &mut qx);
+        for (a, b) in qx.iter().zip(&g) {
+            assert!((a - b).abs() <= 1e-11, "Q Δ = {a} against G = {b}");
+        }
+        // a held row: the system in W has a row, whose entries W would have to give
+        let hessian = solver.law_hessian(&vec![0.0; m], &free[1..]);
+        assert!(solver
+            .direction_in_w(&free[1..], &hessian, &g, &mut FactorBuffer::default())
+            .is_none());
+        let (in_q, q_in_w, q_directions) = solve(&OnlyQ(&op));
+        let (by_w, in_w, directions) = solve(&ProductsByW(&op));
+        assert_eq!(q_in_w, 0);
+        assert_eq!(q_directions, directions);
+        // step 1 starts apart (every row free, no curvature); later steps start from a held set
+        assert!(in_w >= 1 && in_w < directions, "{in_w} of {directions} directions by W");
+        let scale = in_q.last().unwrap().force.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        for (a, b) in in_q.iter().zip(&by_w) {
+            assert_eq!(a.status, b.status);
+            for (x, y) in a.force.iter().zip(&b.force) {
+                assert!((x - y).abs() <= 1e-10 * scale, "{x} against {y}");
+            }
+            for (x, y) in a.normal_displacement.iter().zip(&b.normal_displacement) {
+                assert!((x - y).abs() <= 1e-10, "{x} against {y}");
+            }
         }
     }
 

@@ -164,6 +164,11 @@ pub trait NormalStiffness {
     fn w(&self) -> Option<&[f64]> {
         None
     }
+    /// y = W x where Q = W⁻¹ exactly, whether or not W was formed; false where that product is
+    /// not at hand.
+    fn apply_w(&self, _x: &[f64], _y: &mut [f64]) -> bool {
+        false
+    }
 }
 
 /// W and Q = W⁻¹, dense (m × m, row-major).
@@ -210,6 +215,36 @@ impl NormalStiffness for DenseNormalStiffness {
 
     fn w(&self) -> Option<&[f64]> {
         (self.q_inverts_w && !self.w.is_empty()).then_some(&self.w[..])
+    }
+}
+
+/// A condensation's stiffness with its products by W, formed or not (a product by W without W
+/// is two triangular solves with L_cc, docs/method.md §9.4): what the frictionless active set
+/// solves with.
+pub struct WithCompliance<'a>(pub &'a dyn Condensation);
+
+impl NormalStiffness for WithCompliance<'_> {
+    fn m(&self) -> usize {
+        self.0.stiffness().m
+    }
+
+    fn apply_q(&self, x: &[f64], y: &mut [f64]) {
+        self.0.stiffness().apply_q(x, y)
+    }
+
+    fn q(&self, p: usize, r: usize) -> f64 {
+        self.0.stiffness().q(p, r)
+    }
+
+    fn w(&self) -> Option<&[f64]> {
+        self.0.stiffness().w()
+    }
+
+    fn apply_w(&self, x: &[f64], y: &mut [f64]) -> bool {
+        if self.0.stiffness().q_inverts_w {
+            self.0.apply_w(x, y);
+        }
+        self.0.stiffness().q_inverts_w
     }
 }
 

@@ -13,7 +13,9 @@ pub mod rows;
 mod trailing;
 
 pub use active_set::{ActiveSetSolver, ContactOutcome, ContactSettings, FrictionRows, FrictionStatus, NodeStatus};
-pub use condensed::{Condensation, ContactNodes, DenseNormalStiffness, NormalStiffness, SplitSweeps, StoredResponses};
+pub use condensed::{
+    Condensation, ContactNodes, DenseNormalStiffness, NormalStiffness, SplitSweeps, StoredResponses, WithCompliance,
+};
 pub use law::{ComplianceProfile, ContactLaw, PiecewiseLinear, Symmetry};
 pub use nodal::{LawTerm, NodalLaws};
 pub use obstacle::{Gap, Obstacle};

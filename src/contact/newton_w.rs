@@ -146,14 +146,13 @@ pub fn direction(
             }
         }
     };
-    if !buffer.factor(n, fill) {
-        return None;
-    }
+    let factor = buffer.factor(n, fill)?;
     let mut y: Vec<f64> = columns
         .iter()
         .map(|c| c.entries().map(|(p, a)| a * wg[p]).sum())
         .collect();
-    buffer.solve_in_place(&mut y);
+    factor.solve_in_place(&mut y);
+    buffer.recycle(factor);
     for (c, v) in columns.iter().zip(&y) {
         for (p, a) in c.entries() {
             spread[p] -= a * v;

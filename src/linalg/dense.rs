@@ -2,22 +2,40 @@
 //! of a symmetric positive definite matrix given entry by entry, and the row-major product by Q.
 //! faer does the work; the rest of hvi sees slices.
 
-use faer::linalg::solvers::{DenseSolveCore, Llt, Solve};
-use faer::{Mat, MatMut};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::{MatMut, MatRef, Par};
 
-/// The dense Cholesky factor L Lᵀ of a symmetric positive definite n × n matrix.
+/// From this order on a dense factorisation or inverse runs on the run's threads (below it the
+/// threads' start-up costs more than they save).
+const PARALLEL_FROM: usize = 512;
+
+fn par(n: usize) -> Par {
+    if n >= PARALLEL_FROM {
+        Par::rayon(0)
+    } else {
+        Par::Seq
+    }
+}
+
+/// The dense Cholesky factor L Lᵀ of a symmetric positive definite n × n matrix, L in the lower
+/// triangle of a column-major slice that can be handed back ([`FactorBuffer`]) and reused.
 #[derive(Debug)]
 pub struct DenseCholesky {
     n: usize,
-    llt: Llt<f64>,
+    values: Vec<f64>,
 }
 
 impl DenseCholesky {
     /// Factors the matrix with entries `a(i, j)` (its lower triangle is read); None if it is not
     /// (numerically) positive definite.
     pub fn new(n: usize, a: impl Fn(usize, usize) -> f64) -> Option<Self> {
-        let llt = Mat::<f64>::from_fn(n, n, a).llt(faer::Side::Lower).ok()?;
-        Some(DenseCholesky { n, llt })
+        FactorBuffer::default().factor(n, |column_major| {
+            for (j, column) in column_major.chunks_exact_mut(n.max(1)).enumerate() {
+                for (i, v) in column.iter_mut().enumerate().skip(j) {
+                    *v = a(i, j);
+                }
+            }
+        })
     }
 
     /// The order n.
@@ -25,37 +43,55 @@ impl DenseCholesky {
         self.n
     }
 
+    fn l(&self) -> MatRef<'_, f64> {
+        MatRef::from_column_major_slice(&self.values, self.n, self.n)
+    }
+
     /// A⁻¹ b.
     pub fn solve(&self, b: &[f64]) -> Vec<f64> {
-        let rhs = Mat::<f64>::from_fn(self.n, 1, |i, _| b[i]);
-        let x = self.llt.solve(&rhs);
-        (0..self.n).map(|i| x[(i, 0)]).collect()
+        let mut x = b.to_vec();
+        self.solve_in_place(&mut x);
+        x
     }
 
     /// x ← A⁻¹ x.
     pub fn solve_in_place(&self, x: &mut [f64]) {
-        self.llt
-            .solve_in_place(MatMut::from_column_major_slice_mut(x, self.n, 1));
+        use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
+        let mut rhs = MatMut::from_column_major_slice_mut(x, self.n, 1);
+        solve_lower_triangular_in_place(self.l(), rhs.as_mut(), Par::Seq);
+        solve_upper_triangular_in_place(self.l().transpose(), rhs, Par::Seq);
     }
 
-    /// ½(A⁻¹ + A⁻ᵀ), row-major: the inverse, symmetrised against round-off (one n × n copy
-    /// beside faer's).
+    /// A⁻¹, row-major: L⁻ᵀ L⁻¹ by faer's triangular inverse and product, its lower triangle
+    /// mirrored (exactly symmetric).
     pub fn symmetric_inverse(&self) -> Vec<f64> {
-        let inv = self.llt.inverse();
+        use faer::linalg::cholesky::llt::inverse::{inverse, inverse_scratch};
         let n = self.n;
-        (0..n * n)
-            .map(|k| 0.5 * (inv[(k / n, k % n)] + inv[(k % n, k / n)]))
-            .collect()
+        let mut inv = vec![0.0; n * n];
+        let mut scratch = MemBuffer::new(inverse_scratch::<f64>(n, par(n)));
+        inverse(
+            MatMut::from_column_major_slice_mut(&mut inv, n, n),
+            self.l(),
+            par(n),
+            MemStack::new(&mut scratch),
+        );
+        // column-major lower triangle = row-major upper triangle: mirror it down
+        for p in 0..n {
+            for q in 0..p {
+                inv[p * n + q] = inv[q * n + p];
+            }
+        }
+        inv
     }
 }
 
-/// A dense Cholesky factorisation L Lᵀ in place, in a buffer kept from one factorisation to the
-/// next: the contact solve factors a new matrix of about the same order at every Newton
-/// iteration, and a fresh allocation each time (n² numbers, tens of MB) cost page faults worth
-/// a third of the 3D friction solve's time (docs/method.md §4.6). A cache: a clone starts empty.
+/// Storage for dense Cholesky factors, kept from one factorisation to the next: the contact
+/// solve factors a new matrix of about the same order at every Newton iteration, and a fresh
+/// allocation each time (n² numbers, tens to hundreds of MB) costs page faults on this kind of
+/// machine worth a third of the 3D friction solve's time and, at 4 096 free nodes, half of a
+/// factorisation's (docs/method.md §4.6, §9.2). A cache: a clone starts empty.
 #[derive(Debug, Default)]
 pub struct FactorBuffer {
-    n: usize,
     values: Vec<f64>,
 }
 
@@ -66,36 +102,38 @@ impl Clone for FactorBuffer {
 }
 
 impl FactorBuffer {
-    /// Factors the symmetric n × n matrix whose lower triangle `fill` writes into a zeroed
-    /// column-major slice (column j at j n..(j + 1) n); false if it is not (numerically)
-    /// positive definite.
-    pub fn factor(&mut self, n: usize, fill: impl FnOnce(&mut [f64])) -> bool {
-        use faer::dyn_stack::{MemBuffer, MemStack};
+    /// Factors, in the kept storage (taken out of the buffer), the symmetric n × n matrix whose
+    /// lower triangle `fill` writes into a zeroed column-major slice (column j at j n..(j + 1) n);
+    /// None if it is not (numerically) positive definite, the storage then kept.
+    pub fn factor(&mut self, n: usize, fill: impl FnOnce(&mut [f64])) -> Option<DenseCholesky> {
         use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch};
-        self.n = n;
-        self.values.clear();
-        self.values.resize(n * n, 0.0);
-        fill(&mut self.values);
-        let par = faer::Par::Seq;
-        let mut scratch = MemBuffer::new(cholesky_in_place_scratch::<f64>(n, par, Default::default()));
-        let a = MatMut::from_column_major_slice_mut(&mut self.values, n, n);
-        cholesky_in_place(
-            a,
+        let mut values = std::mem::take(&mut self.values);
+        values.clear();
+        values.resize(n * n, 0.0);
+        fill(&mut values);
+        let mut scratch = MemBuffer::new(cholesky_in_place_scratch::<f64>(n, par(n), Default::default()));
+        let factored = cholesky_in_place(
+            MatMut::from_column_major_slice_mut(&mut values, n, n),
             Default::default(),
-            par,
+            par(n),
             MemStack::new(&mut scratch),
             Default::default(),
         )
-        .is_ok()
+        .is_ok();
+        match factored {
+            true => Some(DenseCholesky { n, values }),
+            false => {
+                self.values = values;
+                None
+            }
+        }
     }
 
-    /// x ← A⁻¹ x for the matrix last factored.
-    pub fn solve_in_place(&self, x: &mut [f64]) {
-        use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
-        let l = faer::MatRef::from_column_major_slice(&self.values, self.n, self.n);
-        let mut rhs = MatMut::from_column_major_slice_mut(x, self.n, 1);
-        solve_lower_triangular_in_place(l, rhs.as_mut(), faer::Par::Seq);
-        solve_upper_triangular_in_place(l.transpose(), rhs, faer::Par::Seq);
+    /// Gives a factor's storage back for the next [`Self::factor`] (the larger of the two kept).
+    pub fn recycle(&mut self, factor: DenseCholesky) {
+        if factor.values.capacity() > self.values.capacity() {
+            self.values = factor.values;
+        }
     }
 }
 
@@ -124,4 +162,69 @@ pub fn matvec_row_major(a: &[f64], n: usize, x: &[f64], y: &mut [f64]) {
         1.0,
         par,
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A symmetric positive definite test matrix: a smooth kernel plus a diagonal shift.
+    fn entry(i: usize, j: usize) -> f64 {
+        (-(i as f64 - j as f64).abs() / 7.0).exp() + if i == j { 0.5 } else { 0.0 }
+    }
+
+    fn residual(n: usize, x: &[f64], b: &[f64]) -> f64 {
+        (0..n)
+            .map(|i| ((0..n).map(|j| entry(i, j) * x[j]).sum::<f64>() - b[i]).abs())
+            .fold(0.0, f64::max)
+    }
+
+    /// Storage handed back and reused (holding a larger factor's numbers, and kept through a
+    /// matrix that is not positive definite) factors as fresh storage does: the fill adds into
+    /// zeros, and the solve meets A x = b to round-off.
+    #[test]
+    fn a_factor_in_kept_storage_is_a_fresh_one() {
+        let fill = |n: usize| {
+            move |matrix: &mut [f64]| {
+                for (j, column) in matrix.chunks_exact_mut(n).enumerate() {
+                    for (i, v) in column.iter_mut().enumerate().skip(j) {
+                        *v += entry(i, j);
+                    }
+                }
+            }
+        };
+        let mut buffer = FactorBuffer::default();
+        let large = buffer.factor(60, fill(60)).unwrap();
+        buffer.recycle(large);
+        assert!(buffer.factor(3, |m| m[0] = -1.0).is_none());
+        assert!(
+            buffer.values.capacity() >= 3600,
+            "the storage was kept through the failure"
+        );
+        let n = 45;
+        let kept = buffer.factor(n, fill(n)).unwrap();
+        let fresh = DenseCholesky::new(n, entry).unwrap();
+        for (a, b) in kept.values.iter().zip(&fresh.values) {
+            assert_eq!(a.to_bits(), b.to_bits());
+        }
+        let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.3).sin()).collect();
+        assert!(residual(n, &kept.solve(&b), &b) < 1e-13);
+    }
+
+    /// The inverse, on one thread and (from 512 on) on the run's threads: A A⁻¹ = I to
+    /// round-off, and exactly symmetric.
+    #[test]
+    fn the_symmetric_inverse_inverts() {
+        for n in [50, 600] {
+            let inverse = DenseCholesky::new(n, entry).unwrap().symmetric_inverse();
+            for p in (0..n).step_by(37) {
+                let row = &inverse[p * n..(p + 1) * n];
+                let e: Vec<f64> = (0..n).map(|i| if i == p { 1.0 } else { 0.0 }).collect();
+                assert!(residual(n, row, &e) < 1e-12, "n = {n}, row {p}");
+                for (q, v) in row.iter().enumerate() {
+                    assert_eq!(v.to_bits(), inverse[q * n + p].to_bits());
+                }
+            }
+        }
+    }
 }

@@ -8,7 +8,7 @@ use super::reactions::{Reactions, StepState};
 use super::setup::{ContactSetup, Simulation};
 use super::stats::{timed, RunStats};
 use crate::contact::active_set::{ActiveSetSolver, ContactOutcome, ContactState};
-use crate::contact::{Condensation, NormalStiffness};
+use crate::contact::{Condensation, NormalStiffness, WithCompliance};
 use crate::linalg::Counters;
 
 /// What one solve of a step reads and writes.
@@ -208,7 +208,7 @@ fn contact_solve<const D: usize>(
             state,
         ),
         None => ActiveSetSolver {
-            operator: op.stiffness(),
+            operator: &WithCompliance(op),
             laws: &setup.laws,
             offset,
             bound,
