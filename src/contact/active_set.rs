@@ -693,7 +693,7 @@ impl ActiveSetSolver<'_> {
         outcome.factorisations += 1;
         let rhs: Vec<f64> = (0..nf).map(|i| grad[free[i]]).collect();
         // the matrix's lower triangle column by column, column j from Q's row free[j] (Q is
-        // symmetric), in storage kept between factorisations (docs/method.md §9.2)
+        // symmetric), in storage kept between factorisations (docs/method.md §9.7)
         let mut build = |diag: &[f64], coupling: &[f64]| {
             buffer.factor(nf, |matrix| {
                 for (j, column) in matrix.chunks_exact_mut(nf).enumerate() {
@@ -830,7 +830,7 @@ impl ActiveSetSolver<'_> {
         newton_w::direction((w, m), free, &curvature, &b, buffer)
     }
 
-    /// The direction in W where W was not formed (docs/method.md §4.6, §9.4): where no row is
+    /// The direction in W where W was not formed (docs/method.md §9.7): where no row is
     /// held and none has curvature (a surface that starts a step apart, under a law without
     /// curvature off contact) the system in W has no rows and Δ = W G, two triangular solves
     /// in place of a factorisation of Q; elsewhere None (the caller solves in Q).

@@ -219,8 +219,8 @@ impl NormalStiffness for DenseNormalStiffness {
 }
 
 /// A condensation's stiffness with its products by W, formed or not (a product by W without W
-/// is two triangular solves with L_cc, docs/method.md §9.4): what the frictionless active set
-/// solves with.
+/// is two triangular solves with L_cc, docs/method.md §9.4, §9.7): what the frictionless
+/// active set solves with.
 pub struct WithCompliance<'a>(pub &'a dyn Condensation);
 
 impl NormalStiffness for WithCompliance<'_> {

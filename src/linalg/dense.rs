@@ -1,6 +1,6 @@
-//! Small dense linear algebra for the contact solve (docs/method.md §4, §9.2): the Cholesky factor
-//! of a symmetric positive definite matrix given entry by entry, and the row-major product by Q.
-//! faer does the work; the rest of hvi sees slices.
+//! Small dense linear algebra for the contact solve (docs/method.md §4, §9.2, §9.7): the Cholesky
+//! factor of a symmetric positive definite matrix, in storage kept from one factorisation to the
+//! next, and the row-major product by Q. faer does the work; the rest of hvi sees slices.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::{MatMut, MatRef, Par};
@@ -89,7 +89,7 @@ impl DenseCholesky {
 /// solve factors a new matrix of about the same order at every Newton iteration, and a fresh
 /// allocation each time (n² numbers, tens to hundreds of MB) costs page faults on this kind of
 /// machine worth a third of the 3D friction solve's time and, at 4 096 free nodes, half of a
-/// factorisation's (docs/method.md §4.6, §9.2). A cache: a clone starts empty.
+/// factorisation's (docs/method.md §4.6, §9.7). A cache: a clone starts empty.
 #[derive(Debug, Default)]
 pub struct FactorBuffer {
     values: Vec<f64>,
