@@ -1007,6 +1007,57 @@ mod tests {
         DenseNormalStiffness::from_w(w, m).unwrap()
     }
 
+    /// A solver of the tests' surfaces: tolerance 1e-12, at most 100 iterations.
+    fn solver<'a>(
+        operator: &'a dyn NormalStiffness,
+        laws: &'a NodalLaws,
+        bound: &'a [f64],
+        pairs: Option<&'a [usize]>,
+        dense_limit: usize,
+    ) -> ActiveSetSolver<'a> {
+        ActiveSetSolver {
+            operator,
+            laws,
+            offset: None,
+            bound: Some(bound),
+            singular: false,
+            pairs,
+            fixed: None,
+            settings: ContactSettings {
+                tolerance: 1e-12,
+                max_iterations: 100,
+                dense_limit,
+            },
+        }
+    }
+
+    /// A growing load's shape along the surface, x ∈ [0, 1) at time t: a moving middle part.
+    fn shape(x: f64, t: f64) -> f64 {
+        t * (std::f64::consts::PI * x).sin() * (1.0 + 0.3 * (7.0 * x + t).cos())
+    }
+
+    /// Steps n = 1..=steps with free displacements d(t_n), t_n = n / steps, from a surface
+    /// apart: per step d, the state after it and what the solve did.
+    fn run_steps(
+        solver: &ActiveSetSolver,
+        steps: usize,
+        d: impl Fn(f64) -> Vec<f64>,
+    ) -> Vec<(Vec<f64>, ContactState, ContactOutcome)> {
+        let mut state = ContactState::new(solver.m());
+        (1..=steps)
+            .map(|n| {
+                let d = d(n as f64 / steps as f64);
+                let outcome = solver.solve(&d, &mut state).unwrap();
+                (d, state.clone(), outcome)
+            })
+            .collect()
+    }
+
+    /// Σ of one count of the outcomes.
+    fn total(run: &[(Vec<f64>, ContactState, ContactOutcome)], count: impl Fn(&ContactOutcome) -> usize) -> usize {
+        run.iter().map(|(_, _, o)| count(o)).sum()
+    }
+
     /// The numbers a PETSc run broadcasts give back the outcome, field by field.
     #[test]
     fn outcome_numbers_round_trip() {
@@ -1034,50 +1085,18 @@ mod tests {
         let op = operator(m);
         let bound = vec![0.2; m];
         let laws = NodalLaws::default();
-        let solve = |dense_limit: usize| {
-            let solver = ActiveSetSolver {
-                operator: &op,
-                laws: &laws,
-                offset: None,
-                bound: Some(&bound),
-                singular: false,
-                pairs: None,
-                fixed: None,
-                settings: ContactSettings {
-                    tolerance: 1e-12,
-                    max_iterations: 100,
-                    dense_limit,
-                },
-            };
-            let mut state = ContactState::new(m);
-            let mut steps = Vec::new();
-            let (mut directions, mut factorisations, mut iterative) = (0, 0, 0);
-            for n in 1..=8 {
-                let t = n as f64 / 8.0;
-                let d: Vec<f64> = (0..m)
-                    .map(|p| {
-                        let x = p as f64 / m as f64;
-                        0.5 * t * (std::f64::consts::PI * x).sin() * (1.0 + 0.3 * (7.0 * x + t).cos())
-                    })
-                    .collect();
-                let outcome = solver.solve(&d, &mut state).unwrap();
-                directions += outcome.iterations;
-                factorisations += outcome.factorisations;
-                iterative += outcome.iterative;
-                steps.push((d, state.clone()));
-            }
-            (steps, directions, factorisations, iterative)
-        };
-        let (dense, dense_directions, dense_factorisations, dense_iterative) = solve(usize::MAX);
-        let (reused, directions, factorisations, iterative) = solve(0);
-        assert_eq!(dense_iterative, 0);
-        assert_eq!(dense_factorisations, dense_directions);
+        let load = |t: f64| (0..m).map(|p| 0.5 * shape(p as f64 / m as f64, t)).collect();
+        let dense = run_steps(&solver(&op, &laws, &bound, None, usize::MAX), 8, load);
+        let reused = run_steps(&solver(&op, &laws, &bound, None, 0), 8, load);
+        assert_eq!(total(&dense, |o| o.iterative), 0);
+        assert_eq!(total(&dense, |o| o.factorisations), total(&dense, |o| o.iterations));
+        let (directions, factorisations) = (total(&reused, |o| o.iterations), total(&reused, |o| o.factorisations));
         assert!(
-            iterative > 0 && factorisations < directions,
+            total(&reused, |o| o.iterative) > 0 && factorisations < directions,
             "{factorisations} of {directions}"
         );
         let mut active_sets = std::collections::HashSet::new();
-        for ((d, a), (_, b)) in dense.iter().zip(&reused) {
+        for ((d, a, _), (_, b, _)) in dense.iter().zip(&reused) {
             let scale = a.normal_displacement.iter().fold(0.0f64, |s, v| s.max(v.abs()));
             for p in 0..m {
                 assert!((a.normal_displacement[p] - b.normal_displacement[p]).abs() <= 1e-10 * scale);
@@ -1093,38 +1112,29 @@ mod tests {
         assert!(active_sets.len() >= 4, "the active set moved: {active_sets:?}");
     }
 
-    /// Q without W: the solver cannot take the Newton system in W.
-    struct OnlyQ<'a>(&'a DenseNormalStiffness);
-
-    impl NormalStiffness for OnlyQ<'_> {
-        fn m(&self) -> usize {
-            self.0.m
-        }
-        fn apply_q(&self, x: &[f64], y: &mut [f64]) {
-            self.0.apply_q(x, y)
-        }
-        fn q(&self, p: usize, r: usize) -> f64 {
-            self.0.q(p, r)
-        }
+    /// Q without W formed: the solver cannot take the Newton system in W, except (with
+    /// `products`, as on the trailing block's condensation, docs/method.md §9.7) where the
+    /// system has no rows and a product by W is all it needs.
+    struct WithoutW<'a> {
+        op: &'a DenseNormalStiffness,
+        products: bool,
     }
 
-    /// Q with products by W but W not formed (the trailing block's condensation, docs/method.md
-    /// §9.4): the Newton system in W only where it has no rows.
-    struct ProductsByW<'a>(&'a DenseNormalStiffness);
-
-    impl NormalStiffness for ProductsByW<'_> {
+    impl NormalStiffness for WithoutW<'_> {
         fn m(&self) -> usize {
-            self.0.m
+            self.op.m
         }
         fn apply_q(&self, x: &[f64], y: &mut [f64]) {
-            self.0.apply_q(x, y)
+            self.op.apply_q(x, y)
         }
         fn q(&self, p: usize, r: usize) -> f64 {
-            self.0.q(p, r)
+            self.op.q(p, r)
         }
         fn apply_w(&self, x: &[f64], y: &mut [f64]) -> bool {
-            crate::linalg::dense::matvec_row_major(&self.0.w, self.0.m, x, y);
-            true
+            if self.products {
+                crate::linalg::dense::matvec_row_major(&self.op.w, self.op.m, x, y);
+            }
+            self.products
         }
     }
 
@@ -1139,57 +1149,16 @@ mod tests {
         let op = operator(m);
         let bound = vec![0.2; m];
         let laws = NodalLaws::default();
-        let solve = |operator: &dyn NormalStiffness| {
-            let solver = ActiveSetSolver {
-                operator,
-                laws: &laws,
-                offset: None,
-                bound: Some(&bound),
-                singular: false,
-                pairs: None,
-                fixed: None,
-                settings: ContactSettings {
-                    tolerance: 1e-12,
-                    max_iterations: 100,
-                    dense_limit: usize::MAX,
-                },
-            };
-            let mut state = ContactState::new(m);
-            let (mut steps, mut in_w, mut directions) = (Vec::new(), 0, 0);
-            for n in 1..=6 {
-                let t = n as f64 / 6.0;
-                let d: Vec<f64> = (0..m)
-                    .map(|p| {
-                        let x = p as f64 / m as f64;
-                        0.5 * t * (std::f64::consts::PI * x).sin() * (1.0 + 0.3 * (7.0 * x + t).cos())
-                    })
-                    .collect();
-                let outcome = solver.solve(&d, &mut state).unwrap();
-                in_w += outcome.in_w;
-                directions += outcome.iterations;
-                steps.push(state.clone());
-            }
-            (steps, in_w, directions)
-        };
         // the direction itself: Q Δ = G on all rows, to round-off
-        let solver = ActiveSetSolver {
-            operator: &ProductsByW(&op),
-            laws: &laws,
-            offset: None,
-            bound: Some(&bound),
-            singular: false,
-            pairs: None,
-            fixed: None,
-            settings: ContactSettings {
-                tolerance: 1e-12,
-                max_iterations: 100,
-                dense_limit: usize::MAX,
-            },
+        let products = WithoutW {
+            op: &op,
+            products: true,
         };
+        let by_products = solver(&products, &laws, &bound, None, usize::MAX);
         let free: Vec<usize> = (0..m).collect();
         let g: Vec<f64> = (0..m).map(|p| (0.05 * p as f64).cos()).collect();
-        let hessian = solver.law_hessian(&vec![0.0; m], &free);
-        let x = solver
+        let hessian = by_products.law_hessian(&vec![0.0; m], &free);
+        let x = by_products
             .direction_in_w(&free, &hessian, &g, &mut FactorBuffer::default())
             .unwrap();
         let mut qx = vec![0.0; m];
@@ -1198,18 +1167,24 @@ mod tests {
             assert!((a - b).abs() <= 1e-11, "Q Δ = {a} against G = {b}");
         }
         // a held row: the system in W has a row, whose entries W would have to give
-        let hessian = solver.law_hessian(&vec![0.0; m], &free[1..]);
-        assert!(solver
+        let hessian = by_products.law_hessian(&vec![0.0; m], &free[1..]);
+        assert!(by_products
             .direction_in_w(&free[1..], &hessian, &g, &mut FactorBuffer::default())
             .is_none());
-        let (in_q, q_in_w, q_directions) = solve(&OnlyQ(&op));
-        let (by_w, in_w, directions) = solve(&ProductsByW(&op));
-        assert_eq!(q_in_w, 0);
-        assert_eq!(q_directions, directions);
+        let load = |t: f64| (0..m).map(|p| 0.5 * shape(p as f64 / m as f64, t)).collect();
+        let only_q = WithoutW {
+            op: &op,
+            products: false,
+        };
+        let in_q = run_steps(&solver(&only_q, &laws, &bound, None, usize::MAX), 6, load);
+        let by_w = run_steps(&by_products, 6, load);
+        assert_eq!(total(&in_q, |o| o.in_w), 0);
+        let (in_w, directions) = (total(&by_w, |o| o.in_w), total(&by_w, |o| o.iterations));
+        assert_eq!(total(&in_q, |o| o.iterations), directions);
         // step 1 starts apart (every row free, no curvature); later steps start from a held set
         assert!(in_w >= 1 && in_w < directions, "{in_w} of {directions} directions by W");
-        let scale = in_q.last().unwrap().force.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        for (a, b) in in_q.iter().zip(&by_w) {
+        let scale = in_q.last().unwrap().1.force.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        for ((_, a, _), (_, b, _)) in in_q.iter().zip(&by_w) {
             assert_eq!(a.status, b.status);
             for (x, y) in a.force.iter().zip(&b.force) {
                 assert!((x - y).abs() <= 1e-10 * scale, "{x} against {y}");
@@ -1241,52 +1216,32 @@ mod tests {
             .map(|p| if p < k { usize::MAX } else { k + ((p - k) ^ 1) })
             .collect();
         let bound: Vec<f64> = (0..m).map(|p| if p < k { 0.2 } else { f64::INFINITY }).collect();
-        let solve = |operator: &dyn NormalStiffness| {
-            let solver = ActiveSetSolver {
-                operator,
-                laws: &laws,
-                offset: None,
-                bound: Some(&bound),
-                singular: false,
-                pairs: Some(&pairs),
-                fixed: None,
-                settings: ContactSettings {
-                    tolerance: 1e-12,
-                    max_iterations: 100,
-                    dense_limit: usize::MAX,
-                },
-            };
-            let mut state = ContactState::new(m);
-            let (mut steps, mut in_w, mut directions) = (Vec::new(), 0, 0);
-            for n in 1..=6 {
-                let t = n as f64 / 6.0;
-                let d: Vec<f64> = (0..m)
-                    .map(|p| {
-                        let x = (p % k) as f64 / k as f64;
-                        let shape = t * (std::f64::consts::PI * x).sin() * (1.0 + 0.3 * (7.0 * x + t).cos());
-                        if p < k {
-                            0.5 * shape
-                        } else {
-                            0.1 * shape * if p % 2 == 0 { 1.0 } else { -0.5 }
-                        }
-                    })
-                    .collect();
-                let outcome = solver.solve(&d, &mut state).unwrap();
-                in_w += outcome.in_w;
-                directions += outcome.iterations;
-                steps.push(state.clone());
-            }
-            (steps, in_w, directions)
+        let load = |t: f64| {
+            (0..m)
+                .map(|p| {
+                    let shape = shape((p % k) as f64 / k as f64, t);
+                    if p < k {
+                        0.5 * shape
+                    } else {
+                        0.1 * shape * if p % 2 == 0 { 1.0 } else { -0.5 }
+                    }
+                })
+                .collect()
         };
-        let (in_q, q_in_w, q_directions) = solve(&OnlyQ(&op));
-        let (with_w, in_w, directions) = solve(&op);
-        assert_eq!(q_in_w, 0);
+        let only_q = WithoutW {
+            op: &op,
+            products: false,
+        };
+        let in_q = run_steps(&solver(&only_q, &laws, &bound, Some(&pairs), usize::MAX), 6, load);
+        let with_w = run_steps(&solver(&op, &laws, &bound, Some(&pairs), usize::MAX), 6, load);
+        assert_eq!(total(&in_q, |o| o.in_w), 0);
         // the same directions up to rounding: the same iterates
-        assert_eq!(q_directions, directions);
+        let (in_w, directions) = (total(&with_w, |o| o.in_w), total(&with_w, |o| o.iterations));
+        assert_eq!(total(&in_q, |o| o.iterations), directions);
         assert!(2 * in_w > directions, "{in_w} of {directions} directions in W");
         let mut active_sets = std::collections::HashSet::new();
         let (mut stick, mut slip) = (0, 0);
-        for (a, b) in in_q.iter().zip(&with_w) {
+        for ((_, a, _), (_, b, _)) in in_q.iter().zip(&with_w) {
             let scale = a.normal_displacement.iter().fold(0.0f64, |s, v| s.max(v.abs()));
             for p in 0..m {
                 let (x, y) = (a.normal_displacement[p], b.normal_displacement[p]);
