@@ -14,7 +14,7 @@
 
 use super::model::fmt_point;
 use super::{Facet, GroupSelector, Mesh, MeshError, PhysicalGroup};
-use std::collections::{HashMap, HashSet};
+use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 
 /// Something wrong with the mesh as a body.
 #[derive(Clone, Debug, PartialEq)]
@@ -37,7 +37,8 @@ struct FacetUse {
 impl<const D: usize> Mesh<D> {
     /// Every cell facet by its node set (sorted key).
     fn facet_uses(&self) -> HashMap<[usize; 4], FacetUse> {
-        let mut uses: HashMap<[usize; 4], FacetUse> = HashMap::with_capacity(self.cells.len() * (D + 1));
+        let mut uses: HashMap<[usize; 4], FacetUse> =
+            HashMap::with_capacity_and_hasher(self.cells.len() * (D + 1), Default::default());
         for (c, cell) in self.cells.iter().enumerate() {
             for f in cell.facets() {
                 uses.entry(f.key())
@@ -233,7 +234,8 @@ impl<const D: usize> Mesh<D> {
         let side = if D == 2 { "edge" } else { "face" };
         if g.dim as usize == D - 1 {
             // each facet once, in the group's order, with the number of cells that have it
-            let mut slot: HashMap<[usize; 4], usize> = HashMap::with_capacity(g.facets.len());
+            let mut slot: HashMap<[usize; 4], usize> =
+                HashMap::with_capacity_and_hasher(g.facets.len(), Default::default());
             let mut facets: Vec<Facet> = Vec::with_capacity(g.facets.len());
             for &f in &g.facets {
                 slot.entry(f.key()).or_insert_with(|| {
@@ -262,8 +264,8 @@ impl<const D: usize> Mesh<D> {
             return Ok(());
         }
         let boundary = self.boundary_facets();
-        let mut nodes = HashSet::new();
-        let mut edges = HashSet::new();
+        let mut nodes = HashSet::default();
+        let mut edges = HashSet::default();
         for f in &boundary {
             let n = f.nodes();
             for (i, &a) in n.iter().enumerate() {
@@ -334,7 +336,7 @@ fn coincident_nodes<const D: usize>(points: &[[f64; D]], used: &[bool]) -> Optio
     }
     let tol = 1e-12 * extent;
     let cell = |x: &[f64; D]| -> [i64; D] { std::array::from_fn(|k| ((x[k] - lo[k]) / tol).floor() as i64) };
-    let mut grid: HashMap<[i64; D], Vec<usize>> = HashMap::new();
+    let mut grid: HashMap<[i64; D], Vec<usize>> = HashMap::default();
     let (mut first, mut count) = (None, 0);
     for (p, x) in points.iter().enumerate() {
         if !used[p] {
@@ -389,7 +391,7 @@ fn pieces<'a>(cells: impl Iterator<Item = &'a [usize]>, n_points: usize) -> Vec<
             }
         }
     }
-    let mut by_root: HashMap<usize, (usize, usize)> = HashMap::new();
+    let mut by_root: HashMap<usize, (usize, usize)> = HashMap::default();
     for (c, nodes) in cells.iter().enumerate() {
         let r = root(&mut parent, nodes[0]);
         by_root.entry(r).or_insert((c, 0)).1 += 1;

@@ -6,7 +6,7 @@ use super::vector::{cross, norm};
 use super::Cell;
 use super::{fmt_point, Facet, GroupSelector, Mesh, MeshError, PhysicalGroup};
 use crate::mesh::quadrature::QUAD_GAUSS_2X2;
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 /// A group of facets as a part of the boundary of the body.
 #[derive(Clone, Debug, PartialEq)]
@@ -160,7 +160,8 @@ pub(crate) fn boundary_part<const D: usize>(
     };
 
     // The group's facets, each once, in the group's order.
-    let mut slot: HashMap<[usize; 4], usize> = HashMap::with_capacity(group.facets.len());
+    let mut slot: HashMap<[usize; 4], usize> =
+        HashMap::with_capacity_and_hasher(group.facets.len(), Default::default());
     let mut facets: Vec<Facet> = Vec::with_capacity(group.facets.len());
     for &f in &group.facets {
         if f.dim() != D - 1 {
