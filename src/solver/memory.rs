@@ -13,7 +13,8 @@
 //!   (docs/method.md §9.4), L_cc, 8·m²; or Z = K⁻¹Cᵀ, 8·n·m, when the scene stores the responses;
 //! * the dense contact matrices: W and its Cholesky inverse Q, the partial W of each thread
 //!   while W = GᵀG is summed, the Newton matrix of the active-set method and its factor (kept
-//!   above `solver.dense_newton_limit` free nodes): 8·m² each, `DENSE_COPIES` of them;
+//!   above `solver.dense_newton_limit` free nodes): 8·m² each, `DENSE_COPIES` of them
+//!   (`TRAILING_COPIES` where Q is read off the trailing block without W, §9.7);
 //! * the history (the memory term's vectors), the step vectors and the output of one frame;
 //! * the process itself (code, thread stacks, allocator arenas): `BASE`.
 //!
@@ -32,6 +33,12 @@ const BASE: u64 = 24 << 20;
 /// 4.2 on the dense path, 5.2 when the Newton matrix's factor is kept above
 /// `solver.dense_newton_limit` free nodes).
 const DENSE_COPIES: f64 = 4.0;
+
+/// The same where Q is read off the factor's trailing block and W is not formed (no friction):
+/// Q, then the Schur complement beside it while Q is formed, and the Newton matrix's storage
+/// (docs/method.md §9.7; measured at m = 4 096: 927 MiB against 1 372 MiB predicted with
+/// `DENSE_COPIES`).
+const TRAILING_COPIES: f64 = 2.0;
 
 /// Copies of K_A's entries (16 bytes each: value and index) held at the peak, per matrix kind:
 /// K_A, the step matrix while it is factorised, the memory terms' node blocks (fitted: 2.9 in
@@ -71,9 +78,15 @@ impl MemoryEstimate {
             };
             parts.push(responses);
             let kept = (m as usize > c.settings.dense_limit) as u8 as f64;
+            // off the trailing block without friction only Q and the Newton matrix's storage
+            // (docs/method.md §9.7): no W, no GᵀG, no inverse
+            let copies = match sim.trailing_block() && c.friction.is_none() {
+                true => TRAILING_COPIES,
+                false => DENSE_COPIES,
+            };
             parts.push((
                 "dense contact matrices",
-                ((DENSE_COPIES + kept) * 8.0 * (m * m) as f64) as u64,
+                ((copies + kept) * 8.0 * (m * m) as f64) as u64,
             ));
         }
         let history = sim.memory.as_ref().map_or(0, |_| 8 * n * (2 + 3 * channels.max(1)));
