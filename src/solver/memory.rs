@@ -80,7 +80,7 @@ impl MemoryEstimate {
             let kept = (m as usize > c.settings.dense_limit) as u8 as f64;
             // off the trailing block without friction only Q and the Newton matrix's storage
             // (docs/method.md §9.7): no W, no GᵀG, no inverse
-            let copies = match sim.trailing_block() && c.friction.is_none() {
+            let copies = match sim.trailing_block() && !sim.forms_w_off_trailing_block() {
                 true => TRAILING_COPIES,
                 false => DENSE_COPIES,
             };

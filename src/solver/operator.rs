@@ -213,7 +213,7 @@ pub fn condensation<const D: usize>(
             // (None only when L_cc's k² numbers cannot be allocated: the sweeps then)
             let trailing = sim
                 .trailing_block()
-                .then(|| SplitSweeps::off_trailing_block(rows, factor.clone(), c.friction.is_some()));
+                .then(|| SplitSweeps::off_trailing_block(rows, factor.clone(), sim.forms_w_off_trailing_block()));
             match trailing.flatten() {
                 Some(op) => Box::new(op),
                 None => Box::new(SplitSweeps::new(rows, factor.clone(), counters)?),

@@ -202,8 +202,8 @@ impl Plan {
                 cost: match sim.condensation {
                     crate::scene::CondensationKind::SplitSweeps if sim.trailing_block() => format!(
                         "condensation off the factor's trailing block: its {m} contact unknowns ordered last, Q = T⁻ᵀ L_cc L_ccᵀ T⁻¹ once{} ({:.1} MiB dense); per step one dense active-set solve of size {m} and two triangular solves with L_cc between the forward and backward sweeps of the step's one solve",
-                        if c.friction.is_some() { " and W = T L_cc⁻ᵀ L_cc⁻¹ Tᵀ" } else { "" },
-                        ((2 + usize::from(c.friction.is_some())) * m * m * 8) as f64 / 1048576.0
+                        if sim.forms_w_off_trailing_block() { " and W = T L_cc⁻ᵀ L_cc⁻¹ Tᵀ" } else { "" },
+                        ((2 + usize::from(sim.forms_w_off_trailing_block())) * m * m * 8) as f64 / 1048576.0
                     ),
                     crate::scene::CondensationKind::SplitSweeps => format!(
                         "condensation by split sweeps: G = L⁻¹ P Cᵀ ({m} sparse forward sweeps) and W = Gᵀ G once, {:.1} MiB dense; per step one dense active-set solve of size {m} between the forward and backward sweeps of the step's one solve",

@@ -237,6 +237,13 @@ impl<const D: usize> Simulation<D> {
                 .is_some_and(|c| !c.nodes.is_empty() && c.condensed_rows().trailing_block_applies())
     }
 
+    /// Whether the trailing-block condensation forms W beside Q (docs/method.md §9.4, §9.7):
+    /// with friction, where the Newton system in W (§4.6) pays; without it a product by W is two
+    /// triangular solves with L_cc.
+    pub fn forms_w_off_trailing_block(&self) -> bool {
+        self.contact.as_ref().is_some_and(|c| c.friction.is_some())
+    }
+
     /// True if step n is written (every `output_every`-th step and always the last).
     pub fn is_output_step(&self, n: usize) -> bool {
         n.is_multiple_of(self.output_every) || n == self.time.steps
