@@ -7,15 +7,19 @@
 //!
 //! * forward: the pieces in parallel, each writing its own columns and accumulating its
 //!   updates of top rows in a private vector; the private vectors are added in; then the top
-//!   supernodes in order, on one thread;
-//! * backward: the top supernodes first, on one thread; then the pieces in parallel, each
-//!   reading the (now final) top rows from a shared copy and writing its own columns.
+//!   supernodes in order;
+//! * backward: the top supernodes first; then the pieces in parallel, each reading the (now
+//!   final) top rows from a shared copy and writing its own columns.
+//!
+//! The top supernodes are few and large (a fifth of L at n = 40): those of at least
+//! [`SPLIT_MIN_ENTRIES`] entries run on two threads inside, by panels of columns, with the
+//! same bits as on one (docs/method.md §9.8).
 //!
 //! Faer numbers supernodes in a postorder, so a subtree is a contiguous range of supernodes
 //! and of columns: the pieces are disjoint slices of the vector, and safe Rust can hand each
 //! to its own thread.
 
-use super::supernodes::{backward_block, forward_block, Supernodes};
+use super::supernodes::{backward_block, backward_block_split, forward_block, forward_block_split, Supernodes};
 use rayon::prelude::*;
 use std::ops::Range;
 
@@ -27,6 +31,10 @@ const PARALLEL_MIN_ENTRIES: usize = 400_000;
 const PIECES: usize = 12;
 /// Stop splitting when the top holds this share of the work.
 const MAX_TOP_SHARE: f64 = 0.2;
+/// Top supernodes of at least this many stored entries (2 MB) are swept on two threads
+/// inside (supernodes.rs, `forward_block_split`): below it a panel's work nears the cost of
+/// handing half of it to the other thread.
+const SPLIT_MIN_ENTRIES: usize = 262_144;
 
 /// A subtree of the supernodal elimination tree: supernodes `supernodes` (inclusive range
 /// in postorder) owning the columns `columns`.
@@ -218,7 +226,12 @@ impl Schedule {
         }
         let mut local = vec![0.0; sn.max_rows];
         for &s in &self.top {
-            forward_supernode(sn, values, s, y, &mut local);
+            let kernel = if sn.entries(s) >= SPLIT_MIN_ENTRIES {
+                forward_block_split
+            } else {
+                forward_block
+            };
+            forward_supernode_with(sn, values, s, y, &mut local, kernel);
         }
     }
 
@@ -226,7 +239,12 @@ impl Schedule {
     pub fn backward(&self, sn: &Supernodes, values: &[f64], y: &mut [f64]) {
         let mut local = vec![0.0; sn.max_rows];
         for &s in self.top.iter().rev() {
-            backward_supernode(sn, values, s, y, &mut local);
+            let kernel = if sn.entries(s) >= SPLIT_MIN_ENTRIES {
+                backward_block_split
+            } else {
+                backward_block
+            };
+            backward_supernode_with(sn, values, s, y, &mut local, kernel);
         }
         let shared: Vec<f64> = self.top_rows.iter().map(|&r| y[r]).collect();
         let mut work = self.split(y);
@@ -254,14 +272,23 @@ impl Schedule {
     }
 }
 
+/// A dense kernel of the sweeps (supernodes.rs).
+type Kernel = fn(&[f64], usize, &mut [f64]);
+
 /// One supernode of the forward sweep on the whole vector.
 #[inline]
 pub(super) fn forward_supernode(sn: &Supernodes, values: &[f64], s: usize, x: &mut [f64], local: &mut [f64]) {
+    forward_supernode_with(sn, values, s, x, local, forward_block)
+}
+
+/// [`forward_supernode`] with a given kernel.
+#[inline]
+fn forward_supernode_with(sn: &Supernodes, values: &[f64], s: usize, x: &mut [f64], local: &mut [f64], kernel: Kernel) {
     let (width, start) = (sn.width[s], sn.start[s]);
     let t = &mut local[..sn.rows(s)];
     t[..width].copy_from_slice(&x[start..start + width]);
     t[width..].fill(0.0);
-    forward_block(sn.block(values, s), width, t);
+    kernel(sn.block(values, s), width, t);
     x[start..start + width].copy_from_slice(&t[..width]);
     for (&row, a) in sn.pattern(s).iter().zip(&t[width..]) {
         x[row] += a;
@@ -271,13 +298,26 @@ pub(super) fn forward_supernode(sn: &Supernodes, values: &[f64], s: usize, x: &m
 /// One supernode of the backward sweep on the whole vector.
 #[inline]
 pub(super) fn backward_supernode(sn: &Supernodes, values: &[f64], s: usize, x: &mut [f64], local: &mut [f64]) {
+    backward_supernode_with(sn, values, s, x, local, backward_block)
+}
+
+/// [`backward_supernode`] with a given kernel.
+#[inline]
+fn backward_supernode_with(
+    sn: &Supernodes,
+    values: &[f64],
+    s: usize,
+    x: &mut [f64],
+    local: &mut [f64],
+    kernel: Kernel,
+) {
     let (width, start) = (sn.width[s], sn.start[s]);
     let t = &mut local[..sn.rows(s)];
     t[..width].copy_from_slice(&x[start..start + width]);
     for (a, &row) in t[width..].iter_mut().zip(sn.pattern(s)) {
         *a = x[row];
     }
-    backward_block(sn.block(values, s), width, t);
+    kernel(sn.block(values, s), width, t);
     x[start..start + width].copy_from_slice(&t[..width]);
 }
 

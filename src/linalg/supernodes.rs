@@ -157,6 +157,221 @@ unsafe fn backward_block_avx2(block: &[f64], width: usize, t: &mut [f64]) {
     backward_block_generic(block, width, t)
 }
 
+/// Columns per block of the two-thread kernels: the block's own triangle is swept on one
+/// thread, the rows below it on two.
+const SPLIT_COLUMNS: usize = 64;
+/// Under this many rows below a block, the two-thread kernels stay on one thread for it.
+const SPLIT_MIN_ROWS: usize = 256;
+
+/// [`forward_block`] on two threads, for the large supernodes at the top of the tree that
+/// the parallel sweeps otherwise run on one (docs/method.md §9.6): in blocks of
+/// [`SPLIT_COLUMNS`] columns, the block's triangle on this thread, then the rows below it in
+/// two halves, one per thread. Every entry of t receives the same updates in the same order
+/// as in [`forward_block`]: the same bits.
+pub(super) fn forward_block_split(block: &[f64], width: usize, t: &mut [f64]) {
+    let avx2 = has_avx2();
+    let rows = t.len();
+    let mut j0 = 0;
+    while j0 < width {
+        let j1 = (j0 + SPLIT_COLUMNS).min(width);
+        let (head, below) = t.split_at_mut(j1);
+        for j in j0..j1 {
+            let column = &block[j * rows..(j + 1) * rows];
+            let v = head[j] / column[j];
+            head[j] = v;
+            if v != 0.0 {
+                for (a, l) in head[j + 1..].iter_mut().zip(&column[j + 1..j1]) {
+                    *a -= l * v;
+                }
+            }
+        }
+        let v = &head[j0..];
+        let update = |first: usize, part: &mut [f64]| subtract_columns(block, rows, j0, v, first, part, avx2);
+        if below.len() >= SPLIT_MIN_ROWS {
+            let half = below.len() / 2;
+            let (a, b) = below.split_at_mut(half);
+            rayon::join(|| update(j1, a), || update(j1 + half, b));
+        } else {
+            update(j1, below);
+        }
+        j0 = j1;
+    }
+}
+
+/// [`backward_block`] on two threads: in blocks of [`SPLIT_COLUMNS`] columns from the last,
+/// each column's dot product over the rows already final (from a row whose distance to the
+/// block's end is a multiple of eight) taken on two threads, half the columns each, into the
+/// lanes the one-thread kernel uses for them; then the block's columns in order on this
+/// thread, continuing those lanes over the remaining rows. The chunks of eight, the lanes
+/// and the order of every sum are [`backward_block`]'s: the same bits.
+pub(super) fn backward_block_split(block: &[f64], width: usize, t: &mut [f64]) {
+    let avx2 = has_avx2();
+    let rows = t.len();
+    let mut lanes = [[0.0f64; 8]; SPLIT_COLUMNS];
+    let mut j1 = width;
+    while j1 > 0 {
+        let j0 = j1.saturating_sub(SPLIT_COLUMNS);
+        // rows e.. are final and rows - e is a multiple of eight: whole chunks of every column
+        let e = rows - (rows - j1) / 8 * 8;
+        let lanes = &mut lanes[..j1 - j0];
+        lanes.fill([0.0; 8]);
+        {
+            let done = &t[e..];
+            let column = |j: usize| &block[j * rows + e..(j + 1) * rows];
+            let partial = |first: usize, lanes: &mut [[f64; 8]]| {
+                let mut chunks = lanes.chunks_exact_mut(4);
+                let mut j = first;
+                for four in &mut chunks {
+                    accumulate4(
+                        [column(j), column(j + 1), column(j + 2), column(j + 3)],
+                        done,
+                        four,
+                        avx2,
+                    );
+                    j += 4;
+                }
+                for acc in chunks.into_remainder() {
+                    accumulate(column(j), done, acc, avx2);
+                    j += 1;
+                }
+            };
+            if rows - e >= SPLIT_MIN_ROWS {
+                let half = lanes.len() / 2;
+                let (a, b) = lanes.split_at_mut(half);
+                rayon::join(|| partial(j0, a), || partial(j0 + half, b));
+            } else {
+                partial(j0, lanes);
+            }
+        }
+        for j in (j0..j1).rev() {
+            let column = &block[j * rows..(j + 1) * rows];
+            let (a, b) = (&column[j + 1..e], &t[j + 1..e]);
+            let acc = &mut lanes[j - j0];
+            accumulate(a, b, acc, avx2);
+            let r = a.len() % 8;
+            let tail: f64 = a[..r].iter().zip(&b[..r]).map(|(x, y)| x * y).sum();
+            let dot = ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7])) + tail;
+            t[j] = (t[j] - dot) / column[j];
+        }
+        j1 = j0;
+    }
+}
+
+/// part ← part − Σ_k L[first.., j0 + k] v_k, k ascending (rows `first..` of the block).
+fn subtract_columns(block: &[f64], rows: usize, j0: usize, v: &[f64], first: usize, part: &mut [f64], avx2: bool) {
+    if avx2 {
+        // SAFETY: AVX2 was detected at run time.
+        unsafe { subtract_columns_avx2(block, rows, j0, v, first, part) }
+    } else {
+        subtract_columns_generic(block, rows, j0, v, first, part)
+    }
+}
+
+#[inline(always)]
+fn subtract_columns_generic(block: &[f64], rows: usize, j0: usize, v: &[f64], first: usize, part: &mut [f64]) {
+    let n = part.len();
+    let column = |k: usize| &block[(j0 + k) * rows + first..][..n];
+    let mut k = 0;
+    // four columns at a time where all four are non-zero: each entry still takes the four
+    // updates in column order, one multiply and one subtraction each
+    while k + 4 <= v.len() {
+        let w = &v[k..k + 4];
+        if w.iter().all(|&x| x != 0.0) {
+            let (c0, c1, c2, c3) = (column(k), column(k + 1), column(k + 2), column(k + 3));
+            for i in 0..n {
+                let mut a = part[i];
+                a -= c0[i] * w[0];
+                a -= c1[i] * w[1];
+                a -= c2[i] * w[2];
+                a -= c3[i] * w[3];
+                part[i] = a;
+            }
+        } else {
+            for (q, &x) in w.iter().enumerate() {
+                if x != 0.0 {
+                    for (a, l) in part.iter_mut().zip(column(k + q)) {
+                        *a -= l * x;
+                    }
+                }
+            }
+        }
+        k += 4;
+    }
+    for (q, &x) in v[k..].iter().enumerate() {
+        if x != 0.0 {
+            for (a, l) in part.iter_mut().zip(column(k + q)) {
+                *a -= l * x;
+            }
+        }
+    }
+}
+
+#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2"))]
+unsafe fn subtract_columns_avx2(block: &[f64], rows: usize, j0: usize, v: &[f64], first: usize, part: &mut [f64]) {
+    subtract_columns_generic(block, rows, j0, v, first, part)
+}
+
+/// [`accumulate`] for four columns against one b (read once for the four): lane for lane
+/// each column's sums.
+fn accumulate4(a: [&[f64]; 4], b: &[f64], acc: &mut [[f64; 8]], avx2: bool) {
+    #[cfg(target_arch = "x86_64")]
+    if avx2 {
+        // SAFETY: AVX2 was detected at run time.
+        return unsafe { accumulate4_avx2(a, b, acc) };
+    }
+    for (a, acc) in a.iter().zip(acc) {
+        accumulate(a, b, acc, avx2);
+    }
+}
+
+/// [`accumulate_descending_avx2`] for four columns of equal length against one b.
+///
+/// # Safety
+/// The processor must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn accumulate4_avx2(a: [&[f64]; 4], b: &[f64], acc: &mut [[f64; 8]]) {
+    use std::arch::x86_64::{__m256d, _mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_storeu_pd};
+    let n = b.len();
+    assert!(acc.len() == 4 && a.iter().all(|c| c.len() == n));
+    let r = n % 8;
+    // SAFETY: every acc holds eight values; base + 8 <= n, within every slice
+    unsafe {
+        let mut lanes: [[__m256d; 2]; 4] = std::array::from_fn(|k| {
+            [
+                _mm256_loadu_pd(acc[k].as_ptr()),
+                _mm256_loadu_pd(acc[k].as_ptr().add(4)),
+            ]
+        });
+        let pb = b.as_ptr();
+        let mut base = n;
+        while base >= r + 8 {
+            base -= 8;
+            let (lo, hi) = (_mm256_loadu_pd(pb.add(base)), _mm256_loadu_pd(pb.add(base + 4)));
+            for k in 0..4 {
+                let pa = a[k].as_ptr();
+                lanes[k][0] = _mm256_add_pd(lanes[k][0], _mm256_mul_pd(_mm256_loadu_pd(pa.add(base)), lo));
+                lanes[k][1] = _mm256_add_pd(lanes[k][1], _mm256_mul_pd(_mm256_loadu_pd(pa.add(base + 4)), hi));
+            }
+        }
+        for k in 0..4 {
+            _mm256_storeu_pd(acc[k].as_mut_ptr(), lanes[k][0]);
+            _mm256_storeu_pd(acc[k].as_mut_ptr().add(4), lanes[k][1]);
+        }
+    }
+}
+
+/// The chunks of eight of a and b from the end into `acc`, on the processor's lanes.
+fn accumulate(a: &[f64], b: &[f64], acc: &mut [f64; 8], avx2: bool) {
+    #[cfg(target_arch = "x86_64")]
+    if avx2 {
+        // SAFETY: AVX2 was detected at run time.
+        return unsafe { accumulate_descending_avx2(a, b, acc) };
+    }
+    let _ = avx2;
+    accumulate_descending_generic(a, b, acc)
+}
+
 /// Whether the processor has AVX2 (detected once, then cached by the standard library).
 fn has_avx2() -> bool {
     #[cfg(target_arch = "x86_64")]
@@ -243,6 +458,44 @@ unsafe fn accumulate_descending_avx2(a: &[f64], b: &[f64], acc: &mut [f64; 8]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The two-thread kernels are the one-thread ones to the bit, on blocks around the column
+    /// block's size, with no rows below the diagonal block and with many (so that both the
+    /// split and the one-thread paths of every block run).
+    #[test]
+    fn split_kernels_are_the_one_thread_kernels_to_the_bit() {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let value = |i: usize, s: f64| (i as f64 * 0.7548776662 + s).fract() - 0.5;
+        for width in [1, 7, 63, 64, 65, 130, 300] {
+            for pattern in [0, 5, 257, 700] {
+                let rows = width + pattern;
+                let block: Vec<f64> = (0..rows * width)
+                    .map(|k| match (k % rows, k / rows) {
+                        (i, j) if i == j => 1.0 + value(k, 0.3).abs(),
+                        (i, j) if i < j => f64::NAN, // above the diagonal: never read
+                        _ => 2.0 * value(k, 0.1) / rows as f64,
+                    })
+                    .collect();
+                let rhs: Vec<f64> = (0..rows)
+                    .map(|i| value(i, 0.6) * 10f64.powi((i % 5) as i32 - 2))
+                    .collect();
+                for (one, split) in [
+                    (
+                        forward_block as fn(&[f64], usize, &mut [f64]),
+                        forward_block_split as fn(&[f64], usize, &mut [f64]),
+                    ),
+                    (backward_block, backward_block_split),
+                ] {
+                    let (mut a, mut b) = (rhs.clone(), rhs.clone());
+                    one(&block, width, &mut a);
+                    pool.install(|| split(&block, width, &mut b));
+                    assert!(a.iter().all(|v| v.is_finite()), "width {width}, pattern {pattern}");
+                    let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(&a), bits(&b), "width {width}, pattern {pattern}");
+                }
+            }
+        }
+    }
 
     /// The AVX2 lanes are the scalar lanes to the bit, at every length around the chunk size
     /// (values of mixed sign and magnitude, so that a different order of the sums would show).
