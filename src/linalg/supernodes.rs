@@ -88,8 +88,19 @@ impl Supernodes {
 }
 
 /// Forward kernel on a local vector t (rows of the block): t_s ← L_ss⁻¹ t_s and
-/// t_pattern ← t_pattern − L_ps t_s, column by column.
+/// t_pattern ← t_pattern − L_ps t_s. Supernodes of at least a panel's width go by panels
+/// ([`forward_panels`], four columns per pass over the rows below a panel), narrower ones
+/// column by column; the two give the same bits.
 pub(super) fn forward_block(block: &[f64], width: usize, t: &mut [f64]) {
+    if width >= PANEL_COLUMNS {
+        forward_panels(block, width, t, false)
+    } else {
+        forward_by_columns(block, width, t)
+    }
+}
+
+/// The forward kernel column by column.
+fn forward_by_columns(block: &[f64], width: usize, t: &mut [f64]) {
     if has_avx2() {
         // SAFETY: AVX2 was detected at run time.
         unsafe { forward_block_avx2(block, width, t) }
@@ -100,8 +111,18 @@ pub(super) fn forward_block(block: &[f64], width: usize, t: &mut [f64]) {
 
 /// Backward kernel on a local vector t: t_s ← L_ssᵀ⁻¹ (t_s − L_psᵀ t_pattern), from the last
 /// column back and each column from its last row up, so that L is read as one descending
-/// stream across supernodes, which the hardware prefetcher follows.
+/// stream across supernodes, which the hardware prefetcher follows. Supernodes of at least a
+/// panel's width go by panels ([`backward_panels`]), with the same bits.
 pub(super) fn backward_block(block: &[f64], width: usize, t: &mut [f64]) {
+    if width >= PANEL_COLUMNS {
+        backward_panels(block, width, t, false)
+    } else {
+        backward_by_columns(block, width, t)
+    }
+}
+
+/// The backward kernel column by column.
+fn backward_by_columns(block: &[f64], width: usize, t: &mut [f64]) {
     if has_avx2() {
         // SAFETY: AVX2 was detected at run time.
         unsafe { backward_block_avx2(block, width, t) }
@@ -157,23 +178,30 @@ unsafe fn backward_block_avx2(block: &[f64], width: usize, t: &mut [f64]) {
     backward_block_generic(block, width, t)
 }
 
-/// Columns per block of the two-thread kernels: the block's own triangle is swept on one
-/// thread, the rows below it on two.
-const SPLIT_COLUMNS: usize = 64;
+/// Columns per panel of the panel kernels: a panel's own triangle is swept column by column,
+/// the rows below it four columns per pass (on two threads in the split kernels). Measured on
+/// the slab n = 40 factor: panels from 40 or 64 columns on, one solve 74.5 -> 71.5 ms (medians
+/// of six alternating runs); on blocks of 16-32 columns they gain nothing (docs/method.md §9.8).
+const PANEL_COLUMNS: usize = 64;
 /// Under this many rows below a block, the two-thread kernels stay on one thread for it.
 const SPLIT_MIN_ROWS: usize = 256;
 
 /// [`forward_block`] on two threads, for the large supernodes at the top of the tree that
 /// the parallel sweeps otherwise run on one (docs/method.md §9.6): in blocks of
-/// [`SPLIT_COLUMNS`] columns, the block's triangle on this thread, then the rows below it in
+/// [`PANEL_COLUMNS`] columns, the block's triangle on this thread, then the rows below it in
 /// two halves, one per thread. Every entry of t receives the same updates in the same order
 /// as in [`forward_block`]: the same bits.
 pub(super) fn forward_block_split(block: &[f64], width: usize, t: &mut [f64]) {
+    forward_panels(block, width, t, true)
+}
+
+/// The forward kernel by panels, the rows below a panel on two threads or on this one.
+pub(super) fn forward_panels(block: &[f64], width: usize, t: &mut [f64], threads: bool) {
     let avx2 = has_avx2();
     let rows = t.len();
     let mut j0 = 0;
     while j0 < width {
-        let j1 = (j0 + SPLIT_COLUMNS).min(width);
+        let j1 = (j0 + PANEL_COLUMNS).min(width);
         let (head, below) = t.split_at_mut(j1);
         for j in j0..j1 {
             let column = &block[j * rows..(j + 1) * rows];
@@ -187,7 +215,7 @@ pub(super) fn forward_block_split(block: &[f64], width: usize, t: &mut [f64]) {
         }
         let v = &head[j0..];
         let update = |first: usize, part: &mut [f64]| subtract_columns(block, rows, j0, v, first, part, avx2);
-        if below.len() >= SPLIT_MIN_ROWS {
+        if threads && below.len() >= SPLIT_MIN_ROWS {
             let half = below.len() / 2;
             let (a, b) = below.split_at_mut(half);
             rayon::join(|| update(j1, a), || update(j1 + half, b));
@@ -198,19 +226,24 @@ pub(super) fn forward_block_split(block: &[f64], width: usize, t: &mut [f64]) {
     }
 }
 
-/// [`backward_block`] on two threads: in blocks of [`SPLIT_COLUMNS`] columns from the last,
+/// [`backward_block`] on two threads: in blocks of [`PANEL_COLUMNS`] columns from the last,
 /// each column's dot product over the rows already final (from a row whose distance to the
 /// block's end is a multiple of eight) taken on two threads, half the columns each, into the
 /// lanes the one-thread kernel uses for them; then the block's columns in order on this
 /// thread, continuing those lanes over the remaining rows. The chunks of eight, the lanes
 /// and the order of every sum are [`backward_block`]'s: the same bits.
 pub(super) fn backward_block_split(block: &[f64], width: usize, t: &mut [f64]) {
+    backward_panels(block, width, t, true)
+}
+
+/// The backward kernel by panels, the final rows' dot products on two threads or on this one.
+pub(super) fn backward_panels(block: &[f64], width: usize, t: &mut [f64], threads: bool) {
     let avx2 = has_avx2();
     let rows = t.len();
-    let mut lanes = [[0.0f64; 8]; SPLIT_COLUMNS];
+    let mut lanes = [[0.0f64; 8]; PANEL_COLUMNS];
     let mut j1 = width;
     while j1 > 0 {
-        let j0 = j1.saturating_sub(SPLIT_COLUMNS);
+        let j0 = j1.saturating_sub(PANEL_COLUMNS);
         // rows e.. are final and rows - e is a multiple of eight: whole chunks of every column
         let e = rows - (rows - j1) / 8 * 8;
         let lanes = &mut lanes[..j1 - j0];
@@ -235,7 +268,7 @@ pub(super) fn backward_block_split(block: &[f64], width: usize, t: &mut [f64]) {
                     j += 1;
                 }
             };
-            if rows - e >= SPLIT_MIN_ROWS {
+            if threads && rows - e >= SPLIT_MIN_ROWS {
                 let half = lanes.len() / 2;
                 let (a, b) = lanes.split_at_mut(half);
                 rayon::join(|| partial(j0, a), || partial(j0 + half, b));
@@ -459,13 +492,16 @@ unsafe fn accumulate_descending_avx2(a: &[f64], b: &[f64], acc: &mut [f64; 8]) {
 mod tests {
     use super::*;
 
-    /// The two-thread kernels are the one-thread ones to the bit, on blocks around the column
-    /// block's size, with no rows below the diagonal block and with many (so that both the
-    /// split and the one-thread paths of every block run).
+    /// The panel kernels, on one thread and on two, are the column-by-column kernels to the
+    /// bit, on blocks around the panel's width, with no rows below the diagonal block and with
+    /// many (so that both the split and the one-thread paths of every panel run).
     #[test]
-    fn split_kernels_are_the_one_thread_kernels_to_the_bit() {
+    fn panel_kernels_are_the_column_kernels_to_the_bit() {
+        type Kernel = fn(&[f64], usize, &mut [f64]);
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
         let value = |i: usize, s: f64| (i as f64 * 0.7548776662 + s).fract() - 0.5;
+        let one_thread_forward: Kernel = |b, w, t| forward_panels(b, w, t, false);
+        let one_thread_backward: Kernel = |b, w, t| backward_panels(b, w, t, false);
         for width in [1, 7, 63, 64, 65, 130, 300] {
             for pattern in [0, 5, 257, 700] {
                 let rows = width + pattern;
@@ -479,19 +515,25 @@ mod tests {
                 let rhs: Vec<f64> = (0..rows)
                     .map(|i| value(i, 0.6) * 10f64.powi((i % 5) as i32 - 2))
                     .collect();
-                for (one, split) in [
+                for (reference, panels) in [
                     (
-                        forward_block as fn(&[f64], usize, &mut [f64]),
-                        forward_block_split as fn(&[f64], usize, &mut [f64]),
+                        forward_by_columns as Kernel,
+                        [forward_block as Kernel, one_thread_forward, forward_block_split],
                     ),
-                    (backward_block, backward_block_split),
+                    (
+                        backward_by_columns,
+                        [backward_block as Kernel, one_thread_backward, backward_block_split],
+                    ),
                 ] {
-                    let (mut a, mut b) = (rhs.clone(), rhs.clone());
-                    one(&block, width, &mut a);
-                    pool.install(|| split(&block, width, &mut b));
+                    let mut a = rhs.clone();
+                    reference(&block, width, &mut a);
                     assert!(a.iter().all(|v| v.is_finite()), "width {width}, pattern {pattern}");
                     let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
-                    assert_eq!(bits(&a), bits(&b), "width {width}, pattern {pattern}");
+                    for (k, kernel) in panels.into_iter().enumerate() {
+                        let mut b = rhs.clone();
+                        pool.install(|| kernel(&block, width, &mut b));
+                        assert_eq!(bits(&a), bits(&b), "kernel {k}, width {width}, pattern {pattern}");
+                    }
                 }
             }
         }
