@@ -861,7 +861,8 @@ impl ActiveSetSolver<'_> {
     /// set or changed curvature, so CG needs about that many iterations. Each costs a product by
     /// Q and two triangular solves (O(m²)) where a factorisation costs O(|ℐ|³).
     ///
-    /// None (the caller refactors) when more than a quarter of the kept rows changed materially,
+    /// None (the caller refactors) when more than a quarter of the kept rows changed materially
+    /// or their number (the change's rank) is past twice the iteration budget,
     /// when a direction of non-positive curvature turns up, or when the relative residual has
     /// not reached 1e-13 within 10 + |ℐ|/200 iterations (about the cost of one factorisation
     /// at |ℐ| = 4 000, measured in docs/method.md §9.2).
@@ -884,7 +885,14 @@ impl ActiveSetSolver<'_> {
                 k != usize::MAX && (e - kept.diagonal[k]).abs() > 0.5 * (self.c(p) + kept.diagonal[k].abs())
             })
             .count();
-        if 4 * (joined + left + changed) > kept.diagonal.len() {
+        // CG needs about as many iterations as the rank of the change; past twice the budget
+        // it did not converge within it on the slab with Coulomb friction, where each such try
+        // cost more than the factorisation it delayed (docs/method.md §9.2)
+        let rank = joined + left + changed;
+        if tracing() {
+            eprintln!("  reused factor: rank of the change {rank} (joined {joined}, left {left}, changed {changed})");
+        }
+        if 4 * rank > kept.diagonal.len() || rank > 2 * iterations {
             return None;
         }
         let (mut full, mut product) = (vec![0.0; m], vec![0.0; m]);
