@@ -226,12 +226,14 @@ impl Schedule {
         }
         let mut local = vec![0.0; sn.max_rows];
         for &s in &self.top {
-            let kernel = if sn.entries(s) >= SPLIT_MIN_ENTRIES {
-                forward_block_split
-            } else {
-                forward_block
-            };
-            forward_supernode_with(sn, values, s, y, &mut local, kernel);
+            forward_supernode_with(
+                sn,
+                values,
+                s,
+                y,
+                &mut local,
+                top_kernel(sn, s, forward_block, forward_block_split),
+            );
         }
     }
 
@@ -239,12 +241,14 @@ impl Schedule {
     pub fn backward(&self, sn: &Supernodes, values: &[f64], y: &mut [f64]) {
         let mut local = vec![0.0; sn.max_rows];
         for &s in self.top.iter().rev() {
-            let kernel = if sn.entries(s) >= SPLIT_MIN_ENTRIES {
-                backward_block_split
-            } else {
-                backward_block
-            };
-            backward_supernode_with(sn, values, s, y, &mut local, kernel);
+            backward_supernode_with(
+                sn,
+                values,
+                s,
+                y,
+                &mut local,
+                top_kernel(sn, s, backward_block, backward_block_split),
+            );
         }
         let shared: Vec<f64> = self.top_rows.iter().map(|&r| y[r]).collect();
         let mut work = self.split(y);
@@ -274,6 +278,15 @@ impl Schedule {
 
 /// A dense kernel of the sweeps (supernodes.rs).
 type Kernel = fn(&[f64], usize, &mut [f64]);
+
+/// The kernel for top supernode s: split between the threads from [`SPLIT_MIN_ENTRIES`] on.
+fn top_kernel(sn: &Supernodes, s: usize, one: Kernel, split: Kernel) -> Kernel {
+    if sn.entries(s) >= SPLIT_MIN_ENTRIES {
+        split
+    } else {
+        one
+    }
+}
 
 /// One supernode of the forward sweep on the whole vector.
 #[inline]

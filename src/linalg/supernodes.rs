@@ -187,10 +187,10 @@ const PANEL_COLUMNS: usize = 64;
 const SPLIT_MIN_ROWS: usize = 256;
 
 /// [`forward_block`] on two threads, for the large supernodes at the top of the tree that
-/// the parallel sweeps otherwise run on one (docs/method.md §9.6): in blocks of
-/// [`PANEL_COLUMNS`] columns, the block's triangle on this thread, then the rows below it in
+/// the parallel sweeps otherwise run on one (docs/method.md §9.8): in panels of
+/// [`PANEL_COLUMNS`] columns, the panel's triangle on this thread, then the rows below it in
 /// two halves, one per thread. Every entry of t receives the same updates in the same order
-/// as in [`forward_block`]: the same bits.
+/// as in [`forward_by_columns`]: the same bits.
 pub(super) fn forward_block_split(block: &[f64], width: usize, t: &mut [f64]) {
     forward_panels(block, width, t, true)
 }
@@ -226,12 +226,12 @@ pub(super) fn forward_panels(block: &[f64], width: usize, t: &mut [f64], threads
     }
 }
 
-/// [`backward_block`] on two threads: in blocks of [`PANEL_COLUMNS`] columns from the last,
+/// [`backward_block`] on two threads: in panels of [`PANEL_COLUMNS`] columns from the last,
 /// each column's dot product over the rows already final (from a row whose distance to the
 /// block's end is a multiple of eight) taken on two threads, half the columns each, into the
-/// lanes the one-thread kernel uses for them; then the block's columns in order on this
-/// thread, continuing those lanes over the remaining rows. The chunks of eight, the lanes
-/// and the order of every sum are [`backward_block`]'s: the same bits.
+/// lanes the column kernel uses for them; then the panel's columns in order on this thread,
+/// continuing those lanes over the remaining rows. The chunks of eight, the lanes and the
+/// order of every sum are [`backward_by_columns`]'s: the same bits.
 pub(super) fn backward_block_split(block: &[f64], width: usize, t: &mut [f64]) {
     backward_panels(block, width, t, true)
 }
@@ -278,12 +278,9 @@ pub(super) fn backward_panels(block: &[f64], width: usize, t: &mut [f64], thread
         }
         for j in (j0..j1).rev() {
             let column = &block[j * rows..(j + 1) * rows];
-            let (a, b) = (&column[j + 1..e], &t[j + 1..e]);
-            let acc = &mut lanes[j - j0];
-            accumulate(a, b, acc, avx2);
-            let r = a.len() % 8;
-            let tail: f64 = a[..r].iter().zip(&b[..r]).map(|(x, y)| x * y).sum();
-            let dot = ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7])) + tail;
+            let dot = dot_descending_from(lanes[j - j0], &column[j + 1..e], &t[j + 1..e], |a, b, acc| {
+                accumulate(a, b, acc, avx2)
+            });
             t[j] = (t[j] - dot) / column[j];
         }
         j1 = j0;
@@ -436,8 +433,19 @@ pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// summed pairwise.
 #[inline(always)]
 fn dot_descending(a: &[f64], b: &[f64], accumulate: impl Fn(&[f64], &[f64], &mut [f64; 8])) -> f64 {
+    dot_descending_from([0.0; 8], a, b, accumulate)
+}
+
+/// [`dot_descending`] continuing lanes `acc` that already hold the chunks after a and b (the
+/// panel kernels take a column's final rows first, in the same lanes).
+#[inline(always)]
+fn dot_descending_from(
+    mut acc: [f64; 8],
+    a: &[f64],
+    b: &[f64],
+    accumulate: impl Fn(&[f64], &[f64], &mut [f64; 8]),
+) -> f64 {
     let r = a.len() % 8;
-    let mut acc = [0.0; 8];
     accumulate(a, b, &mut acc);
     let tail: f64 = a[..r].iter().zip(&b[..r]).map(|(x, y)| x * y).sum();
     ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7])) + tail
