@@ -30,7 +30,7 @@
 use super::condensed::NormalStiffness;
 use super::newton_w::{self, Curvature};
 use super::nodal::NodalLaws;
-use crate::linalg::dense::{DenseCholesky, FactorBuffer};
+use crate::linalg::dense::{DenseCholesky, DenseLu, FactorBuffer};
 
 /// Tolerance and iteration cap of the contact solve.
 #[derive(Clone, Copy, Debug)]
@@ -154,7 +154,48 @@ pub struct ReusedFactor {
     row: Vec<usize>,
     /// e on the factor's diagonal, per row.
     diagonal: Vec<f64>,
+    /// A pair's coupling on the factor's off-diagonal, per row (0 where the row has no pair).
+    coupling: Vec<f64>,
     factor: DenseCholesky,
+    /// The columns A₀⁻¹ e_k of the rows k the low-rank update has needed so far (column-major,
+    /// n numbers each; they depend on the factor only, so they are kept with it), and each
+    /// row's column (usize::MAX: none yet).
+    columns: Vec<f64>,
+    column_of: Vec<usize>,
+}
+
+/// P = A₀ + UΔUᵀ of [`ActiveSetSolver::preconditioned_cg`] on the kept factor's rows `rows`.
+struct LowRankUpdate {
+    rows: Vec<usize>,
+    /// Each row's column of Z = A₀⁻¹ U in [`ReusedFactor::columns`].
+    columns: Vec<usize>,
+    /// Per row: Δ's diagonal, the pair partner's place in `rows` (usize::MAX: none) and Δ there.
+    delta: Vec<(f64, usize, f64)>,
+    /// I + Δ Uᵀ Z.
+    capacitance: DenseLu,
+}
+
+impl LowRankUpdate {
+    /// y ← P⁻¹ r from y = A₀⁻¹ r: y − Z (I + Δ Uᵀ Z)⁻¹ Δ Uᵀ y.
+    fn correct(&self, kept: &ReusedFactor, y: &mut [f64]) {
+        let n = y.len();
+        let mut t: Vec<f64> = (self.delta.iter().zip(&self.rows))
+            .map(|(&(d, partner, off), &k)| {
+                d * y[k]
+                    + if partner == usize::MAX {
+                        0.0
+                    } else {
+                        off * y[self.rows[partner]]
+                    }
+            })
+            .collect();
+        self.capacitance.solve_in_place(&mut t);
+        for (&c, &w) in self.columns.iter().zip(&t) {
+            for (v, z) in y.iter_mut().zip(&kept.columns[c * n..(c + 1) * n]) {
+                *v -= w * z;
+            }
+        }
+    }
 }
 
 /// What one contact solve did.
@@ -683,10 +724,10 @@ impl ActiveSetSolver<'_> {
         }
         let exact: Vec<f64> = hessian.diagonal.iter().zip(proximal).map(|(e, p)| e + p).collect();
         let reuse = nf > self.settings.dense_limit;
-        let reused = (kept.0.as_ref())
+        let reused = (kept.0.as_mut())
             .filter(|k| reuse && k.fingerprint == fingerprint)
             .and_then(|k| self.preconditioned_cg(k, free, (&exact, hessian), grad));
-        if let Some(x) = reused {
+        if let Some((x, _)) = reused {
             outcome.iterative += 1;
             return x;
         }
@@ -708,8 +749,8 @@ impl ActiveSetSolver<'_> {
                 }
             })
         };
-        let (llt, diagonal) = match build(&exact, &hessian.coupling) {
-            Some(llt) => (llt, exact),
+        let (llt, diagonal, coupling) = match build(&exact, &hessian.coupling) {
+            Some(llt) => (llt, exact, hessian.coupling.clone()),
             None => {
                 outcome.convexified += 1;
                 let mut shift = 0.0;
@@ -721,7 +762,7 @@ impl ActiveSetSolver<'_> {
                         .map(|(e, p)| e + p + shift)
                         .collect();
                     if let Some(llt) = build(&diagonal, &hessian.convex_coupling) {
-                        break (llt, diagonal);
+                        break (llt, diagonal, hessian.convex_coupling.clone());
                     }
                     shift = if shift == 0.0 {
                         1e-12 * self.c(free[0])
@@ -737,11 +778,23 @@ impl ActiveSetSolver<'_> {
             for (i, &p) in free.iter().enumerate() {
                 row[p] = i;
             }
+            let coupling = (0..nf)
+                .map(|i| {
+                    if hessian.partner[i] == usize::MAX {
+                        0.0
+                    } else {
+                        coupling[i]
+                    }
+                })
+                .collect();
             let old = kept.0.replace(ReusedFactor {
                 fingerprint,
                 row,
                 diagonal,
+                coupling,
                 factor: llt,
+                columns: Vec::new(),
+                column_of: vec![usize::MAX; nf],
             });
             if let Some(old) = old {
                 buffer.recycle(old.factor);
@@ -854,47 +907,82 @@ impl ActiveSetSolver<'_> {
     }
 
     /// (Q_ℐℐ + diag(curvature)) x = G_ℐ by conjugate gradients preconditioned with the kept
-    /// factorisation of an earlier Newton matrix Q_ℱℱ + diag(e) (docs/method.md §9.2): on ℐ ∩ ℱ
-    /// the preconditioner is (Q_ℱℱ + diag(e))⁻¹ restricted to those rows (a principal block of
-    /// an SPD inverse, so SPD), on the nodes freed since it is Jacobi's 1/(Q_pp + e_p). The two
-    /// matrices differ by a perturbation of the rank of the nodes that joined or left the free
-    /// set or changed curvature, so CG needs about that many iterations. Each costs a product by
-    /// Q and two triangular solves (O(m²)) where a factorisation costs O(|ℐ|³).
+    /// factorisation of an earlier Newton matrix A₀ = Q_ℱℱ + diag(e) (docs/method.md §9.2).
     ///
-    /// None (the caller refactors) when more than a quarter of the kept rows changed materially
-    /// or their number (the change's rank) is past twice the iteration budget,
-    /// when a direction of non-positive curvature turns up, or when the relative residual has
-    /// not reached 1e-13 within 10 + |ℐ|/200 iterations (about the cost of one factorisation
-    /// at |ℐ| = 4 000, measured in docs/method.md §9.2).
+    /// On the same free set (ℐ = ℱ) the preconditioner is A₀ updated on the rows whose curvature
+    /// moved by more than a tenth of their stiffness (𝒰, with a pair's partner): P = A₀ + UΔUᵀ,
+    /// Δ the change of the diagonal and the pairs' coupling there, applied by Woodbury's identity
+    /// P⁻¹ = A₀⁻¹ − Z (I + Δ Uᵀ Z)⁻¹ Δ Uᵀ A₀⁻¹ with Z = A₀⁻¹ U, whose columns are kept with the
+    /// factor (one blocked solve for the rows new to 𝒰). P is the Newton matrix up to the
+    /// other rows' small changes, so CG needs a few iterations whatever |𝒰|; each costs a product by
+    /// Q, two triangular solves and a product by Z, where a factorisation costs O(|ℐ|³). Past
+    /// |ℐ|/12 rows in 𝒰 the new columns would cost about a factorisation: None.
+    ///
+    /// Where nodes joined or left the free set the preconditioner is A₀⁻¹ restricted to ℐ ∩ ℱ
+    /// (a principal block of an SPD inverse, so SPD) and Jacobi's 1/(Q_pp + e_p) on the nodes freed
+    /// since; the two matrices then differ by a perturbation of the rank of the nodes that joined,
+    /// left or changed curvature by half their stiffness, and CG needs about that many iterations:
+    /// None when more than a quarter of the kept rows changed or their number is past twice the
+    /// iteration budget.
+    ///
+    /// None (the caller refactors) also when a direction of non-positive curvature turns up, or
+    /// when the relative residual has not reached 1e-13 within 10 + |ℐ|/200 iterations (about
+    /// the cost of one factorisation at |ℐ| = 4 000, measured in docs/method.md §9.2).
     fn preconditioned_cg(
         &self,
-        kept: &ReusedFactor,
+        kept: &mut ReusedFactor,
         free: &[usize],
         (curvature, hessian): (&[f64], &LawHessian),
         grad: &[f64],
-    ) -> Option<Vec<f64>> {
+    ) -> Option<(Vec<f64>, usize)> {
         let (m, nf) = (self.m(), free.len());
         let iterations = 10 + nf / 200;
         let joined = free.iter().filter(|&&p| kept.row[p] == usize::MAX).count();
         let left = kept.diagonal.len() - (nf - joined);
-        let changed = free
-            .iter()
-            .zip(curvature)
-            .filter(|&(&p, &e)| {
-                let k = kept.row[p];
-                k != usize::MAX && (e - kept.diagonal[k]).abs() > 0.5 * (self.c(p) + kept.diagonal[k].abs())
-            })
-            .count();
-        // CG needs about as many iterations as the rank of the change; past twice the budget
-        // it did not converge within it on the slab with Coulomb friction, where each such try
-        // cost more than the factorisation it delayed (docs/method.md §9.2)
-        let rank = joined + left + changed;
-        if tracing() {
-            eprintln!("  reused factor: rank of the change {rank} (joined {joined}, left {left}, changed {changed})");
-        }
-        if 4 * rank > kept.diagonal.len() || rank > 2 * iterations {
-            return None;
-        }
+        let moved = |share: f64, i: usize| {
+            let (p, k) = (free[i], kept.row[free[i]]);
+            k != usize::MAX && (curvature[i] - kept.diagonal[k]).abs() > share * (self.c(p) + kept.diagonal[k].abs())
+        };
+        let update = if joined + left == 0 {
+            let mut in_u: Vec<bool> = (0..nf)
+                .map(|i| {
+                    let k = kept.row[free[i]];
+                    moved(0.1, i)
+                        || hessian.partner[i] != usize::MAX
+                            && (hessian.coupling[i] - kept.coupling[k]).abs()
+                                > 0.1 * (self.c(free[i]) + kept.diagonal[k].abs())
+                })
+                .collect();
+            for i in 0..nf {
+                if in_u[i] && hessian.partner[i] != usize::MAX {
+                    in_u[hessian.partner[i]] = true;
+                }
+            }
+            let u: Vec<usize> = (0..nf).filter(|&i| in_u[i]).collect();
+            if tracing() {
+                eprintln!("  reused factor: updated on {} of {nf} rows", u.len());
+            }
+            if 12 * u.len() > nf {
+                return None;
+            }
+            Some(self.low_rank_update(kept, free, (curvature, hessian), &u))
+        } else {
+            let changed = (0..nf).filter(|&i| moved(0.5, i)).count();
+            // CG needs about as many iterations as the rank of the change; past twice the budget
+            // it did not converge within it on the slab with Coulomb friction, where each such try
+            // cost more than the factorisation it delayed (docs/method.md §9.2)
+            let rank = joined + left + changed;
+            if tracing() {
+                eprintln!(
+                    "  reused factor: rank of the change {rank} (joined {joined}, left {left}, changed {changed})"
+                );
+            }
+            if 4 * rank > kept.diagonal.len() || rank > 2 * iterations {
+                return None;
+            }
+            None
+        };
+        let kept = &*kept;
         let (mut full, mut product) = (vec![0.0; m], vec![0.0; m]);
         let mut apply = |x: &[f64], y: &mut [f64]| {
             full.fill(0.0);
@@ -918,6 +1006,9 @@ impl ActiveSetSolver<'_> {
                 }
             }
             kept.factor.solve_in_place(&mut kept_rhs);
+            if let Some(update) = &update {
+                update.correct(kept, &mut kept_rhs);
+            }
             for (i, &p) in free.iter().enumerate() {
                 z[i] = match kept.row[p] {
                     usize::MAX => r[i] / (self.c(p) + curvature[i].max(0.0)),
@@ -929,7 +1020,7 @@ impl ActiveSetSolver<'_> {
         let norm_b = b.iter().map(|v| v * v).sum::<f64>().sqrt();
         let mut x = vec![0.0; nf];
         if norm_b == 0.0 {
-            return Some(x);
+            return Some((x, 0));
         }
         let mut r = b;
         let mut z = vec![0.0; nf];
@@ -940,7 +1031,8 @@ impl ActiveSetSolver<'_> {
         for k in 0..iterations {
             apply(&dir, &mut ad);
             let curvature_along: f64 = dir.iter().zip(&ad).map(|(a, b)| a * b).sum();
-            if curvature_along <= 0.0 {
+            // (rz ≤ 0: the updated preconditioner is not positive definite)
+            if curvature_along <= 0.0 || rz <= 0.0 {
                 return None;
             }
             let alpha = rz / curvature_along;
@@ -952,7 +1044,7 @@ impl ActiveSetSolver<'_> {
                 if tracing() {
                     eprintln!("  reused factor: {} conjugate-gradient iterations", k + 1);
                 }
-                return Some(x);
+                return Some((x, k + 1));
             }
             precondition(&r, &mut z);
             let next: f64 = r.iter().zip(&z).map(|(a, b)| a * b).sum();
@@ -966,6 +1058,69 @@ impl ActiveSetSolver<'_> {
             eprintln!("  reused factor: no convergence in {iterations} iterations, refactoring");
         }
         None
+    }
+
+    /// The low-rank update of [`Self::preconditioned_cg`] on the free rows `u` (ℐ = ℱ): the
+    /// columns of Z = A₀⁻¹ U not kept yet (one blocked solve), Δ and the capacitance matrix
+    /// I + Δ Uᵀ Z, factored.
+    fn low_rank_update(
+        &self,
+        kept: &mut ReusedFactor,
+        free: &[usize],
+        (curvature, hessian): (&[f64], &LawHessian),
+        u: &[usize],
+    ) -> LowRankUpdate {
+        let n = kept.diagonal.len();
+        let rows: Vec<usize> = u.iter().map(|&i| kept.row[free[i]]).collect();
+        let fresh: Vec<usize> = rows
+            .iter()
+            .copied()
+            .filter(|&k| kept.column_of[k] == usize::MAX)
+            .collect();
+        if !fresh.is_empty() {
+            let start = kept.columns.len();
+            kept.columns.resize(start + n * fresh.len(), 0.0);
+            for (a, &k) in fresh.iter().enumerate() {
+                kept.columns[start + a * n + k] = 1.0;
+                kept.column_of[k] = start / n + a;
+            }
+            kept.factor
+                .solve_columns_in_place(&mut kept.columns[start..], fresh.len());
+        }
+        // Δ: per row of 𝒰 its diagonal change and, for a pair, its partner's place in 𝒰 and the
+        // change of their coupling
+        let place: std::collections::HashMap<usize, usize> = u.iter().enumerate().map(|(a, &i)| (i, a)).collect();
+        let delta: Vec<(f64, usize, f64)> = u
+            .iter()
+            .zip(&rows)
+            .map(|(&i, &k)| {
+                let j = hessian.partner[i];
+                match j {
+                    usize::MAX => (curvature[i] - kept.diagonal[k], usize::MAX, 0.0),
+                    _ => (
+                        curvature[i] - kept.diagonal[k],
+                        place[&j],
+                        hessian.coupling[i] - kept.coupling[k],
+                    ),
+                }
+            })
+            .collect();
+        let columns: Vec<usize> = rows.iter().map(|&k| kept.column_of[k]).collect();
+        let z = |row: usize, b: usize| kept.columns[columns[b] * n + row];
+        let capacitance = DenseLu::new(u.len(), |a, b| {
+            let (d, partner, off) = delta[a];
+            let mut v = d * z(rows[a], b);
+            if partner != usize::MAX {
+                v += off * z(rows[partner], b);
+            }
+            v + if a == b { 1.0 } else { 0.0 }
+        });
+        LowRankUpdate {
+            rows,
+            columns,
+            delta,
+            capacitance,
+        }
     }
 
     /// Forces and statuses at the converged r: λ = q − Q r (= Q(d − r)), ξ = w j_ε'(r),
@@ -1118,6 +1273,85 @@ mod tests {
             active_sets.insert(b.status.iter().filter(|s| **s == NodeStatus::OnBound).count());
         }
         assert!(active_sets.len() >= 4, "the active set moved: {active_sets:?}");
+    }
+
+    /// The kept factor updated on the rows whose curvature moved (a single row stiffened ten
+    /// thousand times, one dropped to 0, a pair's coupling turned over) is the new Newton matrix:
+    /// CG converges at once, to the fresh factorisation's direction; Z's columns are kept, so a
+    /// second change on the same rows needs none; the other rows' small changes (5 %) cost a few
+    /// iterations more, not a refactorisation.
+    #[test]
+    fn a_low_rank_update_of_the_kept_factor_is_the_new_newton_matrix() {
+        let m = 120;
+        let op = operator(m);
+        let (bound, laws) = (vec![0.2; m], NodalLaws::default());
+        let s = solver(&op, &laws, &bound, None, 0);
+        let free: Vec<usize> = (0..m).collect();
+        let mut partner = vec![usize::MAX; m];
+        for (p, q) in [(10, 11), (40, 41)] {
+            (partner[p], partner[q]) = (q, p);
+        }
+        let e0: Vec<f64> = (0..m).map(|p| 0.3 * s.c(p) * (1 + p % 7) as f64).collect();
+        let c0: Vec<f64> = (0..m)
+            .map(|p| if partner[p] == usize::MAX { 0.0 } else { 0.05 * s.c(p) })
+            .collect();
+        let matrix = |e: &[f64], c: &[f64]| {
+            let (e, c, partner) = (e.to_vec(), c.to_vec(), partner.clone());
+            let q = op.clone();
+            move |i: usize, j: usize| {
+                q.q(i, j)
+                    + if i == j {
+                        e[i]
+                    } else if partner[i] == j {
+                        c[i]
+                    } else {
+                        0.0
+                    }
+            }
+        };
+        let mut kept = ReusedFactor {
+            fingerprint: s.fingerprint(),
+            row: (0..m).collect(),
+            diagonal: e0.clone(),
+            coupling: c0.clone(),
+            factor: DenseCholesky::new(m, matrix(&e0, &c0)).unwrap(),
+            columns: Vec::new(),
+            column_of: vec![usize::MAX; m],
+        };
+        let grad: Vec<f64> = (0..m).map(|p| (0.37 * p as f64).sin()).collect();
+        let solve = |e: &[f64], c: &[f64], kept: &mut ReusedFactor| {
+            let hessian = LawHessian {
+                diagonal: e.to_vec(),
+                coupling: c.to_vec(),
+                convex_diagonal: e.to_vec(),
+                convex_coupling: c.to_vec(),
+                partner: partner.clone(),
+                pair: vec![(0.0, 0.0, [1.0, 0.0]); m],
+            };
+            let (x, iterations) = s.preconditioned_cg(kept, &free, (e, &hessian), &grad).unwrap();
+            let exact = DenseCholesky::new(m, matrix(e, c)).unwrap().solve(&grad);
+            let scale = exact.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            for (a, b) in x.iter().zip(&exact) {
+                assert!((a - b).abs() <= 1e-10 * scale, "{a} against {b}");
+            }
+            iterations
+        };
+        let (mut e, mut c) = (e0.clone(), c0.clone());
+        e[3] *= 1e4;
+        e[57] = 0.0;
+        (c[40], c[41]) = (-0.5 * s.c(40), -0.5 * s.c(40));
+        assert!(solve(&e, &c, &mut kept) <= 2);
+        // the rows of 𝒰: 3, 57 and both rows of the pair (40, 41)
+        assert_eq!(kept.columns.len(), 4 * m);
+        e[3] *= 2.0;
+        e[57] = 5.0 * s.c(57);
+        assert!(solve(&e, &c, &mut kept) <= 2);
+        assert_eq!(kept.columns.len(), 4 * m, "no new columns for the same rows");
+        for p in (0..m).step_by(5) {
+            e[p] *= 1.05;
+        }
+        let iterations = solve(&e, &c, &mut kept);
+        assert!((3..=12).contains(&iterations), "{iterations} iterations");
     }
 
     /// Q without W formed: the solver cannot take the Newton system in W, except (with

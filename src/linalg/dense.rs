@@ -62,6 +62,15 @@ impl DenseCholesky {
         solve_upper_triangular_in_place(self.l().transpose(), rhs, Par::Seq);
     }
 
+    /// X ← A⁻¹ X for the n × k column-major X: k right-hand sides at once, so each sweep reads
+    /// L once for all of them (blocked, on the run's threads from order 512).
+    pub fn solve_columns_in_place(&self, x: &mut [f64], k: usize) {
+        use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
+        let mut rhs = MatMut::from_column_major_slice_mut(x, self.n, k);
+        solve_lower_triangular_in_place(self.l(), rhs.as_mut(), par(self.n));
+        solve_upper_triangular_in_place(self.l().transpose(), rhs, par(self.n));
+    }
+
     /// A⁻¹, row-major: L⁻ᵀ L⁻¹ by faer's triangular inverse and product, its lower triangle
     /// mirrored (exactly symmetric).
     pub fn symmetric_inverse(&self) -> Vec<f64> {
@@ -82,6 +91,24 @@ impl DenseCholesky {
             }
         }
         inv
+    }
+}
+
+/// The LU factors (partial pivoting) of a small general k × k matrix (the capacitance matrix of
+/// a low-rank update, docs/method.md §9.2).
+pub struct DenseLu(faer::linalg::solvers::PartialPivLu<f64>);
+
+impl DenseLu {
+    /// Factors the matrix with entries `a(i, j)`.
+    pub fn new(k: usize, a: impl Fn(usize, usize) -> f64) -> Self {
+        DenseLu(faer::Mat::from_fn(k, k, a).partial_piv_lu())
+    }
+
+    /// x ← A⁻¹ x.
+    pub fn solve_in_place(&self, x: &mut [f64]) {
+        use faer::linalg::solvers::Solve;
+        let k = x.len();
+        self.0.solve_in_place(MatMut::from_column_major_slice_mut(x, k, 1));
     }
 }
 
