@@ -982,6 +982,7 @@ fn case8_several_local_minima() {
             singular: false,
             pairs: None,
             fixed: None,
+            branch_from: usize::MAX,
         };
         let energy = |r: &[f64]| {
             let diff: Vec<f64> = r.iter().zip(&d).map(|(a, b)| a - b).collect();

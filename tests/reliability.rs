@@ -626,6 +626,7 @@ fn a_stalled_contact_solve_names_the_tolerance_that_converges() {
             singular: false,
             pairs: None,
             fixed: None,
+            branch_from: usize::MAX,
             settings: ContactSettings {
                 tolerance,
                 max_iterations: 100,

@@ -199,6 +199,7 @@ fn solve_increment<const D: usize>(
             singular: normal.singular,
             pairs: None,
             fixed: Some(&stick),
+            branch_from: usize::MAX,
         };
         let outcome = predictor.solve_forces(q, state)?;
         total.iterations += outcome.iterations;
@@ -230,6 +231,7 @@ fn solve_increment<const D: usize>(
             singular: normal.singular,
             pairs: friction.pairs.as_deref(),
             fixed: fixed.as_deref(),
+            branch_from: m,
         };
         let outcome = solver.solve_forces(q, state).map_err(|mut f| {
             f.outcome.iterations += total.iterations;

@@ -216,6 +216,7 @@ fn contact_solve<const D: usize>(
             singular: op_singular,
             pairs: None,
             fixed: setup.bilateral.as_deref(),
+            branch_from: usize::MAX,
         }
         .solve_forces(q, state),
     };
