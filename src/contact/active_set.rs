@@ -726,32 +726,18 @@ impl ActiveSetSolver<'_> {
             let proximal: Vec<f64> = free.iter().map(|&p| proximal * self.c(p)).collect();
             // (rows leaving their kink: the branch model's direction where it descends, §17.2)
             let slope = |d: &[f64]| free.iter().zip(d).map(|(&p, d)| grad[p] * d).sum::<f64>();
-            let mut free_dir = self.branch_model(r, &free, &hessian, &grad, &kink).map(|(h, g)| {
-                self.newton_direction(
-                    &free,
-                    (&h, &proximal),
-                    &g,
-                    &mut outcome,
-                    (&mut state.newton_factor, &mut state.buffer),
-                    fingerprint,
-                )
-            });
+            let mut direct = |h: &LawHessian, g: &[f64]| {
+                let kept = (&mut state.newton_factor, &mut state.buffer);
+                self.newton_direction(&free, (h, &proximal), g, &mut outcome, kept, fingerprint)
+            };
+            let mut free_dir = (self.branch_model(r, &free, &hessian, &grad, &kink)).map(|(h, g)| direct(&h, &g));
             if free_dir.as_ref().is_some_and(|d| slope(d) <= 0.0) {
                 if tracing() {
                     eprintln!("  the branch model's direction does not descend: the law's own");
                 }
                 free_dir = None;
             }
-            let free_dir = free_dir.unwrap_or_else(|| {
-                self.newton_direction(
-                    &free,
-                    (&hessian, &proximal),
-                    &grad,
-                    &mut outcome,
-                    (&mut state.newton_factor, &mut state.buffer),
-                    fingerprint,
-                )
-            });
+            let free_dir = free_dir.unwrap_or_else(|| direct(&hessian, &grad));
             let predicted_slope = slope(&free_dir);
             for (k, &p) in free.iter().enumerate() {
                 direction[p] = free_dir[k];
