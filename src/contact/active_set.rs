@@ -1033,7 +1033,8 @@ impl ActiveSetSolver<'_> {
     /// factor (one blocked solve for the rows new to 𝒰). P is the Newton matrix up to the
     /// other rows' small changes, so CG needs a few iterations whatever |𝒰|; each costs a product by
     /// Q, two triangular solves and a product by Z, where a factorisation costs O(|ℐ|³). Past
-    /// |ℐ|/12 rows in 𝒰 the new columns would cost about a factorisation: None.
+    /// |ℐ|/12 rows in 𝒰 the new columns would cost about a factorisation, and past |ℐ|/4 kept
+    /// columns they would hold a quarter of the factor's memory: None.
     ///
     /// Where nodes joined or left the free set the preconditioner is A₀⁻¹ restricted to ℐ ∩ ℱ
     /// (a principal block of an SPD inverse, so SPD) and Jacobi's 1/(Q_pp + e_p) on the nodes freed
@@ -1079,7 +1080,13 @@ impl ActiveSetSolver<'_> {
             if tracing() {
                 eprintln!("  reused factor: updated on {} of {nf} rows", u.len());
             }
-            if 12 * u.len() > nf {
+            // (and the kept columns stay within a quarter of the factor's size: a refactorisation
+            // starts them afresh)
+            let fresh = u
+                .iter()
+                .filter(|&&i| kept.column_of[kept.row[free[i]]] == usize::MAX)
+                .count();
+            if 12 * u.len() > nf || 4 * (kept.columns.len() / nf.max(1) + fresh) > nf {
                 return None;
             }
             Some(self.low_rank_update(kept, free, (curvature, hessian), &u))
