@@ -650,6 +650,10 @@ impl ActiveSetSolver<'_> {
         // The smallest residual so far: a full step that raises the energy is accepted only if
         // it halves this (a watchdog: such steps cannot cycle).
         let mut best_residual = f64::INFINITY;
+        // The branch model is taken only after a full step: where the line search had to cut the
+        // last step, some rows it sent out of their kink came back, and taking it again cycled
+        // (docs/method.md §17.2).
+        let mut full_step = true;
         loop {
             // 1. gradient and residual
             self.gradient(r, d, &mut qrd, &mut grad);
@@ -730,7 +734,9 @@ impl ActiveSetSolver<'_> {
                 let kept = (&mut state.newton_factor, &mut state.buffer);
                 self.newton_direction(&free, (h, &proximal), g, &mut outcome, kept, fingerprint)
             };
-            let mut free_dir = (self.branch_model(r, &free, &hessian, &grad, &kink)).map(|(h, g)| direct(&h, &g));
+            let mut free_dir = (full_step.then(|| self.branch_model(r, &free, &hessian, &grad, &kink)))
+                .flatten()
+                .map(|(h, g)| direct(&h, &g));
             if free_dir.as_ref().is_some_and(|d| slope(d) <= 0.0) {
                 if tracing() {
                     eprintln!("  the branch model's direction does not descend: the law's own");
@@ -806,6 +812,7 @@ impl ActiveSetSolver<'_> {
                     });
                 }
             }
+            full_step = alpha == 1.0;
             for p in 0..m {
                 r[p] += trial[p];
                 if r[p] > self.g(p) {

@@ -231,7 +231,9 @@ fn solve_increment<const D: usize>(
             singular: normal.singular,
             pairs: friction.pairs.as_deref(),
             fixed: fixed.as_deref(),
-            branch_from: m,
+            // Coulomb's rows only: on the Cattaneo–Mindlin block Tresca took 29 → 34 directions
+            // with it (docs/method.md §17.2)
+            branch_from: if coulomb { m } else { usize::MAX },
         };
         let outcome = solver.solve_forces(q, state).map_err(|mut f| {
             f.outcome.iterations += total.iterations;
