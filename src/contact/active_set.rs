@@ -306,6 +306,7 @@ const BRANCH_EDGE: f64 = 1e3;
 /// The Hessian of the laws on the Newton system's free rows: diagonal, the coupling of each
 /// row to its pair's other row (at `partner`, the free index, usize::MAX: none), and both
 /// convexified (the laws' negative curvatures dropped).
+#[derive(Clone)]
 struct LawHessian {
     diagonal: Vec<f64>,
     coupling: Vec<f64>,
@@ -317,6 +318,12 @@ struct LawHessian {
 }
 
 const ARMIJO: f64 = 1e-4;
+
+/// A pair's block a nnᵀ + b (I − nnᵀ) seen from its row whose component of n is n[0]: that row's
+/// diagonal entry and the coupling to the other row (docs/method.md §17.3).
+fn pair_block(a: f64, b: f64, n: [f64; 2]) -> (f64, f64) {
+    (b + (a - b) * n[0] * n[0], (a - b) * n[0] * n[1])
+}
 
 /// HVI_TRACE_CONTACT set: the solve prints its iterations to stderr.
 fn tracing() -> bool {
@@ -419,9 +426,8 @@ impl ActiveSetSolver<'_> {
                     } else {
                         (a, [1.0, 0.0])
                     };
-                    let block = |a: f64, b: f64| (b + (a - b) * n[0] * n[0], (a - b) * n[0] * n[1]);
-                    (h.diagonal[i], h.coupling[i]) = block(a, b);
-                    (h.convex_diagonal[i], h.convex_coupling[i]) = block(a.max(0.0), b.max(0.0));
+                    (h.diagonal[i], h.coupling[i]) = pair_block(a, b, n);
+                    (h.convex_diagonal[i], h.convex_coupling[i]) = pair_block(a.max(0.0), b.max(0.0), n);
                     h.partner[i] = index[q];
                     h.pair[i] = (a, b, n);
                 }
@@ -452,14 +458,7 @@ impl ActiveSetSolver<'_> {
         if self.branch_from >= self.m() {
             return None;
         }
-        let mut h = LawHessian {
-            diagonal: hessian.diagonal.clone(),
-            coupling: hessian.coupling.clone(),
-            convex_diagonal: hessian.convex_diagonal.clone(),
-            convex_coupling: hessian.convex_coupling.clone(),
-            partner: hessian.partner.clone(),
-            pair: hessian.pair.clone(),
-        };
+        let mut h = hessian.clone();
         let mut g = grad.to_vec();
         let mut changed = 0;
         for (i, &p) in free.iter().enumerate() {
@@ -507,16 +506,14 @@ impl ActiveSetSolver<'_> {
                     g[q] = grad[q] - fl * x[1] + f * n[1];
                     let a = self.laws.stiffness(p, edge);
                     let (_, b, _) = h.pair[i];
-                    let coupling = (a - b) * n[0] * n[1];
-                    let convex = (a.max(0.0) - b.max(0.0)) * n[0] * n[1];
-                    h.diagonal[i] = b + (a - b) * n[0] * n[0];
-                    h.diagonal[j] = b + (a - b) * n[1] * n[1];
-                    h.convex_diagonal[i] = b.max(0.0) + (a.max(0.0) - b.max(0.0)) * n[0] * n[0];
-                    h.convex_diagonal[j] = b.max(0.0) + (a.max(0.0) - b.max(0.0)) * n[1] * n[1];
-                    (h.coupling[i], h.coupling[j]) = (coupling, coupling);
-                    (h.convex_coupling[i], h.convex_coupling[j]) = (convex, convex);
-                    h.pair[i] = (a, b, n);
-                    h.pair[j] = (a, b, [n[1], n[0]]);
+                    // row q sees the pair from its side (n with its components swapped); the
+                    // two rows share row p's coupling
+                    for (row, n) in [(i, n), (j, [n[1], n[0]])] {
+                        (h.diagonal[row], h.coupling[row]) = pair_block(a, b, n);
+                        (h.convex_diagonal[row], h.convex_coupling[row]) = pair_block(a.max(0.0), b.max(0.0), n);
+                        h.pair[row] = (a, b, n);
+                    }
+                    (h.coupling[j], h.convex_coupling[j]) = (h.coupling[i], h.convex_coupling[i]);
                     changed += 2;
                 }
                 _ => {}
@@ -902,15 +899,6 @@ impl ActiveSetSolver<'_> {
             for (i, &p) in free.iter().enumerate() {
                 row[p] = i;
             }
-            let coupling = (0..nf)
-                .map(|i| {
-                    if hessian.partner[i] == usize::MAX {
-                        0.0
-                    } else {
-                        coupling[i]
-                    }
-                })
-                .collect();
             let old = kept.0.replace(ReusedFactor {
                 fingerprint,
                 row,
@@ -1087,16 +1075,7 @@ impl ActiveSetSolver<'_> {
             if tracing() {
                 eprintln!("  reused factor: updated on {} of {nf} rows", u.len());
             }
-            // (and the kept columns stay within a quarter of the factor's size: a refactorisation
-            // starts them afresh)
-            let fresh = u
-                .iter()
-                .filter(|&&i| kept.column_of[kept.row[free[i]]] == usize::MAX)
-                .count();
-            if 12 * u.len() > nf || 4 * (kept.columns.len() / nf.max(1) + fresh) > nf {
-                return None;
-            }
-            Some(self.low_rank_update(kept, free, (curvature, hessian), &u))
+            Some(self.low_rank_update(kept, free, (curvature, hessian), &u)?)
         } else {
             let changed = (0..nf).filter(|&i| moved(0.5, i)).count();
             // CG needs about as many iterations as the rank of the change; past twice the budget
@@ -1193,14 +1172,15 @@ impl ActiveSetSolver<'_> {
 
     /// The low-rank update of [`Self::preconditioned_cg`] on the free rows `u` (ℐ = ℱ): the
     /// columns of Z = A₀⁻¹ U not kept yet (one blocked solve), Δ and the capacitance matrix
-    /// I + Δ Uᵀ Z, factored.
+    /// I + Δ Uᵀ Z, factored. None past |ℐ|/12 rows, or where the kept columns would pass |ℐ|/4
+    /// (a quarter of the factor's size; a refactorisation starts them afresh).
     fn low_rank_update(
         &self,
         kept: &mut ReusedFactor,
         free: &[usize],
         (curvature, hessian): (&[f64], &LawHessian),
         u: &[usize],
-    ) -> LowRankUpdate {
+    ) -> Option<LowRankUpdate> {
         let n = kept.diagonal.len();
         let rows: Vec<usize> = u.iter().map(|&i| kept.row[free[i]]).collect();
         let fresh: Vec<usize> = rows
@@ -1208,6 +1188,9 @@ impl ActiveSetSolver<'_> {
             .copied()
             .filter(|&k| kept.column_of[k] == usize::MAX)
             .collect();
+        if 12 * u.len() > n || 4 * (kept.columns.len() / n + fresh.len()) > n {
+            return None;
+        }
         if !fresh.is_empty() {
             let start = kept.columns.len();
             kept.columns.resize(start + n * fresh.len(), 0.0);
@@ -1246,12 +1229,12 @@ impl ActiveSetSolver<'_> {
             }
             v + if a == b { 1.0 } else { 0.0 }
         });
-        LowRankUpdate {
+        Some(LowRankUpdate {
             rows,
             columns,
             delta,
             capacitance,
-        }
+        })
     }
 
     /// Forces and statuses at the converged r: λ = q − Q r (= Q(d − r)), ξ = w j_ε'(r),

@@ -56,19 +56,20 @@ impl DenseCholesky {
 
     /// x ← A⁻¹ x.
     pub fn solve_in_place(&self, x: &mut [f64]) {
-        use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
-        let mut rhs = MatMut::from_column_major_slice_mut(x, self.n, 1);
-        solve_lower_triangular_in_place(self.l(), rhs.as_mut(), Par::Seq);
-        solve_upper_triangular_in_place(self.l().transpose(), rhs, Par::Seq);
+        self.solve_block(x, 1, Par::Seq);
     }
 
     /// X ← A⁻¹ X for the n × k column-major X: k right-hand sides at once, so each sweep reads
     /// L once for all of them (blocked, on the run's threads from order 512).
     pub fn solve_columns_in_place(&self, x: &mut [f64], k: usize) {
+        self.solve_block(x, k, par(self.n));
+    }
+
+    fn solve_block(&self, x: &mut [f64], k: usize, par: Par) {
         use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
         let mut rhs = MatMut::from_column_major_slice_mut(x, self.n, k);
-        solve_lower_triangular_in_place(self.l(), rhs.as_mut(), par(self.n));
-        solve_upper_triangular_in_place(self.l().transpose(), rhs, par(self.n));
+        solve_lower_triangular_in_place(self.l(), rhs.as_mut(), par);
+        solve_upper_triangular_in_place(self.l().transpose(), rhs, par);
     }
 
     /// A⁻¹, row-major: L⁻ᵀ L⁻¹ by faer's triangular inverse and product, its lower triangle
