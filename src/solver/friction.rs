@@ -119,6 +119,18 @@ fn solve_increment<const D: usize>(
     // measured from them
     let k_rows = friction.normal_row.len();
     let before = state.normal_displacement[m..].to_vec();
+    // The predictor: Tresca's and Coulomb's rows start at their last step's slip increment
+    // instead of at their kink (0). Under a steady load the step slips about as much as the
+    // last, so the slipping rows start near their slip curvature F/|Δu_τ| of the last step's end,
+    // where the kept factor of the Newton matrix was made, instead of at the kink's F/ε: fewer
+    // refactorisations at a step's first directions (docs/method.md §17.2).
+    if state.friction.slip.len() == k_rows {
+        for (k, law) in friction.laws.iter().enumerate() {
+            if matches!(law, FrictionLaw::Tresca(_) | FrictionLaw::Coulomb(_)) {
+                state.normal_displacement[m + k] += state.friction.slip[k];
+            }
+        }
+    }
     let accumulated: Vec<f64> = if state.friction.accumulated.len() == k_rows {
         state.friction.accumulated.clone()
     } else {
