@@ -384,8 +384,13 @@ impl ActiveSetSolver<'_> {
     /// Q r − q (= Q(r − d), minus the contact force λ) and the gradient G of E at r.
     fn gradient(&self, r: &[f64], q: &[f64], qrd: &mut [f64], grad: &mut [f64]) {
         self.operator.apply_q(r, qrd);
+        qrd.iter_mut().zip(q).for_each(|(a, b)| *a -= b);
+        self.gradient_from(r, qrd, grad);
+    }
+
+    /// G = (Q r − d) + λ_law(r), given Q r − d.
+    fn gradient_from(&self, r: &[f64], qrd: &[f64], grad: &mut [f64]) {
         for p in 0..self.m() {
-            qrd[p] -= q[p];
             grad[p] = qrd[p] + self.law_force(r, p);
         }
     }
@@ -600,10 +605,10 @@ impl ActiveSetSolver<'_> {
     /// GᵀΔ + ½ΔᵀQΔ + Σ_p w_p [j(r_p + Δ_p) − j(r_p) − j'(r_p)Δ_p], the bracket from its
     /// Taylor expansion ½ j''(r_p) Δ_p² when Δ_p is tiny (the difference of j values would be
     /// below their rounding near convergence, and Armijo could not see the decrease).
-    fn energy_change(&self, r: &[f64], delta: &[f64], grad: &[f64]) -> f64 {
+    /// Q Δ is left in `qdelta`.
+    fn energy_change(&self, r: &[f64], delta: &[f64], grad: &[f64], qdelta: &mut [f64]) -> f64 {
         let m = self.m();
-        let mut qdelta = vec![0.0; m];
-        self.operator.apply_q(delta, &mut qdelta);
+        self.operator.apply_q(delta, qdelta);
         let mut change = 0.0;
         for p in 0..m {
             change += delta[p] * (grad[p] + 0.5 * qdelta[p]);
@@ -635,11 +640,12 @@ impl ActiveSetSolver<'_> {
     }
 
     /// The complementarity residual at r + Δ.
-    fn trial_residual(&self, r: &[f64], delta: &[f64], q: &[f64]) -> f64 {
+    fn trial_residual(&self, r: &[f64], delta: &[f64], (qrd, qdelta): (&[f64], &[f64])) -> f64 {
         let m = self.m();
         let moved: Vec<f64> = (0..m).map(|p| r[p] + delta[p]).collect();
-        let (mut qrd, mut grad) = (vec![0.0; m], vec![0.0; m]);
-        self.gradient(&moved, q, &mut qrd, &mut grad);
+        let moved_qrd: Vec<f64> = qrd.iter().zip(qdelta).map(|(a, b)| a + b).collect();
+        let mut grad = vec![0.0; m];
+        self.gradient_from(&moved, &moved_qrd, &mut grad);
         self.complementarity_residual(&moved, &grad)
     }
 
@@ -702,10 +708,23 @@ impl ActiveSetSolver<'_> {
         // last step, some rows it sent out of their kink came back, and taking it again cycled
         // (docs/method.md §17.2).
         let mut full_step = true;
+        // Q r − d is carried from step to step by the accepted step's Q Δ, which the line search
+        // formed (one product by Q per direction fewer); it is formed afresh every eighth
+        // iteration and before the solve is declared converged, so rounding cannot accumulate
+        let mut qtrial = vec![0.0; m];
+        let mut carried = 0;
         loop {
             // 1. gradient and residual
-            self.gradient(r, d, &mut qrd, &mut grad);
-            let residual = self.complementarity_residual(r, &grad);
+            if carried == 0 {
+                self.gradient(r, d, &mut qrd, &mut grad);
+            } else {
+                self.gradient_from(r, &qrd, &mut grad);
+            }
+            let mut residual = self.complementarity_residual(r, &grad);
+            if residual <= tol && carried > 0 {
+                self.gradient(r, d, &mut qrd, &mut grad);
+                residual = self.complementarity_residual(r, &grad);
+            }
             best_residual = best_residual.min(residual);
             outcome.residual = residual / scale;
             if tracing() {
@@ -839,13 +858,13 @@ impl ActiveSetSolver<'_> {
                         trial[q] = -nearest * d[1];
                     }
                 }
-                let change = self.energy_change(r, &trial, &grad);
+                let change = self.energy_change(r, &trial, &grad, &mut qtrial);
                 if change <= -ARMIJO * decrease_bound || (change <= 0.0 && decrease_bound <= 1e-300) {
                     break;
                 }
                 // Local phase: a full step that halves the complementarity residual is kept
                 // even where the energy change is below its rounding.
-                if alpha == 1.0 && self.trial_residual(r, &trial, d) <= 0.5 * best_residual {
+                if alpha == 1.0 && self.trial_residual(r, &trial, (&qrd, &qtrial)) <= 0.5 * best_residual {
                     break;
                 }
                 alpha *= 0.5;
@@ -870,7 +889,9 @@ impl ActiveSetSolver<'_> {
                 if r[p] > self.g(p) {
                     r[p] = self.g(p);
                 }
+                qrd[p] += qtrial[p];
             }
+            carried = (carried + 1) % 8;
         }
         self.finish(d, state, &mut outcome);
         Ok(outcome)
@@ -1083,8 +1104,9 @@ impl ActiveSetSolver<'_> {
     /// factor (one blocked solve for the rows new to 𝒰). P is the Newton matrix up to the
     /// other rows' small changes, so CG needs a few iterations whatever |𝒰|; each costs a product by
     /// Q, two triangular solves and a product by Z, where a factorisation costs O(|ℐ|³). Past
-    /// |ℐ|/12 rows in 𝒰 the new columns would cost about a factorisation, and past |ℐ|/4 kept
-    /// columns they would hold a quarter of the factor's memory: None.
+    /// |ℐ|/8 new columns they would cost most of a factorisation, and past |ℐ|/4 rows in 𝒰 or
+    /// |ℐ|/4 kept columns (a quarter of the factor's memory): None. CG stops at the relative
+    /// residual `forcing` (inexact Newton, docs/method.md §9.2).
     ///
     /// Where nodes joined or left the free set the preconditioner is A₀⁻¹ restricted to ℐ ∩ ℱ
     /// (a principal block of an SPD inverse, so SPD) and Jacobi's 1/(Q_pp + e_p) on the nodes freed
@@ -1228,8 +1250,9 @@ impl ActiveSetSolver<'_> {
 
     /// The low-rank update of [`Self::preconditioned_cg`] on the free rows `u` (ℐ = ℱ): the
     /// columns of Z = A₀⁻¹ U not kept yet (one blocked solve), Δ and the capacitance matrix
-    /// I + Δ Uᵀ Z, factored. None past |ℐ|/12 rows, or where the kept columns would pass |ℐ|/4
-    /// (a quarter of the factor's size; a refactorisation starts them afresh).
+    /// I + Δ Uᵀ Z, factored. None past |ℐ|/8 new columns or |ℐ|/4 rows, or where the kept
+    /// columns would pass |ℐ|/4 (a quarter of the factor's size; a refactorisation starts them
+    /// afresh).
     fn low_rank_update(
         &self,
         kept: &mut ReusedFactor,
@@ -1244,7 +1267,7 @@ impl ActiveSetSolver<'_> {
             .copied()
             .filter(|&k| kept.column_of[k] == usize::MAX)
             .collect();
-        if 12 * u.len() > n || 4 * (kept.columns.len() / n + fresh.len()) > n {
+        if 8 * fresh.len() > n || 4 * u.len() > n || 4 * (kept.columns.len() / n + fresh.len()) > n {
             return None;
         }
         if !fresh.is_empty() {
