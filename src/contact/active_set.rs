@@ -89,6 +89,10 @@ pub struct ContactState {
     /// Per tangential row of a contact with friction, after the step (empty without friction;
     /// docs/method.md §17).
     pub friction: FrictionRows,
+    /// The r and d at which the last solve formed `force` = d − Q r: a solve from the same r
+    /// and d (the next round of Coulomb's fixed point, whose laws only changed) starts from it
+    /// instead of a product by Q.
+    pub balanced_at: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 /// What a step leaves on the tangential rows of a contact with friction (docs/method.md §17):
@@ -128,6 +132,7 @@ impl ContactState {
             newton_factor: KeptFactor::default(),
             buffer: FactorBuffer::default(),
             friction: FrictionRows::default(),
+            balanced_at: None,
         }
     }
 }
@@ -715,7 +720,15 @@ impl ActiveSetSolver<'_> {
         let mut carried = 0;
         loop {
             // 1. gradient and residual
-            if carried == 0 {
+            let balanced = outcome.iterations == 0
+                && state
+                    .balanced_at
+                    .as_ref()
+                    .is_some_and(|(at, load)| at[..] == r[..] && load[..] == d[..]);
+            if balanced {
+                qrd.iter_mut().zip(&state.force).for_each(|(a, f)| *a = -f);
+                self.gradient_from(r, &qrd, &mut grad);
+            } else if carried == 0 {
                 self.gradient(r, d, &mut qrd, &mut grad);
             } else {
                 self.gradient_from(r, &qrd, &mut grad);
@@ -873,7 +886,7 @@ impl ActiveSetSolver<'_> {
                     // At the round-off floor the energy cannot decrease measurably: accept a
                     // residual within 100× the tolerance, otherwise report the stall.
                     if residual <= 100.0 * tol {
-                        self.finish(d, state, &mut outcome);
+                        self.finish((d, &qrd), state, &mut outcome);
                         return Ok(outcome);
                     }
                     return Err(ContactFailure {
@@ -893,7 +906,7 @@ impl ActiveSetSolver<'_> {
             }
             carried = (carried + 1) % 8;
         }
-        self.finish(d, state, &mut outcome);
+        self.finish((d, &qrd), state, &mut outcome);
         Ok(outcome)
     }
 
@@ -1319,11 +1332,9 @@ impl ActiveSetSolver<'_> {
     /// Forces and statuses at the converged r: λ = q − Q r (= Q(d − r)), ξ = w j_ε'(r),
     /// η = λ − ξ on the bound and 0 elsewhere.
     #[allow(clippy::needless_range_loop)] // p indexes five per-node arrays at once
-    fn finish(&self, q: &[f64], state: &mut ContactState, outcome: &mut ContactOutcome) {
+    fn finish(&self, (q, qrd_final): (&[f64], &[f64]), state: &mut ContactState, outcome: &mut ContactOutcome) {
         let m = self.m();
-        let mut qrd_final = vec![0.0; m];
-        self.operator.apply_q(&state.normal_displacement, &mut qrd_final);
-        qrd_final.iter_mut().zip(q).for_each(|(a, b)| *a -= b);
+        state.balanced_at = Some((state.normal_displacement.clone(), q.to_vec()));
         outcome.active = 0;
         for p in 0..m {
             let r = state.normal_displacement[p];
