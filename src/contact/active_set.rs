@@ -713,9 +713,10 @@ impl ActiveSetSolver<'_> {
         // last step, some rows it sent out of their kink came back, and taking it again cycled
         // (docs/method.md §17.2).
         let mut full_step = true;
-        // Q r − d is carried from step to step by the accepted step's Q Δ, which the line search
-        // formed (one product by Q per direction fewer); it is formed afresh every eighth
-        // iteration and before the solve is declared converged, so rounding cannot accumulate
+        // Q r − d is carried from iteration to iteration by the accepted step's Q Δ, which the line
+        // search formed (one product by Q per direction fewer); it is formed afresh every eighth
+        // iteration, after a cut step and before the solve is declared converged or stalled, so
+        // rounding cannot accumulate
         let mut qtrial = vec![0.0; m];
         let mut carried = 0;
         loop {
@@ -884,8 +885,15 @@ impl ActiveSetSolver<'_> {
                 outcome.line_search_cuts += 1;
                 if alpha < MIN_STEP {
                     // At the round-off floor the energy cannot decrease measurably: accept a
-                    // residual within 100× the tolerance, otherwise report the stall.
-                    if residual <= 100.0 * tol {
+                    // residual within 100× the tolerance (measured with Q r − d formed afresh),
+                    // otherwise report the stall.
+                    let floor = if carried > 0 {
+                        self.gradient(r, d, &mut qrd, &mut grad);
+                        self.complementarity_residual(r, &grad)
+                    } else {
+                        residual
+                    };
+                    if floor <= 100.0 * tol {
                         self.finish((d, &qrd), state, &mut outcome);
                         return Ok(outcome);
                     }
@@ -904,7 +912,9 @@ impl ActiveSetSolver<'_> {
                 }
                 qrd[p] += qtrial[p];
             }
-            carried = (carried + 1) % 8;
+            // (after a cut step afresh: near the round-off floor, where the line search cuts,
+            // the residual and the smallest one reported are measured exactly)
+            carried = if full_step { (carried + 1) % 8 } else { 0 };
         }
         self.finish((d, &qrd), state, &mut outcome);
         Ok(outcome)
@@ -1710,6 +1720,24 @@ mod tests {
         assert!(active_sets.len() >= 3, "the active set moved: {active_sets:?}");
     }
 
+    /// The tests' operator on k nodes (single rows), and the same for k nodes of two uncoupled
+    /// tangential rows each (3D pairs), with the pairing.
+    fn single_and_paired(k: usize) -> (DenseNormalStiffness, DenseNormalStiffness, Vec<usize>) {
+        let scalar = operator(k);
+        let w: Vec<f64> = (0..4 * k * k)
+            .map(|i| {
+                let (p, q) = (i / (2 * k), i % (2 * k));
+                if p % 2 == q % 2 {
+                    scalar.w[(p / 2) * k + q / 2]
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let paired = DenseNormalStiffness::from_w(w, 2 * k).unwrap();
+        (scalar, paired, (0..2 * k).map(|p| p ^ 1).collect())
+    }
+
     /// The vector law of a pair (docs/method.md §17.3): k pairs with an isotropic compliance
     /// W = W₁ ⊗ I₂ (each pair's two rows see the same scalar coupling) and Tresca's law F ρ_ε(|s|).
     /// The problem is then equivariant under a rotation of every pair's plane: the free
@@ -1799,19 +1827,7 @@ mod tests {
     fn rows_leaving_their_kink_take_the_branch_model() {
         use crate::contact::law::ContactLaw;
         let k = 40;
-        let scalar = operator(k);
-        let w: Vec<f64> = (0..4 * k * k)
-            .map(|i| {
-                let (p, q) = (i / (2 * k), i % (2 * k));
-                if p % 2 == q % 2 {
-                    scalar.w[(p / 2) * k + q / 2]
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        let paired = DenseNormalStiffness::from_w(w, 2 * k).unwrap();
-        let pairs: Vec<usize> = (0..2 * k).map(|p| p ^ 1).collect();
+        let (scalar, paired, pairs) = single_and_paired(k);
         let single = |i: usize| 1.2 * (i as f64 / k as f64).powi(2) - 0.3;
         // (operator, pairs, free displacements d)
         type Case<'a> = (&'a DenseNormalStiffness, Option<&'a [usize]>, Vec<f64>);
@@ -1867,6 +1883,7 @@ mod tests {
             assert!(branch_outcome.iterations < own_outcome.iterations);
         }
     }
+
     /// Rows that stick, pressed by less than their bound force F (here 0.5 F to 0.99 F): the
     /// smoothed law's solution lies inside its kink, at |s| = ε t/√(F² − t²) (up to 7 ε), which
     /// the law's own Newton model, concave there, reaches only by steps that fall short each time.
@@ -1877,19 +1894,7 @@ mod tests {
     fn rows_that_stick_inside_their_kink_take_the_stick_side_model() {
         use crate::contact::law::ContactLaw;
         let k = 40;
-        let scalar = operator(k);
-        let w: Vec<f64> = (0..4 * k * k)
-            .map(|i| {
-                let (p, q) = (i / (2 * k), i % (2 * k));
-                if p % 2 == q % 2 {
-                    scalar.w[(p / 2) * k + q / 2]
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        let paired = DenseNormalStiffness::from_w(w, 2 * k).unwrap();
-        let pairs: Vec<usize> = (0..2 * k).map(|p| p ^ 1).collect();
+        let (scalar, paired, pairs) = single_and_paired(k);
         let bound = 0.3;
         // the demand of node i: between 0.5 F and 0.99 F, its sign (its direction) turning
         let share = |i: usize| 0.5 + 0.49 * (i as f64 / (k - 1) as f64);
