@@ -1720,6 +1720,36 @@ mod tests {
         assert!(active_sets.len() >= 3, "the active set moved: {active_sets:?}");
     }
 
+    /// The branch-model tests' tangential rows under the load q (no bound, tolerance 1e-13,
+    /// dense directions), solved with the laws' own model and with the branch model.
+    fn with_and_without_branch_model(
+        operator: &DenseNormalStiffness,
+        laws: &NodalLaws,
+        pairs: Option<&[usize]>,
+        q: &[f64],
+    ) -> [(ContactState, ContactOutcome); 2] {
+        [usize::MAX, 0].map(|branch_from| {
+            let solver = ActiveSetSolver {
+                operator,
+                laws,
+                offset: None,
+                bound: None,
+                singular: false,
+                pairs,
+                fixed: None,
+                branch_from,
+                settings: ContactSettings {
+                    tolerance: 1e-13,
+                    max_iterations: 100,
+                    dense_limit: usize::MAX,
+                },
+            };
+            let mut state = ContactState::new(q.len());
+            let outcome = solver.solve_forces(q, &mut state).unwrap();
+            (state, outcome)
+        })
+    }
+
     /// The tests' operator on k nodes (single rows), and the same for k nodes of two uncoupled
     /// tangential rows each (3D pairs), with the pairing.
     fn single_and_paired(k: usize) -> (DenseNormalStiffness, DenseNormalStiffness, Vec<usize>) {
@@ -1842,28 +1872,9 @@ mod tests {
         for (op, pairs, d) in cases {
             let m = d.len();
             let laws = NodalLaws::uniform(ContactLaw::smoothed_magnitude(1e-8), &vec![0.3; m]);
-            let solve = |branch_from: usize| {
-                let solver = ActiveSetSolver {
-                    operator: op,
-                    laws: &laws,
-                    offset: None,
-                    bound: None,
-                    singular: false,
-                    pairs,
-                    fixed: None,
-                    branch_from,
-                    settings: ContactSettings {
-                        tolerance: 1e-13,
-                        max_iterations: 100,
-                        dense_limit: usize::MAX,
-                    },
-                };
-                let mut state = ContactState::new(m);
-                let outcome = solver.solve(&d, &mut state).unwrap();
-                (state, outcome)
-            };
-            let (own, own_outcome) = solve(usize::MAX);
-            let (branch, branch_outcome) = solve(0);
+            let mut q = vec![0.0; m];
+            op.apply_q(&d, &mut q);
+            let [(own, own_outcome), (branch, branch_outcome)] = with_and_without_branch_model(op, &laws, pairs, &q);
             let scale = own.normal_displacement.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             for (a, b) in own.normal_displacement.iter().zip(&branch.normal_displacement) {
                 assert!((a - b).abs() <= 1e-12 * scale, "{a} against {b}");
@@ -1917,28 +1928,7 @@ mod tests {
         for (op, pairs, q) in cases {
             let m = q.len();
             let laws = NodalLaws::uniform(ContactLaw::smoothed_magnitude(1e-8), &vec![bound; m]);
-            let solve = |branch_from: usize| {
-                let solver = ActiveSetSolver {
-                    operator: op,
-                    laws: &laws,
-                    offset: None,
-                    bound: None,
-                    singular: false,
-                    pairs,
-                    fixed: None,
-                    branch_from,
-                    settings: ContactSettings {
-                        tolerance: 1e-13,
-                        max_iterations: 100,
-                        dense_limit: usize::MAX,
-                    },
-                };
-                let mut state = ContactState::new(m);
-                let outcome = solver.solve_forces(&q, &mut state).unwrap();
-                (state, outcome)
-            };
-            let (own, own_outcome) = solve(usize::MAX);
-            let (model, model_outcome) = solve(0);
+            let [(own, own_outcome), (model, model_outcome)] = with_and_without_branch_model(op, &laws, pairs, &q);
             let largest = own.normal_displacement.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             // every row inside its kink: |s| of a few ε, the largest about 7 ε
             assert!(largest > 3e-8 && largest < 1e-7, "largest |s| {largest}");
