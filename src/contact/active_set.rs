@@ -388,9 +388,14 @@ impl ActiveSetSolver<'_> {
 
     /// Q r − q (= Q(r − d), minus the contact force λ) and the gradient G of E at r.
     fn gradient(&self, r: &[f64], q: &[f64], qrd: &mut [f64], grad: &mut [f64]) {
+        self.residual_force(r, q, qrd);
+        self.gradient_from(r, qrd, grad);
+    }
+
+    /// Q r − q, by a product by Q.
+    fn residual_force(&self, r: &[f64], q: &[f64], qrd: &mut [f64]) {
         self.operator.apply_q(r, qrd);
         qrd.iter_mut().zip(q).for_each(|(a, b)| *a -= b);
-        self.gradient_from(r, qrd, grad);
     }
 
     /// G = (Q r − d) + λ_law(r), given Q r − d.
@@ -728,12 +733,10 @@ impl ActiveSetSolver<'_> {
                     .is_some_and(|(at, load)| at[..] == r[..] && load[..] == d[..]);
             if balanced {
                 qrd.iter_mut().zip(&state.force).for_each(|(a, f)| *a = -f);
-                self.gradient_from(r, &qrd, &mut grad);
             } else if carried == 0 {
-                self.gradient(r, d, &mut qrd, &mut grad);
-            } else {
-                self.gradient_from(r, &qrd, &mut grad);
+                self.residual_force(r, d, &mut qrd);
             }
+            self.gradient_from(r, &qrd, &mut grad);
             let mut residual = self.complementarity_residual(r, &grad);
             if residual <= tol && carried > 0 {
                 self.gradient(r, d, &mut qrd, &mut grad);
@@ -1339,8 +1342,9 @@ impl ActiveSetSolver<'_> {
         })
     }
 
-    /// Forces and statuses at the converged r: λ = q − Q r (= Q(d − r)), ξ = w j_ε'(r),
-    /// η = λ − ξ on the bound and 0 elsewhere.
+    /// Forces and statuses at the converged r, given Q r − q there (`qrd_final`): λ = q − Q r
+    /// (= Q(d − r)), ξ = w j_ε'(r), η = λ − ξ on the bound and 0 elsewhere; the r and q are kept
+    /// as [`ContactState::balanced_at`].
     #[allow(clippy::needless_range_loop)] // p indexes five per-node arrays at once
     fn finish(&self, (q, qrd_final): (&[f64], &[f64]), state: &mut ContactState, outcome: &mut ContactOutcome) {
         let m = self.m();
@@ -1720,8 +1724,27 @@ mod tests {
         assert!(active_sets.len() >= 3, "the active set moved: {active_sets:?}");
     }
 
-    /// The branch-model tests' tangential rows under the load q (no bound, tolerance 1e-13,
-    /// dense directions), solved with the laws' own model and with the branch model.
+    /// [`solver`] for the tests' tangential rows: no bound, tolerance 1e-13, dense directions.
+    fn tangential_rows<'a>(
+        operator: &'a DenseNormalStiffness,
+        laws: &'a NodalLaws,
+        pairs: Option<&'a [usize]>,
+        branch_from: usize,
+    ) -> ActiveSetSolver<'a> {
+        let base = solver(operator, laws, &[], pairs, usize::MAX);
+        ActiveSetSolver {
+            bound: None,
+            branch_from,
+            settings: ContactSettings {
+                tolerance: 1e-13,
+                ..base.settings
+            },
+            ..base
+        }
+    }
+
+    /// The branch-model tests' tangential rows under the load q, solved with the laws' own model
+    /// and with the branch model.
     fn with_and_without_branch_model(
         operator: &DenseNormalStiffness,
         laws: &NodalLaws,
@@ -1729,23 +1752,10 @@ mod tests {
         q: &[f64],
     ) -> [(ContactState, ContactOutcome); 2] {
         [usize::MAX, 0].map(|branch_from| {
-            let solver = ActiveSetSolver {
-                operator,
-                laws,
-                offset: None,
-                bound: None,
-                singular: false,
-                pairs,
-                fixed: None,
-                branch_from,
-                settings: ContactSettings {
-                    tolerance: 1e-13,
-                    max_iterations: 100,
-                    dense_limit: usize::MAX,
-                },
-            };
             let mut state = ContactState::new(q.len());
-            let outcome = solver.solve_forces(q, &mut state).unwrap();
+            let outcome = tangential_rows(operator, laws, pairs, branch_from)
+                .solve_forces(q, &mut state)
+                .unwrap();
             (state, outcome)
         })
     }
@@ -1780,23 +1790,11 @@ mod tests {
         use crate::contact::law::ContactLaw;
         let k = 40;
         let m = 2 * k;
-        let scalar = operator(k);
-        let w: Vec<f64> = (0..m * m)
-            .map(|i| {
-                let (p, q) = (i / m, i % m);
-                if p % 2 == q % 2 {
-                    scalar.w[(p / 2) * k + q / 2]
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        let op = DenseNormalStiffness::from_w(w, m).unwrap();
+        let (_, op, pairs) = single_and_paired(k);
         let epsilon = 1e-8;
         let law = ContactLaw::smoothed_magnitude(epsilon);
         let bound_force = 0.3;
         let laws = NodalLaws::uniform(law, &vec![bound_force; m]);
-        let pairs: Vec<usize> = (0..m).map(|p| p ^ 1).collect();
         let solve = |theta: f64| {
             let (c, s) = (theta.cos(), theta.sin());
             // a slip field that is large at one end and small at the other: both zones
@@ -1807,23 +1805,10 @@ mod tests {
                     [c * a - s * b, s * a + c * b]
                 })
                 .collect();
-            let solver = ActiveSetSolver {
-                operator: &op,
-                laws: &laws,
-                offset: None,
-                bound: None,
-                singular: false,
-                pairs: Some(&pairs),
-                fixed: None,
-                branch_from: usize::MAX,
-                settings: ContactSettings {
-                    tolerance: 1e-13,
-                    max_iterations: 100,
-                    dense_limit: usize::MAX,
-                },
-            };
             let mut state = ContactState::new(m);
-            solver.solve(&d, &mut state).unwrap();
+            tangential_rows(&op, &laws, Some(&pairs), usize::MAX)
+                .solve(&d, &mut state)
+                .unwrap();
             state
         };
         let base = solve(0.0);
@@ -1848,6 +1833,7 @@ mod tests {
         }
         assert!(stick > 0 && slip > 0, "{stick} stick, {slip} slip");
     }
+
     /// Rows that start a solve at their kink (the slip increments' origin, as every step of
     /// Tresca or Coulomb friction does) and must slip: with the branch model (docs/method.md
     /// §17.2) the solve reaches the law's own solution (to 10⁻¹² of the largest slip) in fewer
