@@ -105,8 +105,23 @@ pub struct FrictionRows {
     pub accumulated: Vec<f64>,
     /// The bound force F of the row (w_p F_b for Tresca, μ λ_ν for Coulomb).
     pub bound: Vec<f64>,
+    /// How the step moved, for the next step's predictor.
+    pub trend: StepTrend,
     /// [`FrictionStatus`] codes.
     pub status: Vec<i32>,
+}
+
+/// How a step with friction moved, which the next step extrapolates where its load moves on the
+/// same way (docs/method.md §17.2): empty before the first such step.
+#[derive(Clone, Debug, Default)]
+pub struct StepTrend {
+    /// The free contact forces q of the step (all rows) and their change over it.
+    pub load: Vec<f64>,
+    pub load_change: Vec<f64>,
+    /// The normal rows' displacements' change over the step.
+    pub normal_change: Vec<f64>,
+    /// The tangential rows' bound forces' change over the step.
+    pub bound_change: Vec<f64>,
 }
 
 /// Where a tangential row ends a step.

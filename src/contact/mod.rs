@@ -12,7 +12,9 @@ pub mod obstacle;
 pub mod rows;
 mod trailing;
 
-pub use active_set::{ActiveSetSolver, ContactOutcome, ContactSettings, FrictionRows, FrictionStatus, NodeStatus};
+pub use active_set::{
+    ActiveSetSolver, ContactOutcome, ContactSettings, FrictionRows, FrictionStatus, NodeStatus, StepTrend,
+};
 pub use condensed::{
     Condensation, ContactNodes, DenseNormalStiffness, NormalStiffness, SplitSweeps, StoredResponses, WithCompliance,
 };

@@ -18,6 +18,7 @@ use super::contact::{ContactSetup, Friction, FrictionLaw};
 use super::setup::Simulation;
 use crate::contact::active_set::{
     ActiveSetSolver, ContactFailure, ContactOutcome, ContactSettings, ContactState, FrictionRows, FrictionStatus,
+    StepTrend,
 };
 use crate::contact::NormalStiffness;
 
@@ -65,7 +66,33 @@ pub(super) fn solve<const D: usize>(
         .iter_mut()
         .zip(&shift)
         .for_each(|(r, s)| *r -= s);
-    let solved = solve_increment(sim, setup, friction, normal, step, &shifted, state);
+    // The load-following predictor: where this step's load moves on as the last step's did (the
+    // projection `along` of its change of q on the last step's), the normal rows start at their
+    // last displacement plus `along` times its last change, and Coulomb's bound forces likewise
+    // (in solve_increment); a load that turns (the Cattaneo–Mindlin block's shear step after its
+    // pressing step) gives along ≈ 0, the plain warm start (docs/method.md §17.2).
+    let trend = &state.friction.trend;
+    let change: Vec<f64> = if trend.load.len() == all {
+        q.iter().zip(&trend.load).map(|(a, b)| a - b).collect()
+    } else {
+        Vec::new()
+    };
+    let along = load_following(&change, &trend.load_change);
+    let start = state.normal_displacement[..m].to_vec();
+    if trend.normal_change.len() == m {
+        for (r, d) in state.normal_displacement.iter_mut().zip(&trend.normal_change) {
+            *r += along * d;
+        }
+    }
+    let solved = solve_increment(sim, setup, friction, normal, (step, along), &shifted, state);
+    if solved.is_ok() {
+        let trend = &mut state.friction.trend;
+        trend.normal_change = (state.normal_displacement.iter().zip(&start))
+            .map(|(a, b)| a - b)
+            .collect();
+        trend.load_change = change;
+        trend.load = q.to_vec();
+    }
     state
         .normal_displacement
         .iter_mut()
@@ -81,7 +108,7 @@ fn solve_increment<const D: usize>(
     setup: &ContactSetup<D>,
     friction: &Friction<D>,
     normal: NormalRows,
-    step: usize,
+    (step, along): (usize, f64),
     q: &[f64],
     state: &mut ContactState,
 ) -> Result<ContactOutcome, ContactFailure> {
@@ -181,9 +208,22 @@ fn solve_increment<const D: usize>(
         reason,
         smallest_residual: f64::INFINITY,
     };
-    let coulomb = friction.laws.iter().any(|l| matches!(l, FrictionLaw::Coulomb(_)));
-    // Coulomb's first round uses the previous step's normal forces (the warm start)
+    // Coulomb's first round uses the previous step's normal forces (the warm start), moved on by
+    // the load-following predictor (see `solve`)
+    let is_coulomb: Vec<bool> = friction
+        .laws
+        .iter()
+        .map(|l| matches!(l, FrictionLaw::Coulomb(_)))
+        .collect();
     let mut forces = bound_forces(state).map_err(|reason| failure(reason, ContactOutcome::default()))?;
+    if state.friction.trend.bound_change.len() == k_rows {
+        for (k, change) in state.friction.trend.bound_change.iter().enumerate() {
+            if is_coulomb[k] {
+                forces[k] = (forces[k] + along * change).max(0.0);
+            }
+        }
+    }
+    let coulomb = is_coulomb.contains(&true);
     let mut total = ContactOutcome::default();
     // A body that only its contact holds (rigid parameters, docs/method.md §7.7) and no normal
     // force yet: friction of bound 0 would hold nothing and a tangential load would have no
@@ -224,6 +264,7 @@ fn solve_increment<const D: usize>(
     // settle, which the last round always is (docs/method.md §17.2)
     let tolerance = setup.settings.tolerance;
     let mut round_tolerance = if coulomb { tolerance.max(1e-3) } else { tolerance };
+    let mut mixing = Anderson::new(is_coulomb);
     for _ in 0..COULOMB_ROUNDS {
         // (a potential's "bound" is an output only: its term keeps the weight w_p)
         for (k, law) in friction.laws.iter().enumerate() {
@@ -274,7 +315,7 @@ fn solve_increment<const D: usize>(
         } else {
             tolerance.max((1e-2 * change / scale).min(1e-3))
         };
-        forces = next;
+        forces = mixing.next(&forces, next);
     }
     Err(failure(
         format!(
@@ -283,6 +324,92 @@ fn solve_increment<const D: usize>(
         ),
         total,
     ))
+}
+
+/// The projection of this step's change of the free contact forces on the last step's,
+/// clamped to [0, 2]: 1 for a load that moves on as it did, 0 for one that turns or reverses,
+/// or where either change is unknown or zero (the load-following predictor of [`solve`]).
+fn load_following(change: &[f64], last: &[f64]) -> f64 {
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let norm = dot(last, last);
+    if change.len() != last.len() || norm == 0.0 {
+        return 0.0;
+    }
+    (dot(change, last) / norm).clamp(0.0, 2.0)
+}
+
+/// Rounds of the Coulomb fixed point that [`Anderson`] combines.
+const ANDERSON_DEPTH: usize = 3;
+
+/// Anderson mixing of Coulomb's fixed point F ← Φ(F) = μ(s) λ_ν(F) (docs/method.md §17.2). The
+/// next round's bound forces combine the last rounds' outputs Φ(F_j) with the weights whose
+/// residuals Φ(F_j) − F_j combine to the least length; on a linear Φ that is GMRES on I − Φ',
+/// where the plain fixed point gains only Φ's contraction per round. Only Coulomb's rows are
+/// mixed (Tresca's bound is fixed, a potential's an output); a round whose residual grew starts
+/// the history afresh (the plain round).
+struct Anderson {
+    coulomb: Vec<bool>,
+    /// the last rounds' (F_j, Φ(F_j)), oldest first
+    rounds: Vec<(Vec<f64>, Vec<f64>)>,
+}
+
+impl Anderson {
+    fn new(coulomb: Vec<bool>) -> Self {
+        Anderson {
+            coulomb,
+            rounds: Vec::new(),
+        }
+    }
+
+    /// The residual Φ(F) − F on Coulomb's rows (0 elsewhere).
+    fn residual(&self, (input, output): &(Vec<f64>, Vec<f64>)) -> Vec<f64> {
+        (input.iter().zip(output).zip(&self.coulomb))
+            .map(|((x, g), &c)| if c { g - x } else { 0.0 })
+            .collect()
+    }
+
+    /// The next round's bound forces, given this round's F and Φ(F).
+    fn next(&mut self, input: &[f64], output: Vec<f64>) -> Vec<f64> {
+        let norm = |v: &[f64]| v.iter().map(|a| a * a).sum::<f64>().sqrt();
+        let round = (input.to_vec(), output);
+        let f = self.residual(&round);
+        if self
+            .rounds
+            .last()
+            .is_some_and(|last| norm(&f) > norm(&self.residual(last)))
+        {
+            self.rounds.clear();
+        }
+        self.rounds.push(round);
+        if self.rounds.len() > ANDERSON_DEPTH + 1 {
+            self.rounds.remove(0);
+        }
+        let k = self.rounds.len() - 1;
+        let newest = &self.rounds[k].1;
+        if k == 0 {
+            return newest.clone();
+        }
+        // γ = argmin |f_k − Σ_j γ_j (f_{j+1} − f_j)|, by an SVD that drops directions below 10⁻¹²
+        // of |f_k| (rounds whose residuals are nearly parallel)
+        let residuals: Vec<Vec<f64>> = self.rounds.iter().map(|r| self.residual(r)).collect();
+        let n = f.len();
+        let differences = nalgebra::DMatrix::from_fn(n, k, |i, j| residuals[j + 1][i] - residuals[j][i]);
+        let target = nalgebra::DVector::from_column_slice(&f);
+        let Ok(gamma) = differences.svd(true, true).solve(&target, 1e-12 * norm(&f)) else {
+            return newest.clone();
+        };
+        (0..n)
+            .map(|i| {
+                let mut v = newest[i];
+                if self.coulomb[i] {
+                    for j in 0..k {
+                        v -= gamma[j] * (self.rounds[j + 1].1[i] - self.rounds[j].1[i]);
+                    }
+                }
+                v.max(0.0)
+            })
+            .collect()
+    }
 }
 
 /// The tangential rows' slip (their change from `before`, their values at the step's start),
@@ -308,6 +435,14 @@ fn record<const D: usize>(
         slip: slip.clone(),
         accumulated: Vec::with_capacity(k_rows),
         bound: forces.to_vec(),
+        trend: StepTrend {
+            bound_change: if state.friction.bound.len() == k_rows {
+                forces.iter().zip(&state.friction.bound).map(|(a, b)| a - b).collect()
+            } else {
+                vec![0.0; k_rows]
+            },
+            ..std::mem::take(&mut state.friction.trend)
+        },
         status: Vec::with_capacity(k_rows),
     };
     for k in 0..k_rows {
@@ -322,4 +457,107 @@ fn record<const D: usize>(
         } as i32);
     }
     state.friction = rows;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A linear contraction Φ(F) = A F + b on n rows (A symmetric, eigenvalues spread over
+    /// [0.05, `largest`]) and its fixed point: the Coulomb map's linearisation.
+    fn linear_map(n: usize, largest: f64) -> (impl Fn(&[f64]) -> Vec<f64>, Vec<f64>) {
+        // A = V diag(θ) Vᵀ with V the orthonormal sine basis
+        let v = |i: usize, j: usize| {
+            (2.0 / (n as f64 + 1.0)).sqrt()
+                * (((i + 1) * (j + 1)) as f64 * std::f64::consts::PI / (n as f64 + 1.0)).sin()
+        };
+        let theta: Vec<f64> = (0..n)
+            .map(|j| 0.05 + (largest - 0.05) * j as f64 / (n - 1) as f64)
+            .collect();
+        let a: Vec<Vec<f64>> = (0..n)
+            .map(|i| {
+                (0..n)
+                    .map(|k| (0..n).map(|j| v(i, j) * theta[j] * v(k, j)).sum())
+                    .collect()
+            })
+            .collect();
+        let b: Vec<f64> = (0..n).map(|i| 1.0 + 0.1 * i as f64).collect();
+        // the fixed point (I − A)⁻¹ b = V diag(1/(1 − θ)) Vᵀ b
+        let vb: Vec<f64> = (0..n).map(|j| (0..n).map(|i| v(i, j) * b[i]).sum()).collect();
+        let fixed: Vec<f64> = (0..n)
+            .map(|i| (0..n).map(|j| v(i, j) * vb[j] / (1.0 - theta[j])).sum())
+            .collect();
+        let map = move |f: &[f64]| -> Vec<f64> {
+            (0..n)
+                .map(|i| b[i] + (0..n).map(|k| a[i][k] * f[k]).sum::<f64>())
+                .collect()
+        };
+        (map, fixed)
+    }
+
+    /// Rounds until max |F − F*| ≤ 10⁻¹⁰ max |F*|, mixed or plain, and the error then.
+    fn rounds(n: usize, largest: f64, mixed: bool) -> (usize, f64) {
+        let (map, fixed) = linear_map(n, largest);
+        let scale = fixed.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        let mut mixing = Anderson::new(vec![true; n]);
+        let mut f = vec![0.0; n];
+        for round in 1..=5000 {
+            let next = map(&f);
+            f = if mixed { mixing.next(&f, next) } else { next };
+            let error = f.iter().zip(&fixed).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+            if error <= 1e-10 * scale {
+                return (round, error / scale);
+            }
+        }
+        (usize::MAX, f64::INFINITY)
+    }
+
+    #[test]
+    fn anderson_mixing_reaches_the_fixed_point_in_fewer_rounds() {
+        // the plain fixed point gains the contraction per round: log(1e-10)/log(θ) rounds
+        for (largest, plain_at_least) in [(0.9, 150), (0.99, 1500)] {
+            let (plain, _) = rounds(40, largest, false);
+            let (mixed, error) = rounds(40, largest, true);
+            assert!(
+                (plain_at_least..usize::MAX).contains(&plain),
+                "plain {plain} rounds at θ = {largest}"
+            );
+            assert!(error <= 1e-10, "mixed error {error:e}");
+            assert!(
+                3 * mixed <= plain,
+                "θ ≤ {largest}: {mixed} mixed rounds against {plain} plain"
+            );
+        }
+    }
+
+    #[test]
+    fn anderson_mixing_leaves_other_rows_and_keeps_forces_non_negative() {
+        // rows 1 and 3 are not Coulomb's: they take Φ's output as it is
+        let mut mixing = Anderson::new(vec![true, false, true, false]);
+        let phi = |f: &[f64]| vec![0.5 * f[0] + 1.0, 7.0, (0.5 * f[2] - 1.0).max(0.0), f[3] + 1.0];
+        let mut f = vec![0.0, 0.0, 3.0, 0.0];
+        for _ in 0..6 {
+            let next = phi(&f);
+            let expected = next.clone();
+            f = mixing.next(&f, next);
+            assert_eq!((f[1], f[3]), (expected[1], expected[3]));
+            assert!(f.iter().all(|&v| v >= 0.0), "{f:?}");
+        }
+        // the Coulomb rows reach their fixed points 2 and 0 (Φ ≥ 0, as μ λ_ν)
+        assert!((f[0] - 2.0).abs() <= 1e-12 && f[2].abs() <= 1e-12, "{f:?}");
+    }
+
+    #[test]
+    fn the_predictor_follows_a_load_that_moves_on_and_not_one_that_turns() {
+        let last = [0.0, -2.0, 0.0, 1.0];
+        assert_eq!(load_following(&[0.0, -1.8, 0.0, 0.9], &last), 0.9);
+        // a shear step after a pressing step: the change is across the last one
+        assert_eq!(load_following(&[3.0, 0.0, -1.0, 0.0], &last), 0.0);
+        // reversed, unknown or zero
+        assert_eq!(load_following(&[0.0, 2.0, 0.0, -1.0], &last), 0.0);
+        assert_eq!(load_following(&[], &last), 0.0);
+        assert_eq!(load_following(&[1.0, 0.0, 0.0, 0.0], &[0.0; 4]), 0.0);
+        // at most twice the last change
+        assert_eq!(load_following(&[0.0, -20.0, 0.0, 10.0], &last), 2.0);
+    }
 }
