@@ -400,11 +400,12 @@ impl Anderson {
         };
         (0..n)
             .map(|i| {
+                if !self.coulomb[i] {
+                    return newest[i];
+                }
                 let mut v = newest[i];
-                if self.coulomb[i] {
-                    for j in 0..k {
-                        v -= gamma[j] * (self.rounds[j + 1].1[i] - self.rounds[j].1[i]);
-                    }
+                for j in 0..k {
+                    v -= gamma[j] * (self.rounds[j + 1].1[i] - self.rounds[j].1[i]);
                 }
                 v.max(0.0)
             })
@@ -532,16 +533,17 @@ mod tests {
 
     #[test]
     fn anderson_mixing_leaves_other_rows_and_keeps_forces_non_negative() {
-        // rows 1 and 3 are not Coulomb's: they take Φ's output as it is
+        // rows 1 and 3 are not Coulomb's: they take Φ's output as it is (row 3 a potential's
+        // output, negative where its μ falls)
         let mut mixing = Anderson::new(vec![true, false, true, false]);
-        let phi = |f: &[f64]| vec![0.5 * f[0] + 1.0, 7.0, (0.5 * f[2] - 1.0).max(0.0), f[3] + 1.0];
+        let phi = |f: &[f64]| vec![0.5 * f[0] + 1.0, 7.0, (0.5 * f[2] - 1.0).max(0.0), f[3] - 1.0];
         let mut f = vec![0.0, 0.0, 3.0, 0.0];
         for _ in 0..6 {
             let next = phi(&f);
             let expected = next.clone();
             f = mixing.next(&f, next);
             assert_eq!((f[1], f[3]), (expected[1], expected[3]));
-            assert!(f.iter().all(|&v| v >= 0.0), "{f:?}");
+            assert!(f[0] >= 0.0 && f[2] >= 0.0, "{f:?}");
         }
         // the Coulomb rows reach their fixed points 2 and 0 (Φ ≥ 0, as μ λ_ν)
         assert!((f[0] - 2.0).abs() <= 1e-12 && f[2].abs() <= 1e-12, "{f:?}");
