@@ -349,7 +349,8 @@ const ANDERSON_DEPTH: usize = 3;
 /// the history afresh (the plain round).
 struct Anderson {
     coulomb: Vec<bool>,
-    /// the last rounds' (F_j, Φ(F_j)), oldest first
+    /// the last rounds' residuals Φ(F_j) − F_j (0 off Coulomb's rows) and outputs Φ(F_j),
+    /// oldest first
     rounds: Vec<(Vec<f64>, Vec<f64>)>,
 }
 
@@ -361,41 +362,31 @@ impl Anderson {
         }
     }
 
-    /// The residual Φ(F) − F on Coulomb's rows (0 elsewhere).
-    fn residual(&self, (input, output): &(Vec<f64>, Vec<f64>)) -> Vec<f64> {
-        (input.iter().zip(output).zip(&self.coulomb))
-            .map(|((x, g), &c)| if c { g - x } else { 0.0 })
-            .collect()
-    }
-
     /// The next round's bound forces, given this round's F and Φ(F).
     fn next(&mut self, input: &[f64], output: Vec<f64>) -> Vec<f64> {
         let norm = |v: &[f64]| v.iter().map(|a| a * a).sum::<f64>().sqrt();
-        let round = (input.to_vec(), output);
-        let f = self.residual(&round);
-        if self
-            .rounds
-            .last()
-            .is_some_and(|last| norm(&f) > norm(&self.residual(last)))
-        {
+        // the residual Φ(F) − F on Coulomb's rows (0 elsewhere)
+        let f: Vec<f64> = (input.iter().zip(&output).zip(&self.coulomb))
+            .map(|((x, g), &c)| if c { g - x } else { 0.0 })
+            .collect();
+        if self.rounds.last().is_some_and(|(last, _)| norm(&f) > norm(last)) {
             self.rounds.clear();
         }
-        self.rounds.push(round);
+        self.rounds.push((f, output));
         if self.rounds.len() > ANDERSON_DEPTH + 1 {
             self.rounds.remove(0);
         }
         let k = self.rounds.len() - 1;
-        let newest = &self.rounds[k].1;
+        let (f, newest) = &self.rounds[k];
         if k == 0 {
             return newest.clone();
         }
         // γ = argmin |f_k − Σ_j γ_j (f_{j+1} − f_j)|, by an SVD that drops directions below 10⁻¹²
         // of |f_k| (rounds whose residuals are nearly parallel)
-        let residuals: Vec<Vec<f64>> = self.rounds.iter().map(|r| self.residual(r)).collect();
         let n = f.len();
-        let differences = nalgebra::DMatrix::from_fn(n, k, |i, j| residuals[j + 1][i] - residuals[j][i]);
-        let target = nalgebra::DVector::from_column_slice(&f);
-        let Ok(gamma) = differences.svd(true, true).solve(&target, 1e-12 * norm(&f)) else {
+        let differences = nalgebra::DMatrix::from_fn(n, k, |i, j| self.rounds[j + 1].0[i] - self.rounds[j].0[i]);
+        let target = nalgebra::DVector::from_column_slice(f);
+        let Ok(gamma) = differences.svd(true, true).solve(&target, 1e-12 * norm(f)) else {
             return newest.clone();
         };
         (0..n)
