@@ -111,6 +111,41 @@ impl DenseLu {
         let k = x.len();
         self.0.solve_in_place(MatMut::from_column_major_slice_mut(x, k, 1));
     }
+
+    /// X ← A⁻¹ X for the k × c column-major X (c right-hand sides at once).
+    pub fn solve_columns_in_place(&self, x: &mut [f64], c: usize) {
+        use faer::linalg::solvers::Solve;
+        let k = x.len() / c.max(1);
+        self.0.solve_in_place(MatMut::from_column_major_slice_mut(x, k, c));
+    }
+}
+
+/// Aᵀ X (k × c, column-major) for the column-major n × k A and n × c X (faer's product, on the
+/// run's threads from order 512).
+pub fn transpose_product(a: &[f64], x: &[f64], (n, k, c): (usize, usize, usize)) -> Vec<f64> {
+    let mut out = vec![0.0; k * c];
+    faer::linalg::matmul::matmul(
+        MatMut::from_column_major_slice_mut(&mut out, k, c),
+        faer::Accum::Replace,
+        MatRef::from_column_major_slice(a, n, k).transpose(),
+        MatRef::from_column_major_slice(x, n, c),
+        1.0,
+        par(n),
+    );
+    out
+}
+
+/// Y ← Y − Z T for the column-major n × k Y, n × u Z and u × k T (faer's product, on the run's
+/// threads from order 512).
+pub fn subtract_product(y: &mut [f64], z: &[f64], t: &[f64], (n, u, k): (usize, usize, usize)) {
+    faer::linalg::matmul::matmul(
+        MatMut::from_column_major_slice_mut(y, n, k),
+        faer::Accum::Add,
+        MatRef::from_column_major_slice(z, n, u),
+        MatRef::from_column_major_slice(t, u, k),
+        -1.0,
+        par(n),
+    );
 }
 
 /// Storage for dense Cholesky factors, kept from one factorisation to the next: the contact
