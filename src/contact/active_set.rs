@@ -192,19 +192,18 @@ pub struct ReusedFactor {
 /// P = A₀ + UΔUᵀ of [`ActiveSetSolver::preconditioned_cg`] on the kept factor's rows `rows`.
 struct LowRankUpdate {
     rows: Vec<usize>,
-    /// Each row's column of Z = A₀⁻¹ U in [`ReusedFactor::columns`].
-    columns: Vec<usize>,
     /// Per row: Δ's diagonal, the pair partner's place in `rows` (usize::MAX: none) and Δ there.
     delta: Vec<(f64, usize, f64)>,
     /// I + Δ Uᵀ Z.
     capacitance: DenseLu,
+    /// Z's columns of `rows`, n × |𝒰| column-major (gathered once per update).
+    z: Vec<f64>,
 }
 
 impl LowRankUpdate {
-    /// Y ← P⁻¹ R from Y = A₀⁻¹ R for the n × c column-major Y, blocked: Y − Z T with
-    /// T = (I + Δ Uᵀ Z)⁻¹ Δ Uᵀ Y.
-    fn correct_columns(&self, kept: &ReusedFactor, y: &mut [f64], c: usize) {
-        let n = kept.diagonal.len();
+    /// T = Δ Uᵀ Y for the n × c column-major Y (a pinned row: its row of Y, the limit of
+    /// Δ Uᵀ Y divided by Δ, as its capacitance row is).
+    fn rhs(&self, y: &[f64], n: usize, c: usize) -> Vec<f64> {
         let u = self.rows.len();
         let mut t = vec![0.0; u * c];
         for (column, tc) in y.chunks_exact(n).zip(t.chunks_exact_mut(u)) {
@@ -221,37 +220,15 @@ impl LowRankUpdate {
                 };
             }
         }
-        self.capacitance.solve_columns_in_place(&mut t, c);
-        let mut z = vec![0.0; n * u];
-        for (zc, &col) in z.chunks_exact_mut(n).zip(&self.columns) {
-            zc.copy_from_slice(&kept.columns[col * n..(col + 1) * n]);
-        }
-        subtract_product(y, &z, &t, (n, u, c));
+        t
     }
 
-    /// y ← P⁻¹ r from y = A₀⁻¹ r: y − Z (I + Δ Uᵀ Z)⁻¹ Δ Uᵀ y.
-    fn correct(&self, kept: &ReusedFactor, y: &mut [f64]) {
-        let n = y.len();
-        let mut t: Vec<f64> = (self.delta.iter().zip(&self.rows))
-            .map(|(&(d, partner, off), &k)| {
-                if d.is_infinite() {
-                    // a pinned row: (ΔUᵀy) divided by Δ, as its row of the capacitance matrix
-                    return y[k];
-                }
-                d * y[k]
-                    + if partner == usize::MAX {
-                        0.0
-                    } else {
-                        off * y[self.rows[partner]]
-                    }
-            })
-            .collect();
-        self.capacitance.solve_in_place(&mut t);
-        for (&c, &w) in self.columns.iter().zip(&t) {
-            for (v, z) in y.iter_mut().zip(&kept.columns[c * n..(c + 1) * n]) {
-                *v -= w * z;
-            }
-        }
+    /// Y ← P⁻¹ R from Y = A₀⁻¹ R for the n × c column-major Y: Y − Z (I + Δ Uᵀ Z)⁻¹ Δ Uᵀ Y.
+    fn correct_columns(&self, y: &mut [f64], c: usize) {
+        let (n, u) = (y.len() / c, self.rows.len());
+        let mut t = self.rhs(y, n, c);
+        self.capacitance.solve_columns_in_place(&mut t, c);
+        subtract_product(y, &self.z, &t, (n, u, c));
     }
 }
 
@@ -271,22 +248,13 @@ struct Border {
 impl Border {
     /// From t = P⁻¹ r_K (in `kept`): z_J = S⁻¹ (r_J − A_JK t), t ← t − X z_J.
     fn correct(&self, r: &[f64], kept: &mut [f64], z: &mut [f64]) {
-        let n = kept.len();
-        let mut w: Vec<f64> = (self.rows.iter().enumerate())
-            .map(|(a, &j)| {
-                r[j] - self.a[a * n..(a + 1) * n]
-                    .iter()
-                    .zip(&*kept)
-                    .map(|(x, y)| x * y)
-                    .sum::<f64>()
-            })
-            .collect();
+        let (n, k) = (kept.len(), self.rows.len());
+        let coupled = transpose_product(&self.a, kept, (n, k, 1));
+        let mut w: Vec<f64> = (self.rows.iter().zip(&coupled)).map(|(&j, c)| r[j] - c).collect();
         self.schur.solve_in_place(&mut w);
-        for (a, &j) in self.rows.iter().enumerate() {
-            for (t, x) in kept.iter_mut().zip(&self.x[a * n..(a + 1) * n]) {
-                *t -= x * w[a];
-            }
-            z[j] = w[a];
+        subtract_product(kept, &self.x, &w, (n, k, 1));
+        for (&j, &v) in self.rows.iter().zip(&w) {
+            z[j] = v;
         }
     }
 }
@@ -1382,9 +1350,9 @@ impl ActiveSetSolver<'_> {
                     kept_rhs[kept.row[p]] = r[i];
                 }
             }
-            kept.factor.solve_in_place(&mut kept_rhs);
+            kept.factor.solve_in_place_parallel(&mut kept_rhs);
             if let Some(update) = &update {
-                update.correct(kept, &mut kept_rhs);
+                update.correct_columns(&mut kept_rhs, 1);
             }
             if let Some(border) = &border {
                 border.correct(r, &mut kept_rhs, z);
@@ -1491,7 +1459,7 @@ impl ActiveSetSolver<'_> {
             x[b * n..(b + 1) * n].copy_from_slice(&kept.bordered[at + n..at + 2 * n]);
         }
         if let Some(update) = update {
-            update.correct_columns(kept, &mut x, k);
+            update.correct_columns(&mut x, k);
         }
         let coupled = transpose_product(&a, &x, (n, k, k));
         let schur = DenseLu::new(k, |i, b| {
@@ -1566,8 +1534,12 @@ impl ActiveSetSolver<'_> {
             })
             .chain(pinned.iter().map(|_| (f64::INFINITY, usize::MAX, 0.0)))
             .collect();
-        let columns: Vec<usize> = rows.iter().map(|&k| kept.column_of[k]).collect();
-        let z = |row: usize, b: usize| kept.columns[columns[b] * n + row];
+        let mut gathered = vec![0.0; n * rows.len()];
+        for (zc, &k) in gathered.chunks_exact_mut(n).zip(&rows) {
+            let col = kept.column_of[k];
+            zc.copy_from_slice(&kept.columns[col * n..(col + 1) * n]);
+        }
+        let z = |row: usize, b: usize| gathered[b * n + row];
         let capacitance = DenseLu::new(rows.len(), |a, b| {
             let (d, partner, off) = delta[a];
             if d.is_infinite() {
@@ -1582,9 +1554,9 @@ impl ActiveSetSolver<'_> {
         });
         Some(LowRankUpdate {
             rows,
-            columns,
             delta,
             capacitance,
+            z: gathered,
         })
     }
 
