@@ -382,6 +382,9 @@ const ARMIJO: f64 = 1e-4;
 /// A row whose law curvature is this many times its stiffness Q_pp (a pair: both of its
 /// curvatures) is left out of a kept factor and preconditioned by Jacobi (docs/method.md §9.2).
 const STIFF: f64 = 100.0;
+/// A kept factor's row whose curvature (or pair coupling) moved by more than this share of
+/// Q_pp + e_p is updated by Woodbury's identity (docs/method.md §9.2).
+const MOVED: f64 = 0.4;
 
 /// A pair's block a nnᵀ + b (I − nnᵀ) seen from its row whose component of n is n[0]: that row's
 /// diagonal entry and the coupling to the other row (docs/method.md §17.3).
@@ -1247,8 +1250,8 @@ impl ActiveSetSolver<'_> {
     /// rows it was formed on: the free rows then, less those a law held stiffly.
     ///
     /// The preconditioner is A₀ brought to the present free set and curvatures:
-    /// * **updated** on the rows of ℱ whose curvature moved by more than a tenth of their stiffness
-    ///   (𝒰, with a pair's partner): P = A₀ + UΔUᵀ, Δ the change of the diagonal and the pairs'
+    /// * **updated** on the rows of ℱ whose curvature moved by more than [`MOVED`] of their
+    ///   stiffness (𝒰, with a pair's partner): P = A₀ + UΔUᵀ, Δ the change of the diagonal and the pairs'
     ///   coupling there, and **pinned** (Δ = ∞, the row held at 0) on the rows of ℱ that left the
     ///   free set, applied by Woodbury's identity P⁻¹ = A₀⁻¹ − Z (I + Δ Uᵀ Z)⁻¹ Δ Uᵀ A₀⁻¹ with
     ///   Z = A₀⁻¹ U, whose columns are kept with the factor (one blocked solve for the rows new to
@@ -1294,9 +1297,10 @@ impl ActiveSetSolver<'_> {
         let moved = |i: usize| {
             let (p, k) = (free[i], kept.row[free[i]]);
             k != usize::MAX
-                && ((curvature[i] - kept.diagonal[k]).abs() > 0.1 * (self.c(p) + kept.diagonal[k].abs())
+                && ((curvature[i] - kept.diagonal[k]).abs() > MOVED * (self.c(p) + kept.diagonal[k].abs())
                     || hessian.partner[i] != usize::MAX
-                        && (hessian.coupling[i] - kept.coupling[k]).abs() > 0.1 * (self.c(p) + kept.diagonal[k].abs()))
+                        && (hessian.coupling[i] - kept.coupling[k]).abs()
+                            > MOVED * (self.c(p) + kept.diagonal[k].abs()))
         };
         let mut in_u: Vec<bool> = (0..nf).map(moved).collect();
         for i in 0..nf {
@@ -1777,13 +1781,14 @@ mod tests {
         };
         let (mut e, mut c) = (e0.clone(), c0.clone());
         e[3] *= 1e4;
-        e[57] = 0.0;
-        (c[40], c[41]) = (-0.5 * s.c(40), -0.5 * s.c(40));
+        e[55] = 0.0; // from 2.1 Q_pp
+                     // the pair's coupling turned over, past MOVED of its rows' Q_pp + e_p
+        (c[40], c[41]) = (-1.2 * s.c(40), -1.2 * s.c(40));
         assert!(solve(&e, &c, &mut kept) <= 2);
-        // the rows of 𝒰: 3, 57 and both rows of the pair (40, 41)
+        // the rows of 𝒰: 3, 55 and both rows of the pair (40, 41)
         assert_eq!(kept.columns.len(), 4 * m);
         e[3] *= 2.0;
-        e[57] = 5.0 * s.c(57);
+        e[55] = 5.0 * s.c(55);
         assert!(solve(&e, &c, &mut kept) <= 2);
         assert_eq!(kept.columns.len(), 4 * m, "no new columns for the same rows");
         for p in (0..m).step_by(5) {
