@@ -988,7 +988,8 @@ impl ActiveSetSolver<'_> {
     /// Solves (Q_ℐℐ + H + diag(proximal)) x = G_ℐ, H the laws' Hessian (diagonal, and 2 × 2
     /// blocks on pairs), convexifying H when the matrix is indefinite. Above
     /// `dense_limit` free nodes the factorisation is kept in `kept` and reused by
-    /// [`Self::preconditioned_cg`] until it no longer serves (docs/method.md §9.2).
+    /// [`Self::preconditioned_cg`] until it no longer serves; it is formed without the rows a law
+    /// holds stiffly ([`STIFF`]), and its own direction is then CG's (docs/method.md §9.2).
     fn newton_direction(
         &self,
         free: &[usize],
@@ -1043,6 +1044,7 @@ impl ActiveSetSolver<'_> {
                 // CG met a direction of non-positive curvature or did not converge: the dense
                 // direction on every free row
                 buffer.recycle(fresh.factor);
+                outcome.factorisations += 1;
                 let all: Vec<usize> = (0..nf).collect();
                 fresh = self.factor_rows(free, &all, (hessian, proximal), buffer, outcome);
             }
