@@ -1022,7 +1022,7 @@ impl ActiveSetSolver<'_> {
         if !reuse {
             let all: Vec<usize> = (0..nf).collect();
             let llt = self
-                .factor_rows(free, &all, (hessian, proximal), buffer, outcome)
+                .factor_rows(free, &all, (hessian, proximal), (buffer, fingerprint), outcome)
                 .factor;
             let x = llt.solve(&rhs(free));
             buffer.recycle(llt);
@@ -1036,7 +1036,7 @@ impl ActiveSetSolver<'_> {
         if factored.is_empty() {
             factored = (0..nf).collect();
         }
-        let mut fresh = self.factor_rows(free, &factored, (hessian, proximal), buffer, outcome);
+        let mut fresh = self.factor_rows(free, &factored, (hessian, proximal), (buffer, fingerprint), outcome);
         let mut x = None;
         if factored.len() < nf {
             x = self.preconditioned_cg(&mut fresh, free, (&exact, hessian), grad, forcing);
@@ -1046,7 +1046,7 @@ impl ActiveSetSolver<'_> {
                 buffer.recycle(fresh.factor);
                 outcome.factorisations += 1;
                 let all: Vec<usize> = (0..nf).collect();
-                fresh = self.factor_rows(free, &all, (hessian, proximal), buffer, outcome);
+                fresh = self.factor_rows(free, &all, (hessian, proximal), (buffer, fingerprint), outcome);
             }
         }
         let x = x.map_or_else(|| fresh.factor.solve(&rhs(free)), |(x, _)| x);
@@ -1064,7 +1064,7 @@ impl ActiveSetSolver<'_> {
         free: &[usize],
         factored: &[usize],
         (hessian, proximal): (&LawHessian, &[f64]),
-        buffer: &mut FactorBuffer,
+        (buffer, fingerprint): (&mut FactorBuffer, (usize, u64)),
         outcome: &mut ContactOutcome,
     ) -> ReusedFactor {
         let rows: Vec<usize> = factored.iter().map(|&i| free[i]).collect();
@@ -1094,8 +1094,9 @@ impl ActiveSetSolver<'_> {
             })
         };
         let exact: Vec<f64> = factored.iter().map(|&i| hessian.diagonal[i] + proximal[i]).collect();
-        let (factor, diagonal, coupling) = match build(&exact, &on_rows(&hessian.coupling)) {
-            Some(llt) => (llt, exact, on_rows(&hessian.coupling)),
+        let coupling = on_rows(&hessian.coupling);
+        let (factor, diagonal, coupling) = match build(&exact, &coupling) {
+            Some(llt) => (llt, exact, coupling),
             None => {
                 outcome.convexified += 1;
                 let mut shift = 0.0;
@@ -1120,7 +1121,7 @@ impl ActiveSetSolver<'_> {
             row[p] = a;
         }
         ReusedFactor {
-            fingerprint: self.fingerprint(),
+            fingerprint,
             row,
             diagonal,
             coupling,
@@ -1266,10 +1267,10 @@ impl ActiveSetSolver<'_> {
     /// P is then the Newton matrix up to the other rows' small changes and the stiff rows'
     /// coupling (below 1/√10 of their diagonal), so CG needs a few iterations; each costs a
     /// product by Q, two triangular solves and products by Z and the border, where a
-    /// factorisation costs O(|ℐ|³). None past |ℐ|/8 new columns of Z (they would cost most of a
-    /// factorisation), |ℐ|/4 rows in 𝒰, |ℐ|/4 kept columns (a quarter of the factor's memory) or
-    /// |ℱ|/8 bordered rows. CG stops at the relative residual `forcing` (inexact Newton,
-    /// docs/method.md §9.2).
+    /// factorisation costs O(|ℐ|³). None past |ℱ|/8 new columns of Z (they would cost most of a
+    /// factorisation), |ℱ|/4 rows in 𝒰 with the pinned ones, |ℱ|/4 kept columns (a quarter of the
+    /// factor's memory), |ℱ|/8 rows in 𝒥 or |ℱ|/4 bordered rows kept. CG stops at the relative
+    /// residual `forcing` (inexact Newton, docs/method.md §9.2).
     ///
     /// None (the caller refactors) also when a direction of non-positive curvature turns up, or
     /// when the relative residual has not reached `forcing` within 10 + |ℐ|/200 iterations (about
@@ -1298,11 +1299,12 @@ impl ActiveSetSolver<'_> {
         let pinned: Vec<usize> = (0..now_free.len()).filter(|&k| !now_free[k]).collect();
         let moved = |i: usize| {
             let (p, k) = (free[i], kept.row[free[i]]);
-            k != usize::MAX
-                && ((curvature[i] - kept.diagonal[k]).abs() > MOVED * (self.c(p) + kept.diagonal[k].abs())
-                    || hessian.partner[i] != usize::MAX
-                        && (hessian.coupling[i] - kept.coupling[k]).abs()
-                            > MOVED * (self.c(p) + kept.diagonal[k].abs()))
+            if k == usize::MAX {
+                return false;
+            }
+            let limit = MOVED * (self.c(p) + kept.diagonal[k].abs());
+            (curvature[i] - kept.diagonal[k]).abs() > limit
+                || hessian.partner[i] != usize::MAX && (hessian.coupling[i] - kept.coupling[k]).abs() > limit
         };
         let mut in_u: Vec<bool> = (0..nf).map(moved).collect();
         for i in 0..nf {
@@ -1356,7 +1358,8 @@ impl ActiveSetSolver<'_> {
                     kept_rhs[kept.row[p]] = r[i];
                 }
             }
-            kept.factor.solve_in_place_parallel(&mut kept_rhs);
+            // (one column on the run's threads: a preconditioner's rounding only changes CG's path)
+            kept.factor.solve_columns_in_place(&mut kept_rhs, 1);
             if let Some(update) = &update {
                 update.correct_columns(&mut kept_rhs, 1);
             }
@@ -1492,11 +1495,11 @@ impl ActiveSetSolver<'_> {
         }
     }
 
-    /// The low-rank update of [`Self::preconditioned_cg`] on the free rows `u` (ℐ = ℱ): the
-    /// columns of Z = A₀⁻¹ U not kept yet (one blocked solve), Δ and the capacitance matrix
-    /// I + Δ Uᵀ Z, factored. None past |ℐ|/8 new columns or |ℐ|/4 rows, or where the kept
-    /// columns would pass |ℐ|/4 (a quarter of the factor's size; a refactorisation starts them
-    /// afresh).
+    /// The low-rank update of [`Self::preconditioned_cg`] on the free rows `u` and the factor's
+    /// rows `pinned` (no longer free; Δ = ∞): the columns of Z = A₀⁻¹ U not kept yet (one blocked
+    /// solve), gathered, Δ and the capacitance matrix I + Δ Uᵀ Z (a pinned row's: Uᵀ Z), factored.
+    /// None past |ℱ|/8 new columns or |ℱ|/4 rows, or where the kept columns would pass |ℱ|/4 (a
+    /// quarter of the factor's size; a refactorisation starts them afresh).
     fn low_rank_update(
         &self,
         kept: &mut ReusedFactor,
@@ -1783,8 +1786,9 @@ mod tests {
         };
         let (mut e, mut c) = (e0.clone(), c0.clone());
         e[3] *= 1e4;
-        e[55] = 0.0; // from 2.1 Q_pp
-                     // the pair's coupling turned over, past MOVED of its rows' Q_pp + e_p
+        // a row dropped to 0 from 2.1 Q_pp, and the pair's coupling turned over, past MOVED of its
+        // rows' Q_pp + e_p
+        e[55] = 0.0;
         (c[40], c[41]) = (-1.2 * s.c(40), -1.2 * s.c(40));
         assert!(solve(&e, &c, &mut kept) <= 2);
         // the rows of 𝒰: 3, 55 and both rows of the pair (40, 41)
@@ -1831,7 +1835,13 @@ mod tests {
         assert_eq!(factored, (0..100).collect::<Vec<_>>());
         let (mut buffer, mut outcome) = (FactorBuffer::default(), ContactOutcome::default());
         let zeros = vec![0.0; m];
-        let mut kept = s.factor_rows(&all, &factored, (&hessian(&e), &zeros), &mut buffer, &mut outcome);
+        let mut kept = s.factor_rows(
+            &all,
+            &factored,
+            (&hessian(&e), &zeros),
+            (&mut buffer, s.fingerprint()),
+            &mut outcome,
+        );
         // now rows 0..5, 30 and 31 are on their bound, rows 100..106 left the stiff part of their
         // law (106..120 did not) and row 50 stiffened a hundred times
         let free: Vec<usize> = (5..m).filter(|p| ![30, 31].contains(p)).collect();

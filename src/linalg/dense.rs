@@ -59,12 +59,6 @@ impl DenseCholesky {
         self.solve_block(x, 1, Par::Seq);
     }
 
-    /// x ← A⁻¹ x on the run's threads from order 512 (the sums split differently: for a
-    /// preconditioner, whose rounding only changes CG's path).
-    pub fn solve_in_place_parallel(&self, x: &mut [f64]) {
-        self.solve_block(x, 1, par(self.n));
-    }
-
     /// X ← A⁻¹ X for the n × k column-major X: k right-hand sides at once, so each sweep reads
     /// L once for all of them (blocked, on the run's threads from order 512).
     pub fn solve_columns_in_place(&self, x: &mut [f64], k: usize) {
@@ -113,9 +107,7 @@ impl DenseLu {
 
     /// x ← A⁻¹ x.
     pub fn solve_in_place(&self, x: &mut [f64]) {
-        use faer::linalg::solvers::Solve;
-        let k = x.len();
-        self.0.solve_in_place(MatMut::from_column_major_slice_mut(x, k, 1));
+        self.solve_columns_in_place(x, 1);
     }
 
     /// X ← A⁻¹ X for the k × c column-major X (c right-hand sides at once).
