@@ -30,7 +30,7 @@
 use super::condensed::NormalStiffness;
 use super::newton_w::{self, Curvature};
 use super::nodal::NodalLaws;
-use crate::linalg::dense::{subtract_product, transpose_product, DenseCholesky, DenseLu, FactorBuffer};
+use crate::linalg::dense::{subtract_product, transpose_product, DenseCholesky, DenseLu, FactorBuffer, SingleCholesky};
 
 /// Tolerance and iteration cap of the contact solve.
 #[derive(Clone, Copy, Debug)]
@@ -177,6 +177,8 @@ pub struct ReusedFactor {
     /// A pair's coupling on the factor's off-diagonal, per row (0 where the row has no pair).
     coupling: Vec<f64>,
     factor: DenseCholesky,
+    /// The factor in single precision: the preconditioner's sweeps (docs/method.md §9.2).
+    single: SingleCholesky,
     /// The columns A₀⁻¹ e_k of the rows k the low-rank update has needed so far (column-major,
     /// n numbers each; they depend on the factor only, so they are kept with it), and each
     /// row's column (usize::MAX: none yet).
@@ -1125,6 +1127,7 @@ impl ActiveSetSolver<'_> {
             row,
             diagonal,
             coupling,
+            single: factor.single(),
             factor,
             columns: Vec::new(),
             column_of: vec![usize::MAX; n],
@@ -1359,7 +1362,7 @@ impl ActiveSetSolver<'_> {
                 }
             }
             // (one column on the run's threads: a preconditioner's rounding only changes CG's path)
-            kept.factor.solve_columns_in_place(&mut kept_rhs, 1);
+            kept.single.solve_columns_in_place(&mut kept_rhs, 1);
             if let Some(update) = &update {
                 update.correct_columns(&mut kept_rhs, 1);
             }
@@ -1453,7 +1456,7 @@ impl ActiveSetSolver<'_> {
                 }
             }
             let mut x = a.clone();
-            kept.factor.solve_columns_in_place(&mut x, fresh.len());
+            kept.single.solve_columns_in_place(&mut x, fresh.len());
             for (b, &p) in fresh.iter().enumerate() {
                 kept.bordered_of[p] = kept.bordered.len();
                 kept.bordered.extend_from_slice(&a[b * n..(b + 1) * n]);
@@ -1526,7 +1529,7 @@ impl ActiveSetSolver<'_> {
                 kept.columns[start + a * n + k] = 1.0;
                 kept.column_of[k] = start / n + a;
             }
-            kept.factor
+            kept.single
                 .solve_columns_in_place(&mut kept.columns[start..], fresh.len());
         }
         // Δ: per row of 𝒰 its diagonal change and, for a pair, its partner's place in 𝒰 and the
@@ -1760,6 +1763,7 @@ mod tests {
             row: (0..m).collect(),
             diagonal: e0.clone(),
             coupling: c0.clone(),
+            single: DenseCholesky::new(m, matrix(&e0, &c0)).unwrap().single(),
             factor: DenseCholesky::new(m, matrix(&e0, &c0)).unwrap(),
             columns: Vec::new(),
             column_of: vec![usize::MAX; m],
