@@ -39,6 +39,7 @@
 pub mod dense;
 mod factor;
 mod forward_columns;
+pub mod krylov;
 mod numeric;
 mod schedule;
 pub mod sparse;
