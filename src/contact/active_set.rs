@@ -689,10 +689,21 @@ impl ActiveSetSolver<'_> {
     /// GᵀΔ + ½ΔᵀQΔ + Σ_p w_p [j(r_p + Δ_p) − j(r_p) − j'(r_p)Δ_p], the bracket from its
     /// Taylor expansion ½ j''(r_p) Δ_p² when Δ_p is tiny (the difference of j values would be
     /// below their rounding near convergence, and Armijo could not see the decrease).
-    /// Q Δ is left in `qdelta`.
-    fn energy_change(&self, r: &[f64], delta: &[f64], grad: &[f64], qdelta: &mut [f64]) -> f64 {
+    /// Q Δ is left in `qdelta`: by the single-precision Q where one is given (§9.2: the trial's
+    /// energy and residual decide a step only; Q r − q carried by it is formed afresh before the
+    /// solve is declared converged).
+    fn energy_change(
+        &self,
+        r: &[f64],
+        delta: &[f64],
+        (grad, single): (&[f64], Option<&SingleMatrix>),
+        qdelta: &mut [f64],
+    ) -> f64 {
         let m = self.m();
-        self.operator.apply_q(delta, qdelta);
+        match single {
+            Some(q) => q.apply(delta, qdelta),
+            None => self.operator.apply_q(delta, qdelta),
+        }
         let mut change = 0.0;
         for p in 0..m {
             change += delta[p] * (grad[p] + 0.5 * qdelta[p]);
@@ -898,11 +909,14 @@ impl ActiveSetSolver<'_> {
             }
 
             // 4. projected Armijo backtracking on the energy
+            let single = (state.newton_factor.0.as_ref())
+                .filter(|k| k.fingerprint == fingerprint)
+                .and_then(|k| k.q_single.clone());
             let mut alpha = 1.0;
             loop {
                 let path = (&direction[..], &active[..], &kink[..], &grad[..]);
                 let decrease_bound = alpha * predicted_slope + self.path(r, path, alpha, &mut trial);
-                let change = self.energy_change(r, &trial, &grad, &mut qtrial);
+                let change = self.energy_change(r, &trial, (&grad, single.as_deref()), &mut qtrial);
                 if change <= -ARMIJO * decrease_bound || (change <= 0.0 && decrease_bound <= 1e-300) {
                     break;
                 }
