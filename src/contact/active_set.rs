@@ -1050,10 +1050,10 @@ impl ActiveSetSolver<'_> {
         coulomb: &[(usize, usize, f64, f64)],
     ) -> Option<usize> {
         let m = self.m();
-        if self.singular {
+        let fingerprint = self.fingerprint();
+        if self.singular || !(state.newton_factor.0.as_ref()).is_some_and(|k| k.fingerprint == fingerprint) {
             return None;
         }
-        let fingerprint = self.fingerprint();
         let r = state.normal_displacement.clone();
         let mut qrd = vec![0.0; m];
         match &state.balanced_at {
