@@ -1051,7 +1051,7 @@ impl ActiveSetSolver<'_> {
     ) -> Option<usize> {
         let m = self.m();
         let fingerprint = self.fingerprint();
-        if self.singular || !(state.newton_factor.0.as_ref()).is_some_and(|k| k.fingerprint == fingerprint) {
+        if self.singular || (state.newton_factor.0.as_ref()).is_none_or(|k| k.fingerprint != fingerprint) {
             return None;
         }
         let r = state.normal_displacement.clone();
