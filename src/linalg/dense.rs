@@ -128,7 +128,7 @@ impl SingleCholesky {
     }
 }
 
-/// A symmetric n × n matrix rounded to single precision, for the products of an iteration that
+/// An n × n matrix (row-major) rounded to single precision, for the products of an iteration that
 /// a preconditioner leads (CG on the kept factor, docs/method.md §9.2): half the bytes of the
 /// double matrix, which bound a product's time; the sums are formed in double precision, so a
 /// product's error is the entries' rounding, 6·10⁻⁸ Σ_j |a_ij x_j| per row.

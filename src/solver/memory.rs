@@ -84,9 +84,11 @@ impl MemoryEstimate {
                 true => TRAILING_COPIES,
                 false => DENSE_COPIES,
             };
+            // the kept factor in double precision and, with Q, in single (its preconditioner's
+            // sweeps and CG's products, docs/method.md §9.2): two more m² in doubles' bytes
             parts.push((
                 "dense contact matrices",
-                ((copies + kept) * 8.0 * (m * m) as f64) as u64,
+                ((copies + 2.0 * kept) * 8.0 * (m * m) as f64) as u64,
             ));
         }
         let history = sim.memory.as_ref().map_or(0, |_| 8 * n * (2 + 3 * channels.max(1)));
