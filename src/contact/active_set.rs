@@ -180,11 +180,15 @@ pub struct ReusedFactor {
     /// A pair's coupling on the factor's off-diagonal, per row (0 where the row has no pair).
     coupling: Vec<f64>,
     factor: DenseCholesky,
-    /// The factor in single precision: the preconditioner's sweeps (docs/method.md §9.2).
-    single: SingleCholesky,
+    /// The factor in single precision for the preconditioner's sweeps (docs/method.md §9.2),
+    /// rounded at the first of them: a factor that only solves its own direction never is.
+    single: std::sync::OnceLock<SingleCholesky>,
     /// Q in single precision for CG's products where its accuracy asks no more (formed at the
     /// first such product, handed on to the next factor of the same operator).
     q_single: Option<std::sync::Arc<SingleMatrix>>,
+    /// The directions it has given (a fresh factor's first CG runs in double precision: its
+    /// single copies would cost more than one use saves).
+    served: usize,
     /// The columns A₀⁻¹ e_k of the rows k the low-rank update has needed so far (column-major,
     /// n numbers each; they depend on the factor only, so they are kept with it), and each
     /// row's column (usize::MAX: none yet).
@@ -195,6 +199,13 @@ pub struct ReusedFactor {
     /// none yet) (the border of [`ActiveSetSolver::preconditioned_cg`]).
     bordered: Vec<f64>,
     bordered_of: Vec<usize>,
+}
+
+impl ReusedFactor {
+    /// The factor in single precision, rounded at the first call.
+    fn single(&self) -> &SingleCholesky {
+        self.single.get_or_init(|| self.factor.single())
+    }
 }
 
 /// P = A₀ + UΔUᵀ of [`ActiveSetSolver::preconditioned_cg`] on the kept factor's rows `rows`.
@@ -1269,9 +1280,10 @@ impl ActiveSetSolver<'_> {
             row,
             diagonal,
             coupling,
-            single: factor.single(),
+            single: std::sync::OnceLock::new(),
             factor,
             q_single: None,
+            served: 0,
             columns: Vec::new(),
             column_of: vec![usize::MAX; n],
             bordered: Vec::new(),
@@ -1436,7 +1448,6 @@ impl ActiveSetSolver<'_> {
         (forcing, coupled): (f64, Option<&[(usize, f64)]>),
     ) -> Option<(Vec<f64>, usize)> {
         let (m, nf) = (self.m(), free.len());
-        let iterations = 10 + nf / 200;
         let joined_rows: Vec<usize> = (0..nf)
             .filter(|&i| kept.row[free[i]] == usize::MAX && !self.stiff(free, (curvature, hessian), i, STIFF / 10.0))
             .collect();
@@ -1487,12 +1498,47 @@ impl ActiveSetSolver<'_> {
         } else {
             Some(self.border(kept, update.as_ref(), free, (curvature, hessian), &joined_rows))
         };
-        // the products in single precision where the accuracy asked is well above its rounding
-        if forcing >= SINGLE_FORCING && kept.q_single.is_none() {
-            kept.q_single = Some(std::sync::Arc::new(SingleMatrix::new(m, |p, r| self.operator.q(p, r))));
+        // single precision only for a factor reused (not a fresh one's first direction) where it
+        // is not the Newton matrix itself: with an exact preconditioner CG's first iteration gives
+        // the direction to double precision, which a problem linear in the step (a soft layer)
+        // needs to finish in one direction (docs/method.md §9.2)
+        let exact = update.is_none() && border.is_none() && free.iter().all(|&p| kept.row[p] != usize::MAX);
+        let single = !exact && kept.served > 0;
+        let solved = self.iterate(
+            kept,
+            free,
+            (curvature, hessian),
+            grad,
+            (forcing, coupled, single),
+            (update.as_ref(), border.as_ref()),
+        );
+        if solved.is_some() {
+            kept.served += 1;
+            // Q in single precision for the next directions, once a reused factor has served one
+            // whose accuracy allowed it
+            if single && forcing >= SINGLE_FORCING && kept.q_single.is_none() {
+                kept.q_single = Some(std::sync::Arc::new(SingleMatrix::new(m, |p, r| self.operator.q(p, r))));
+            }
         }
-        let single = kept.q_single.clone().filter(|_| forcing >= SINGLE_FORCING);
-        let kept = &*kept;
+        solved
+    }
+
+    /// The iteration of [`Self::preconditioned_cg`] (CG, or GMRES on the coupled system) with the
+    /// kept factor updated and bordered.
+    #[allow(clippy::too_many_lines)]
+    fn iterate(
+        &self,
+        kept: &ReusedFactor,
+        free: &[usize],
+        (curvature, hessian): (&[f64], &LawHessian),
+        grad: &[f64],
+        (forcing, coupled, low): (f64, Option<&[(usize, f64)]>, bool),
+        (update, border): (Option<&LowRankUpdate>, Option<&Border>),
+    ) -> Option<(Vec<f64>, usize)> {
+        let (m, nf) = (self.m(), free.len());
+        let iterations = 10 + nf / 200;
+        // the products in single precision where the accuracy asked is well above its rounding
+        let single = kept.q_single.clone().filter(|_| low && forcing >= SINGLE_FORCING);
         let (mut full, mut product) = (vec![0.0; m], vec![0.0; m]);
         let mut apply = |x: &[f64], y: &mut [f64]| {
             full.fill(0.0);
@@ -1522,11 +1568,14 @@ impl ActiveSetSolver<'_> {
                 }
             }
             // (one column on the run's threads: a preconditioner's rounding only changes CG's path)
-            kept.single.solve_columns_in_place(&mut kept_rhs, 1);
-            if let Some(update) = &update {
+            match low {
+                true => kept.single().solve_columns_in_place(&mut kept_rhs, 1),
+                false => kept.factor.solve_columns_in_place(&mut kept_rhs, 1),
+            }
+            if let Some(update) = update {
                 update.correct_columns(&mut kept_rhs, 1);
             }
-            if let Some(border) = &border {
+            if let Some(border) = border {
                 border.correct(r, &mut kept_rhs, z);
             }
             for (i, &p) in free.iter().enumerate() {
@@ -1623,7 +1672,7 @@ impl ActiveSetSolver<'_> {
                 }
             }
             let mut x = a.clone();
-            kept.single.solve_columns_in_place(&mut x, fresh.len());
+            kept.single().solve_columns_in_place(&mut x, fresh.len());
             for (b, &p) in fresh.iter().enumerate() {
                 kept.bordered_of[p] = kept.bordered.len();
                 kept.bordered.extend_from_slice(&a[b * n..(b + 1) * n]);
@@ -1696,7 +1745,7 @@ impl ActiveSetSolver<'_> {
                 kept.columns[start + a * n + k] = 1.0;
                 kept.column_of[k] = start / n + a;
             }
-            kept.single
+            (kept.single.get_or_init(|| kept.factor.single()))
                 .solve_columns_in_place(&mut kept.columns[start..], fresh.len());
         }
         // Δ: per row of 𝒰 its diagonal change and, for a pair, its partner's place in 𝒰 and the
@@ -1930,8 +1979,9 @@ mod tests {
             row: (0..m).collect(),
             diagonal: e0.clone(),
             coupling: c0.clone(),
-            single: DenseCholesky::new(m, matrix(&e0, &c0)).unwrap().single(),
+            single: std::sync::OnceLock::new(),
             q_single: None,
+            served: 0,
             factor: DenseCholesky::new(m, matrix(&e0, &c0)).unwrap(),
             columns: Vec::new(),
             column_of: vec![usize::MAX; m],
