@@ -415,6 +415,14 @@ fn pair_block(a: f64, b: f64, n: [f64; 2]) -> (f64, f64) {
     (b + (a - b) * n[0] * n[0], (a - b) * n[0] * n[1])
 }
 
+/// Whether a solve ended at r under the free contact forces q ([`ContactState::balanced_at`]):
+/// the state's forces are then q − Q r, and no product by Q need form them.
+fn is_balanced(balanced_at: &Option<(Vec<f64>, Vec<f64>)>, r: &[f64], q: &[f64]) -> bool {
+    balanced_at
+        .as_ref()
+        .is_some_and(|(at, load)| at[..] == r[..] && load[..] == q[..])
+}
+
 /// HVI_TRACE_CONTACT set: the solve prints its iterations to stderr.
 fn tracing() -> bool {
     std::env::var_os("HVI_TRACE_CONTACT").is_some()
@@ -822,12 +830,7 @@ impl ActiveSetSolver<'_> {
         let mut carried = 0;
         loop {
             // 1. gradient and residual
-            let balanced = outcome.iterations == 0
-                && state
-                    .balanced_at
-                    .as_ref()
-                    .is_some_and(|(at, load)| at[..] == r[..] && load[..] == d[..]);
-            if balanced {
+            if outcome.iterations == 0 && is_balanced(&state.balanced_at, r, d) {
                 qrd.iter_mut().zip(&state.force).for_each(|(a, f)| *a = -f);
             } else if carried == 0 {
                 self.residual_force(r, d, &mut qrd);
@@ -1067,11 +1070,10 @@ impl ActiveSetSolver<'_> {
         }
         let r = state.normal_displacement.clone();
         let mut qrd = vec![0.0; m];
-        match &state.balanced_at {
-            Some((at, load)) if at[..] == r[..] && load[..] == q[..] => {
-                qrd.iter_mut().zip(&state.force).for_each(|(a, f)| *a = -f);
-            }
-            _ => self.residual_force(&r, q, &mut qrd),
+        if is_balanced(&state.balanced_at, &r, q) {
+            qrd.iter_mut().zip(&state.force).for_each(|(a, f)| *a = -f);
+        } else {
+            self.residual_force(&r, q, &mut qrd);
         }
         let mut grad = vec![0.0; m];
         self.gradient_from(&r, &qrd, &mut grad);
@@ -1096,7 +1098,7 @@ impl ActiveSetSolver<'_> {
         let free: Vec<usize> = (0..m).filter(|&p| !active[p]).collect();
         let hessian = self.law_hessian(&r, &free);
         let coupled: Vec<(usize, f64)> = free.iter().map(|&p| coefficient[p]).collect();
-        // the inexact-Newton accuracy of solve_forces, from the coupled residual
+        // no step where the coupled residual meets this solver's tolerance already
         let scale = self.force_scale(q);
         let residual = self.complementarity_residual(&r, &grad);
         let tol = self.settings.tolerance * scale;
@@ -1105,11 +1107,7 @@ impl ActiveSetSolver<'_> {
         }
         // (10⁻⁴: solve_forces' adaptive rule took 268 directions on the slab against 256)
         let forcing = 1e-4;
-        let kept = state
-            .newton_factor
-            .0
-            .as_mut()
-            .filter(|k| k.fingerprint == fingerprint)?;
+        let kept = state.newton_factor.0.as_mut()?;
         let (x, iterations) = self.preconditioned_cg(
             kept,
             &free,
@@ -1525,7 +1523,6 @@ impl ActiveSetSolver<'_> {
 
     /// The iteration of [`Self::preconditioned_cg`] (CG, or GMRES on the coupled system) with the
     /// kept factor updated and bordered.
-    #[allow(clippy::too_many_lines)]
     fn iterate(
         &self,
         kept: &ReusedFactor,

@@ -59,11 +59,7 @@ pub fn gmres(
         g.push(-s * g[k]);
         g[k] *= c;
         r_columns.push(h);
-        let converged = g[k + 1].abs() <= relative * norm_b;
-        if converged || k + 1 == iterations {
-            if !converged {
-                return None;
-            }
+        if g[k + 1].abs() <= relative * norm_b {
             // y = R⁻¹ g, x = Z y
             let size = k + 1;
             let mut y = vec![0.0; size];

@@ -317,18 +317,22 @@ fn solve_increment<const D: usize>(
         };
         // the bound forces' next guess: from a Newton step on the coupled law where it serves
         // (docs/method.md §17.2), otherwise the fixed point's (mixed)
-        let coupling: Vec<(usize, usize, f64, f64)> = (0..k_rows)
-            .filter(|&k| is_coulomb[k] && forces[k] > 0.0)
-            .filter_map(|k| {
-                let p = friction.normal_row[k];
-                let pressed = pressing(state, p);
-                (pressed > 0.0).then(|| (m + k, p, forces[k], next[k] / pressed))
-            })
-            .collect();
         // (not after the first round: from the predicted bound forces the stick/slip pattern
         // still moves, and the step cost more directions than it saved, 264 against 256 on the
         // slab)
-        let stepped = (round > 0).then(|| solver.coupled_step(q, state, &coupling)).flatten();
+        let stepped = (round > 0)
+            .then(|| {
+                let coupling: Vec<(usize, usize, f64, f64)> = (0..k_rows)
+                    .filter(|&k| is_coulomb[k] && forces[k] > 0.0)
+                    .filter_map(|k| {
+                        let p = friction.normal_row[k];
+                        let pressed = pressing(state, p);
+                        (pressed > 0.0).then(|| (m + k, p, forces[k], next[k] / pressed))
+                    })
+                    .collect();
+                solver.coupled_step(q, state, &coupling)
+            })
+            .flatten();
         match stepped {
             Some(iterations) => {
                 if iterations > 0 {
@@ -336,7 +340,7 @@ fn solve_increment<const D: usize>(
                     total.iterative += 1;
                 }
                 forces = bound_forces(state).map_err(|reason| failure(reason, total))?;
-                mixing = Anderson::new(is_coulomb.clone());
+                mixing.restart();
             }
             None => forces = mixing.next(&forces, next),
         }
@@ -384,6 +388,11 @@ impl Anderson {
             coulomb,
             rounds: Vec::new(),
         }
+    }
+
+    /// Forgets the rounds so far (the bound forces moved by other means than a round).
+    fn restart(&mut self) {
+        self.rounds.clear();
     }
 
     /// The next round's bound forces, given this round's F and Φ(F).
