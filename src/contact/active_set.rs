@@ -397,6 +397,11 @@ struct LawHessian {
     pair: Vec<(f64, f64, [f64; 2])>,
 }
 
+/// A Krylov solve's result: x on the free rows, the iterations taken and, from CG, Q x over
+/// all rows (x zero off the free rows): the sum of CG's own products, which spares the line
+/// search its product by Q (docs/method.md §9.2).
+type Krylov = (Vec<f64>, usize, Option<Vec<f64>>);
+
 const ARMIJO: f64 = 1e-4;
 /// A row whose law curvature is this many times its stiffness Q_pp (a pair: both of its
 /// curvatures) is left out of a kept factor and preconditioned by Jacobi (docs/method.md §9.2).
@@ -708,21 +713,9 @@ impl ActiveSetSolver<'_> {
     /// GᵀΔ + ½ΔᵀQΔ + Σ_p w_p [j(r_p + Δ_p) − j(r_p) − j'(r_p)Δ_p], the bracket from its
     /// Taylor expansion ½ j''(r_p) Δ_p² when Δ_p is tiny (the difference of j values would be
     /// below their rounding near convergence, and Armijo could not see the decrease).
-    /// Q Δ is left in `qdelta`: by the single-precision Q where one is given (§9.2: the trial's
-    /// energy and residual decide a step only; Q r − q carried by it is formed afresh before the
-    /// solve is declared converged).
-    fn energy_change(
-        &self,
-        r: &[f64],
-        delta: &[f64],
-        (grad, single): (&[f64], Option<&SingleMatrix>),
-        qdelta: &mut [f64],
-    ) -> f64 {
+    /// `qdelta` is Q Δ ([`Self::trial_product`]).
+    fn energy_change(&self, r: &[f64], delta: &[f64], grad: &[f64], qdelta: &[f64]) -> f64 {
         let m = self.m();
-        match single {
-            Some(q) => q.apply(delta, qdelta),
-            None => self.operator.apply_q(delta, qdelta),
-        }
         let mut change = 0.0;
         for p in 0..m {
             change += delta[p] * (grad[p] + 0.5 * qdelta[p]);
@@ -751,6 +744,43 @@ impl ActiveSetSolver<'_> {
         let (dd, xd) = (dx[0] * dx[0] + dx[1] * dx[1], x[0] * dx[0] + x[1] * dx[1]);
         let sum = rho + moved;
         radial + self.laws.force(p, rho) * (dd / sum + xd * (rho - moved) / (rho * sum))
+    }
+
+    /// Q Δ for the line search's trial Δ = −α d off the rows in `stops` (the path's stops), into
+    /// `qdelta`: from Q d where the direction brought it (`qd`, CG's own products) and Q's
+    /// columns on the stops where those are few, else by a product — by the single-precision Q
+    /// where one is given (§9.2: the trial's energy and residual decide a step only; Q r − q
+    /// carried by it is formed afresh before the solve is declared converged).
+    fn trial_product(
+        &self,
+        (delta, direction, alpha, stops): (&[f64], &[f64], f64, &[usize]),
+        (qd, single): (Option<&[f64]>, Option<&SingleMatrix>),
+        qdelta: &mut [f64],
+    ) {
+        if let Some(qd) = qd.filter(|_| 8 * stops.len() <= self.m()) {
+            qdelta.iter_mut().zip(qd).for_each(|(y, q)| *y = -alpha * q);
+            if self.add_columns(stops.iter().map(|&p| (p, delta[p] + alpha * direction[p])), qdelta) {
+                return;
+            }
+        }
+        match single {
+            Some(q) => q.apply(delta, qdelta),
+            None => self.operator.apply_q(delta, qdelta),
+        }
+    }
+
+    /// y += Σ a Q[:, p] over `columns` (p, a) where Q's rows are at hand (false, y untouched,
+    /// where they are not).
+    fn add_columns(&self, columns: impl Iterator<Item = (usize, f64)> + Clone, y: &mut [f64]) -> bool {
+        if columns.clone().any(|(p, _)| self.operator.q_row(p).is_none()) {
+            return false;
+        }
+        for (p, a) in columns.filter(|&(_, a)| a != 0.0) {
+            if let Some(row) = self.operator.q_row(p) {
+                y.iter_mut().zip(row).for_each(|(y, q)| *y += a * q);
+            }
+        }
+        true
     }
 
     /// The complementarity residual at r + Δ.
@@ -809,7 +839,7 @@ impl ActiveSetSolver<'_> {
         let (mut qrd, mut grad) = (vec![0.0; m], vec![0.0; m]);
         let mut outcome = ContactOutcome::default();
         let mut direction = vec![0.0; m];
-        let mut trial = vec![0.0; m];
+        let (mut trial, mut stops) = (vec![0.0; m], Vec::new());
         // A kink of j at r = 0 (∂j(0) an interval, e.g. [−Sa, Sa]): the smoothed j_ε bends
         // within ~ε of 0, which a Newton model taken farther out cannot see. The path stops
         // a node at 0 instead of carrying it across (it may cross at the next iteration, from
@@ -907,13 +937,13 @@ impl ActiveSetSolver<'_> {
             let mut free_dir = (full_step.then(|| self.branch_model(r, &free, &hessian, &grad, &kink)))
                 .flatten()
                 .map(|(h, g)| direct(&h, &g));
-            if free_dir.as_ref().is_some_and(|d| slope(d) <= 0.0) {
+            if free_dir.as_ref().is_some_and(|(d, _)| slope(d) <= 0.0) {
                 if tracing() {
                     eprintln!("  the branch model's direction does not descend: the law's own");
                 }
                 free_dir = None;
             }
-            let free_dir = free_dir.unwrap_or_else(|| direct(&hessian, &grad));
+            let (free_dir, q_free) = free_dir.unwrap_or_else(|| direct(&hessian, &grad));
             let predicted_slope = slope(&free_dir);
             for (k, &p) in free.iter().enumerate() {
                 direction[p] = free_dir[k];
@@ -921,6 +951,12 @@ impl ActiveSetSolver<'_> {
             for p in (0..m).filter(|&p| active[p]) {
                 direction[p] = grad[p] / self.c(p);
             }
+            // Q d from CG's own products on the free rows and Q's columns on the held ones, where
+            // those are few: the line search's trials then need no product (docs/method.md §9.2)
+            let qdir = q_free.filter(|_| 8 * (m - free.len()) <= m).and_then(|mut qd| {
+                let held = (0..m).filter(|&p| active[p]).map(|p| (p, direction[p]));
+                self.add_columns(held, &mut qd).then_some(qd)
+            });
 
             // 4. projected Armijo backtracking on the energy
             let single = (state.newton_factor.0.as_ref())
@@ -929,8 +965,10 @@ impl ActiveSetSolver<'_> {
             let mut alpha = 1.0;
             loop {
                 let path = (&direction[..], &active[..], &kink[..], &grad[..]);
-                let decrease_bound = alpha * predicted_slope + self.path(r, path, alpha, &mut trial);
-                let change = self.energy_change(r, &trial, (&grad, single.as_deref()), &mut qtrial);
+                let decrease_bound = alpha * predicted_slope + self.path(r, path, alpha, (&mut trial, &mut stops));
+                let trial_at = (&trial[..], &direction[..], alpha, &stops[..]);
+                self.trial_product(trial_at, (qdir.as_deref(), single.as_deref()), &mut qtrial);
+                let change = self.energy_change(r, &trial, &grad, &qtrial);
                 if change <= -ARMIJO * decrease_bound || (change <= 0.0 && decrease_bound <= 1e-300) {
                     break;
                 }
@@ -988,21 +1026,22 @@ impl ActiveSetSolver<'_> {
         r: &[f64],
         (direction, active, kink, grad): (&[f64], &[bool], &[f64], &[f64]),
         alpha: f64,
-        trial: &mut [f64],
+        (trial, stops): (&mut [f64], &mut Vec<usize>),
     ) -> f64 {
         let mut decrease = 0.0;
+        stops.clear();
         for p in 0..self.m() {
-            let mut moved = if self.is_fixed(p) {
-                self.g(p)
-            } else {
-                (r[p] - alpha * direction[p]).min(self.g(p))
-            };
+            let along = r[p] - alpha * direction[p];
+            let mut moved = if self.is_fixed(p) { self.g(p) } else { along.min(self.g(p)) };
             let o = self.origin(p);
             let single = self.partner(p).is_none();
             if single && !active[p] && (r[p] - o).abs() > kink[p] && (moved - o) * (r[p] - o) < 0.0 {
                 // stop at the kink: the first-order decrease is that of the shorter move
                 decrease += grad[p] * (r[p] - o - alpha * direction[p]);
                 moved = o;
+            }
+            if moved != along {
+                stops.push(p);
             }
             trial[p] = moved - r[p];
             if active[p] {
@@ -1018,8 +1057,11 @@ impl ActiveSetSolver<'_> {
                 decrease += (nearest - alpha) * (grad[p] * d[0] + grad[q] * d[1]);
                 trial[p] = -nearest * d[0];
                 trial[q] = -nearest * d[1];
+                stops.extend([p, q]);
             }
         }
+        stops.sort_unstable();
+        stops.dedup();
         decrease
     }
 
@@ -1108,7 +1150,7 @@ impl ActiveSetSolver<'_> {
         // (10⁻⁴: solve_forces' adaptive rule took 268 directions on the slab against 256)
         let forcing = 1e-4;
         let kept = state.newton_factor.0.as_mut()?;
-        let (x, iterations) = self.preconditioned_cg(
+        let (x, iterations, _) = self.preconditioned_cg(
             kept,
             &free,
             (&hessian.diagonal, &hessian),
@@ -1122,7 +1164,7 @@ impl ActiveSetSolver<'_> {
         }
         let kink: Vec<f64> = (0..m).map(|p| self.laws.kink_width(p)).collect();
         let mut trial = vec![0.0; m];
-        self.path(&r, (&direction, &active, &kink, &grad), 1.0, &mut trial);
+        self.path(&r, (&direction, &active, &kink, &grad), 1.0, (&mut trial, &mut Vec::new()));
         let r = &mut state.normal_displacement;
         for p in 0..m {
             if !active[p] {
@@ -1148,35 +1190,35 @@ impl ActiveSetSolver<'_> {
         outcome: &mut ContactOutcome,
         (kept, buffer): (&mut KeptFactor, &mut FactorBuffer),
         fingerprint: (usize, u64),
-    ) -> Vec<f64> {
+    ) -> (Vec<f64>, Option<Vec<f64>>) {
         let nf = free.len();
         if nf == 0 {
-            return Vec::new();
+            return (Vec::new(), Some(vec![0.0; self.m()]));
         }
         if let Some(x) = self.direction_in_w(free, hessian, grad, buffer) {
             outcome.factorisations += 1;
             outcome.in_w += 1;
-            return x;
+            return (x, None);
         }
         let exact: Vec<f64> = hessian.diagonal.iter().zip(proximal).map(|(e, p)| e + p).collect();
         let reuse = nf > self.settings.dense_limit;
         let reused = (kept.0.as_mut())
             .filter(|k| reuse && k.fingerprint == fingerprint)
             .and_then(|k| self.preconditioned_cg(k, free, (&exact, hessian), grad, (forcing, None)));
-        if let Some((x, _)) = reused {
+        if let Some((x, _, qx)) = reused {
             outcome.iterative += 1;
-            return x;
+            return (x, qx);
         }
         outcome.factorisations += 1;
         let rhs = |rows: &[usize]| -> Vec<f64> { rows.iter().map(|&p| grad[p]).collect() };
         if !reuse {
             let all: Vec<usize> = (0..nf).collect();
             let llt = self
-                .factor_rows(free, &all, (hessian, proximal), (buffer, fingerprint), outcome)
+                .factor_rows(free, &all, (hessian, proximal), (buffer, fingerprint), (outcome, true))
                 .factor;
             let x = llt.solve(&rhs(free));
             buffer.recycle(llt);
-            return x;
+            return (x, None);
         }
         // the kept factor leaves out the rows a law holds stiffly (Jacobi preconditions them,
         // docs/method.md §9.2): its direction is then CG's on it
@@ -1186,10 +1228,15 @@ impl ActiveSetSolver<'_> {
         if factored.is_empty() {
             factored = (0..nf).collect();
         }
-        let mut fresh = self.factor_rows(free, &factored, (hessian, proximal), (buffer, fingerprint), outcome);
+        let convexified = outcome.convexified;
+        let mut fresh = self.factor_rows(free, &factored, (hessian, proximal), (buffer, fingerprint), (outcome, true));
         fresh.q_single = (kept.0.as_ref())
             .filter(|k| k.fingerprint == fingerprint)
             .and_then(|k| k.q_single.clone());
+        // where the exact Newton matrix on the factored rows is not positive definite, neither is
+        // the one on all free rows (it holds it as a principal submatrix): the refactorisation
+        // below does not try it again
+        let indefinite = outcome.convexified > convexified;
         let mut x = None;
         if factored.len() < nf {
             x = self.preconditioned_cg(&mut fresh, free, (&exact, hessian), grad, (forcing, None));
@@ -1199,10 +1246,11 @@ impl ActiveSetSolver<'_> {
                 buffer.recycle(fresh.factor);
                 outcome.factorisations += 1;
                 let all: Vec<usize> = (0..nf).collect();
-                fresh = self.factor_rows(free, &all, (hessian, proximal), (buffer, fingerprint), outcome);
+                let tries = (outcome, !indefinite);
+                fresh = self.factor_rows(free, &all, (hessian, proximal), (buffer, fingerprint), tries);
             }
         }
-        let x = x.map_or_else(|| fresh.factor.solve(&rhs(free)), |(x, _)| x);
+        let x = x.map_or_else(|| (fresh.factor.solve(&rhs(free)), None), |(x, _, qx)| (x, qx));
         if let Some(old) = kept.0.replace(fresh) {
             buffer.recycle(old.factor);
         }
@@ -1211,14 +1259,15 @@ impl ActiveSetSolver<'_> {
 
     /// The Newton matrix Q + H on the free rows `factored` (indices into `free`) factored, as a
     /// [`ReusedFactor`]: H the laws' exact Hessian with the proximal term, else (where that is not
-    /// positive definite) the convexified one, shifted as §4.4 says until Cholesky succeeds.
+    /// positive definite, or not `exact_first`) the convexified one, shifted as §4.4 says until
+    /// Cholesky succeeds.
     fn factor_rows(
         &self,
         free: &[usize],
         factored: &[usize],
         (hessian, proximal): (&LawHessian, &[f64]),
         (buffer, fingerprint): (&mut FactorBuffer, (usize, u64)),
-        outcome: &mut ContactOutcome,
+        (outcome, exact_first): (&mut ContactOutcome, bool),
     ) -> ReusedFactor {
         let rows: Vec<usize> = factored.iter().map(|&i| free[i]).collect();
         let n = rows.len();
@@ -1248,7 +1297,7 @@ impl ActiveSetSolver<'_> {
         };
         let exact: Vec<f64> = factored.iter().map(|&i| hessian.diagonal[i] + proximal[i]).collect();
         let coupling = on_rows(&hessian.coupling);
-        let (factor, diagonal, coupling) = match build(&exact, &coupling) {
+        let (factor, diagonal, coupling) = match exact_first.then(|| build(&exact, &coupling)).flatten() {
             Some(llt) => (llt, exact, coupling),
             None => {
                 outcome.convexified += 1;
@@ -1436,7 +1485,7 @@ impl ActiveSetSolver<'_> {
     /// `forcing` ≥ [`SINGLE_FORCING`]. With `coupled` (per free row: Coulomb's normal row p and
     /// the entry a of E, usize::MAX for none) the system is the coupled law's
     /// (Q + H − E Q) x = G, not symmetric, and GMRES solves it with the same preconditioner
-    /// ([`Self::coupled_step`]).
+    /// ([`Self::coupled_step`]). Returns x, the iterations and, from CG, Q x over all rows ([`Krylov`]).
     fn preconditioned_cg(
         &self,
         kept: &mut ReusedFactor,
@@ -1444,7 +1493,7 @@ impl ActiveSetSolver<'_> {
         (curvature, hessian): (&[f64], &LawHessian),
         grad: &[f64],
         (forcing, coupled): (f64, Option<&[(usize, f64)]>),
-    ) -> Option<(Vec<f64>, usize)> {
+    ) -> Option<Krylov> {
         let (m, nf) = (self.m(), free.len());
         let joined_rows: Vec<usize> = (0..nf)
             .filter(|&i| kept.row[free[i]] == usize::MAX && !self.stiff(free, (curvature, hessian), i, STIFF / 10.0))
@@ -1531,17 +1580,20 @@ impl ActiveSetSolver<'_> {
         grad: &[f64],
         (forcing, coupled, low): (f64, Option<&[(usize, f64)]>, bool),
         (update, border): (Option<&LowRankUpdate>, Option<&Border>),
-    ) -> Option<(Vec<f64>, usize)> {
+    ) -> Option<Krylov> {
         let (m, nf) = (self.m(), free.len());
         let iterations = 10 + nf / 200;
         // the products in single precision where the accuracy asked is well above its rounding
         let single = kept.q_single.clone().filter(|_| low && forcing >= SINGLE_FORCING);
-        let (mut full, mut product) = (vec![0.0; m], vec![0.0; m]);
+        let mut full = vec![0.0; m];
+        // the last product by Q over all rows (CG sums them into Q x)
+        let product = std::cell::RefCell::new(vec![0.0; m]);
         let mut apply = |x: &[f64], y: &mut [f64]| {
             full.fill(0.0);
             for (i, &p) in free.iter().enumerate() {
                 full[p] = x[i];
             }
+            let mut product = product.borrow_mut();
             match &single {
                 Some(q) => q.apply(&full, &mut product),
                 None => self.operator.apply_q(&full, &mut product),
@@ -1591,12 +1643,13 @@ impl ActiveSetSolver<'_> {
             if tracing() {
                 eprintln!("  coupled step: GMRES {:?}", solved.as_ref().map(|s| s.1));
             }
-            return solved;
+            return solved.map(|(x, k)| (x, k, None));
         }
         let norm_b = b.iter().map(|v| v * v).sum::<f64>().sqrt();
         let mut x = vec![0.0; nf];
+        let mut qx = vec![0.0; m];
         if norm_b == 0.0 {
-            return Some((x, 0));
+            return Some((x, 0, Some(qx)));
         }
         let mut r = b;
         let mut z = vec![0.0; nf];
@@ -1616,11 +1669,12 @@ impl ActiveSetSolver<'_> {
                 x[i] += alpha * dir[i];
                 r[i] -= alpha * ad[i];
             }
+            qx.iter_mut().zip(product.borrow().iter()).for_each(|(y, q)| *y += alpha * q);
             if r.iter().map(|v| v * v).sum::<f64>().sqrt() <= forcing * norm_b {
                 if tracing() {
                     eprintln!("  reused factor: {} conjugate-gradient iterations", k + 1);
                 }
-                return Some((x, k + 1));
+                return Some((x, k + 1, Some(qx)));
             }
             precondition(&r, &mut z);
             let next: f64 = r.iter().zip(&z).map(|(a, b)| a * b).sum();
@@ -1995,13 +2049,20 @@ mod tests {
                 partner: partner.clone(),
                 pair: vec![(0.0, 0.0, [1.0, 0.0]); m],
             };
-            let (x, iterations) = s
+            let (x, iterations, qx) = s
                 .preconditioned_cg(kept, &free, (e, &hessian), &grad, (1e-13, None))
                 .unwrap();
             let exact = DenseCholesky::new(m, matrix(e, c)).unwrap().solve(&grad);
             let scale = exact.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             for (a, b) in x.iter().zip(&exact) {
                 assert!((a - b).abs() <= 1e-10 * scale, "{a} against {b}");
+            }
+            // CG's sum of its own products is Q x (all rows free here), to the products' rounding
+            let mut product = vec![0.0; m];
+            s.operator.apply_q(&x, &mut product);
+            let bound = product.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            for (a, b) in qx.unwrap().iter().zip(&product) {
+                assert!((a - b).abs() <= 1e-12 * bound, "Q x {a} against {b}");
             }
             iterations
         };
@@ -2061,7 +2122,7 @@ mod tests {
             &factored,
             (&hessian(&e), &zeros),
             (&mut buffer, s.fingerprint()),
-            &mut outcome,
+            (&mut outcome, true),
         );
         // now rows 0..5, 30 and 31 are on their bound, rows 100..106 left the stiff part of their
         // law (106..120 did not) and row 50 stiffened a hundred times
@@ -2072,7 +2133,7 @@ mod tests {
         e[50] *= 100.0;
         let curvature: Vec<f64> = free.iter().map(|&p| e[p]).collect();
         let grad: Vec<f64> = (0..m).map(|p| (0.37 * p as f64).sin()).collect();
-        let (x, iterations) = s
+        let (x, iterations, qx) = s
             .preconditioned_cg(
                 &mut kept,
                 &free,
@@ -2091,6 +2152,17 @@ mod tests {
             assert!((a - b).abs() <= 1e-10 * scale, "{a} against {b}");
         }
         assert!(iterations <= 6, "{iterations} iterations");
+        // CG's sum of its own products is Q x on every row, the held ones too (x zero there)
+        let mut full = vec![0.0; m];
+        for (i, &p) in free.iter().enumerate() {
+            full[p] = x[i];
+        }
+        let mut product = vec![0.0; m];
+        op.apply_q(&full, &mut product);
+        let bound = product.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        for (a, b) in qx.unwrap().iter().zip(&product) {
+            assert!((a - b).abs() <= 1e-12 * bound, "Q x {a} against {b}");
+        }
         assert_eq!(
             kept.bordered.len(),
             2 * 100 * 6,
