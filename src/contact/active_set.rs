@@ -215,8 +215,9 @@ struct LowRankUpdate {
     delta: Vec<(f64, usize, f64)>,
     /// I + Δ Uᵀ Z.
     capacitance: DenseLu,
-    /// Z's columns of `rows`, n × |𝒰| column-major (gathered once per update).
-    z: Vec<f64>,
+    /// Per row, its column of Z among the kept factor's (`ReusedFactor::columns`), read in
+    /// place: gathering them was a copy of n × |𝒰| numbers per direction.
+    columns: Vec<usize>,
 }
 
 impl LowRankUpdate {
@@ -242,12 +243,25 @@ impl LowRankUpdate {
         t
     }
 
-    /// Y ← P⁻¹ R from Y = A₀⁻¹ R for the n × c column-major Y: Y − Z (I + Δ Uᵀ Z)⁻¹ Δ Uᵀ Y.
-    fn correct_columns(&self, y: &mut [f64], c: usize) {
+    /// Y ← P⁻¹ R from Y = A₀⁻¹ R for the n × c column-major Y: Y − Z (I + Δ Uᵀ Z)⁻¹ Δ Uᵀ Y,
+    /// Z's columns read from the kept ones (`kept`, n × each).
+    fn correct_columns(&self, kept: &[f64], y: &mut [f64], c: usize) {
         let (n, u) = (y.len() / c, self.rows.len());
         let mut t = self.rhs(y, n, c);
         self.capacitance.solve_columns_in_place(&mut t, c);
-        subtract_product(y, &self.z, &t, (n, u, c));
+        let column = |a: usize| &kept[self.columns[a] * n..(self.columns[a] + 1) * n];
+        if c == 1 {
+            // (CG's preconditioner: one column, each of Z's read once)
+            for (a, &ta) in t.iter().enumerate() {
+                y.iter_mut().zip(column(a)).for_each(|(y, z)| *y -= ta * z);
+            }
+            return;
+        }
+        let mut z = vec![0.0; n * u];
+        for (a, za) in z.chunks_exact_mut(n).enumerate() {
+            za.copy_from_slice(column(a));
+        }
+        subtract_product(y, &z, &t, (n, u, c));
     }
 }
 
@@ -1246,8 +1260,9 @@ impl ActiveSetSolver<'_> {
                 buffer.recycle(fresh.factor);
                 outcome.factorisations += 1;
                 let all: Vec<usize> = (0..nf).collect();
-                let tries = (outcome, !indefinite);
+                let (tries, q_single) = ((outcome, !indefinite), fresh.q_single.take());
                 fresh = self.factor_rows(free, &all, (hessian, proximal), (buffer, fingerprint), tries);
+                fresh.q_single = q_single;
             }
         }
         let x = x.map_or_else(|| (fresh.factor.solve(&rhs(free)), None), |(x, _, qx)| (x, qx));
@@ -1622,7 +1637,7 @@ impl ActiveSetSolver<'_> {
                 false => kept.factor.solve_columns_in_place(&mut kept_rhs, 1),
             }
             if let Some(update) = update {
-                update.correct_columns(&mut kept_rhs, 1);
+                update.correct_columns(&kept.columns, &mut kept_rhs, 1);
             }
             if let Some(border) = border {
                 border.correct(r, &mut kept_rhs, z);
@@ -1738,7 +1753,7 @@ impl ActiveSetSolver<'_> {
             x[b * n..(b + 1) * n].copy_from_slice(&kept.bordered[at + n..at + 2 * n]);
         }
         if let Some(update) = update {
-            update.correct_columns(&mut x, k);
+            update.correct_columns(&kept.columns, &mut x, k);
         }
         let coupled = transpose_product(&a, &x, (n, k, k));
         let schur = DenseLu::new(k, |i, b| {
@@ -1791,13 +1806,11 @@ impl ActiveSetSolver<'_> {
         }
         if !fresh.is_empty() {
             let start = kept.columns.len();
-            kept.columns.resize(start + n * fresh.len(), 0.0);
             for (a, &k) in fresh.iter().enumerate() {
-                kept.columns[start + a * n + k] = 1.0;
                 kept.column_of[k] = start / n + a;
             }
-            (kept.single.get_or_init(|| kept.factor.single()))
-                .solve_columns_in_place(&mut kept.columns[start..], fresh.len());
+            let columns = (kept.single.get_or_init(|| kept.factor.single())).solve_unit_columns(&fresh);
+            kept.columns.extend_from_slice(&columns);
         }
         // Δ: per row of 𝒰 its diagonal change and, for a pair, its partner's place in 𝒰 and the
         // change of their coupling
@@ -1813,12 +1826,8 @@ impl ActiveSetSolver<'_> {
             })
             .chain(pinned.iter().map(|_| (f64::INFINITY, usize::MAX, 0.0)))
             .collect();
-        let mut gathered = vec![0.0; n * rows.len()];
-        for (zc, &k) in gathered.chunks_exact_mut(n).zip(&rows) {
-            let col = kept.column_of[k];
-            zc.copy_from_slice(&kept.columns[col * n..(col + 1) * n]);
-        }
-        let z = |row: usize, b: usize| gathered[b * n + row];
+        let columns: Vec<usize> = rows.iter().map(|&k| kept.column_of[k]).collect();
+        let z = |row: usize, b: usize| kept.columns[columns[b] * n + row];
         let capacitance = DenseLu::new(rows.len(), |a, b| {
             let (d, partner, off) = delta[a];
             if d.is_infinite() {
@@ -1835,7 +1844,7 @@ impl ActiveSetSolver<'_> {
             rows,
             delta,
             capacitance,
-            z: gathered,
+            columns,
         })
     }
 

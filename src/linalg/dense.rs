@@ -126,7 +126,41 @@ impl SingleCholesky {
         solve_upper_triangular_in_place(l.transpose(), rhs, par(self.n));
         x.iter_mut().zip(&single).for_each(|(a, &b)| *a = f64::from(b));
     }
+
+    /// The columns A⁻¹ e_k for the unit vectors of `rows`, n × |rows| column-major (in double
+    /// precision; the sweeps in single). L y = e_k is zero above k, so the forward sweep of a
+    /// block of columns starts at its first row: the columns are taken in the order of their
+    /// rows, in blocks of [`UNIT_BLOCK`] (a kept factor's new columns Z = A₀⁻¹ U,
+    /// docs/method.md §9.2, mostly on the tangential rows, the last two thirds).
+    pub fn solve_unit_columns(&self, rows: &[usize]) -> Vec<f64> {
+        use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
+        let (n, c) = (self.n, rows.len());
+        let mut order: Vec<usize> = (0..c).collect();
+        order.sort_by_key(|&a| rows[a]);
+        let mut single = vec![0.0f32; n * c];
+        for (b, &a) in order.iter().enumerate() {
+            single[b * n + rows[a]] = 1.0;
+        }
+        let l = MatRef::from_column_major_slice(&self.values, n, n);
+        for (block, columns) in order.chunks(UNIT_BLOCK).enumerate() {
+            let (first, width) = (rows[columns[0]], columns.len());
+            let rhs = MatMut::from_column_major_slice_mut(&mut single, n, c);
+            let rhs = rhs.submatrix_mut(first, block * UNIT_BLOCK, n - first, width);
+            solve_lower_triangular_in_place(l.submatrix(first, first, n - first, n - first), rhs, par(n));
+        }
+        let rhs = MatMut::from_column_major_slice_mut(&mut single, n, c);
+        solve_upper_triangular_in_place(l.transpose(), rhs, par(n));
+        let mut x = vec![0.0; n * c];
+        for (b, &a) in order.iter().enumerate() {
+            let column = &single[b * n..(b + 1) * n];
+            x[a * n..(a + 1) * n].iter_mut().zip(column).for_each(|(x, &v)| *x = f64::from(v));
+        }
+        x
+    }
 }
+
+/// Columns per block of [`SingleCholesky::solve_unit_columns`]' forward sweeps.
+const UNIT_BLOCK: usize = 32;
 
 /// An n × n matrix (row-major) rounded to single precision, for the products of an iteration that
 /// a preconditioner leads (CG on the kept factor, docs/method.md §9.2): half the bytes of the
@@ -411,6 +445,27 @@ mod tests {
                 assert!(error > 1e-12 * size, "n = {n}, k = {k}: solved in double precision");
             }
         }
+    }
+
+    /// The unit columns' solve (forward sweeps started at each block's first row, columns in
+    /// any order, repeated rows, more columns than a block) gives A⁻¹ e_k as the full solve of
+    /// the unit vectors does, to single precision's rounding, each column in its place.
+    #[test]
+    fn the_unit_columns_are_the_inverse_columns() {
+        let n = 300;
+        let double = DenseCholesky::new(n, entry).unwrap();
+        let single = double.single();
+        let rows: Vec<usize> = (0..70).map(|a| (a * 137 + 11) % n).chain([5, 299, 0, 5]).collect();
+        let x = single.solve_unit_columns(&rows);
+        let c = rows.len();
+        let mut exact = vec![0.0; n * c];
+        for (a, &k) in rows.iter().enumerate() {
+            exact[a * n + k] = 1.0;
+        }
+        double.solve_columns_in_place(&mut exact, c);
+        let size = exact.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let error = x.iter().zip(&exact).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+        assert!(error < 1e-5 * size, "{error:e} of {size:e}");
     }
 
     /// The single-precision product is the double one to the entries' rounding: within
