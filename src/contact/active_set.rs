@@ -1046,7 +1046,11 @@ impl ActiveSetSolver<'_> {
         stops.clear();
         for p in 0..self.m() {
             let along = r[p] - alpha * direction[p];
-            let mut moved = if self.is_fixed(p) { self.g(p) } else { along.min(self.g(p)) };
+            let mut moved = if self.is_fixed(p) {
+                self.g(p)
+            } else {
+                along.min(self.g(p))
+            };
             let o = self.origin(p);
             let single = self.partner(p).is_none();
             if single && !active[p] && (r[p] - o).abs() > kink[p] && (moved - o) * (r[p] - o) < 0.0 {
@@ -1178,7 +1182,12 @@ impl ActiveSetSolver<'_> {
         }
         let kink: Vec<f64> = (0..m).map(|p| self.laws.kink_width(p)).collect();
         let mut trial = vec![0.0; m];
-        self.path(&r, (&direction, &active, &kink, &grad), 1.0, (&mut trial, &mut Vec::new()));
+        self.path(
+            &r,
+            (&direction, &active, &kink, &grad),
+            1.0,
+            (&mut trial, &mut Vec::new()),
+        );
         let r = &mut state.normal_displacement;
         for p in 0..m {
             if !active[p] {
@@ -1243,7 +1252,13 @@ impl ActiveSetSolver<'_> {
             factored = (0..nf).collect();
         }
         let convexified = outcome.convexified;
-        let mut fresh = self.factor_rows(free, &factored, (hessian, proximal), (buffer, fingerprint), (outcome, true));
+        let mut fresh = self.factor_rows(
+            free,
+            &factored,
+            (hessian, proximal),
+            (buffer, fingerprint),
+            (outcome, true),
+        );
         fresh.q_single = (kept.0.as_ref())
             .filter(|k| k.fingerprint == fingerprint)
             .and_then(|k| k.q_single.clone());
@@ -1684,7 +1699,9 @@ impl ActiveSetSolver<'_> {
                 x[i] += alpha * dir[i];
                 r[i] -= alpha * ad[i];
             }
-            qx.iter_mut().zip(product.borrow().iter()).for_each(|(y, q)| *y += alpha * q);
+            qx.iter_mut()
+                .zip(product.borrow().iter())
+                .for_each(|(y, q)| *y += alpha * q);
             if r.iter().map(|v| v * v).sum::<f64>().sqrt() <= forcing * norm_b {
                 if tracing() {
                     eprintln!("  reused factor: {} conjugate-gradient iterations", k + 1);
