@@ -20,7 +20,9 @@ use crate::contact::active_set::{
     ActiveSetSolver, ContactFailure, ContactOutcome, ContactSettings, ContactState, FrictionRows, FrictionStatus,
     StepTrend,
 };
+use crate::contact::condensed::DenseNormalStiffness;
 use crate::contact::NormalStiffness;
+use crate::linalg::dense::matvec_row_major;
 
 /// Rounds of the Coulomb fixed point before the step fails.
 const COULOMB_ROUNDS: usize = 50;
@@ -265,7 +267,30 @@ fn solve_increment<const D: usize>(
     let tolerance = setup.settings.tolerance;
     let mut round_tolerance = if coulomb { tolerance.max(1e-3) } else { tolerance };
     let mut mixing = Anderson::new(is_coulomb.clone());
-    for round in 0..COULOMB_ROUNDS {
+    // Coulomb's first round with no normal force yet (a step's first contact) is the frictionless
+    // problem: solved on the normal rows alone (see `unloaded_round`), the rounds go on from it
+    let mut first = 0;
+    if coulomb && forces.iter().all(|&f| f == 0.0) && is_coulomb.iter().all(|&c| c) && !normal.singular {
+        let settings = ContactSettings {
+            tolerance: round_tolerance,
+            ..setup.settings
+        };
+        if let Some(outcome) = unloaded_round(setup, &normal, (&offset, bound.as_deref()), settings, q, state)? {
+            total.iterations += outcome.iterations;
+            total.factorisations += outcome.factorisations;
+            total.in_w += outcome.in_w;
+            total.line_search_cuts += outcome.line_search_cuts;
+            total.convexified += outcome.convexified;
+            total.iterative += outcome.iterative;
+            let next = bound_forces(state).map_err(|reason| failure(reason, total))?;
+            let scale = state.force[..m].iter().fold(f64::MIN_POSITIVE, |a, b| a.max(b.abs()));
+            let change = next.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            round_tolerance = tolerance.max((1e-2 * change / scale).min(1e-3));
+            forces = next;
+            first = 1;
+        }
+    }
+    for round in first..COULOMB_ROUNDS {
         // (a potential's "bound" is an output only: its term keeps the weight w_p)
         for (k, law) in friction.laws.iter().enumerate() {
             if !matches!(law, FrictionLaw::Potential) {
@@ -352,6 +377,61 @@ fn solve_increment<const D: usize>(
         ),
         total,
     ))
+}
+
+/// Coulomb's first round where every bound force is 0 (no normal force yet, docs/method.md §17.2):
+/// no tangential row holds a force, so the round is the frictionless problem of the normal rows,
+/// whose stiffness is the Schur complement S = (W_νν)⁻¹ of Q on them and whose free forces are
+/// S d_ν, d = W q. Solved there (m rows, where the full round factors m + m_τ), the tangential rows
+/// follow as r_τ = d_τ − W_τν λ_ν; the state is then the full round's solution. None (the full
+/// round runs) where W is not at hand or not positive definite on the normal rows.
+fn unloaded_round<const D: usize>(
+    setup: &ContactSetup<D>,
+    normal: &NormalRows,
+    (offset, bound): (&[f64], Option<&[f64]>),
+    settings: ContactSettings,
+    q: &[f64],
+    state: &mut ContactState,
+) -> Result<Option<ContactOutcome>, ContactFailure> {
+    let (m, all) = (setup.nodes.len(), normal.operator.m());
+    let Some(w) = normal.operator.w() else {
+        return Ok(None);
+    };
+    let normal_block: Vec<f64> = (0..m).flat_map(|p| w[p * all..p * all + m].iter().copied()).collect();
+    let Ok(reduced) = DenseNormalStiffness::from_w(normal_block, m) else {
+        return Ok(None);
+    };
+    let mut d = vec![0.0; all];
+    matvec_row_major(w, all, q, &mut d);
+    let mut free_forces = vec![0.0; m];
+    reduced.apply_q(&d[..m], &mut free_forces);
+    let mut rows = ContactState::new(m);
+    rows.normal_displacement
+        .copy_from_slice(&state.normal_displacement[..m]);
+    let solver = ActiveSetSolver {
+        operator: &reduced,
+        laws: &setup.laws,
+        offset: Some(&offset[..m]),
+        bound: bound.map(|g| &g[..m]),
+        settings,
+        singular: false,
+        pairs: None,
+        fixed: setup.bilateral.as_deref(),
+        branch_from: usize::MAX,
+    };
+    let outcome = solver.solve_forces(&free_forces, &mut rows)?;
+    // λ_τ = 0 and r = d − W λ
+    let mut lambda = vec![0.0; all];
+    lambda[..m].copy_from_slice(&rows.force);
+    let mut moved = vec![0.0; all];
+    matvec_row_major(w, all, &lambda, &mut moved);
+    state.normal_displacement[..m].copy_from_slice(&rows.normal_displacement);
+    for p in m..all {
+        state.normal_displacement[p] = d[p] - moved[p];
+    }
+    state.force.copy_from_slice(&lambda);
+    state.balanced_at = None;
+    Ok(Some(outcome))
 }
 
 /// The projection of this step's change of the free contact forces on the last step's,
