@@ -434,6 +434,14 @@ fn pair_block(a: f64, b: f64, n: [f64; 2]) -> (f64, f64) {
     (b + (a - b) * n[0] * n[0], (a - b) * n[0] * n[1])
 }
 
+/// |(a, b)| as √(a² + b²): a pair's slip length, which is never near f64's overflow or the
+/// underflow that `hypot` guards against, at a fraction of glibc's `hypot` cost (a tenth of a
+/// second of the slab's Coulomb run went to it).
+#[inline]
+fn length(a: f64, b: f64) -> f64 {
+    (a * a + b * b).sqrt()
+}
+
 /// Whether a solve ended at r under the free contact forces q ([`ContactState::balanced_at`]):
 /// the state's forces are then q − Q r, and no product by Q need form them.
 fn is_balanced(balanced_at: &Option<(Vec<f64>, Vec<f64>)>, r: &[f64], q: &[f64]) -> bool {
@@ -478,7 +486,7 @@ impl ActiveSetSolver<'_> {
     #[inline]
     fn pair_at(&self, r: &[f64], p: usize, q: usize) -> ([f64; 2], f64) {
         let x = [r[p] - self.origin(p), r[q] - self.origin(q)];
-        (x, x[0].hypot(x[1]))
+        (x, length(x[0], x[1]))
     }
 
     /// The laws' force on row p at r: w j'(s_p), or for a pair the component
@@ -750,7 +758,7 @@ impl ActiveSetSolver<'_> {
     fn pair_energy_increment(&self, r: &[f64], delta: &[f64], p: usize, q: usize) -> f64 {
         let (x, rho) = self.pair_at(r, p, q);
         let dx = [delta[p], delta[q]];
-        let moved = (x[0] + dx[0]).hypot(x[1] + dx[1]);
+        let moved = length(x[0] + dx[0], x[1] + dx[1]);
         let radial = self.laws.energy_increment(p, rho, moved - rho);
         if rho == 0.0 {
             return radial;
@@ -1594,7 +1602,11 @@ impl ActiveSetSolver<'_> {
             // Q in single precision for the next directions, once a reused factor has served one
             // whose accuracy allowed it
             if single && forcing >= SINGLE_FORCING && kept.q_single.is_none() {
-                kept.q_single = Some(std::sync::Arc::new(SingleMatrix::new(m, |p, r| self.operator.q(p, r))));
+                let single = match self.operator.q_row(0) {
+                    Some(_) => SingleMatrix::from_rows(m, |p| self.operator.q_row(p).unwrap_or_default()),
+                    None => SingleMatrix::new(m, |p, r| self.operator.q(p, r)),
+                };
+                kept.q_single = Some(std::sync::Arc::new(single));
             }
         }
         solved
@@ -1826,8 +1838,7 @@ impl ActiveSetSolver<'_> {
             for (a, &k) in fresh.iter().enumerate() {
                 kept.column_of[k] = start / n + a;
             }
-            let columns = (kept.single.get_or_init(|| kept.factor.single())).solve_unit_columns(&fresh);
-            kept.columns.extend_from_slice(&columns);
+            (kept.single.get_or_init(|| kept.factor.single())).solve_unit_columns(&fresh, &mut kept.columns);
         }
         // Δ: per row of 𝒰 its diagonal change and, for a pair, its partner's place in 𝒰 and the
         // change of their coupling
@@ -1844,18 +1855,21 @@ impl ActiveSetSolver<'_> {
             .chain(pinned.iter().map(|_| (f64::INFINITY, usize::MAX, 0.0)))
             .collect();
         let columns: Vec<usize> = rows.iter().map(|&k| kept.column_of[k]).collect();
-        let z = |row: usize, b: usize| kept.columns[columns[b] * n + row];
-        let capacitance = DenseLu::new(rows.len(), |a, b| {
-            let (d, partner, off) = delta[a];
-            if d.is_infinite() {
-                // a pinned row, (I + ΔUᵀZ) divided by Δ → ∞: Uᵀ Z
-                return z(rows[a], b);
+        let capacitance = DenseLu::from_columns(rows.len(), |b, out| {
+            let zb = &kept.columns[columns[b] * n..(columns[b] + 1) * n];
+            for (a, v) in out.iter_mut().enumerate() {
+                let (d, partner, off) = delta[a];
+                *v = if d.is_infinite() {
+                    // a pinned row, (I + ΔUᵀZ) divided by Δ → ∞: Uᵀ Z
+                    zb[rows[a]]
+                } else {
+                    let mut v = d * zb[rows[a]];
+                    if partner != usize::MAX {
+                        v += off * zb[rows[partner]];
+                    }
+                    v + if a == b { 1.0 } else { 0.0 }
+                };
             }
-            let mut v = d * z(rows[a], b);
-            if partner != usize::MAX {
-                v += off * z(rows[partner], b);
-            }
-            v + if a == b { 1.0 } else { 0.0 }
         });
         Some(LowRankUpdate {
             rows,

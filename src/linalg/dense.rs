@@ -127,12 +127,12 @@ impl SingleCholesky {
         x.iter_mut().zip(&single).for_each(|(a, &b)| *a = f64::from(b));
     }
 
-    /// The columns A⁻¹ e_k for the unit vectors of `rows`, n × |rows| column-major (in double
-    /// precision; the sweeps in single). L y = e_k is zero above k, so the forward sweep of a
+    /// Appends to `out` the columns A⁻¹ e_k for the unit vectors of `rows`, n × |rows|
+    /// column-major (in double precision; the sweeps in single), in place of a copy. L y = e_k is zero above k, so the forward sweep of a
     /// block of columns starts at its first row: the columns are taken in the order of their
     /// rows, in blocks of [`UNIT_BLOCK`] (a kept factor's new columns Z = A₀⁻¹ U,
     /// docs/method.md §9.2, mostly on the tangential rows, the last two thirds).
-    pub fn solve_unit_columns(&self, rows: &[usize]) -> Vec<f64> {
+    pub fn solve_unit_columns(&self, rows: &[usize], out: &mut Vec<f64>) {
         use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
         let (n, c) = (self.n, rows.len());
         let mut order: Vec<usize> = (0..c).collect();
@@ -150,7 +150,9 @@ impl SingleCholesky {
         }
         let rhs = MatMut::from_column_major_slice_mut(&mut single, n, c);
         solve_upper_triangular_in_place(l.transpose(), rhs, par(n));
-        let mut x = vec![0.0; n * c];
+        let start = out.len();
+        out.resize(start + n * c, 0.0);
+        let x = &mut out[start..];
         for (b, &a) in order.iter().enumerate() {
             let column = &single[b * n..(b + 1) * n];
             x[a * n..(a + 1) * n]
@@ -158,7 +160,6 @@ impl SingleCholesky {
                 .zip(column)
                 .for_each(|(x, &v)| *x = f64::from(v));
         }
-        x
     }
 }
 
@@ -181,6 +182,16 @@ impl SingleMatrix {
     /// The matrix with entries `a(i, j)`, rounded.
     pub fn new(n: usize, a: impl Fn(usize, usize) -> f64) -> Self {
         let values = (0..n * n).map(|k| a(k / n, k % n) as f32).collect();
+        SingleMatrix { n, values }
+    }
+
+    /// The matrix with rows `row(i)` (each of length n), rounded: a conversion of contiguous
+    /// rows, without a call per entry.
+    pub fn from_rows<'a>(n: usize, row: impl Fn(usize) -> &'a [f64]) -> Self {
+        let mut values = Vec::with_capacity(n * n);
+        for i in 0..n {
+            values.extend(row(i)[..n].iter().map(|&v| v as f32));
+        }
         SingleMatrix { n, values }
     }
 
@@ -243,6 +254,22 @@ impl DenseLu {
     /// Factors the matrix with entries `a(i, j)`.
     pub fn new(k: usize, a: impl Fn(usize, usize) -> f64) -> Self {
         DenseLu(faer::Mat::from_fn(k, k, a).partial_piv_lu())
+    }
+
+    /// Factors the k × k matrix whose column j is `column(j)` written into a slice of k zeros
+    /// (built a column at a time into faer's storage, without a call per entry).
+    pub fn from_columns(k: usize, mut column: impl FnMut(usize, &mut [f64])) -> Self {
+        let mut a = faer::Mat::<f64>::zeros(k, k);
+        for j in 0..k {
+            column(
+                j,
+                a.col_mut(j)
+                    .try_as_col_major_mut()
+                    .expect("a Mat's columns are contiguous")
+                    .as_slice_mut(),
+            );
+        }
+        DenseLu(a.partial_piv_lu())
     }
 
     /// x ← A⁻¹ x.
@@ -461,7 +488,10 @@ mod tests {
         let double = DenseCholesky::new(n, entry).unwrap();
         let single = double.single();
         let rows: Vec<usize> = (0..200).map(|a| (a * 137 + 11) % n).chain([5, 299, 0, 5]).collect();
-        let x = single.solve_unit_columns(&rows);
+        let mut out = vec![7.0; 3];
+        single.solve_unit_columns(&rows, &mut out);
+        assert_eq!(out[..3], [7.0; 3], "appended after what was there");
+        let x = &out[3..];
         let c = rows.len();
         let mut exact = vec![0.0; n * c];
         for (a, &k) in rows.iter().enumerate() {
