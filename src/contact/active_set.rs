@@ -315,6 +315,17 @@ pub struct ContactOutcome {
 }
 
 impl ContactOutcome {
+    /// Adds another solve's work (its iterations, cuts, convexifications, iterative directions
+    /// and factorisations) to this one's; the residual and the active count stay this one's.
+    pub fn add_work(&mut self, other: &ContactOutcome) {
+        self.iterations += other.iterations;
+        self.line_search_cuts += other.line_search_cuts;
+        self.convexified += other.convexified;
+        self.iterative += other.iterative;
+        self.factorisations += other.factorisations;
+        self.in_w += other.in_w;
+    }
+
     /// How many numbers [`Self::to_numbers`] gives (a broadcast of the outcome, src/petsc).
     pub const NUMBERS: usize = 8;
 

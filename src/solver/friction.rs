@@ -256,9 +256,7 @@ fn solve_increment<const D: usize>(
             branch_from: usize::MAX,
         };
         let outcome = predictor.solve_forces(q, state)?;
-        total.iterations += outcome.iterations;
-        total.factorisations += outcome.factorisations;
-        total.in_w += outcome.in_w;
+        total.add_work(&outcome);
         forces = bound_forces(state).map_err(|reason| failure(reason, total))?;
     }
     // Coulomb's rounds are solved inexactly while the bound forces still move: to 10⁻² of their
@@ -276,12 +274,7 @@ fn solve_increment<const D: usize>(
             ..setup.settings
         };
         if let Some(outcome) = unloaded_round(setup, &normal, (&offset, bound.as_deref()), settings, q, state)? {
-            total.iterations += outcome.iterations;
-            total.factorisations += outcome.factorisations;
-            total.in_w += outcome.in_w;
-            total.line_search_cuts += outcome.line_search_cuts;
-            total.convexified += outcome.convexified;
-            total.iterative += outcome.iterative;
+            total.add_work(&outcome);
             let next = bound_forces(state).map_err(|reason| failure(reason, total))?;
             let scale = state.force[..m].iter().fold(f64::MIN_POSITIVE, |a, b| a.max(b.abs()));
             let change = next.iter().fold(0.0f64, |a, x| a.max(x.abs()));
@@ -317,12 +310,7 @@ fn solve_increment<const D: usize>(
             f.outcome.iterations += total.iterations;
             f
         })?;
-        total.iterations += outcome.iterations;
-        total.line_search_cuts += outcome.line_search_cuts;
-        total.convexified += outcome.convexified;
-        total.iterative += outcome.iterative;
-        total.factorisations += outcome.factorisations;
-        total.in_w += outcome.in_w;
+        total.add_work(&outcome);
         total.residual = outcome.residual;
         total.active = outcome.active;
         let next = bound_forces(state).map_err(|reason| failure(reason, total))?;
