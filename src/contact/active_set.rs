@@ -1271,6 +1271,15 @@ impl ActiveSetSolver<'_> {
             factored = (0..nf).collect();
         }
         let convexified = outcome.convexified;
+        // the kept factor is replaced: its storage serves the new one (no fresh n² allocation,
+        // and the two are not alive together), its single-precision Q is carried over
+        let old = kept.0.take();
+        let q_single = (old.as_ref())
+            .filter(|k| k.fingerprint == fingerprint)
+            .and_then(|k| k.q_single.clone());
+        if let Some(old) = old {
+            buffer.recycle(old.factor);
+        }
         let mut fresh = self.factor_rows(
             free,
             &factored,
@@ -1278,9 +1287,7 @@ impl ActiveSetSolver<'_> {
             (buffer, fingerprint),
             (outcome, true),
         );
-        fresh.q_single = (kept.0.as_ref())
-            .filter(|k| k.fingerprint == fingerprint)
-            .and_then(|k| k.q_single.clone());
+        fresh.q_single = q_single;
         // where the exact Newton matrix on the factored rows is not positive definite, neither is
         // the one on all free rows (it holds it as a principal submatrix): the refactorisation
         // below does not try it again
@@ -1300,9 +1307,7 @@ impl ActiveSetSolver<'_> {
             }
         }
         let x = x.map_or_else(|| (fresh.factor.solve(&rhs(free)), None), |(x, _, qx)| (x, qx));
-        if let Some(old) = kept.0.replace(fresh) {
-            buffer.recycle(old.factor);
-        }
+        kept.0 = Some(fresh);
         x
     }
 
