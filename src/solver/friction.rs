@@ -343,7 +343,17 @@ fn solve_increment<const D: usize>(
                         (pressed > 0.0).then(|| (m + k, p, forces[k], next[k] / pressed))
                     })
                     .collect();
-                solver.coupled_step(q, state, &coupling)
+                // a step wherever the coupled residual is above the solve's tolerance, not the
+                // round's: the next round then starts converged instead of one or two rounds
+                // of a direction each (docs/method.md §17.2)
+                let full = ActiveSetSolver {
+                    settings: ContactSettings {
+                        tolerance,
+                        ..setup.settings
+                    },
+                    ..solver
+                };
+                full.coupled_step(q, state, &coupling)
             })
             .flatten();
         match stepped {
