@@ -445,6 +445,12 @@ fn pair_block(a: f64, b: f64, n: [f64; 2]) -> (f64, f64) {
     (b + (a - b) * n[0] * n[0], (a - b) * n[0] * n[1])
 }
 
+/// Whether k of Q's m columns are few enough (an eighth) to add to a product one by one instead
+/// of forming a product by Q (the line search's trial products, docs/method.md §9.2).
+fn few_columns(k: usize, m: usize) -> bool {
+    8 * k <= m
+}
+
 /// |(a, b)| as √(a² + b²): a pair's slip length, which is never near f64's overflow or the
 /// underflow that `hypot` guards against, at a fraction of glibc's `hypot` cost (a tenth of a
 /// second of the slab's Coulomb run went to it).
@@ -790,7 +796,7 @@ impl ActiveSetSolver<'_> {
         (qd, single): (Option<&[f64]>, Option<&SingleMatrix>),
         qdelta: &mut [f64],
     ) {
-        if let Some(qd) = qd.filter(|_| 8 * stops.len() <= self.m()) {
+        if let Some(qd) = qd.filter(|_| few_columns(stops.len(), self.m())) {
             qdelta.iter_mut().zip(qd).for_each(|(y, q)| *y = -alpha * q);
             if self.add_columns(stops.iter().map(|&p| (p, delta[p] + alpha * direction[p])), qdelta) {
                 return;
@@ -804,14 +810,15 @@ impl ActiveSetSolver<'_> {
 
     /// y += Σ a Q[:, p] over `columns` (p, a) where Q's rows are at hand (false, y untouched,
     /// where they are not).
-    fn add_columns(&self, columns: impl Iterator<Item = (usize, f64)> + Clone, y: &mut [f64]) -> bool {
-        if columns.clone().any(|(p, _)| self.operator.q_row(p).is_none()) {
+    fn add_columns(&self, columns: impl Iterator<Item = (usize, f64)>, y: &mut [f64]) -> bool {
+        let rows: Option<Vec<(&[f64], f64)>> = columns
+            .map(|(p, a)| self.operator.q_row(p).map(|row| (row, a)))
+            .collect();
+        let Some(rows) = rows else {
             return false;
-        }
-        for (p, a) in columns.filter(|&(_, a)| a != 0.0) {
-            if let Some(row) = self.operator.q_row(p) {
-                y.iter_mut().zip(row).for_each(|(y, q)| *y += a * q);
-            }
+        };
+        for (row, a) in rows.into_iter().filter(|&(_, a)| a != 0.0) {
+            y.iter_mut().zip(row).for_each(|(y, q)| *y += a * q);
         }
         true
     }
@@ -986,7 +993,7 @@ impl ActiveSetSolver<'_> {
             }
             // Q d from CG's own products on the free rows and Q's columns on the held ones, where
             // those are few: the line search's trials then need no product (docs/method.md §9.2)
-            let qdir = q_free.filter(|_| 8 * (m - free.len()) <= m).and_then(|mut qd| {
+            let qdir = q_free.filter(|_| few_columns(m - free.len(), m)).and_then(|mut qd| {
                 let held = (0..m).filter(|&p| active[p]).map(|p| (p, direction[p]));
                 self.add_columns(held, &mut qd).then_some(qd)
             });
@@ -1618,8 +1625,9 @@ impl ActiveSetSolver<'_> {
             // Q in single precision for the next directions, once a reused factor has served one
             // whose accuracy allowed it
             if single && forcing >= SINGLE_FORCING && kept.q_single.is_none() {
-                let single = match self.operator.q_row(0) {
-                    Some(_) => SingleMatrix::from_rows(m, |p| self.operator.q_row(p).unwrap_or_default()),
+                let rows: Option<Vec<&[f64]>> = (0..m).map(|p| self.operator.q_row(p)).collect();
+                let single = match rows {
+                    Some(rows) => SingleMatrix::from_rows(m, |p| rows[p]),
                     None => SingleMatrix::new(m, |p, r| self.operator.q(p, r)),
                 };
                 kept.q_single = Some(std::sync::Arc::new(single));

@@ -128,10 +128,11 @@ impl SingleCholesky {
     }
 
     /// Appends to `out` the columns A⁻¹ e_k for the unit vectors of `rows`, n × |rows|
-    /// column-major (in double precision; the sweeps in single), in place of a copy. L y = e_k is zero above k, so the forward sweep of a
-    /// block of columns starts at its first row: the columns are taken in the order of their
-    /// rows, in blocks of [`UNIT_BLOCK`] (a kept factor's new columns Z = A₀⁻¹ U,
-    /// docs/method.md §9.2, mostly on the tangential rows, the last two thirds).
+    /// column-major (in double precision; the sweeps in single), in place of a copy. L y = e_k
+    /// is zero above k, so the forward sweep of a block of columns starts at its first row: the
+    /// columns are taken in the order of their rows, in blocks of [`UNIT_BLOCK`] (a kept
+    /// factor's new columns Z = A₀⁻¹ U, docs/method.md §9.2, mostly on the tangential rows, the
+    /// last two thirds).
     pub fn solve_unit_columns(&self, rows: &[usize], out: &mut Vec<f64>) {
         use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
         let (n, c) = (self.n, rows.len());

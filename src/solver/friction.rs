@@ -276,9 +276,8 @@ fn solve_increment<const D: usize>(
         if let Some(outcome) = unloaded_round(setup, &normal, (&offset, bound.as_deref()), settings, q, state)? {
             total.add_work(&outcome);
             let next = bound_forces(state).map_err(|reason| failure(reason, total))?;
-            let scale = state.force[..m].iter().fold(f64::MIN_POSITIVE, |a, b| a.max(b.abs()));
-            let change = next.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-            round_tolerance = tolerance.max((1e-2 * change / scale).min(1e-3));
+            let (change, scale) = bound_change(state, m, &forces, &next);
+            round_tolerance = moving_tolerance(tolerance, change, scale);
             forces = next;
             first = 1;
         }
@@ -315,8 +314,7 @@ fn solve_increment<const D: usize>(
         total.active = outcome.active;
         let next = bound_forces(state).map_err(|reason| failure(reason, total))?;
         // the fixed point F = μ(s) λ_ν has settled when the bound forces stop moving
-        let scale = state.force[..m].iter().fold(f64::MIN_POSITIVE, |a, b| a.max(b.abs()));
-        let change = next.iter().zip(&forces).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+        let (change, scale) = bound_change(state, m, &forces, &next);
         let settled = change <= tolerance * scale;
         if !coulomb || (settled && (round_tolerance == tolerance || outcome.residual <= tolerance)) {
             let pressed: Vec<f64> = friction.normal_row.iter().map(|&p| pressing(state, p)).collect();
@@ -326,7 +324,7 @@ fn solve_increment<const D: usize>(
         round_tolerance = if settled {
             tolerance
         } else {
-            tolerance.max((1e-2 * change / scale).min(1e-3))
+            moving_tolerance(tolerance, change, scale)
         };
         // the bound forces' next guess: from a Newton step on the coupled law where it serves
         // (docs/method.md §17.2), otherwise the fixed point's (mixed)
@@ -375,6 +373,20 @@ fn solve_increment<const D: usize>(
         ),
         total,
     ))
+}
+
+/// The largest change of the bound forces from `forces` to `next`, and the scale it is measured
+/// against: the largest normal force of the state (m normal rows).
+fn bound_change(state: &ContactState, m: usize, forces: &[f64], next: &[f64]) -> (f64, f64) {
+    let scale = state.force[..m].iter().fold(f64::MIN_POSITIVE, |a, b| a.max(b.abs()));
+    let change = next.iter().zip(forces).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+    (change, scale)
+}
+
+/// A round's tolerance while the bound forces still move: 10⁻² of their last change relative to
+/// the scale, at most 10⁻³, never below the solve's (docs/method.md §17.2).
+fn moving_tolerance(tolerance: f64, change: f64, scale: f64) -> f64 {
+    tolerance.max((1e-2 * change / scale).min(1e-3))
 }
 
 /// Coulomb's first round where every bound force is 0 (no normal force yet, docs/method.md §17.2):
