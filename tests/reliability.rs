@@ -631,6 +631,7 @@ fn a_stalled_contact_solve_names_the_tolerance_that_converges() {
                 tolerance,
                 max_iterations: 100,
                 dense_limit: 1000,
+                ..ContactSettings::default()
             },
         };
         solver.solve(&d, &mut ContactState::new(m))

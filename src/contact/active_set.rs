@@ -30,24 +30,11 @@
 use super::condensed::NormalStiffness;
 use super::newton_w::{self, Curvature};
 use super::nodal::NodalLaws;
+pub use super::settings::{ContactSettings, Strategies};
 use crate::linalg::dense::{
     subtract_product, transpose_product, DenseCholesky, DenseLu, FactorBuffer, SingleCholesky, SingleMatrix,
 };
 use crate::linalg::krylov;
-
-/// Tolerance and iteration cap of the contact solve.
-#[derive(Clone, Copy, Debug)]
-pub struct ContactSettings {
-    /// Relative complementarity residual at which a step is converged.
-    pub tolerance: f64,
-    /// Newton iterations per step before giving up.
-    pub max_iterations: usize,
-    /// Above this many free (inactive) contact nodes the dense Cholesky factorisation of the
-    /// Newton matrix is kept and reused: later Newton systems (of this step and the next ones)
-    /// are solved by conjugate gradients preconditioned with it, and it is refactored only when
-    /// that does not converge quickly (docs/method.md §9.2).
-    pub dense_limit: usize,
-}
 
 /// Where a contact node ends a step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -205,6 +192,31 @@ impl ReusedFactor {
     /// The factor in single precision, rounded at the first call.
     fn single(&self) -> &SingleCholesky {
         self.single.get_or_init(|| self.factor.single())
+    }
+
+    /// X ← A₀⁻¹ X for the n × k column-major X, by the single-precision sweeps or the double ones.
+    fn solve_columns(&self, x: &mut [f64], k: usize, single: bool) {
+        match single {
+            true => self.single().solve_columns_in_place(x, k),
+            false => self.factor.solve_columns_in_place(x, k),
+        }
+    }
+
+    /// Appends A₀⁻¹ e_k for the factor's rows `rows` to the kept columns.
+    fn unit_columns(&mut self, rows: &[usize], single: bool) {
+        if single {
+            let factor = &self.factor;
+            (self.single.get_or_init(|| factor.single())).solve_unit_columns(rows, &mut self.columns);
+            return;
+        }
+        let n = self.diagonal.len();
+        let start = self.columns.len();
+        self.columns.resize(start + n * rows.len(), 0.0);
+        let x = &mut self.columns[start..];
+        for (b, &k) in rows.iter().enumerate() {
+            x[b * n + k] = 1.0;
+        }
+        self.factor.solve_columns_in_place(x, rows.len());
     }
 }
 
@@ -476,6 +488,19 @@ const MIN_STEP: f64 = 1e-12;
 impl ActiveSetSolver<'_> {
     fn m(&self) -> usize {
         self.operator.m()
+    }
+
+    /// Gives a factor's storage back to `buffer` for the next factorisation (where storage is
+    /// recycled; else it is freed).
+    fn recycle(&self, buffer: &mut FactorBuffer, factor: DenseCholesky) {
+        if self.on().recycled_storage {
+            buffer.recycle(factor);
+        }
+    }
+
+    /// The strategies this solve uses.
+    fn on(&self) -> &Strategies {
+        &self.settings.strategies
     }
 
     fn g(&self, p: usize) -> f64 {
@@ -900,7 +925,7 @@ impl ActiveSetSolver<'_> {
         let mut carried = 0;
         loop {
             // 1. gradient and residual
-            if outcome.iterations == 0 && is_balanced(&state.balanced_at, r, d) {
+            if outcome.iterations == 0 && self.on().product_reuse && is_balanced(&state.balanced_at, r, d) {
                 qrd.iter_mut().zip(&state.force).for_each(|(a, f)| *a = -f);
             } else if carried == 0 {
                 self.residual_force(r, d, &mut qrd);
@@ -956,7 +981,7 @@ impl ActiveSetSolver<'_> {
             let free: Vec<usize> = (0..m).filter(|&p| !active[p]).collect();
 
             // 3. Newton direction on the inactive set, diagonal scaling on the active set
-            let proximal = if self.singular {
+            let proximal = if self.singular && self.on().proximal_shift {
                 (residual / scale).min(1e-6)
             } else {
                 0.0
@@ -969,12 +994,16 @@ impl ActiveSetSolver<'_> {
             // the relative accuracy of an iterative direction (inexact Newton): the relative
             // residual, which keeps the convergence quadratic, at most 10⁻² and no finer than a
             // tenth of what the last step needs to pass the tolerance (docs/method.md §9.2)
-            let forcing = (residual / scale).max(0.1 * tol / residual).clamp(1e-13, 1e-2);
+            let forcing = match self.on().inexact_newton {
+                true => (residual / scale).max(0.1 * tol / residual).clamp(1e-13, 1e-2),
+                false => 1e-13,
+            };
             let mut direct = |h: &LawHessian, g: &[f64]| {
                 let kept = (&mut state.newton_factor, &mut state.buffer);
                 self.newton_direction(&free, (h, &proximal, forcing), g, &mut outcome, kept, fingerprint)
             };
-            let mut free_dir = (full_step.then(|| self.branch_model(r, &free, &hessian, &grad, &kink)))
+            let branch = full_step && self.on().branch_model;
+            let mut free_dir = (branch.then(|| self.branch_model(r, &free, &hessian, &grad, &kink)))
                 .flatten()
                 .map(|(h, g)| direct(&h, &g));
             if free_dir.as_ref().is_some_and(|(d, _)| slope(d) <= 0.0) {
@@ -993,10 +1022,13 @@ impl ActiveSetSolver<'_> {
             }
             // Q d from CG's own products on the free rows and Q's columns on the held ones, where
             // those are few: the line search's trials then need no product (docs/method.md §9.2)
-            let qdir = q_free.filter(|_| few_columns(m - free.len(), m)).and_then(|mut qd| {
-                let held = (0..m).filter(|&p| active[p]).map(|p| (p, direction[p]));
-                self.add_columns(held, &mut qd).then_some(qd)
-            });
+            let reuse = self.on().product_reuse;
+            let qdir = q_free
+                .filter(|_| reuse && few_columns(m - free.len(), m))
+                .and_then(|mut qd| {
+                    let held = (0..m).filter(|&p| active[p]).map(|p| (p, direction[p]));
+                    self.add_columns(held, &mut qd).then_some(qd)
+                });
 
             // 4. projected Armijo backtracking on the energy
             let single = (state.newton_factor.0.as_ref())
@@ -1014,7 +1046,8 @@ impl ActiveSetSolver<'_> {
                 }
                 // Local phase: a full step that halves the complementarity residual is kept
                 // even where the energy change is below its rounding.
-                if alpha == 1.0 && self.trial_residual(r, &trial, (&qrd, &qtrial)) <= 0.5 * best_residual {
+                let watchdog = self.on().watchdog && alpha == 1.0;
+                if watchdog && self.trial_residual(r, &trial, (&qrd, &qtrial)) <= 0.5 * best_residual {
                     break;
                 }
                 alpha *= 0.5;
@@ -1029,7 +1062,7 @@ impl ActiveSetSolver<'_> {
                     } else {
                         residual
                     };
-                    if floor <= 100.0 * tol {
+                    if self.on().round_off_acceptance && floor <= 100.0 * tol {
                         self.finish((d, &qrd), state, &mut outcome);
                         return Ok(outcome);
                     }
@@ -1050,7 +1083,7 @@ impl ActiveSetSolver<'_> {
             }
             // (after a cut step afresh: near the round-off floor, where the line search cuts,
             // the residual and the smallest one reported are measured exactly)
-            carried = if full_step { (carried + 1) % 8 } else { 0 };
+            carried = if full_step && reuse { (carried + 1) % 8 } else { 0 };
         }
         self.finish((d, &qrd), state, &mut outcome);
         Ok(outcome)
@@ -1069,6 +1102,7 @@ impl ActiveSetSolver<'_> {
         (trial, stops): (&mut [f64], &mut Vec<usize>),
     ) -> f64 {
         let mut decrease = 0.0;
+        let stops_on = self.on().kink_stops;
         stops.clear();
         for p in 0..self.m() {
             let along = r[p] - alpha * direction[p];
@@ -1079,7 +1113,7 @@ impl ActiveSetSolver<'_> {
             };
             let o = self.origin(p);
             let single = self.partner(p).is_none();
-            if single && !active[p] && (r[p] - o).abs() > kink[p] && (moved - o) * (r[p] - o) < 0.0 {
+            if stops_on && single && !active[p] && (r[p] - o).abs() > kink[p] && (moved - o) * (r[p] - o) < 0.0 {
                 // stop at the kink: the first-order decrease is that of the shorter move
                 decrease += grad[p] * (r[p] - o - alpha * direction[p]);
                 moved = o;
@@ -1096,7 +1130,7 @@ impl ActiveSetSolver<'_> {
             let (x, rho) = self.pair_at(r, p, q);
             let d = [direction[p], direction[q]];
             let along = x[0] * d[0] + x[1] * d[1];
-            if rho > kink[p] && rho * rho < alpha * along {
+            if stops_on && rho > kink[p] && rho * rho < alpha * along {
                 let nearest = along / (d[0] * d[0] + d[1] * d[1]);
                 decrease += (nearest - alpha) * (grad[p] * d[0] + grad[q] * d[1]);
                 trial[p] = -nearest * d[0];
@@ -1113,6 +1147,7 @@ impl ActiveSetSolver<'_> {
     /// (and the bilateral rows, always held).
     fn active_set(&self, r: &[f64], grad: &[f64]) -> Vec<bool> {
         let m = self.m();
+        let enlarged = self.on().enlarged_active_set;
         let projected_step = (0..m)
             .map(|p| (r[p] - (r[p] - grad[p] / self.c(p)).min(self.g(p))).abs())
             .fold(0.0, f64::max);
@@ -1128,7 +1163,8 @@ impl ActiveSetSolver<'_> {
             .map(|p| {
                 let g = self.g(p);
                 self.is_fixed(p)
-                    || g.is_finite() && (r[p] - grad[p] / self.c(p) >= g || (g - r[p] <= delta && grad[p] < 0.0))
+                    || g.is_finite()
+                        && (r[p] - grad[p] / self.c(p) >= g || (enlarged && g - r[p] <= delta && grad[p] < 0.0))
             })
             .collect()
     }
@@ -1156,7 +1192,7 @@ impl ActiveSetSolver<'_> {
         }
         let r = state.normal_displacement.clone();
         let mut qrd = vec![0.0; m];
-        if is_balanced(&state.balanced_at, &r, q) {
+        if self.on().product_reuse && is_balanced(&state.balanced_at, &r, q) {
             qrd.iter_mut().zip(&state.force).for_each(|(a, f)| *a = -f);
         } else {
             self.residual_force(&r, q, &mut qrd);
@@ -1250,7 +1286,7 @@ impl ActiveSetSolver<'_> {
             return (x, None);
         }
         let exact: Vec<f64> = hessian.diagonal.iter().zip(proximal).map(|(e, p)| e + p).collect();
-        let reuse = nf > self.settings.dense_limit;
+        let reuse = nf > self.settings.dense_limit && self.on().kept_factor;
         let reused = (kept.0.as_mut())
             .filter(|k| reuse && k.fingerprint == fingerprint)
             .and_then(|k| self.preconditioned_cg(k, free, (&exact, hessian), grad, (forcing, None)));
@@ -1266,13 +1302,13 @@ impl ActiveSetSolver<'_> {
                 .factor_rows(free, &all, (hessian, proximal), (buffer, fingerprint), (outcome, true))
                 .factor;
             let x = llt.solve(&rhs(free));
-            buffer.recycle(llt);
+            self.recycle(buffer, llt);
             return (x, None);
         }
         // the kept factor leaves out the rows a law holds stiffly (Jacobi preconditions them,
         // docs/method.md §9.2): its direction is then CG's on it
         let mut factored: Vec<usize> = (0..nf)
-            .filter(|&i| !self.stiff(free, (&exact, hessian), i, STIFF))
+            .filter(|&i| !self.on().jacobi_rows || !self.stiff(free, (&exact, hessian), i, STIFF))
             .collect();
         if factored.is_empty() {
             factored = (0..nf).collect();
@@ -1285,7 +1321,7 @@ impl ActiveSetSolver<'_> {
             .filter(|k| k.fingerprint == fingerprint)
             .and_then(|k| k.q_single.clone());
         if let Some(old) = old {
-            buffer.recycle(old.factor);
+            self.recycle(buffer, old.factor);
         }
         let mut fresh = self.factor_rows(
             free,
@@ -1305,7 +1341,7 @@ impl ActiveSetSolver<'_> {
             if x.is_none() {
                 // CG met a direction of non-positive curvature or did not converge: the dense
                 // direction on every free row
-                buffer.recycle(fresh.factor);
+                self.recycle(buffer, fresh.factor);
                 outcome.factorisations += 1;
                 let all: Vec<usize> = (0..nf).collect();
                 let (tries, q_single) = ((outcome, !indefinite), fresh.q_single.take());
@@ -1410,7 +1446,7 @@ impl ActiveSetSolver<'_> {
         grad: &[f64],
         buffer: &mut FactorBuffer,
     ) -> Option<Vec<f64>> {
-        if self.singular {
+        if self.singular || !self.on().system_in_w {
             return None;
         }
         let m = self.m();
@@ -1474,6 +1510,8 @@ impl ActiveSetSolver<'_> {
             return None;
         }
         let b: Vec<f64> = free.iter().map(|&p| grad[p]).collect();
+        let mut fresh = FactorBuffer::default();
+        let buffer = if self.on().recycled_storage { buffer } else { &mut fresh };
         newton_w::direction((w, m), free, &curvature, &b, buffer)
     }
 
@@ -1557,7 +1595,10 @@ impl ActiveSetSolver<'_> {
     ) -> Option<Krylov> {
         let (m, nf) = (self.m(), free.len());
         let joined_rows: Vec<usize> = (0..nf)
-            .filter(|&i| kept.row[free[i]] == usize::MAX && !self.stiff(free, (curvature, hessian), i, STIFF / 10.0))
+            .filter(|&i| {
+                kept.row[free[i]] == usize::MAX
+                    && (!self.on().jacobi_rows || !self.stiff(free, (curvature, hessian), i, STIFF / 10.0))
+            })
             .collect();
         let joined = joined_rows.len();
         // the kept rows that left the free set: pinned at 0 by the update (an infinite Δ)
@@ -1596,6 +1637,9 @@ impl ActiveSetSolver<'_> {
         if 8 * joined > n || 4 * (bordered + joined) > n {
             return None;
         }
+        if (joined > 0 && !self.on().border) || (!(u.is_empty() && pinned.is_empty()) && !self.on().low_rank_update) {
+            return None;
+        }
         let update = if u.is_empty() && pinned.is_empty() {
             None
         } else {
@@ -1611,7 +1655,7 @@ impl ActiveSetSolver<'_> {
         // the direction to double precision, which a problem linear in the step (a soft layer)
         // needs to finish in one direction (docs/method.md §9.2)
         let exact = update.is_none() && border.is_none() && free.iter().all(|&p| kept.row[p] != usize::MAX);
-        let single = !exact && kept.served > 0;
+        let single = !exact && kept.served > 0 && self.on().single_precision;
         let solved = self.iterate(
             kept,
             free,
@@ -1791,7 +1835,7 @@ impl ActiveSetSolver<'_> {
                 }
             }
             let mut x = a.clone();
-            kept.single().solve_columns_in_place(&mut x, fresh.len());
+            kept.solve_columns(&mut x, fresh.len(), self.on().single_precision);
             for (b, &p) in fresh.iter().enumerate() {
                 kept.bordered_of[p] = kept.bordered.len();
                 kept.bordered.extend_from_slice(&a[b * n..(b + 1) * n]);
@@ -1862,7 +1906,8 @@ impl ActiveSetSolver<'_> {
             for (a, &k) in fresh.iter().enumerate() {
                 kept.column_of[k] = start / n + a;
             }
-            (kept.single.get_or_init(|| kept.factor.single())).solve_unit_columns(&fresh, &mut kept.columns);
+            let single = self.on().single_precision;
+            kept.unit_columns(&fresh, single);
         }
         // Δ: per row of 𝒰 its diagonal change and, for a pair, its partner's place in 𝒰 and the
         // change of their coupling
@@ -1970,6 +2015,7 @@ mod tests {
                 tolerance: 1e-12,
                 max_iterations: 100,
                 dense_limit,
+                ..ContactSettings::default()
             },
         }
     }

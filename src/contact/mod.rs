@@ -10,6 +10,7 @@ pub mod newton_w;
 pub mod nodal;
 pub mod obstacle;
 pub mod rows;
+pub mod settings;
 mod trailing;
 
 pub use active_set::{
@@ -21,3 +22,4 @@ pub use condensed::{
 pub use law::{ComplianceProfile, ContactLaw, PiecewiseLinear, Symmetry};
 pub use nodal::{LawTerm, NodalLaws};
 pub use obstacle::{Gap, Obstacle};
+pub use settings::Strategies;

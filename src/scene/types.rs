@@ -683,6 +683,10 @@ pub struct SolverSpec {
     /// preconditioner of conjugate gradients (docs/method.md §9.2).
     #[serde(default = "default_dense_newton_limit")]
     pub dense_newton_limit: usize,
+    /// Strategies of the contact solve switched off, by name: for measuring what each is worth
+    /// (docs/ablation.md); empty for the default solver.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub without: Vec<String>,
 }
 
 fn default_dense_newton_limit() -> usize {
@@ -721,6 +725,7 @@ impl Default for SolverSpec {
             max_iterations: default_max_iterations(),
             condensation: CondensationKind::default(),
             dense_newton_limit: default_dense_newton_limit(),
+            without: Vec::new(),
         }
     }
 }

@@ -81,7 +81,13 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
             });
             keys
         }
-        "solver" => vec!["tolerance", "max_iterations", "condensation", "dense_newton_limit"],
+        "solver" => vec![
+            "tolerance",
+            "max_iterations",
+            "condensation",
+            "dense_newton_limit",
+            "without",
+        ],
         "output" => vec!["every", "fields", "compress", "active_scalar"],
         _ => return None,
     })
@@ -417,6 +423,19 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
             0,
             "allow at least one iteration",
         ));
+    }
+    for (i, name) in scene.solver.without.iter().enumerate() {
+        if !crate::contact::Strategies::default().switch_off(name) {
+            return Err(invalid(
+                origin,
+                &format!("solver.without[{i}]"),
+                format!("\"{name}\""),
+                &format!(
+                    "name one of the contact solve's strategies (docs/ablation.md): {}",
+                    crate::contact::Strategies::NAMES.join(", ")
+                ),
+            ));
+        }
     }
     if scene.output.every == 0 {
         return Err(invalid(origin, "output.every", 0, "write every n-th step with n ≥ 1"));

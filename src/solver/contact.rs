@@ -478,6 +478,13 @@ pub fn build<const D: usize>(
             tolerance: scene.solver.tolerance,
             max_iterations: scene.solver.max_iterations,
             dense_limit: scene.solver.dense_newton_limit,
+            strategies: {
+                let mut on = crate::contact::Strategies::default();
+                for name in &scene.solver.without {
+                    on.switch_off(name);
+                }
+                on
+            },
         },
     }))
 }

@@ -79,7 +79,10 @@ pub(super) fn solve<const D: usize>(
     } else {
         Vec::new()
     };
-    let along = load_following(&change, &trend.load_change);
+    let along = match setup.settings.strategies.load_predictor {
+        true => load_following(&change, &trend.load_change),
+        false => 0.0,
+    };
     let start = state.normal_displacement[..m].to_vec();
     if trend.normal_change.len() == m {
         for (r, d) in state.normal_displacement.iter_mut().zip(&trend.normal_change) {
@@ -115,6 +118,7 @@ fn solve_increment<const D: usize>(
     state: &mut ContactState,
 ) -> Result<ContactOutcome, ContactFailure> {
     let t = sim.time.time(step);
+    let on = setup.settings.strategies;
     let m = setup.nodes.len();
     let all = friction.rows.len();
     // origins: the normal rows' gaps; 0 on the tangential rows (Tresca and Coulomb: their slip
@@ -153,7 +157,7 @@ fn solve_increment<const D: usize>(
     // last, so the slipping rows start near their slip curvature F/|Δu_τ| of the last step's end,
     // where the kept factor of the Newton matrix was made, instead of at the kink's F/ε: fewer
     // refactorisations at a step's first directions (docs/method.md §17.2).
-    if state.friction.slip.len() == k_rows {
+    if state.friction.slip.len() == k_rows && on.slip_predictor {
         for (k, law) in friction.laws.iter().enumerate() {
             if matches!(law, FrictionLaw::Tresca(_) | FrictionLaw::Coulomb(_)) {
                 state.normal_displacement[m + k] += state.friction.slip[k];
@@ -263,12 +267,14 @@ fn solve_increment<const D: usize>(
     // last change (at most 10⁻³, the first round), and at the solver's tolerance once they
     // settle, which the last round always is (docs/method.md §17.2)
     let tolerance = setup.settings.tolerance;
-    let mut round_tolerance = if coulomb { tolerance.max(1e-3) } else { tolerance };
+    let inexact = coulomb && on.inexact_rounds;
+    let mut round_tolerance = if inexact { tolerance.max(1e-3) } else { tolerance };
     let mut mixing = Anderson::new(is_coulomb.clone());
     // Coulomb's first round with no normal force yet (a step's first contact) is the frictionless
     // problem: solved on the normal rows alone (see `unloaded_round`), the rounds go on from it
     let mut first = 0;
-    if coulomb && forces.iter().all(|&f| f == 0.0) && is_coulomb.iter().all(|&c| c) && !normal.singular {
+    let unloaded = coulomb && on.unloaded_round && forces.iter().all(|&f| f == 0.0);
+    if unloaded && is_coulomb.iter().all(|&c| c) && !normal.singular {
         let settings = ContactSettings {
             tolerance: round_tolerance,
             ..setup.settings
@@ -277,7 +283,9 @@ fn solve_increment<const D: usize>(
             total.add_work(&outcome);
             let next = bound_forces(state).map_err(|reason| failure(reason, total))?;
             let (change, scale) = bound_change(state, m, &forces, &next);
-            round_tolerance = moving_tolerance(tolerance, change, scale);
+            if inexact {
+                round_tolerance = moving_tolerance(tolerance, change, scale);
+            }
             forces = next;
             first = 1;
         }
@@ -321,7 +329,7 @@ fn solve_increment<const D: usize>(
             record(state, friction, (&before, &pressed), &accumulated, &forces);
             return Ok(total);
         }
-        round_tolerance = if settled {
+        round_tolerance = if settled || !inexact {
             tolerance
         } else {
             moving_tolerance(tolerance, change, scale)
@@ -331,7 +339,7 @@ fn solve_increment<const D: usize>(
         // (not after the first round: from the predicted bound forces the stick/slip pattern
         // still moves, and the step cost more directions than it saved, 264 against 256 on the
         // slab)
-        let stepped = (round > 0)
+        let stepped = (round > 0 && on.coupled_step)
             .then(|| {
                 let coupling: Vec<(usize, usize, f64, f64)> = (0..k_rows)
                     .filter(|&k| is_coulomb[k] && forces[k] > 0.0)
@@ -363,7 +371,8 @@ fn solve_increment<const D: usize>(
                 forces = bound_forces(state).map_err(|reason| failure(reason, total))?;
                 mixing.restart();
             }
-            None => forces = mixing.next(&forces, next),
+            None if on.anderson => forces = mixing.next(&forces, next),
+            None => forces = next,
         }
     }
     Err(failure(
