@@ -1,7 +1,7 @@
-//! Expressions in a scene (loads in x, y, z, t and the facet normal; kernels in s; README
-//! "Expression language", docs/method.md §11.1), compiled once and evaluated many times.
+//! Expressions in a scene (loads in x, y, z, t and the facet normal; kernels in s;
+//! docs/scenes.md "Expression language", docs/method.md §11.1), compiled once and evaluated many times.
 //!
-//! hvi parses an expression itself, with the grammar README documents, so that every error
+//! hvi parses an expression itself, with the grammar docs/scenes.md documents, so that every error
 //! names its column (with a caret under it) and says what is valid there; the checked tree is
 //! compiled into a tree of closures over f64 (numbers parsed once, constants and variables
 //! resolved to values and slots) and evaluated directly. One parser: nothing is printed and read

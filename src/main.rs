@@ -46,7 +46,7 @@ enum Command {
         #[arg(long)]
         quiet: bool,
         /// The linear algebra: faer (one machine), or petsc (PETSc over MPI, launched with
-        /// mpirun; needs a build with `--features petsc`, README "Running on a cluster").
+        /// mpirun; needs a build with `--features petsc`, docs/cluster.md).
         #[arg(long, value_enum, default_value_t = BackendArg::Faer)]
         backend: BackendArg,
         /// With --backend petsc: mumps (a Cholesky factor, the default) or gamg (CG + GAMG).
@@ -103,7 +103,7 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         overrides: Vec<String>,
         /// petsc (under mpirun): also the partition over the ranks and the memory each rank
-        /// will need (README "Running on a cluster").
+        /// will need (docs/cluster.md).
         #[arg(long, value_enum, default_value_t = BackendArg::Faer)]
         backend: BackendArg,
         /// With --backend petsc: the solver whose memory to predict (mumps, the default, or gamg).
@@ -204,7 +204,7 @@ fn check_petsc(
 }
 
 #[cfg(not(feature = "petsc"))]
-const NO_PETSC: &str = "error: --backend petsc: this hvi was built without the PETSc backend; build it with `cargo build --release --features petsc` (needs PETSc ≥ 3.18 and MPI, see README \"Running on a cluster\") and launch it with mpirun";
+const NO_PETSC: &str = "error: --backend petsc: this hvi was built without the PETSc backend; build it with `cargo build --release --features petsc` (needs PETSc ≥ 3.18 and MPI, see docs/cluster.md) and launch it with mpirun";
 
 #[cfg(not(feature = "petsc"))]
 fn solve_petsc(_opts: &hvi::app::SolveOptions, _solver: Option<SolverArg>) -> ExitCode {

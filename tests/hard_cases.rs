@@ -16,7 +16,8 @@ mod common;
 
 use common::{distort_interior, scene};
 use hvi::app::{solve_in_memory, MemorySink};
-use hvi::contact::active_set::{ActiveSetSolver, ContactState};
+use hvi::contact::trace::Silent;
+use hvi::contact::{ActiveSetSolver, ContactProblem, ContactState, SolverCache};
 use hvi::contact::{Condensation, NodeStatus, NormalStiffness, SplitSweeps};
 use hvi::mesh::structured::{rectangle, CellShape};
 use hvi::mesh::Mesh;
@@ -973,16 +974,13 @@ fn case8_several_local_minima() {
             .map(|p| last.normal_displacement[p] + (0..m).map(|q| op.w[p * m + q] * last.force[q]).sum::<f64>())
             .collect();
         let (law, g, w) = (c.law().unwrap(), c.bound.as_ref().unwrap(), &c.nodes.weights);
-        let solver = ActiveSetSolver {
-            operator: op,
-            laws: &c.laws,
-            offset: None,
+        let problem = ContactProblem {
             bound: Some(g),
+            ..ContactProblem::new(op, &c.laws)
+        };
+        let solver = ActiveSetSolver {
             settings: c.settings,
-            singular: false,
-            pairs: None,
-            fixed: None,
-            branch_from: usize::MAX,
+            trace: &Silent,
         };
         let energy = |r: &[f64]| {
             let diff: Vec<f64> = r.iter().zip(&d).map(|(a, b)| a - b).collect();
@@ -1009,7 +1007,7 @@ fn case8_several_local_minima() {
                     _ => [0.0, g[q], d[q].min(g[q]), -0.05][(seed % 4) as usize],
                 };
             }
-            let out = solver.solve(&d, &mut st).unwrap_or_else(|f| {
+            let out = (solver.solve(&problem, &d, &mut st, &mut SolverCache::default())).unwrap_or_else(|f| {
                 panic!(
                     "P = {p}, start {start}: {} (residual {:e})",
                     f.reason, f.outcome.residual

@@ -606,8 +606,10 @@ fn the_predicted_peak_is_within_30_percent_of_the_measured_one() {
 /// more regularisation, which cannot lower a round-off floor) at which the same solve converges.
 #[test]
 fn a_stalled_contact_solve_names_the_tolerance_that_converges() {
-    use hvi::contact::active_set::ContactState;
-    use hvi::contact::{ActiveSetSolver, ContactSettings, DenseNormalStiffness, NodalLaws};
+    use hvi::contact::trace::Silent;
+    use hvi::contact::{
+        ActiveSetSolver, ContactProblem, ContactSettings, ContactState, DenseNormalStiffness, NodalLaws, SolverCache,
+    };
     let m = 60;
     let w: Vec<f64> = (0..m * m)
         .map(|k| 1.0 / m as f64 + if k / m == k % m { 1e-9 } else { 0.0 })
@@ -618,23 +620,20 @@ fn a_stalled_contact_solve_names_the_tolerance_that_converges() {
     let d: Vec<f64> = (0..m).map(|p| 0.3 * (p as f64 / m as f64 * 6.0).sin()).collect();
     let bound = vec![0.1; m];
     let solve = |tolerance: f64| {
-        let solver = ActiveSetSolver {
-            operator: &op,
-            laws: &laws,
-            offset: None,
+        let problem = ContactProblem {
             bound: Some(&bound),
-            singular: false,
-            pairs: None,
-            fixed: None,
-            branch_from: usize::MAX,
+            ..ContactProblem::new(&op, &laws)
+        };
+        let solver = ActiveSetSolver {
             settings: ContactSettings {
                 tolerance,
                 max_iterations: 100,
                 dense_limit: 1000,
                 ..ContactSettings::default()
             },
+            trace: &Silent,
         };
-        solver.solve(&d, &mut ContactState::new(m))
+        solver.solve(&problem, &d, &mut ContactState::new(m), &mut SolverCache::default())
     };
     let failure = solve(1e-18).expect_err("a tolerance below round-off cannot be met");
     let advice = hvi::solver::error::contact_failure_advice(failure.smallest_residual, 1e-18);

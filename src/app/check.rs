@@ -1,4 +1,4 @@
-//! `hvi check`: what a run would do and cost, without running it (README "Checking a setup").
+//! `hvi check`: what a run would do and cost, without running it (docs/usage.md "Checking and solving").
 
 use super::solve::read_mesh;
 use crate::mesh::{AnyMesh, Mesh};

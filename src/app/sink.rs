@@ -1,7 +1,7 @@
 //! The sinks that turn a run's steps into files (the VTK series, Γ₃'s CSV and series, the
 //! reactions) or keep them in memory (tests and studies); docs/method.md §12.
 
-use crate::contact::active_set::{ContactOutcome, ContactState};
+use crate::contact::{ContactOutcome, ContactState};
 use crate::fem::stress::{cell_measures, cell_stresses, nodal_stresses, CellStresses, MemoryField};
 use crate::mesh::{GroupSelector, Mesh};
 use crate::output::{self, ContactBoundary, CsvTable, Field, Frame, SeriesWriter, SurfaceFrame};
@@ -597,7 +597,7 @@ const FRICTION_COLUMNS_3D: [&str; 12] = [
 /// where it has none: its group has no friction, or its tangential directions are prescribed).
 /// In 3D the vectors are Σ_k value_k τ_k over the row's tangential rows.
 fn friction_columns<const D: usize>(
-    f: &crate::solver::contact::Friction<D>,
+    f: &crate::contact::friction::Friction<D>,
     tangential: &[usize],
     state: &ContactState,
 ) -> Vec<f64> {

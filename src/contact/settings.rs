@@ -15,6 +15,8 @@ pub struct ContactSettings {
     pub dense_limit: usize,
     /// The optional strategies, each on unless the scene's `solver.without` names it.
     pub strategies: Strategies,
+    /// Report every iteration to standard error (`hvi solve --trace-contact`).
+    pub trace: bool,
 }
 
 impl Default for ContactSettings {
@@ -24,9 +26,98 @@ impl Default for ContactSettings {
             max_iterations: 100,
             dense_limit: 1000,
             strategies: Strategies::default(),
+            trace: false,
         }
     }
 }
+
+/// The contact solve's tuning constants, in one place, each with the reason or the measurement
+/// that set it (docs/ablation.md has the measurements of the strategies they tune).
+#[derive(Clone, Copy, Debug)]
+pub struct Tuning {
+    /// Armijo's sufficient decrease: E(r + Δ) − E(r) ≤ −armijo × the path's first-order decrease.
+    pub armijo: f64,
+    /// The smallest step of the line search: below it the energy cannot decrease measurably.
+    pub min_step: f64,
+    /// δ of the enlarged active set: at most this share of the largest bound (itself at least
+    /// this), so that only rows numerically at their bound join.
+    pub near_bound: f64,
+    /// The watchdog keeps a full step that multiplies the smallest residual so far by at most
+    /// this, even where the energy cannot show its decrease (docs/method.md §4.4).
+    pub watchdog: f64,
+    /// Where the line search reaches `min_step`, a residual within this many tolerances is
+    /// accepted (round-off of the energy, docs/method.md §16.4).
+    pub round_off: f64,
+    /// The proximal shift of a singular Q is min(this, the relative residual) · Q_pp
+    /// (docs/method.md §7.7): it bounds the first steps of a body not yet touching.
+    pub proximal: f64,
+    /// The inexact-Newton forcing term of an iterative direction lies in [forcing_floor,
+    /// forcing_cap] (docs/method.md §9.2): the relative residual, which keeps the convergence
+    /// quadratic, and no finer than a tenth of what the last step needs.
+    pub forcing_floor: f64,
+    pub forcing_cap: f64,
+    /// The iterations CG may take on a kept factor before refactoring: `cg_iterations` +
+    /// |ℐ|/`cg_rows_per_iteration` (about the cost of one factorisation at |ℐ| = 4 000).
+    pub cg_iterations: usize,
+    pub cg_rows_per_iteration: usize,
+    /// A row whose law curvature is this many times its stiffness Q_pp is left out of a kept
+    /// factor and preconditioned by Jacobi (docs/method.md §9.2).
+    pub stiff: f64,
+    /// A kept factor's row whose curvature (or pair coupling) moved by more than this share of
+    /// Q_pp + e_p is updated by Woodbury's identity (0.4: 290 against 293 directions and 14
+    /// against 18 factorisations on the slab with Coulomb friction, docs/performance.md §9.2).
+    pub moved: f64,
+    /// The low-rank update refactors past |ℱ|/`new_columns` new columns of Z (they would cost
+    /// most of a factorisation: 108 → 60 factorisations on the slab with Coulomb friction against
+    /// counting the rows of the update), past |ℱ|/`update_rows` rows in the update or kept
+    /// columns (a quarter of the factor's memory).
+    pub new_columns: usize,
+    pub update_rows: usize,
+    /// Where a tangential row is within this many kink widths ε of its kink it is inside the
+    /// smoothing zone for the branch model (10 and 100 measured alike on the slab with Coulomb
+    /// friction, 10³ and 10⁵ worse; docs/method.md §17.2).
+    pub branch_zone: f64,
+    /// The branch model reads the branch a row leaves for this many ε from the kink, where the
+    /// smoothed |·| gives F (1 − 5·10⁻⁷) and a curvature of 10⁻⁹ F/ε.
+    pub branch_edge: f64,
+    /// A curvature below this share of a direction's least stiffness 1/(eᵀWe) counts as none in
+    /// the system in W (docs/method.md §4.6).
+    pub negligible_curvature: f64,
+    /// Rounds of Coulomb's fixed point before the step fails.
+    pub coulomb_rounds: usize,
+    /// Coulomb's first round is solved to at most this relative residual, later ones to
+    /// `round_share` of the bound forces' last change (at most `first_round`), the last at the
+    /// solver's tolerance (docs/method.md §17.2).
+    pub first_round: f64,
+    pub round_share: f64,
+    /// Rounds of the Coulomb fixed point that Anderson mixing combines.
+    pub anderson_depth: usize,
+}
+
+/// The tuning of every contact solve.
+pub const TUNING: Tuning = Tuning {
+    armijo: 1e-4,
+    min_step: 1e-12,
+    near_bound: 1e-3,
+    watchdog: 0.5,
+    round_off: 100.0,
+    proximal: 1e-6,
+    forcing_floor: 1e-13,
+    forcing_cap: 1e-2,
+    cg_iterations: 10,
+    cg_rows_per_iteration: 200,
+    stiff: 100.0,
+    moved: 0.4,
+    new_columns: 8,
+    update_rows: 4,
+    branch_zone: 10.0,
+    branch_edge: 1e3,
+    negligible_curvature: 1e-8,
+    coulomb_rounds: 50,
+    first_round: 1e-3,
+    round_share: 1e-2,
+    anderson_depth: 3,
+};
 
 macro_rules! strategies {
     ($($(#[$doc:meta])* $name:ident,)*) => {
@@ -67,22 +158,15 @@ strategies! {
     kept_factor,
     /// The kept factor brought to moved curvatures and a shrunk free set by Woodbury's identity.
     low_rank_update,
-    /// The kept factor bordered by the rows that joined the free set (their Schur complement).
-    border,
     /// The rows a law holds stiffly left out of the kept factor and preconditioned by Jacobi.
     jacobi_rows,
     /// CG stopped at the inexact-Newton accuracy instead of 10⁻¹³.
     inexact_newton,
-    /// Single-precision copies of the kept factor and of Q for CG's and the line search's work.
-    single_precision,
     /// Products by Q saved: CG's own products reused by the line search, Q r − q carried between
     /// iterations, a solve started from the forces of the last one at the same point.
     product_reuse,
-    /// The Newton system in W where it is smaller (docs/method.md §4.6), and Δ = W G where no
-    /// row is held or curved.
-    system_in_w,
-    /// The dense factors' storage kept between factorisations.
-    recycled_storage,
+    /// Δ = W G where no row is held or curved (docs/method.md §4.6, §9.7).
+    w_product,
     /// The Newton model of the branch a tangential row leaves its kink for (docs/method.md §17.2).
     branch_model,
     /// A full step that halves the residual accepted where the energy cannot show its decrease.
@@ -96,16 +180,10 @@ strategies! {
     /// A proximal shift of the Newton matrix where Q is singular along rigid motions
     /// (docs/method.md §7.7).
     proximal_shift,
-    /// A Newton step on Coulomb's coupled law between the fixed point's rounds.
-    coupled_step,
     /// Anderson mixing of the Coulomb fixed point's rounds.
     anderson,
-    /// The load-following predictor of a step with friction.
-    load_predictor,
     /// Tresca's and Coulomb's rows started at the last step's slip.
     slip_predictor,
-    /// Coulomb's first round without normal forces solved on the normal rows alone.
-    unloaded_round,
     /// Coulomb's rounds solved inexactly while the bound forces move.
     inexact_rounds,
 }

@@ -98,7 +98,7 @@ pub fn format_number(x: f64) -> String {
 
 /// The default zlib level of the `.vtu` files: 0, uncompressed (levels 1–9: zlib blocks of
 /// 32 KiB, VTK's `vtkZLibDataCompressor` layout; the scene's `output.compress`). Measured sizes
-/// and times: README, "Output files".
+/// and times: docs/outputs.md, "Files".
 pub const DEFAULT_COMPRESSION_LEVEL: u32 = 0;
 
 #[cfg(test)]

@@ -8,7 +8,7 @@
 
 use super::common::SolverChoice;
 use super::partition::Partition;
-use crate::contact::active_set::{ContactOutcome, ContactState};
+use crate::contact::{ContactOutcome, ContactState};
 use crate::contact::condensed::{subtract_normal_forces, subtract_responses};
 use crate::contact::{Condensation, ContactNodes, DenseNormalStiffness};
 use crate::fem::assembly::local_stiffness;

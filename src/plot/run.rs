@@ -1,4 +1,4 @@
-//! `hvi plot RUN_DIR` (README "Pictures"): what the run directory holds decides the pictures, their
+//! `hvi plot RUN_DIR` (docs/outputs.md "Pictures without ParaView"): what the run directory holds decides the pictures, their
 //! times and their magnification.
 
 use super::error::PlotError;

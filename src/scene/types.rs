@@ -2,7 +2,7 @@
 //! [`super::validate::check_keys`], which also suggests the nearest valid key.
 //!
 //! Over 600 lines because it is one schema: every section of a scene with its documented defaults,
-//! in one place so that README's scene table can be checked against it.
+//! in one place so that the scene table of docs/scenes.md can be checked against it.
 
 use crate::mesh::GroupSelector;
 use serde::{Deserialize, Serialize};
@@ -758,7 +758,7 @@ pub struct OutputSpec {
     pub active_scalar: Option<String>,
 }
 
-/// The zlib level of `output.compress = true` (measured in README, "Outputs").
+/// The zlib level of `output.compress = true` (measured in docs/outputs.md, "Compression").
 pub const DEFAULT_COMPRESS_LEVEL: u32 = 1;
 
 impl OutputSpec {

@@ -649,7 +649,7 @@ fn check_memory(spec: &MemorySpec, origin: &str, at: &str) -> Result<(), SceneEr
                         origin,
                         &format!("{at}.terms[{i}].coefficient"),
                         term.coefficient,
-                        "coefficients must be finite (negative for a relaxing material, README \"Memory\")",
+                        "coefficients must be finite (negative for a relaxing material, docs/scenes.md \"Viscoelastic memory\")",
                     ));
                 }
             }

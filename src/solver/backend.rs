@@ -8,7 +8,7 @@ use super::operator::StepOperator;
 use super::reactions::Reactions;
 use super::setup::Simulation;
 use super::stats::RunStats;
-use crate::contact::active_set::{ContactOutcome, ContactState};
+use crate::contact::{ContactOutcome, ContactState};
 use crate::linalg::Counters;
 
 /// Which unmodified stiffness matrix (no identity rows) a [`Backend::product`] applies.

@@ -3,7 +3,8 @@
 //! one active-set solve.
 
 use super::error::SolveError;
-use crate::contact::active_set::ContactState;
+use crate::contact::friction::{Coefficient, Friction, FrictionLaw};
+use crate::contact::ContactState;
 use crate::contact::rows::{self, GroupRows};
 use crate::contact::{
     ComplianceProfile, ContactLaw, ContactNodes, ContactSettings, LawTerm, NodalLaws, Obstacle, PiecewiseLinear,
@@ -55,112 +56,6 @@ pub struct ContactSetup<const D: usize> {
     /// Per normal row, whether its group is bilateral (u_ν = g_p, held from both sides,
     /// docs/method.md §17.4); None when no group is.
     pub bilateral: Option<Vec<bool>>,
-}
-
-/// The friction law of one tangential row.
-#[derive(Clone, Debug)]
-pub enum FrictionLaw {
-    /// F_b(x, y, z, t), a traction: the row's bound force is w_p F_b(x_p, t).
-    Tresca(Expr),
-    /// μ, a number or an expression of the accumulated slip s: the row's bound force is
-    /// μ λ_ν of its normal row in the same step.
-    Coulomb(Coefficient),
-    /// w_p j_τ(u_τ), j_τ an odd law on the total tangential displacement (the hemivariational
-    /// case, docs/method.md §17.1); the law is the row's term in [`Friction::laws_of_rows`].
-    Potential,
-}
-
-/// A Coulomb coefficient: constant, or μ(s) of the accumulated slip.
-#[derive(Clone, Debug)]
-pub enum Coefficient {
-    Constant(f64),
-    OfSlip(Expr),
-}
-
-impl Coefficient {
-    /// μ at accumulated slip s.
-    pub fn at(&self, s: f64) -> f64 {
-        match self {
-            Coefficient::Constant(mu) => *mu,
-            Coefficient::OfSlip(e) => e.eval(&[s]),
-        }
-    }
-}
-
-/// The tangential rows of a contact with friction (docs/method.md §17): the condensation holds
-/// the normal rows first, then these.
-#[derive(Clone, Debug)]
-pub struct Friction<const D: usize> {
-    /// Every row the condensation holds: the m normal rows, then the tangential ones.
-    pub rows: ContactNodes<D>,
-    /// Per tangential row: its normal row.
-    pub normal_row: Vec<usize>,
-    /// Over all rows: the other tangential row of the same normal row in 3D (usize::MAX:
-    /// none), whose slip with this one is a vector of the tangent plane (docs/method.md §17.3);
-    /// None in 2D.
-    pub pairs: Option<Vec<usize>>,
-    /// Per tangential row: its law.
-    pub laws: Vec<FrictionLaw>,
-    /// The laws of every row, built once: the normal rows' terms, then one term per tangential
-    /// row — the odd law of constant profile μ ≡ 1 and the group's ε for Tresca and Coulomb
-    /// (its weight, the bound force, set every step), the group's own law with weight w_p for a
-    /// potential (docs/method.md §17.2).
-    pub laws_of_rows: NodalLaws,
-}
-
-impl<const D: usize> Friction<D> {
-    /// The tangential rows of each of the m normal rows (none, one, or in 3D two).
-    pub fn rows_of(&self, m: usize) -> Vec<Vec<usize>> {
-        let mut out = vec![Vec::new(); m];
-        for (k, &p) in self.normal_row.iter().enumerate() {
-            out[p].push(k);
-        }
-        out
-    }
-
-    /// The other tangential row of tangential row k's pair (3D), if it has one.
-    pub fn partner(&self, k: usize) -> Option<usize> {
-        let m = self.rows.len() - self.normal_row.len();
-        self.pairs
-            .as_ref()
-            .map(|p| p[m + k])
-            .filter(|&q| q != usize::MAX)
-            .map(|q| q - m)
-    }
-
-    /// The length of tangential row k's value v(k): |v(k)|, or in 3D the length of its pair's
-    /// vector (docs/method.md §17.3).
-    pub fn length(&self, k: usize, v: impl Fn(usize) -> f64) -> f64 {
-        match self.partner(k) {
-            Some(j) => v(k).hypot(v(j)),
-            None => v(k).abs(),
-        }
-    }
-
-    /// The fixed unit tangents of a normal ν (docs/method.md §17.3). 2D: τ = (−ν_y, ν_x). 3D:
-    /// τ₁ the axis e_k least aligned with ν (the first of equals) made orthogonal to it,
-    /// τ₁ = (e_k − ν_k ν)/|e_k − ν_k ν|, and τ₂ = ν × τ₁; so a face normal to an axis gets
-    /// axis tangents, and a symmetry plane's prescribed component is one whole tangential row.
-    pub fn tangents(nu: [f64; D]) -> Vec<[f64; D]> {
-        let mut t = [0.0; D];
-        if D == 2 {
-            t[0] = -nu[1];
-            t[1] = nu[0];
-            return vec![t];
-        }
-        let k = (0..D).fold(0, |k, c| if nu[c].abs() < nu[k].abs() { c } else { k });
-        for c in 0..D {
-            t[c] = f64::from(u8::from(c == k)) - nu[k] * nu[c];
-        }
-        let norm = t.iter().map(|v| v * v).sum::<f64>().sqrt();
-        t.iter_mut().for_each(|v| *v /= norm);
-        let mut t2 = [0.0; D];
-        for c in 0..D {
-            let (a, b) = ((c + 1) % D, (c + 2) % D);
-            t2[c] = nu[a] * t[b] - nu[b] * t[a];
-        }
-        vec![t, t2]
-    }
 }
 
 impl<const D: usize> ContactSetup<D> {
@@ -485,6 +380,9 @@ pub fn build<const D: usize>(
                 }
                 on
             },
+            // the contact solve's report to standard error (docs/troubleshooting.md): read here,
+            // once, and handed to the solver as a sink
+            trace: std::env::var_os("HVI_TRACE_CONTACT").is_some(),
         },
     }))
 }
@@ -579,10 +477,10 @@ fn friction_rows<const D: usize>(
     let tangential: Vec<usize> = kept[m..].iter().map(|&k| with[k - m].0).collect();
     // 3D: the two kept tangential rows of a normal row form a pair (docs/method.md §17.3)
     let pairs = (D == 3).then(|| {
-        let mut pairs = vec![usize::MAX; m + tangential.len()];
+        let mut pairs = vec![None; m + tangential.len()];
         for k in 1..tangential.len() {
             if tangential[k] == tangential[k - 1] {
-                (pairs[m + k - 1], pairs[m + k]) = (m + k, m + k - 1);
+                (pairs[m + k - 1], pairs[m + k]) = (Some(m + k), Some(m + k - 1));
             }
         }
         pairs

@@ -18,8 +18,8 @@
 //! * the history (the memory term's vectors), the step vectors and the output of one frame;
 //! * the process itself (code, thread stacks, allocator arenas): `BASE`.
 //!
-//! The constants are fitted to the peaks (VmHWM) measured on the cases of README's cost tables;
-//! README "When the solver struggles" lists them against the prediction.
+//! The constants are fitted to the peaks (VmHWM) measured on the cases of docs/performance.md's cost tables;
+//! docs/troubleshooting.md lists them against the prediction.
 
 use super::setup::Simulation;
 use crate::linalg::{forward_columns_entries, Analysis};
@@ -145,7 +145,7 @@ impl MemoryEstimate {
                  --backend petsc on more ranks"
             )
         } else {
-            "a coarser mesh (fewer unknowns), or --backend petsc on more ranks (README \"Running on a cluster\")".into()
+            "a coarser mesh (fewer unknowns), or --backend petsc on more ranks (docs/cluster.md)".into()
         };
         Err(format!(
             "the run needs about {} of memory at its peak, but this process may use {} ({}); use {remedy} \

@@ -10,7 +10,6 @@ pub mod contact;
 pub mod dirichlet;
 pub mod error;
 pub mod faer;
-mod friction;
 pub mod memory;
 pub mod operator;
 pub mod plan;

@@ -222,9 +222,9 @@ impl Plan {
         }
         if let Some(f) = sim.contact.as_ref().and_then(|c| c.friction.as_ref()) {
             let (coulomb, tresca, potential) = f.laws.iter().fold((0, 0, 0), |(c, t, p), l| match l {
-                crate::solver::contact::FrictionLaw::Coulomb(_) => (c + 1, t, p),
-                crate::solver::contact::FrictionLaw::Tresca(_) => (c, t + 1, p),
-                crate::solver::contact::FrictionLaw::Potential => (c, t, p + 1),
+                crate::contact::friction::FrictionLaw::Coulomb(_) => (c + 1, t, p),
+                crate::contact::friction::FrictionLaw::Tresca(_) => (c, t + 1, p),
+                crate::contact::friction::FrictionLaw::Potential => (c, t, p + 1),
             });
             let all = f.rows.len();
             effects.push(Effect {

@@ -3,7 +3,7 @@
 
 use super::columns::PrescribedColumns;
 use super::setup::Simulation;
-use crate::contact::active_set::ContactState;
+use crate::contact::ContactState;
 use crate::fem::SymmetricMatrix;
 
 /// What the reactions of a step are computed from: u_n, the memory displacements m_n^j (None at

@@ -145,7 +145,7 @@ impl<const D: usize> Simulation<D> {
                 return Err(SolveError::Setup(format!(
                     "{origin} is a 3D mesh, but no scene was given and the embedded default is the paper's 2D example \
                      (examples/paper.toml, plane strain); a 3D body needs a scene of its own: --scene \
-                     examples/slab.toml (the paper's example on a slab) or one of yours (README \"Scene files\")"
+                     examples/slab.toml (the paper's example on a slab) or one of yours (docs/scenes.md)"
                 )))
             }
             (_, Some(_)) => {

@@ -1,7 +1,7 @@
 //! Run statistics: sizes, per-phase wall time, counters and per-step contact iterations,
 //! written to `summary.json` (docs/README.md: timing per phase is collected in one place).
 
-use crate::contact::active_set::ContactOutcome;
+use crate::contact::ContactOutcome;
 use serde::Serialize;
 use std::time::{Duration, Instant};
 

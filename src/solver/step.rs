@@ -7,7 +7,7 @@ use super::operator::{Lifting, StepOperator};
 use super::reactions::{Reactions, StepState};
 use super::setup::{ContactSetup, Simulation};
 use super::stats::{timed, RunStats};
-use crate::contact::active_set::{ActiveSetSolver, ContactOutcome, ContactState};
+use crate::contact::{ActiveSetSolver, ContactOutcome, ContactProblem, ContactState, SolverCache};
 use crate::contact::{Condensation, NormalStiffness, WithCompliance};
 use crate::linalg::Counters;
 
@@ -24,7 +24,8 @@ pub(super) struct StepSolve<'a> {
     pub motion: &'a mut [f64],
     /// Receives u_n.
     pub u: &'a mut [f64],
-    pub state: Option<&'a mut ContactState>,
+    /// The contact state, and the solver's caches beside it.
+    pub state: Option<(&'a mut ContactState, &'a mut SolverCache)>,
 }
 
 impl StepOperator {
@@ -60,7 +61,7 @@ impl StepOperator {
             None => None,
         };
         match (&sim.contact, self.condensed.as_mut(), state) {
-            (Some(setup), Some(op), Some(state)) => {
+            (Some(setup), Some(op), Some((state, cache))) => {
                 let mut d = vec![0.0; setup.condensed_rows().len()];
                 timed(&mut stats.phases.forward_sweep, || {
                     op.free_normal(rhs, &mut d, counters)
@@ -77,7 +78,7 @@ impl StepOperator {
                         if let (Some(rigid), Some(p)) = (&self.rigid, &balance) {
                             rigid.contact_load(p, &mut q);
                         }
-                        contact_solve(sim, setup, op.as_ref(), self.rigid.is_some(), step, &q, state)
+                        contact_solve(sim, setup, op.as_ref(), self.rigid.is_some(), step, &q, (&mut *state, &mut *cache))
                     } else {
                         Ok(ContactOutcome::default())
                     };
@@ -180,7 +181,7 @@ fn contact_solve<const D: usize>(
     op_singular: bool,
     step: usize,
     q: &[f64],
-    state: &mut ContactState,
+    (state, cache): (&mut ContactState, &mut SolverCache),
 ) -> Result<ContactOutcome, SolveError> {
     // a moving obstacle moves the laws' origins and the bounds (docs/method.md §14.2)
     let t = sim.time.time(step);
@@ -193,32 +194,39 @@ fn contact_solve<const D: usize>(
     };
     let solved = match &setup.friction {
         // with friction: the tangential rows join the solve (docs/method.md §17)
-        Some(friction) => super::friction::solve(
-            sim,
-            setup,
-            friction,
-            super::friction::NormalRows {
+        Some(friction) => crate::contact::friction::solve(
+            &crate::contact::friction::FrictionStep {
+                friction,
                 operator: op.stiffness(),
                 offset,
                 bound,
                 singular: op_singular,
+                bilateral: setup.bilateral.as_deref(),
+                weights: &setup.nodes.weights,
+                nodes: &setup.nodes.nodes,
+                points: &sim.mesh.points,
+                time: t,
+                settings: setup.settings,
             },
-            step,
             q,
             state,
+            cache,
         ),
-        None => ActiveSetSolver {
-            operator: &WithCompliance(op),
-            laws: &setup.laws,
-            offset,
-            bound,
-            settings: setup.settings,
-            singular: op_singular,
-            pairs: None,
-            fixed: setup.bilateral.as_deref(),
-            branch_from: usize::MAX,
+        None => {
+            let operator = WithCompliance(op);
+            let problem = ContactProblem {
+                offset,
+                bound,
+                singular: op_singular,
+                fixed: setup.bilateral.as_deref(),
+                ..ContactProblem::new(&operator, &setup.laws)
+            };
+            ActiveSetSolver {
+                settings: setup.settings,
+                trace: crate::contact::trace::sink(setup.settings.trace),
+            }
+            .solve_forces(&problem, q, state, cache)
         }
-        .solve_forces(q, state),
     };
     let failure = match solved {
         Ok(outcome) => return Ok(outcome),

@@ -25,7 +25,7 @@ use super::reactions::{Reactions, StepState};
 use super::setup::Simulation;
 use super::stats::{timed, Reaction, RunStats};
 use super::step::{lift, StepSolve};
-use crate::contact::active_set::{ContactOutcome, ContactState};
+use crate::contact::{ContactOutcome, ContactState, SolverCache};
 use crate::history::History;
 use crate::linalg::Counters;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -77,6 +77,8 @@ pub struct Stepper<'s, const D: usize> {
     memory_diagonal: Vec<f64>,
     history: Option<History>,
     contact: Option<ContactState>,
+    /// The contact solver's caches, beside its state (docs/method.md §9.2).
+    contact_cache: SolverCache,
     reactions: Option<Reactions>,
     reaction_values: Vec<f64>,
     contact_forces: Vec<f64>,
@@ -158,6 +160,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
             single_solve: sim.is_static(),
             history,
             contact,
+            contact_cache: SolverCache::default(),
             reaction_values: Vec::new(),
             contact_forces: Vec::new(),
             reactions,
@@ -275,7 +278,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
                 rigid_loads: &rigid_loads,
                 motion: &mut self.motion,
                 u: &mut self.displacement,
-                state: self.contact.as_mut(),
+                state: self.contact.as_mut().map(|s| (s, &mut self.contact_cache)),
             };
             self.main
                 .solve(sim, &*self.backend, step, &self.counters, &mut self.stats)?
@@ -382,6 +385,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
                 *s = ContactState::new(m);
                 ContactOutcome::default()
             });
+            self.contact_cache = SolverCache::default();
             self.displacement.fill(0.0);
             return Ok(outcome);
         }
@@ -395,7 +399,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
             rigid_loads,
             motion: &mut self.motion,
             u: &mut self.displacement,
-            state: self.contact.as_mut(),
+            state: self.contact.as_mut().map(|s| (s, &mut self.contact_cache)),
         };
         op.solve(sim, &*self.backend, step, &self.counters, &mut self.stats)
     }
