@@ -1446,12 +1446,12 @@ impl ActiveSetSolver<'_> {
         grad: &[f64],
         buffer: &mut FactorBuffer,
     ) -> Option<Vec<f64>> {
-        if self.singular || !self.on().system_in_w {
+        if self.singular {
             return None;
         }
         let m = self.m();
         let Some(w) = self.operator.w() else {
-            return self.direction_without_w(free, hessian, grad);
+            return self.direction_without_w(free, hessian, grad).filter(|_| self.on().w_product);
         };
         // a curvature below 10⁻⁸ of the direction's least stiffness 1/(eᵀWe) counts as none
         let negligible = |h: f64, e: &Curvature| h * e.compliance(w, m) <= 1e-8;
@@ -1507,6 +1507,10 @@ impl ActiveSetSolver<'_> {
             );
         }
         if !newton_w::pays(m, free.len(), curvature.len()) {
+            return None;
+        }
+        let rows = curvature.len() + m - free.len();
+        if (rows == 0 && !self.on().w_product) || (rows > 0 && !self.on().system_in_w) {
             return None;
         }
         let b: Vec<f64> = free.iter().map(|&p| grad[p]).collect();

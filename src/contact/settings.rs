@@ -78,9 +78,10 @@ strategies! {
     /// Products by Q saved: CG's own products reused by the line search, Q r − q carried between
     /// iterations, a solve started from the forces of the last one at the same point.
     product_reuse,
-    /// The Newton system in W where it is smaller (docs/method.md §4.6), and Δ = W G where no
-    /// row is held or curved.
+    /// The Newton system in W where it is smaller (docs/method.md §4.6) and has rows.
     system_in_w,
+    /// Δ = W G where no row is held or curved (the system in W has no rows, docs/method.md §9.7).
+    w_product,
     /// The dense factors' storage kept between factorisations.
     recycled_storage,
     /// The Newton model of the branch a tangential row leaves its kink for (docs/method.md §17.2).
