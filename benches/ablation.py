@@ -2,14 +2,14 @@
 strategies were introduced for, with every strategy on and with one switched off at a time
 (`--set solver.without=["name"]`), interleaved round by round.
 
-    python3 benches/ablation.py HVI [--rounds 3] [--only a,b] [--cases slab_coulomb,soft_layer]
+    python3 benches/ablation.py HVI [--rounds 3] [--only a,b+c] [--cases slab_coulomb,soft_layer]
                                 [--csv ablation.csv]
     python3 benches/ablation.py --table ablation.csv          # the medians as a Markdown table
 
 Each round runs every (variant, case) pair once, the variants in an order rotated by one each
 round (so that no variant always follows the same one); a row per run is appended to the CSV as it
 ends (a stopped measurement keeps what it measured). A run without a strategy is compared with the
-round's run with all of them: `diff` is max |Δ| / max |value| over gamma3.csv's numeric columns at
+round's run with all of them (`--only a,b+c`: without a, then without both b and c): `diff` is max |Δ| / max |value| over gamma3.csv's numeric columns at
 every written frame. Friction's strategies run only on the cases with friction.
 """
 import argparse
@@ -47,7 +47,7 @@ CASES = {
 FRICTION_ONLY = {"branch_model", "coupled_step", "anderson", "load_predictor", "slip_predictor",
                  "unloaded_round", "inexact_rounds"}
 STRATEGIES = ["kept_factor", "low_rank_update", "border", "jacobi_rows", "inexact_newton",
-              "single_precision", "product_reuse", "system_in_w", "recycled_storage", "branch_model",
+              "single_precision", "product_reuse", "system_in_w", "w_product", "recycled_storage", "branch_model",
               "watchdog", "round_off_acceptance", "enlarged_active_set", "kink_stops",
               "proximal_shift", "coupled_step", "anderson", "load_predictor", "slip_predictor",
               "unloaded_round", "inexact_rounds"]
@@ -87,7 +87,8 @@ def run(hvi, case, variant, out):
     args, _ = CASES[case]
     command = [hvi, "solve", *args, "--out", str(out), "--quiet"]
     if variant != "all":
-        command += ["--set", f'solver.without=["{variant}"]']
+        names = ", ".join(f'"{v}"' for v in variant.split("+"))
+        command += ["--set", f"solver.without=[{names}]"]
     shutil.rmtree(out, ignore_errors=True)
     start = time.perf_counter()
     done = subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
@@ -106,7 +107,7 @@ def run(hvi, case, variant, out):
 
 
 def measure(args):
-    variants = ["all"] + [s for s in STRATEGIES if not args.only or s in args.only]
+    variants = ["all"] + (args.only or STRATEGIES)
     cases = [c for c in CASES if not args.cases or c in args.cases]
     new = not os.path.exists(args.csv)
     with open(args.csv, "a", newline="") as f, tempfile.TemporaryDirectory(prefix="hvi-ablation-") as tmp:
@@ -118,7 +119,7 @@ def measure(args):
             order = variants[r % len(variants):] + variants[:r % len(variants)]
             for variant in order:
                 for case in cases:
-                    if variant in FRICTION_ONLY and not CASES[case][1]:
+                    if set(variant.split("+")) <= FRICTION_ONLY and not CASES[case][1]:
                         continue
                     out = tmp / f"{case}-{variant}"
                     seconds, status, iterations, contact = run(args.hvi, case, variant, out)
@@ -139,6 +140,15 @@ def measure(args):
                                          "status": "diff", "newton_iterations": "", "contact_seconds": "",
                                          "diff": f"{d:.2e}"})
             f.flush()
+
+
+def total(iterations):
+    """The run's Newton iterations: summary.json's list per step, summed."""
+    try:
+        value = json.loads(iterations)
+    except ValueError:
+        return iterations
+    return sum(value) if isinstance(value, list) else value
 
 
 def table(path):
@@ -164,7 +174,7 @@ def table(path):
             median = statistics.median(seconds)
             ratio = median / statistics.median(base) if base else float("nan")
             ok = all(r["status"] == "completed" for r in rows)
-            iterations = sorted({r["newton_iterations"] for r in rows})
+            iterations = sorted({str(total(r["newton_iterations"])) for r in rows})
             d = diffs.get((case, variant))
             print(f"| {variant} | {case} | {len(rows)} | {median:.2f} ({min(seconds):.2f}–{max(seconds):.2f}) | "
                   f"{ratio:.2f} | {'/'.join(iterations)} | {'yes' if ok else '**no**'} | "

@@ -1,4 +1,4 @@
-//! The README's "Expression language" section, checked against the implementation: every row of
+//! The "Expression language" section of docs/scenes.md, checked against the implementation: every row of
 //! its examples table is evaluated (or must fail with the documented column and message), and
 //! the variables, functions and constants it lists are exactly the ones the parser accepts.
 
@@ -7,8 +7,8 @@ use hvi::scene::{
 };
 
 fn section() -> String {
-    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap();
-    let start = readme.find("### Expression language").expect("README has the section");
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/scenes.md")).unwrap();
+    let start = readme.find("### Expression language").expect("docs/scenes.md has the section");
     let rest = &readme[start + 4..];
     let end = rest.find("\n#").unwrap_or(rest.len());
     rest[..end].to_string()

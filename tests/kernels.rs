@@ -904,13 +904,13 @@ fn a_time_step_too_large_for_a_relaxing_material_is_refused_with_the_bound() {
     );
 }
 
-/// The TOML examples of README "Viscoelastic memory" are valid scenes (with a `[time]` added)
+/// The TOML examples of docs/scenes.md "Viscoelastic memory" are valid scenes (with a `[time]` added)
 /// and build what the text says: the first one channel ∝ A with b(0) = −1.2, the second A =
 /// (κ(0), G(0)) with one channel (only shear relaxes).
 #[test]
 fn the_readme_examples_are_valid_scenes() {
-    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap();
-    let start = readme.find("### Viscoelastic memory").expect("README section");
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/scenes.md")).unwrap();
+    let start = readme.find("### Viscoelastic memory").expect("docs/scenes.md section");
     let section = &readme[start..start + readme[start..].find("### Expression language").unwrap()];
     let blocks: Vec<&str> = section
         .split("```toml\n")
