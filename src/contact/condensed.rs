@@ -160,11 +160,7 @@ pub trait NormalStiffness {
     fn apply_q(&self, x: &[f64], y: &mut [f64]);
     /// Entry (p, r) of Q.
     fn q(&self, p: usize, r: usize) -> f64;
-    /// Row p of Q (its column p: Q is symmetric) where Q is stored densely, else None.
-    fn q_row(&self, _p: usize) -> Option<&[f64]> {
-        None
-    }
-    /// W (row-major), where Q = W⁻¹ exactly: the Newton system in W (docs/method.md §4.6).
+    /// W (row-major), where Q = W⁻¹ exactly: Δ = W G (docs/method.md §4.6).
     fn w(&self) -> Option<&[f64]> {
         None
     }
@@ -217,10 +213,6 @@ impl NormalStiffness for DenseNormalStiffness {
         self.q[p * self.m + r]
     }
 
-    fn q_row(&self, p: usize) -> Option<&[f64]> {
-        self.q.get(p * self.m..(p + 1) * self.m)
-    }
-
     fn w(&self) -> Option<&[f64]> {
         (self.q_inverts_w && !self.w.is_empty()).then_some(&self.w[..])
     }
@@ -242,10 +234,6 @@ impl NormalStiffness for WithCompliance<'_> {
 
     fn q(&self, p: usize, r: usize) -> f64 {
         self.0.stiffness().q(p, r)
-    }
-
-    fn q_row(&self, p: usize) -> Option<&[f64]> {
-        self.0.stiffness().q_row(p)
     }
 
     fn w(&self) -> Option<&[f64]> {

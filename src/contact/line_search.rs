@@ -75,7 +75,7 @@ impl Path<'_> {
 
 /// How the search ended.
 pub enum Search {
-    /// The step α was taken: the move is in `trial`, its product by Q in `q_trial`.
+    /// The step α was taken: the move is in the work's `trial`.
     Accepted(f64),
     /// α fell below [`TUNING`]`.min_step`: at the energy's round-off.
     Floor,
@@ -84,7 +84,7 @@ pub enum Search {
 /// The trial move Δ = `trial` and Q Δ = `q_trial` of the search, and the rows the path stopped.
 pub struct Trial {
     pub trial: Vec<f64>,
-    pub q_trial: Vec<f64>,
+    q_trial: Vec<f64>,
     stopped: Vec<usize>,
 }
 
@@ -99,33 +99,15 @@ impl Trial {
 }
 
 /// Backtracks along `path` from α = 1: accepts the first α whose energy change is at most
-/// −Armijo × (α Gᵀd + the stops' decrease), or (the watchdog, where `watchdog`) a full step that
-/// brings the complementarity residual below [`TUNING`]`.watchdog` × `best_residual` even where
-/// the energy cannot show its decrease. `predicted_slope` is Gᵀd on the free rows, `qrd` Q r − q,
-/// `q_direction` Q d where the direction's solver formed it (its trial products are then −α Q d
-/// plus Q's columns of the stopped rows, where those are few).
-pub fn search(
-    path: &Path,
-    (predicted_slope, best_residual, watchdog): (f64, f64, bool),
-    (qrd, q_direction): (&[f64], Option<&[f64]>),
-    work: &mut Trial,
-    outcome: &mut ContactOutcome,
-) -> Search {
+/// −Armijo × (α Gᵀd + the stops' decrease), `predicted_slope` = Gᵀd on the free rows.
+pub fn search(path: &Path, predicted_slope: f64, work: &mut Trial, outcome: &mut ContactOutcome) -> Search {
     let problem = path.problem;
     let mut alpha = 1.0;
     loop {
         let decrease_bound = alpha * predicted_slope + path.at(alpha, &mut work.trial, &mut work.stopped);
-        trial_product(problem, path, alpha, q_direction, work);
+        problem.operator.apply_q(&work.trial, &mut work.q_trial);
         let change = problem.energy_change(path.r, &work.trial, path.grad, &work.q_trial);
         if change <= -TUNING.armijo * decrease_bound || (change <= 0.0 && decrease_bound <= 1e-300) {
-            return Search::Accepted(alpha);
-        }
-        // the local phase: a full step that cuts the complementarity residual enough is kept
-        // even where the energy change is below its rounding
-        if watchdog
-            && alpha == 1.0
-            && problem.trial_residual(path.r, &work.trial, (qrd, &work.q_trial)) <= TUNING.watchdog * best_residual
-        {
             return Search::Accepted(alpha);
         }
         alpha *= 0.5;
@@ -134,43 +116,4 @@ pub fn search(
             return Search::Floor;
         }
     }
-}
-
-/// Q Δ for the trial Δ = −α d off the stopped rows: from Q d where the direction brought it and
-/// Q's columns on the stopped rows where those are few, else by a product by Q.
-fn trial_product(problem: &ContactProblem, path: &Path, alpha: f64, q_direction: Option<&[f64]>, work: &mut Trial) {
-    let Trial {
-        trial,
-        q_trial,
-        stopped,
-    } = work;
-    if let Some(qd) = q_direction.filter(|_| few_columns(stopped.len(), problem.m())) {
-        q_trial.iter_mut().zip(qd).for_each(|(y, q)| *y = -alpha * q);
-        let columns = stopped.iter().map(|&p| (p, trial[p] + alpha * path.direction[p]));
-        if add_columns(problem, columns, q_trial) {
-            return;
-        }
-    }
-    problem.operator.apply_q(trial, q_trial);
-}
-
-/// Whether k of Q's m columns are few enough (an eighth) to add to a product one by one instead
-/// of forming a product by Q.
-pub fn few_columns(k: usize, m: usize) -> bool {
-    8 * k <= m
-}
-
-/// y += Σ a Q[:, p] over `columns` (p, a) where Q's rows are at hand (false, y untouched, where
-/// they are not).
-pub fn add_columns(problem: &ContactProblem, columns: impl Iterator<Item = (usize, f64)>, y: &mut [f64]) -> bool {
-    let rows: Option<Vec<(&[f64], f64)>> = columns
-        .map(|(p, a)| problem.operator.q_row(p).map(|row| (row, a)))
-        .collect();
-    let Some(rows) = rows else {
-        return false;
-    };
-    for (row, a) in rows.into_iter().filter(|&(_, a)| a != 0.0) {
-        y.iter_mut().zip(row).for_each(|(y, q)| *y += a * q);
-    }
-    true
 }

@@ -18,7 +18,7 @@ use super::line_search::{self, Path, Search, Trial};
 use super::outcome::{ContactFailure, ContactOutcome};
 use super::problem::ContactProblem;
 use super::settings::{ContactSettings, TUNING};
-use super::state::{Balanced, ContactState, NodeStatus, SolverCache};
+use super::state::{ContactState, NodeStatus, SolverCache};
 use super::trace::Trace;
 
 /// The solver: its settings and where it reports.
@@ -28,18 +28,12 @@ pub struct ActiveSetSolver<'a> {
     pub trace: &'a dyn Trace,
 }
 
-/// The iterate of a solve: r, Q r − q and the gradient, with what the solve tracks between
-/// iterations.
+/// What the solve tracks between iterations besides r: Q r − q, the gradient, the smallest
+/// residual and whether the last step was a full one.
 struct Iterate {
-    /// Q r − q, carried from iteration to iteration by the accepted step's Q Δ (which the line
-    /// search formed) for up to eight iterations, then formed afresh.
     qrd: Vec<f64>,
     grad: Vec<f64>,
-    /// Iterations since Q r − q was formed afresh (0: it is exact).
-    carried: usize,
-    /// Q r − q was read off the last solve's forces (the first measure forms none).
-    from_cache: bool,
-    /// The smallest residual so far (the watchdog's reference).
+    /// The smallest residual so far (where a solve that stalls stalled).
     best_residual: f64,
     /// Whether the last step was a full one (the branch model is taken only after one: where
     /// the line search cut the last step, taking it again cycled, docs/method.md §17.2).
@@ -87,21 +81,14 @@ impl ActiveSetSolver<'_> {
         let mut it = Iterate {
             qrd: vec![0.0; m],
             grad: vec![0.0; m],
-            carried: 0,
-            from_cache: false,
             best_residual: f64::INFINITY,
             full_step: true,
         };
-        if on.product_reuse && cache.is_balanced(r, q) {
-            // the last solve ended here under the same load: its forces are −(Q r − q)
-            it.qrd.iter_mut().zip(&state.force).for_each(|(a, f)| *a = -f);
-            it.from_cache = true;
-        }
         let mut direction = vec![0.0; m];
         let mut work = Trial::new(m);
         loop {
             // 1. gradient and residual
-            let residual = it.measure(problem, r, q, tol);
+            let residual = it.measure(problem, r, q);
             outcome.residual = residual / scale;
             self.trace_iteration(problem, (r, &it.grad), (residual, scale, tol), &outcome);
             if residual <= tol {
@@ -117,7 +104,7 @@ impl ActiveSetSolver<'_> {
             outcome.iterations += 1;
 
             // 2. active set
-            let held = active_set::held_rows(problem, r, &it.grad, on.enlarged_active_set);
+            let held = active_set::held_rows(problem, r, &it.grad);
             let free = active_set::free_rows(&held);
 
             // 3. Newton direction on the free rows, G_p/c_p on the held ones
@@ -138,7 +125,6 @@ impl ActiveSetSolver<'_> {
                 direction[p] = it.grad[p] / problem.c(p);
             }
             let predicted_slope: f64 = free.iter().zip(&step.x).map(|(&p, d)| it.grad[p] * d).sum();
-            let q_direction = on.product_reuse.then(|| self.q_direction(problem, &held, &direction, step)).flatten();
 
             // 4. projected Armijo backtracking on the energy
             let path = Path {
@@ -150,22 +136,10 @@ impl ActiveSetSolver<'_> {
                 grad: &it.grad,
                 stops: on.kink_stops,
             };
-            let search = line_search::search(
-                &path,
-                (predicted_slope, it.best_residual, on.watchdog),
-                (&it.qrd, q_direction.as_deref()),
-                &mut work,
-                &mut outcome,
-            );
-            match search {
-                Search::Accepted(alpha) => it.take(problem, r, &work, (alpha == 1.0, on.product_reuse)),
+            match line_search::search(&path, predicted_slope, &mut work, &mut outcome) {
+                Search::Accepted(alpha) => it.take(problem, r, &work, alpha == 1.0),
+                // at the round-off floor the energy cannot decrease measurably
                 Search::Floor => {
-                    // at the round-off floor the energy cannot decrease measurably: accept a
-                    // residual within a hundred tolerances (Q r − q formed afresh), else stall
-                    let floor = it.exact_residual(problem, r, q);
-                    if on.round_off_acceptance && floor <= TUNING.round_off * tol {
-                        break;
-                    }
                     return Err(ContactFailure {
                         outcome,
                         smallest_residual: it.best_residual / scale,
@@ -176,11 +150,7 @@ impl ActiveSetSolver<'_> {
                 }
             }
         }
-        finish(problem, (q, &it.qrd), state, &mut outcome);
-        cache.balanced = Some(Balanced {
-            at: state.normal_displacement.clone(),
-            load: q.to_vec(),
-        });
+        finish(problem, &it.qrd, state, &mut outcome);
         Ok(outcome)
     }
 
@@ -212,17 +182,6 @@ impl ActiveSetSolver<'_> {
             self.trace.line(format_args!("  the branch model's direction does not descend: the law's own"));
         }
         direction::newton_direction(problem, system, &self.settings, cache, outcome)
-    }
-
-    /// Q d over all rows from the direction's own Q x on the free rows and Q's columns on the held
-    /// ones, where those are few (the line search's trials then need no product, docs/method.md
-    /// §9.2).
-    fn q_direction(&self, problem: &ContactProblem, held: &[bool], d: &[f64], step: Direction) -> Option<Vec<f64>> {
-        let m = problem.m();
-        let count = held.iter().filter(|&&h| h).count();
-        let mut qd = step.q_x.filter(|_| line_search::few_columns(count, m))?;
-        let columns = (0..m).filter(|&p| held[p]).map(|p| (p, d[p]));
-        line_search::add_columns(problem, columns, &mut qd).then_some(qd)
     }
 
     /// The proximal shift per free row where Q is singular (docs/method.md §7.7): min(10⁻⁶, the
@@ -282,49 +241,29 @@ impl ActiveSetSolver<'_> {
 }
 
 impl Iterate {
-    /// The gradient and the complementarity residual at r (Q r − q formed afresh where it was
-    /// not carried, and where a carried one says converged).
-    fn measure(&mut self, problem: &ContactProblem, r: &[f64], q: &[f64], tol: f64) -> f64 {
-        if self.carried == 0 && !std::mem::take(&mut self.from_cache) {
-            problem.residual_force(r, q, &mut self.qrd);
-        }
-        problem.gradient_from(r, &self.qrd, &mut self.grad);
-        let mut residual = problem.complementarity_residual(r, &self.grad);
-        if residual <= tol && self.carried > 0 {
-            residual = self.exact_residual(problem, r, q);
-        }
+    /// Q r − q, the gradient and the complementarity residual at r.
+    fn measure(&mut self, problem: &ContactProblem, r: &[f64], q: &[f64]) -> f64 {
+        problem.gradient(r, q, &mut self.qrd, &mut self.grad);
+        let residual = problem.complementarity_residual(r, &self.grad);
         self.best_residual = self.best_residual.min(residual);
         residual
     }
 
-    /// The residual at r with a carried Q r − q formed afresh.
-    fn exact_residual(&mut self, problem: &ContactProblem, r: &[f64], q: &[f64]) -> f64 {
-        if self.carried > 0 {
-            problem.gradient(r, q, &mut self.qrd, &mut self.grad);
-        }
-        problem.complementarity_residual(r, &self.grad)
-    }
-
-    /// Takes the line search's step: r += Δ (kept below the bound), Q r − q += Q Δ. Q r − q is
-    /// carried into the next iteration (where `reuse`) after a full step, and formed afresh after
-    /// a cut one (near the round-off floor, where the line search cuts, the residual and the
-    /// smallest one reported are measured exactly).
-    fn take(&mut self, problem: &ContactProblem, r: &mut [f64], work: &Trial, (full, reuse): (bool, bool)) {
+    /// Takes the line search's step: r += Δ, kept below the bound.
+    fn take(&mut self, problem: &ContactProblem, r: &mut [f64], work: &Trial, full: bool) {
         for p in 0..problem.m() {
             r[p] += work.trial[p];
             if r[p] > problem.g(p) {
                 r[p] = problem.g(p);
             }
-            self.qrd[p] += work.q_trial[p];
         }
         self.full_step = full;
-        self.carried = if full && reuse { (self.carried + 1) % 8 } else { 0 };
     }
 }
 
 /// Forces and statuses at the converged r, given Q r − q there (`qrd`): λ = q − Q r, ξ = w j_ε'(r),
 /// η = λ − ξ on the bound and 0 elsewhere.
-fn finish(problem: &ContactProblem, (_q, qrd): (&[f64], &[f64]), state: &mut ContactState, outcome: &mut ContactOutcome) {
+fn finish(problem: &ContactProblem, qrd: &[f64], state: &mut ContactState, outcome: &mut ContactOutcome) {
     outcome.active = 0;
     for p in 0..problem.m() {
         let r = state.normal_displacement[p];

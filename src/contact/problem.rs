@@ -154,16 +154,6 @@ impl<'a> ContactProblem<'a> {
         (0..self.m()).map(|p| self.row_residual(r, grad, p)).fold(0.0, f64::max)
     }
 
-    /// The complementarity residual at r + Δ, given Q r − q and Q Δ.
-    pub fn trial_residual(&self, r: &[f64], delta: &[f64], (qrd, qdelta): (&[f64], &[f64])) -> f64 {
-        let m = self.m();
-        let moved: Vec<f64> = (0..m).map(|p| r[p] + delta[p]).collect();
-        let moved_qrd: Vec<f64> = qrd.iter().zip(qdelta).map(|(a, b)| a + b).collect();
-        let mut grad = vec![0.0; m];
-        self.gradient_from(&moved, &moved_qrd, &mut grad);
-        self.complementarity_residual(&moved, &grad)
-    }
-
     /// E(r + Δ) − E(r), formed from differences to avoid cancellation:
     /// GᵀΔ + ½ΔᵀQΔ + Σ_p w_p [j(r_p + Δ_p) − j(r_p) − j'(r_p)Δ_p], the bracket from its
     /// Taylor expansion ½ j''(r_p) Δ_p² when Δ_p is tiny (the difference of j values would be

@@ -39,15 +39,6 @@ pub struct Tuning {
     pub armijo: f64,
     /// The smallest step of the line search: below it the energy cannot decrease measurably.
     pub min_step: f64,
-    /// δ of the enlarged active set: at most this share of the largest bound (itself at least
-    /// this), so that only rows numerically at their bound join.
-    pub near_bound: f64,
-    /// The watchdog keeps a full step that multiplies the smallest residual so far by at most
-    /// this, even where the energy cannot show its decrease (docs/method.md §4.4).
-    pub watchdog: f64,
-    /// Where the line search reaches `min_step`, a residual within this many tolerances is
-    /// accepted (round-off of the energy, docs/method.md §16.4).
-    pub round_off: f64,
     /// The proximal shift of a singular Q is min(this, the relative residual) · Q_pp
     /// (docs/method.md §7.7): it bounds the first steps of a body not yet touching.
     pub proximal: f64,
@@ -90,17 +81,12 @@ pub struct Tuning {
     /// solver's tolerance (docs/method.md §17.2).
     pub first_round: f64,
     pub round_share: f64,
-    /// Rounds of the Coulomb fixed point that Anderson mixing combines.
-    pub anderson_depth: usize,
 }
 
 /// The tuning of every contact solve.
 pub const TUNING: Tuning = Tuning {
     armijo: 1e-4,
     min_step: 1e-12,
-    near_bound: 1e-3,
-    watchdog: 0.5,
-    round_off: 100.0,
     proximal: 1e-6,
     forcing_floor: 1e-13,
     forcing_cap: 1e-2,
@@ -116,7 +102,6 @@ pub const TUNING: Tuning = Tuning {
     coulomb_rounds: 50,
     first_round: 1e-3,
     round_share: 1e-2,
-    anderson_depth: 3,
 };
 
 macro_rules! strategies {
@@ -162,26 +147,19 @@ strategies! {
     jacobi_rows,
     /// CG stopped at the inexact-Newton accuracy instead of 10⁻¹³.
     inexact_newton,
-    /// Products by Q saved: CG's own products reused by the line search, Q r − q carried between
-    /// iterations, a solve started from the forces of the last one at the same point.
-    product_reuse,
     /// Δ = W G where no row is held or curved (docs/method.md §4.6, §9.7).
     w_product,
     /// The Newton model of the branch a tangential row leaves its kink for (docs/method.md §17.2).
     branch_model,
-    /// A full step that halves the residual accepted where the energy cannot show its decrease.
-    watchdog,
-    /// A residual within 100× the tolerance accepted where the line search reaches round-off.
-    round_off_acceptance,
-    /// The active set enlarged by the rows near their bound that are pushed into it.
-    enlarged_active_set,
     /// The projected path stopped at a row's kink and a pair's origin.
     kink_stops,
     /// A proximal shift of the Newton matrix where Q is singular along rigid motions
     /// (docs/method.md §7.7).
     proximal_shift,
-    /// Anderson mixing of the Coulomb fixed point's rounds.
-    anderson,
+    /// Coulomb's first round without normal forces solved on the normal rows alone.
+    unloaded_round,
+    /// The load-following predictor of a step with friction.
+    load_predictor,
     /// Tresca's and Coulomb's rows started at the last step's slip.
     slip_predictor,
     /// Coulomb's rounds solved inexactly while the bound forces move.

@@ -164,22 +164,11 @@ fn exact_direction(op: &DenseNormalStiffness, free: &[usize], h: &LawHessian, gr
     .solve(&free.iter().map(|&p| grad[p]).collect::<Vec<_>>())
 }
 
-/// x against the exact direction to 1e-10 of its size, and CG's sum of its own products against
-/// Q x over all rows (x zero off the free rows) to 1e-12 of its size.
-fn assert_direction(op: &DenseNormalStiffness, free: &[usize], x: &[f64], qx: &[f64], exact: &[f64]) {
+/// x against the exact direction to 1e-10 of its size.
+fn assert_direction(x: &[f64], exact: &[f64]) {
     let scale = exact.iter().fold(0.0f64, |a, v| a.max(v.abs()));
     for (a, b) in x.iter().zip(exact) {
         assert!((a - b).abs() <= 1e-10 * scale, "{a} against {b}");
-    }
-    let mut full = vec![0.0; op.m];
-    for (i, &p) in free.iter().enumerate() {
-        full[p] = x[i];
-    }
-    let mut product = vec![0.0; op.m];
-    op.apply_q(&full, &mut product);
-    let bound = product.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    for (a, b) in qx.iter().zip(&product) {
-        assert!((a - b).abs() <= 1e-12 * bound, "Q x {a} against {b}");
     }
 }
 
@@ -209,9 +198,9 @@ fn a_low_rank_update_of_the_kept_factor_is_the_new_newton_matrix() {
     let mut solve = |e: &[f64], c: &[f64]| {
         let h = hessian_of(e, c, &partner);
         let s = system(&free, &h, &zeros, &grad);
-        let (direction, iterations) = preconditioned(&p, &mut kept, &s, (e, None), &on).unwrap();
+        let (direction, iterations) = preconditioned(&p, &mut kept, &s, e, &on).unwrap();
         let exact = exact_direction(&op, &free, &h, &grad);
-        assert_direction(&op, &free, &direction.x, &direction.q_x.unwrap(), &exact);
+        assert_direction(&direction.x, &exact);
         (iterations, kept.kept_columns())
     };
     let (mut e, mut c) = (e0.clone(), c0.clone());
@@ -270,9 +259,9 @@ fn the_kept_factor_serves_a_free_set_that_moved() {
     let curvature: Vec<f64> = free.iter().map(|&r| e[r]).collect();
     let h = LawHessian::diagonal(&curvature);
     let s = system(&free, &h, &zeros, &grad);
-    let (direction, iterations) = preconditioned(&p, &mut kept, &s, (&curvature, None), &on).unwrap();
+    let (direction, iterations) = preconditioned(&p, &mut kept, &s, &curvature, &on).unwrap();
     let exact = exact_direction(&op, &free, &h, &grad);
-    assert_direction(&op, &free, &direction.x, &direction.q_x.unwrap(), &exact);
+    assert_direction(&direction.x, &exact);
     assert!(iterations <= 6, "{iterations} iterations");
     // rows 100..106 leave the stiff part of their law: outside the factor and soft, not served
     let mut curvature = curvature;
@@ -283,7 +272,7 @@ fn the_kept_factor_serves_a_free_set_that_moved() {
     }
     let h = LawHessian::diagonal(&curvature);
     let s = system(&free, &h, &zeros, &grad);
-    assert!(preconditioned(&p, &mut kept, &s, (&curvature, None), &on).is_none());
+    assert!(preconditioned(&p, &mut kept, &s, &curvature, &on).is_none());
 }
 
 /// Q without W formed: the solver cannot take the Newton system in W, except (with

@@ -91,28 +91,20 @@ pub struct SolverCache {
     /// The last factorisation of the Newton matrix, kept above `dense_limit` free rows as the
     /// preconditioner of later Newton systems (docs/method.md §9.2).
     pub(crate) kept: Option<KeptFactor>,
-    /// The point and load at which the last solve formed the state's forces (the next round of
-    /// Coulomb's fixed point, from the same point, starts from them instead of a product by Q).
-    pub(crate) balanced: Option<Balanced>,
+    /// How the last step with friction moved, for the next step's load-following predictor
+    /// (docs/method.md §17.2): empty before the first such step.
+    pub(crate) trend: StepTrend,
 }
 
-/// The r and q at which a solve formed the state's forces λ = q − Q r.
-#[derive(Clone, Debug)]
-pub(crate) struct Balanced {
-    pub at: Vec<f64>,
+/// How a step with friction moved, which the next step extrapolates where its load moves on the
+/// same way (docs/method.md §17.2).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct StepTrend {
+    /// The free contact forces q of the step (all rows) and their change over it.
     pub load: Vec<f64>,
-}
-
-impl SolverCache {
-    /// Whether the state's forces are q − Q r at r (formed by the last solve).
-    pub(crate) fn is_balanced(&self, r: &[f64], q: &[f64]) -> bool {
-        self.balanced
-            .as_ref()
-            .is_some_and(|b| b.at[..] == r[..] && b.load[..] == q[..])
-    }
-
-    /// Forgets the point of the state's forces (the state was changed by other means).
-    pub fn unbalance(&mut self) {
-        self.balanced = None;
-    }
+    pub load_change: Vec<f64>,
+    /// The normal rows' displacements' change over the step.
+    pub normal_change: Vec<f64>,
+    /// The tangential rows' bound forces' change over the step.
+    pub bound_change: Vec<f64>,
 }

@@ -39,7 +39,6 @@
 pub mod dense;
 mod factor;
 mod forward_columns;
-pub mod krylov;
 mod numeric;
 mod schedule;
 pub mod sparse;

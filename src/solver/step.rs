@@ -202,6 +202,7 @@ fn contact_solve<const D: usize>(
                 bound,
                 singular: op_singular,
                 bilateral: setup.bilateral.as_deref(),
+                normal_laws: &setup.laws,
                 weights: &setup.nodes.weights,
                 nodes: &setup.nodes.nodes,
                 points: &sim.mesh.points,

@@ -23,7 +23,6 @@ impl DirectionSolver for Dense {
         let factored = factor_rows(problem, system, &all, (outcome, true));
         Some(Direction {
             x: factored.factor.solve(&system.rhs()),
-            q_x: None,
         })
     }
 }

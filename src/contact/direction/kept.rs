@@ -21,7 +21,6 @@ use super::super::settings::{ContactSettings, Strategies, TUNING};
 use super::dense::{factor_rows, FactoredRows};
 use super::system::{Direction, DirectionSolver, NewtonSystem};
 use super::update::{DeltaRow, KeptColumns, LowRankUpdate};
-use crate::linalg::krylov;
 
 /// The kept factorisation and what it has computed that depends on it alone.
 #[derive(Debug)]
@@ -94,7 +93,7 @@ impl DirectionSolver for Kept<'_> {
         let exact = system.exact_diagonal();
         let reused = (self.factor.as_mut())
             .filter(|k| k.serves(problem))
-            .and_then(|k| preconditioned(problem, k, system, (&exact, None), &on));
+            .and_then(|k| preconditioned(problem, k, system, &exact, &on));
         if let Some((direction, _)) = reused {
             outcome.iterative += 1;
             return Some(direction);
@@ -117,7 +116,7 @@ impl DirectionSolver for Kept<'_> {
         let indefinite = outcome.convexified > convexified;
         let mut solved = None;
         if factored.len() < nf {
-            solved = preconditioned(problem, &mut fresh, system, (&exact, None), &on).map(|(d, _)| d);
+            solved = preconditioned(problem, &mut fresh, system, &exact, &on).map(|(d, _)| d);
             if solved.is_none() {
                 // CG met a direction of non-positive curvature or did not converge: the dense
                 // direction on every free row
@@ -129,7 +128,6 @@ impl DirectionSolver for Kept<'_> {
         }
         let direction = solved.unwrap_or_else(|| Direction {
             x: fresh.factored.factor.solve(&system.rhs()),
-            q_x: None,
         });
         *self.factor = Some(fresh);
         Some(direction)
@@ -154,16 +152,13 @@ pub(crate) fn stiff(problem: &ContactProblem, system: &NewtonSystem, curvature: 
 /// (Q_ℐℐ + diag(curvature) + the pairs' coupling) x = G_ℐ by CG preconditioned with the kept
 /// factor brought to the present system (this file's doc), to the relative residual
 /// `system.forcing` within [`TUNING`]`.cg_iterations` + |ℐ|/`cg_rows_per_iteration`
-/// iterations. With `coupled` (per free row: Coulomb's normal row p and the entry a of E, None
-/// for none) the system is the coupled law's (Q + H − E Q) x = G, not symmetric, and GMRES
-/// solves it with the same preconditioner (docs/method.md §17.2). Returns the direction (from CG
-/// with Q x, the sum of its own products) and the iterations; None where the factor does not
-/// serve (the caller refactors).
+/// iterations. Returns the direction and the iterations; None where the factor does not serve
+/// (the caller refactors).
 pub fn preconditioned(
     problem: &ContactProblem,
     kept: &mut KeptFactor,
     system: &NewtonSystem,
-    (curvature, coupled): (&[f64], Option<&[Option<(usize, f64)>]>),
+    curvature: &[f64],
     on: &Strategies,
 ) -> Option<(Direction, usize)> {
     let (free, hessian) = (system.free, system.hessian);
@@ -203,7 +198,7 @@ pub fn preconditioned(
         false if !on.low_rank_update => return None,
         false => Some(low_rank_update(kept, system, curvature, (&u, &pinned))?),
     };
-    iterate(problem, kept, system, (curvature, coupled), update.as_ref())
+    iterate(problem, kept, system, curvature, update.as_ref())
 }
 
 /// The low-rank update on the free rows `u` and the factor's rows `pinned` (no longer free;
@@ -247,34 +242,28 @@ fn low_rank_update(
     Some(LowRankUpdate::new(&kept.columns, rows, delta))
 }
 
-/// CG (GMRES on the coupled system) with the kept factor, updated, as the preconditioner.
+/// CG with the kept factor, updated, as the preconditioner.
 fn iterate(
     problem: &ContactProblem,
     kept: &KeptFactor,
     system: &NewtonSystem,
-    (curvature, coupled): (&[f64], Option<&[Option<(usize, f64)>]>),
+    curvature: &[f64],
     update: Option<&LowRankUpdate>,
 ) -> Option<(Direction, usize)> {
     let (free, hessian, forcing) = (system.free, system.hessian, system.forcing);
     let (m, nf) = (problem.m(), free.len());
     let iterations = TUNING.cg_iterations + nf / TUNING.cg_rows_per_iteration;
-    let mut full = vec![0.0; m];
-    // the last product by Q over all rows (CG sums them into Q x)
-    let product = std::cell::RefCell::new(vec![0.0; m]);
+    let (mut full, mut product) = (vec![0.0; m], vec![0.0; m]);
     let mut apply = |x: &[f64], y: &mut [f64]| {
         full.fill(0.0);
         for (i, &p) in free.iter().enumerate() {
             full[p] = x[i];
         }
-        let mut product = product.borrow_mut();
         problem.operator.apply_q(&full, &mut product);
         for (i, &p) in free.iter().enumerate() {
             y[i] = product[p] + curvature[i] * x[i];
             if let Some(j) = hessian.partner[i] {
                 y[i] += hessian.coupling[i] * x[j];
-            }
-            if let Some((p, a)) = coupled.and_then(|c| c[i]) {
-                y[i] -= a * product[p];
             }
         }
     };
@@ -299,15 +288,10 @@ fn iterate(
         }
     };
     let b = system.rhs();
-    if coupled.is_some() {
-        let (x, k) = krylov::gmres(apply, precondition, &b, forcing, iterations)?;
-        return Some((Direction { x, q_x: None }, k));
-    }
     let norm_b = b.iter().map(|v| v * v).sum::<f64>().sqrt();
     let mut x = vec![0.0; nf];
-    let mut qx = vec![0.0; m];
     if norm_b == 0.0 {
-        return Some((Direction { x, q_x: Some(qx) }, 0));
+        return Some((Direction { x }, 0));
     }
     let mut r = b;
     let mut z = vec![0.0; nf];
@@ -327,11 +311,8 @@ fn iterate(
             x[i] += alpha * dir[i];
             r[i] -= alpha * ad[i];
         }
-        qx.iter_mut()
-            .zip(product.borrow().iter())
-            .for_each(|(y, q)| *y += alpha * q);
         if r.iter().map(|v| v * v).sum::<f64>().sqrt() <= forcing * norm_b {
-            return Some((Direction { x, q_x: Some(qx) }, k + 1));
+            return Some((Direction { x }, k + 1));
         }
         precondition(&r, &mut z);
         let next: f64 = r.iter().zip(&z).map(|(a, b)| a * b).sum();

@@ -27,10 +27,7 @@ pub fn newton_direction(
     outcome: &mut ContactOutcome,
 ) -> Direction {
     if system.free.is_empty() {
-        return Direction {
-            x: Vec::new(),
-            q_x: Some(vec![0.0; problem.m()]),
-        };
+        return Direction { x: Vec::new() };
     }
     let (mut product, mut dense) = (w_product::WProduct, dense::Dense);
     let mut kept = kept::Kept {

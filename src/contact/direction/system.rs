@@ -34,11 +34,9 @@ impl NewtonSystem<'_> {
     }
 }
 
-/// A Newton direction: x on the free rows and, where the solver formed it on the way, Q x over all
-/// rows (x zero off the free rows), which spares the line search a product by Q.
+/// A Newton direction: x on the free rows.
 pub struct Direction {
     pub x: Vec<f64>,
-    pub q_x: Option<Vec<f64>>,
 }
 
 /// A way to solve the Newton system. `direction` gives None where the solver does not serve this

@@ -39,7 +39,7 @@ impl DirectionSolver for WProduct {
         }
         outcome.factorisations += 1;
         outcome.in_w += 1;
-        Some(Direction { x, q_x: None })
+        Some(Direction { x })
     }
 }
 

@@ -13,17 +13,18 @@
 //! normal ones, in one condensed problem of size m + m_τ, still after the step's one forward
 //! sweep. Tresca is a potential (one solve); Coulomb's F depends on the solution and is found by
 //! a fixed point F ← μ λ_ν, each round warm-started from the last and solved inexactly while
-//! the bound forces still move, the rounds' bound forces mixed (`anderson.rs`).
+//! the bound forces still move.
 
 use super::super::condensed::NormalStiffness;
+use super::super::nodal::NodalLaws;
 use super::super::newton::ActiveSetSolver;
 use super::super::outcome::{ContactFailure, ContactOutcome};
 use super::super::problem::ContactProblem;
 use super::super::settings::{ContactSettings, TUNING};
 use super::super::state::{ContactState, FrictionRows, FrictionStatus, SolverCache};
 use super::super::trace;
-use super::anderson::Anderson;
 use super::law::{Friction, FrictionLaw};
+use super::unloaded;
 
 /// The step's contact problem with friction: the condensed operator of all rows, the normal
 /// rows' origins, bounds and weights, and where the rows are.
@@ -37,6 +38,8 @@ pub struct FrictionStep<'a, const D: usize> {
     pub singular: bool,
     /// Per normal row, whether it is bilateral (docs/method.md §17.4).
     pub bilateral: Option<&'a [bool]>,
+    /// The normal rows' laws (the first m rows of `friction.laws_of_rows`, alone).
+    pub normal_laws: &'a NodalLaws,
     /// The normal rows' nodal weights w_p and mesh nodes, and the mesh's points.
     pub weights: &'a [f64],
     pub nodes: &'a [usize],
@@ -72,16 +75,57 @@ pub fn solve<const D: usize>(
     shifted.iter_mut().zip(q).for_each(|(s, q)| *s = q - *s);
     let r = &mut state.normal_displacement;
     r.iter_mut().zip(&shift).for_each(|(r, s)| *r -= s);
-    let solved = solve_increment(step, &shifted, state, cache);
+    // The load-following predictor: where this step's load moves on as the last step's did (the
+    // projection `along` of its change of q on the last step's), the normal rows start at their
+    // last displacement plus `along` times its last change, and Coulomb's bound forces likewise
+    // (in solve_increment); a load that turns (the Cattaneo–Mindlin block's shear step after its
+    // pressing step) gives along ≈ 0, the plain warm start (docs/method.md §17.2).
+    let trend = &cache.trend;
+    let change: Vec<f64> = match trend.load.len() == all {
+        true => q.iter().zip(&trend.load).map(|(a, b)| a - b).collect(),
+        false => Vec::new(),
+    };
+    let along = match step.settings.strategies.load_predictor {
+        true => load_following(&change, &trend.load_change),
+        false => 0.0,
+    };
+    let start = state.normal_displacement[..m].to_vec();
+    if trend.normal_change.len() == m {
+        for (r, d) in state.normal_displacement.iter_mut().zip(&trend.normal_change) {
+            *r += along * d;
+        }
+    }
+    let solved = solve_increment(step, along, &shifted, state, cache);
+    if solved.is_ok() {
+        let trend = &mut cache.trend;
+        trend.normal_change = (state.normal_displacement.iter().zip(&start))
+            .map(|(a, b)| a - b)
+            .collect();
+        trend.load_change = change;
+        trend.load = q.to_vec();
+    }
     let r = &mut state.normal_displacement;
     r.iter_mut().zip(&shift).for_each(|(r, s)| *r += s);
     solved
+}
+
+/// The projection of this step's change of the free contact forces on the last step's, clamped
+/// to [0, 2]: 1 for a load that moves on as it did, 0 for one that turns or reverses, or where
+/// either change is unknown or zero (the load-following predictor of [`solve`]).
+fn load_following(change: &[f64], last: &[f64]) -> f64 {
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let norm = dot(last, last);
+    if change.len() != last.len() || norm == 0.0 {
+        return 0.0;
+    }
+    (dot(change, last) / norm).clamp(0.0, 2.0)
 }
 
 /// [`solve`] in the frame of the slip increments: Tresca's and Coulomb's tangential rows hold
 /// r − u_τ(t_{n−1}) (their origin 0), the other rows their displacements.
 fn solve_increment<const D: usize>(
     step: &FrictionStep<D>,
+    along: f64,
     q: &[f64],
     state: &mut ContactState,
     cache: &mut SolverCache,
@@ -131,6 +175,16 @@ fn solve_increment<const D: usize>(
     let coulomb = friction.laws.iter().any(|l| matches!(l, FrictionLaw::Coulomb(_)));
     // Coulomb's first round uses the previous step's normal forces (the warm start)
     let mut forces = forces_at(state, ContactOutcome::default())?;
+    let is_coulomb: Vec<bool> = (friction.laws.iter())
+        .map(|l| matches!(l, FrictionLaw::Coulomb(_)))
+        .collect();
+    if cache.trend.bound_change.len() == k_rows {
+        for (k, change) in cache.trend.bound_change.iter().enumerate() {
+            if is_coulomb[k] {
+                forces[k] = (forces[k] + along * change).max(0.0);
+            }
+        }
+    }
     let mut total = ContactOutcome::default();
     let solver = ActiveSetSolver {
         settings: step.settings,
@@ -164,12 +218,32 @@ fn solve_increment<const D: usize>(
     let tolerance = step.settings.tolerance;
     let inexact = coulomb && on.inexact_rounds;
     let mut round_tolerance = if inexact { tolerance.max(TUNING.first_round) } else { tolerance };
-    // the next round's bound forces: the fixed point's, mixed with the last rounds' (Anderson)
-    let is_coulomb: Vec<bool> = (friction.laws.iter())
-        .map(|l| matches!(l, FrictionLaw::Coulomb(_)))
-        .collect();
-    let mut mixing = Anderson::new(is_coulomb);
-    for _ in 0..TUNING.coulomb_rounds {
+    // Coulomb's first round with no normal force yet (a step's first contact) is the frictionless
+    // problem: solved on the normal rows alone (`unloaded.rs`), the rounds go on from it
+    let mut first = 0;
+    let unloaded = coulomb && on.unloaded_round && forces.iter().all(|&f| f == 0.0);
+    if unloaded && is_coulomb.iter().all(|&c| c) && !step.singular {
+        let round = ActiveSetSolver {
+            settings: ContactSettings {
+                tolerance: round_tolerance,
+                ..step.settings
+            },
+            ..solver
+        };
+        let rows = (step.operator, step.normal_laws, m);
+        let solved = unloaded::solve(&round, rows, (&offset, bound.as_deref(), step.bilateral), q, state)?;
+        if let Some(outcome) = solved {
+            total.add_work(&outcome);
+            let next = forces_at(state, total)?;
+            let (change, scale) = bound_change(state, m, &forces, &next);
+            if inexact {
+                round_tolerance = moving_tolerance(tolerance, change, scale);
+            }
+            forces = next;
+            first = 1;
+        }
+    }
+    for _ in first..TUNING.coulomb_rounds {
         // (a potential's "bound" is an output only: its term keeps the weight w_p)
         for (k, law) in friction.laws.iter().enumerate() {
             if !matches!(law, FrictionLaw::Potential) {
@@ -203,22 +277,21 @@ fn solve_increment<const D: usize>(
         total.active = outcome.active;
         let next = forces_at(state, total)?;
         // the fixed point F = μ(s) λ_ν has settled when the bound forces stop moving
-        let scale = state.force[..m].iter().fold(f64::MIN_POSITIVE, |a, b| a.max(b.abs()));
-        let change = next.iter().zip(&forces).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+        let (change, scale) = bound_change(state, m, &forces, &next);
         let settled = change <= tolerance * scale;
         if !coulomb || (settled && (round_tolerance == tolerance || outcome.residual <= tolerance)) {
+            cache.trend.bound_change = match state.friction.bound.len() == k_rows {
+                true => forces.iter().zip(&state.friction.bound).map(|(a, b)| a - b).collect(),
+                false => vec![0.0; k_rows],
+            };
             record(step, state, (&before, &accumulated), &forces);
             return Ok(total);
         }
         round_tolerance = match settled || !inexact {
             true => tolerance,
-            // a round's tolerance while the bound forces still move
-            false => tolerance.max((TUNING.round_share * change / scale).min(TUNING.first_round)),
+            false => moving_tolerance(tolerance, change, scale),
         };
-        forces = match on.anderson {
-            true => mixing.next(&forces, next),
-            false => next,
-        };
+        forces = next;
     }
     Err(failure(
         format!(
@@ -228,6 +301,20 @@ fn solve_increment<const D: usize>(
         ),
         total,
     ))
+}
+
+/// The largest change of the bound forces from `forces` to `next`, and the scale it is measured
+/// against: the largest normal force of the state (m normal rows).
+fn bound_change(state: &ContactState, m: usize, forces: &[f64], next: &[f64]) -> (f64, f64) {
+    let scale = state.force[..m].iter().fold(f64::MIN_POSITIVE, |a, b| a.max(b.abs()));
+    let change = next.iter().zip(forces).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+    (change, scale)
+}
+
+/// A round's tolerance while the bound forces still move: a share of their last change relative
+/// to the scale, at most the first round's, never below the solve's (docs/method.md §17.2).
+fn moving_tolerance(tolerance: f64, change: f64, scale: f64) -> f64 {
+    tolerance.max((TUNING.round_share * change / scale).min(TUNING.first_round))
 }
 
 /// The normal force that presses row p: λ_ν, or |λ_ν| where the contact is bilateral.
@@ -323,4 +410,26 @@ fn record<const D: usize>(
         } as i32);
     }
     state.friction = rows;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The load-following factor is the projection of this step's load change on the last one:
+    /// 0.9 for a load that moves on at 90 % of its pace, 0 for one that turns across or reverses,
+    /// 0 where a change is unknown or zero, and at most 2.
+    #[test]
+    fn the_predictor_follows_a_load_that_moves_on_and_not_one_that_turns() {
+        let last = [0.0, -2.0, 0.0, 1.0];
+        assert_eq!(load_following(&[0.0, -1.8, 0.0, 0.9], &last), 0.9);
+        // a shear step after a pressing step: the change is across the last one
+        assert_eq!(load_following(&[3.0, 0.0, -1.0, 0.0], &last), 0.0);
+        // reversed, unknown or zero
+        assert_eq!(load_following(&[0.0, 2.0, 0.0, -1.0], &last), 0.0);
+        assert_eq!(load_following(&[], &last), 0.0);
+        assert_eq!(load_following(&[1.0, 0.0, 0.0, 0.0], &[0.0; 4]), 0.0);
+        // at most twice the last change
+        assert_eq!(load_following(&[0.0, -20.0, 0.0, 10.0], &last), 2.0);
+    }
 }
