@@ -8,7 +8,7 @@ contact on y = 0 (nu = (0,-1), g = 0.2, the paper's odd compliance law regularis
 eps = 1e-8, nodal weights), trapezoidal history by shifted polynomial moments, T = 1. K = K_A +
 (k/2) b(0) K_B is factored once with scipy's SuperLU (splu), W = C K^-1 C^T is dense, and each step
 solves the condensed contact problem by a projected Newton / active-set method with an Armijo line
-search on the energy (the globalisation of src/contact/active_set.rs), warm-started from the last
+search on the energy (the globalisation of src/contact/newton.rs), warm-started from the last
 step. Vectorised: Python loops run only over time steps, Newton iterations and line-search cuts.
 
     python3 benches/numpy_reference.py --nx 256 --ny 128 --steps 128 [--out FILE.npz]

@@ -8,7 +8,9 @@ use hvi::scene::{
 
 fn section() -> String {
     let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/scenes.md")).unwrap();
-    let start = readme.find("### Expression language").expect("docs/scenes.md has the section");
+    let start = readme
+        .find("### Expression language")
+        .expect("docs/scenes.md has the section");
     let rest = &readme[start + 4..];
     let end = rest.find("\n#").unwrap_or(rest.len());
     rest[..end].to_string()

@@ -8,9 +8,10 @@
 //! residuals of every case (one `case …` line each), the second routes and the O(ε) table.
 //!
 //! `case4_load_reversal_crosses_the_kink` and `case8_several_local_minima` failed before the
-//! contact solver stopped nodes at the kink of the law at u_ν = 0 and guarded its local-phase
-//! acceptance by the best residual so far (src/contact/active_set.rs): the solver zig-zagged
-//! across the kink, or cycled, for 100 iterations.
+//! contact solver stopped nodes at the kink of the law at u_ν = 0 (src/contact/line_search.rs)
+//! and guarded its local-phase acceptance by the best residual so far (a watchdog, removed since
+//! by issue 42's ablation, docs/ablation.md): the solver zig-zagged across the kink, or cycled,
+//! for 100 iterations.
 
 mod common;
 
@@ -625,8 +626,9 @@ fn case4_contact_configurations() {
 }
 
 /// A load that presses, lifts and presses again (−P cos(2πt) x): the contact nodes cross the
-/// kink of the law at u_ν = 0 twice, and at t = 1/4 the load vanishes. Before the fix in
-/// `active_set.rs` (stop at the kink; residual watchdog) the paper's law with P = 0.02,
+/// kink of the law at u_ν = 0 twice, and at t = 1/4 the load vanishes. Before the fix in the
+/// contact solve (stop at the kink, now in `line_search.rs`; a residual watchdog, removed since
+/// by issue 42's ablation) the paper's law with P = 0.02,
 /// N = 64 failed at step 15 and the steep law with P = 0.3 at t = 1/4, after 100 iterations.
 #[test]
 fn case4_load_reversal_crosses_the_kink() {

@@ -68,7 +68,11 @@ impl ActiveSetSolver<'_> {
         let on = self.settings.strategies;
         let r = &mut state.normal_displacement;
         for (p, rp) in r.iter_mut().enumerate() {
-            *rp = if problem.is_fixed(p) { problem.g(p) } else { rp.min(problem.g(p)) };
+            *rp = if problem.is_fixed(p) {
+                problem.g(p)
+            } else {
+                rp.min(problem.g(p))
+            };
         }
         let scale = problem.force_scale(q);
         let tol = self.settings.tolerance * scale;
@@ -164,7 +168,14 @@ impl ActiveSetSolver<'_> {
         cache: &mut SolverCache,
         outcome: &mut ContactOutcome,
     ) -> Direction {
-        let slope = |d: &[f64]| system.free.iter().zip(d).map(|(&p, d)| system.gradient[p] * d).sum::<f64>();
+        let slope = |d: &[f64]| {
+            system
+                .free
+                .iter()
+                .zip(d)
+                .map(|(&p, d)| system.gradient[p] * d)
+                .sum::<f64>()
+        };
         let branch = full_step && self.settings.strategies.branch_model;
         let model = branch
             .then(|| branch::model(problem, r, system.free, (system.hessian, system.gradient), kink))
@@ -179,7 +190,9 @@ impl ActiveSetSolver<'_> {
             if slope(&step.x) > 0.0 {
                 return step;
             }
-            self.trace.line(format_args!("  the branch model's direction does not descend: the law's own"));
+            self.trace.line(format_args!(
+                "  the branch model's direction does not descend: the law's own"
+            ));
         }
         direction::newton_direction(problem, system, &self.settings, cache, outcome)
     }
@@ -201,7 +214,9 @@ impl ActiveSetSolver<'_> {
     /// a tenth of what the last step needs to pass the tolerance (τ/ρ = `needed`).
     fn forcing(&self, relative: f64, needed: f64) -> f64 {
         match self.settings.strategies.inexact_newton {
-            true => relative.max(0.1 * needed).clamp(TUNING.forcing_floor, TUNING.forcing_cap),
+            true => relative
+                .max(0.1 * needed)
+                .clamp(TUNING.forcing_floor, TUNING.forcing_cap),
             false => TUNING.forcing_floor,
         }
     }

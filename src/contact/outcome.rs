@@ -16,7 +16,7 @@ pub struct ContactOutcome {
     /// Dense Cholesky factorisations of the Newton matrix (one per direction below
     /// `dense_limit`; above it, only when the reused one no longer serves).
     pub factorisations: usize,
-    /// Of those, the factorisations of the Newton system in W (docs/method.md §4.6).
+    /// Of those, the directions Δ = W G (docs/method.md §4.6), each counted as a factorisation.
     pub in_w: usize,
     /// Nodes on the bound at the end.
     pub active: usize,

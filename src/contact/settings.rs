@@ -15,7 +15,8 @@ pub struct ContactSettings {
     pub dense_limit: usize,
     /// The optional strategies, each on unless the scene's `solver.without` names it.
     pub strategies: Strategies,
-    /// Report every iteration to standard error (`hvi solve --trace-contact`).
+    /// Report every iteration to standard error (`HVI_TRACE_CONTACT=1`, read once when the
+    /// contact is set up; docs/troubleshooting.md).
     pub trace: bool,
 }
 
@@ -39,6 +40,11 @@ pub struct Tuning {
     pub armijo: f64,
     /// The smallest step of the line search: below it the energy cannot decrease measurably.
     pub min_step: f64,
+    /// Where the convexified Newton matrix is still not positive definite (round-off), a shift
+    /// of `convex_shift` × Q_pp of its first row is added, and multiplied by `convex_growth` until
+    /// Cholesky succeeds (docs/method.md §4.4).
+    pub convex_shift: f64,
+    pub convex_growth: f64,
     /// The proximal shift of a singular Q is min(this, the relative residual) · Q_pp
     /// (docs/method.md §7.7): it bounds the first steps of a body not yet touching.
     pub proximal: f64,
@@ -71,8 +77,9 @@ pub struct Tuning {
     /// The branch model reads the branch a row leaves for this many ε from the kink, where the
     /// smoothed |·| gives F (1 − 5·10⁻⁷) and a curvature of 10⁻⁹ F/ε.
     pub branch_edge: f64,
-    /// A curvature below this share of a direction's least stiffness 1/(eᵀWe) counts as none in
-    /// the system in W (docs/method.md §4.6).
+    /// A curvature below this share of a direction's least stiffness 1/(eᵀWe) counts as none for
+    /// the product Δ = W G (docs/method.md §4.6): the direction then differs from Newton's by at
+    /// most this share along it.
     pub negligible_curvature: f64,
     /// Rounds of Coulomb's fixed point before the step fails.
     pub coulomb_rounds: usize,
@@ -87,6 +94,8 @@ pub struct Tuning {
 pub const TUNING: Tuning = Tuning {
     armijo: 1e-4,
     min_step: 1e-12,
+    convex_shift: 1e-12,
+    convex_growth: 10.0,
     proximal: 1e-6,
     forcing_floor: 1e-13,
     forcing_cap: 1e-2,
@@ -138,8 +147,7 @@ macro_rules! strategies {
 
 strategies! {
     /// A factorisation of the Newton matrix kept above `dense_limit` free rows and reused as the
-    /// preconditioner of CG (docs/method.md §9.2); without it, a factorisation per direction
-    /// (and no coupled Coulomb step, which needs it).
+    /// preconditioner of CG (docs/method.md §9.2); without it, a factorisation per direction.
     kept_factor,
     /// The kept factor brought to moved curvatures and a shrunk free set by Woodbury's identity.
     low_rank_update,

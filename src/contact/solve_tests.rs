@@ -1,5 +1,5 @@
 //! The contact solve's tests: the Newton loop with each direction solver, the kept factor and
-//! its update, the system in W, a pair's vector law, the branch model and Coulomb's coupled step.
+//! its update, the product by W, a pair's vector law and the branch model.
 
 use super::condensed::{DenseNormalStiffness, NormalStiffness};
 use super::direction::kept::{preconditioned, KeptFactor};
@@ -41,6 +41,9 @@ fn problem<'a>(
         ..ContactProblem::new(operator, laws)
     }
 }
+
+/// A `dense_limit` no free set passes: every direction by a dense factorisation.
+const ALWAYS_DENSE: usize = usize::MAX;
 
 /// A solver of tolerance 1e-12, at most 100 iterations, its factor kept above `dense_limit` rows.
 fn solver(dense_limit: usize) -> ActiveSetSolver<'static> {
@@ -95,7 +98,7 @@ fn reused_factorisation_gives_the_dense_directions() {
     let laws = NodalLaws::default();
     let load = |t: f64| (0..m).map(|p| 0.5 * shape(p as f64 / m as f64, t)).collect();
     let p = problem(&op, &laws, &bound, None);
-    let dense = run_steps((&p, &solver(usize::MAX)), 8, load);
+    let dense = run_steps((&p, &solver(ALWAYS_DENSE)), 8, load);
     let reused = run_steps((&p, &solver(0)), 8, load);
     assert_eq!(total(&dense, |o| o.iterative), 0);
     assert_eq!(total(&dense, |o| o.factorisations), total(&dense, |o| o.iterations));
@@ -123,12 +126,7 @@ fn reused_factorisation_gives_the_dense_directions() {
 
 /// A Newton system on the free rows `free` with the laws' diagonal `e`, the pair couplings `c` of
 /// `partner` (over all rows), the gradient `grad` and CG's accuracy 10⁻¹³.
-fn system<'a>(
-    free: &'a [usize],
-    hessian: &'a LawHessian,
-    zeros: &'a [f64],
-    grad: &'a [f64],
-) -> NewtonSystem<'a> {
+fn system<'a>(free: &'a [usize], hessian: &'a LawHessian, zeros: &'a [f64], grad: &'a [f64]) -> NewtonSystem<'a> {
     NewtonSystem {
         free,
         hessian,
@@ -194,7 +192,12 @@ fn a_low_rank_update_of_the_kept_factor_is_the_new_newton_matrix() {
     let c0: Vec<f64> = (0..m).map(|r| partner[r].map_or(0.0, |_| 0.05 * p.c(r))).collect();
     let grad: Vec<f64> = (0..m).map(|r| (0.37 * r as f64).sin()).collect();
     let h0 = hessian_of(&e0, &c0, &partner);
-    let mut kept = KeptFactor::new(&p, &system(&free, &h0, &zeros, &grad), &free, (&mut ContactOutcome::default(), true));
+    let mut kept = KeptFactor::new(
+        &p,
+        &system(&free, &h0, &zeros, &grad),
+        &free,
+        (&mut ContactOutcome::default(), true),
+    );
     let mut solve = |e: &[f64], c: &[f64]| {
         let h = hessian_of(e, c, &partner);
         let s = system(&free, &h, &zeros, &grad);
@@ -275,7 +278,7 @@ fn the_kept_factor_serves_a_free_set_that_moved() {
     assert!(preconditioned(&p, &mut kept, &s, &curvature, &on).is_none());
 }
 
-/// Q without W formed: the solver cannot take the Newton system in W, except (with
+/// Q without W formed: the solver cannot take a direction in W, except (with
 /// `products`, as on the trailing block's condensation, docs/method.md §9.7) where the
 /// system has no rows and a product by W is all it needs.
 struct WithoutW<'a> {
@@ -318,14 +321,16 @@ fn a_direction_without_rows_in_w_is_a_product_by_w() {
         products: true,
     };
     let by_products = problem(&products, &laws, &bound, None);
-    let dense = solver(usize::MAX);
+    let dense = solver(ALWAYS_DENSE);
     let free: Vec<usize> = (0..m).collect();
     let g: Vec<f64> = (0..m).map(|p| (0.05 * p as f64).cos()).collect();
     let zeros = vec![0.0; m];
     let in_w = |free: &[usize]| {
         let hessian = LawHessian::at(&by_products, &zeros, free);
         let s = system(free, &hessian, &zeros[..free.len()], &g);
-        WProduct.direction(&by_products, &s, &mut ContactOutcome::default()).map(|d| d.x)
+        WProduct
+            .direction(&by_products, &s, &mut ContactOutcome::default())
+            .map(|d| d.x)
     };
     let x = in_w(&free).unwrap();
     let mut qx = vec![0.0; m];
@@ -372,7 +377,7 @@ fn tangential_rows<'a>(
         branch_from,
         ..ContactProblem::new(operator, laws)
     };
-    let mut solver = solver(usize::MAX);
+    let mut solver = solver(ALWAYS_DENSE);
     solver.settings.tolerance = 1e-13;
     (problem, solver)
 }
@@ -440,7 +445,9 @@ fn a_pair_law_acts_on_the_vector_and_is_isotropic() {
             .collect();
         let mut state = ContactState::new(m);
         let (problem, solver) = tangential_rows(&op, &laws, Some(&pairs), None);
-        solver.solve(&problem, &d, &mut state, &mut SolverCache::default()).unwrap();
+        solver
+            .solve(&problem, &d, &mut state, &mut SolverCache::default())
+            .unwrap();
         state
     };
     let base = solve(0.0);

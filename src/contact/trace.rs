@@ -1,5 +1,5 @@
 //! Where a contact solve reports what it does, iteration by iteration: nowhere unless a caller
-//! hands it a listening sink (`hvi solve --trace-contact`, docs/troubleshooting.md). The solve
+//! hands it a listening sink (`HVI_TRACE_CONTACT=1`, docs/troubleshooting.md). The solve
 //! never asks the environment; it writes to the sink it was given.
 
 /// A sink for the contact solve's report.

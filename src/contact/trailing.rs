@@ -7,7 +7,7 @@
 //!
 //! * Q = W⁻¹ = T⁻ᵀ (L_cc L_ccᵀ) T⁻¹, a dense triangular product of k³/3 multiply–adds and no
 //!   inverse;
-//! * W = T (L_cc⁻ᵀ L_cc⁻¹) Tᵀ, formed only where the Newton system in W (§4.6) may use it;
+//! * W = T (L_cc⁻ᵀ L_cc⁻¹) Tᵀ, formed only with friction (Coulomb's unloaded round, §17.2);
 //! * per step d = T L_cc⁻ᵀ y_c and y_c ← y_c − L_cc⁻¹ Tᵀ λ, two dense triangular solves of order
 //!   k around the step's one solve,
 //!

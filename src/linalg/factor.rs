@@ -10,6 +10,10 @@
 //! on several threads are factored by `numeric.rs` on the subtrees of the elimination tree
 //! (docs/method.md §9.5). The factor is swept with the kernels of `supernodes.rs` on the
 //! schedule of `schedule.rs`.
+//!
+//! Over 600 lines because the analysis, the numeric factorisation and the counted sweeps share one
+//! supernodal structure and its invariants (the permutation, the contact-last ordering, the
+//! supernodes' ranges); what can stand apart is in `numeric.rs`, `supernodes.rs` and `schedule.rs`.
 
 use super::schedule::{backward_sequential, forward_sequential, forward_supernode, Schedule};
 use super::sparse::SymmetricMatrix;

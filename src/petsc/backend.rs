@@ -8,9 +8,9 @@
 
 use super::common::SolverChoice;
 use super::partition::Partition;
-use crate::contact::{ContactOutcome, ContactState};
 use crate::contact::condensed::{subtract_normal_forces, subtract_responses};
 use crate::contact::{Condensation, ContactNodes, DenseNormalStiffness};
+use crate::contact::{ContactOutcome, ContactState};
 use crate::fem::assembly::local_stiffness;
 use crate::linalg::{Counters, LinearSolver};
 use crate::material::{Isotropic, IDENTITY_TENSOR};

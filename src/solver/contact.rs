@@ -4,8 +4,8 @@
 
 use super::error::SolveError;
 use crate::contact::friction::{Coefficient, Friction, FrictionLaw};
-use crate::contact::ContactState;
 use crate::contact::rows::{self, GroupRows};
+use crate::contact::ContactState;
 use crate::contact::{
     ComplianceProfile, ContactLaw, ContactNodes, ContactSettings, LawTerm, NodalLaws, Obstacle, PiecewiseLinear,
     Symmetry,

@@ -84,10 +84,6 @@ impl MemoryEstimate {
                 true => TRAILING_COPIES,
                 false => DENSE_COPIES,
             };
-            // (the single-precision copies of a reused factor and of Q, docs/method.md §9.2, one m²
-            // in doubles' bytes, are made only where CG reuses the factor past an update: within
-            // the prediction's margin, measured +59 MiB on the 3D Cattaneo–Mindlin block with
-            // Tresca friction)
             parts.push((
                 "dense contact matrices",
                 ((copies + kept) * 8.0 * (m * m) as f64) as u64,

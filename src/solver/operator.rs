@@ -197,7 +197,7 @@ pub fn singularity_verdict(error: f64) -> Result<(), String> {
 
 /// The condensation of `sim` on `factor` (docs/method.md §9): Q read off the factor's trailing
 /// block where [`Simulation::trailing_block`] says so, with W beside it only with friction
-/// (where the Newton system in W pays, §4.6; elsewhere W is applied by triangular solves);
+/// (Coulomb's unloaded round reads it, §17.2; elsewhere W is applied by triangular solves);
 /// else G by sparse sweeps, or the stored responses the scene asks for.
 pub fn condensation<const D: usize>(
     sim: &Simulation<D>,

@@ -238,8 +238,8 @@ impl<const D: usize> Simulation<D> {
     }
 
     /// Whether the trailing-block condensation forms W beside Q (docs/method.md §9.4, §9.7):
-    /// with friction, where the Newton system in W (§4.6) pays; without it a product by W is two
-    /// triangular solves with L_cc.
+    /// with friction, whose first round without normal forces solves on the normal rows with
+    /// (W_νν)⁻¹ (docs/method.md §17.2); without it a product by W is two triangular solves with L_cc.
     pub fn forms_w_off_trailing_block(&self) -> bool {
         self.contact.as_ref().is_some_and(|c| c.friction.is_some())
     }

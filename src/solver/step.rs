@@ -28,150 +28,155 @@ pub(super) struct StepSolve<'a> {
     pub state: Option<(&'a mut ContactState, &'a mut SolverCache)>,
 }
 
-impl StepOperator {
-    /// Solves one step: d = C K⁻¹ rhs, contact → λ, u_n = K⁻¹ (rhs − Cᵀ λ) (docs/method.md
-    /// §3–4), with the rigid parameters' motions a found with λ and added (§7.7).
-    pub(super) fn solve<const D: usize>(
-        &mut self,
-        sim: &Simulation<D>,
-        backend: &dyn Backend<D>,
-        StepSolve {
-            step,
-            rhs,
-            offset,
-            rigid_loads,
-            motion,
-            u,
-            state,
-        }: StepSolve,
-        counters: &Counters,
-        stats: &mut RunStats,
-    ) -> Result<Option<ContactOutcome>, SolveError> {
-        let t = sim.time.time(step);
-        // p̂ = P(t) − R⁰: what the rigid parameters must balance
-        let balance = match &self.rigid {
-            Some(rigid) => {
-                let forces: Vec<f64> = sim.dirichlet.rigid.iter().map(|p| p.force_at(t)).collect();
-                Some(
-                    rigid
-                        .balance(&forces, rhs, offset, rigid_loads)
-                        .map_err(|detail| super::rigid::unbalanced(step, t, detail))?,
-                )
+/// Solves one step: d = C K⁻¹ rhs, contact → λ, u_n = K⁻¹ (rhs − Cᵀ λ) (docs/method.md
+/// §3–4), with the rigid parameters' motions a found with λ and added (§7.7).
+pub(super) fn solve<const D: usize>(
+    operator: &mut StepOperator,
+    sim: &Simulation<D>,
+    backend: &dyn Backend<D>,
+    StepSolve {
+        step,
+        rhs,
+        offset,
+        rigid_loads,
+        motion,
+        u,
+        state,
+    }: StepSolve,
+    counters: &Counters,
+    stats: &mut RunStats,
+) -> Result<Option<ContactOutcome>, SolveError> {
+    let t = sim.time.time(step);
+    // p̂ = P(t) − R⁰: what the rigid parameters must balance
+    let balance = match &operator.rigid {
+        Some(rigid) => {
+            let forces: Vec<f64> = sim.dirichlet.rigid.iter().map(|p| p.force_at(t)).collect();
+            Some(
+                rigid
+                    .balance(&forces, rhs, offset, rigid_loads)
+                    .map_err(|detail| super::rigid::unbalanced(step, t, detail))?,
+            )
+        }
+        None => None,
+    };
+    match (&sim.contact, operator.condensed.as_mut(), state) {
+        (Some(setup), Some(op), Some((state, cache))) => {
+            let mut d = vec![0.0; setup.condensed_rows().len()];
+            timed(&mut stats.phases.forward_sweep, || {
+                op.free_normal(rhs, &mut d, counters)
+            });
+            if let Some(g) = offset {
+                setup.condensed_rows().prescribed_offset(g, &mut d);
             }
-            None => None,
-        };
-        match (&sim.contact, self.condensed.as_mut(), state) {
-            (Some(setup), Some(op), Some((state, cache))) => {
-                let mut d = vec![0.0; setup.condensed_rows().len()];
-                timed(&mut stats.phases.forward_sweep, || {
-                    op.free_normal(rhs, &mut d, counters)
-                });
-                if let Some(g) = offset {
-                    setup.condensed_rows().prescribed_offset(g, &mut d);
-                }
-                // (a backend may solve on one process and share the result)
-                let outcome = timed(&mut stats.phases.contact, || {
-                    let local = if backend.solves_contact() {
-                        // the free contact forces q = Q d (Q̂ d + Q D_a S⁺ p̂ with rigid parameters)
-                        let mut q = vec![0.0; d.len()];
-                        op.stiffness().apply_q(&d, &mut q);
-                        if let (Some(rigid), Some(p)) = (&self.rigid, &balance) {
-                            rigid.contact_load(p, &mut q);
-                        }
-                        contact_solve(sim, setup, op.as_ref(), self.rigid.is_some(), step, &q, (&mut *state, &mut *cache))
-                    } else {
-                        Ok(ContactOutcome::default())
-                    };
-                    backend.share_contact(state, local)
-                })?;
-                stats.contact_solves += 1;
-                if let (Some(rigid), Some(p)) = (&mut self.rigid, &balance) {
-                    let moved: Vec<f64> = state.normal_displacement.iter().zip(&d).map(|(r, d)| r - d).collect();
-                    rigid.solve_values(p, &moved);
-                }
-                timed(&mut stats.phases.backward_sweep, || {
-                    op.recover(&state.force, u, counters)
-                });
-                if let Some(rigid) = &self.rigid {
-                    rigid.add_motion(u);
-                    motion.copy_from_slice(rigid.values());
-                }
-                Ok(Some(outcome))
+            // (a backend may solve on one process and share the result)
+            let outcome = timed(&mut stats.phases.contact, || {
+                let local = if backend.solves_contact() {
+                    // the free contact forces q = Q d (Q̂ d + Q D_a S⁺ p̂ with rigid parameters)
+                    let mut q = vec![0.0; d.len()];
+                    op.stiffness().apply_q(&d, &mut q);
+                    if let (Some(rigid), Some(p)) = (&operator.rigid, &balance) {
+                        rigid.contact_load(p, &mut q);
+                    }
+                    contact_solve(
+                        sim,
+                        setup,
+                        op.as_ref(),
+                        operator.rigid.is_some(),
+                        step,
+                        &q,
+                        (&mut *state, &mut *cache),
+                    )
+                } else {
+                    Ok(ContactOutcome::default())
+                };
+                backend.share_contact(state, local)
+            })?;
+            stats.contact_solves += 1;
+            if let (Some(rigid), Some(p)) = (&mut operator.rigid, &balance) {
+                let moved: Vec<f64> = state.normal_displacement.iter().zip(&d).map(|(r, d)| r - d).collect();
+                rigid.solve_values(p, &moved);
             }
-            _ => {
-                timed(&mut stats.phases.backward_sweep, || self.solver.solve(rhs, u, counters));
-                if let (Some(rigid), Some(p)) = (&mut self.rigid, &balance) {
-                    rigid.solve_values(p, &[]);
-                    rigid.add_motion(u);
-                    motion.copy_from_slice(rigid.values());
-                }
-                Ok(None)
+            timed(&mut stats.phases.backward_sweep, || {
+                op.recover(&state.force, u, counters)
+            });
+            if let Some(rigid) = &operator.rigid {
+                rigid.add_motion(u);
+                motion.copy_from_slice(rigid.values());
             }
+            Ok(Some(outcome))
+        }
+        _ => {
+            timed(&mut stats.phases.backward_sweep, || {
+                operator.solver.solve(rhs, u, counters)
+            });
+            if let (Some(rigid), Some(p)) = (&mut operator.rigid, &balance) {
+                rigid.solve_values(p, &[]);
+                rigid.add_motion(u);
+                motion.copy_from_slice(rigid.values());
+            }
+            Ok(None)
         }
     }
 }
 
-impl Reactions {
-    /// The group totals of R = K_A u_n + Σ_j K_j m_n^j − F_n + Cᵀ λ (collective with a
-    /// backend that holds a share of the unknowns).
-    pub(super) fn compute<const D: usize>(
-        &mut self,
-        sim: &Simulation<D>,
-        backend: &dyn Backend<D>,
-        state: StepState,
-    ) -> &[f64] {
-        if self.k_a.is_some() {
-            self.through_columns(sim, state);
-        } else {
-            self.through_products(sim, backend, state);
-        }
-        // an overlap row takes back what its groups count twice (docs/method.md §7.5)
-        for (total, g) in self.totals.iter_mut().zip(&sim.dirichlet.reaction_groups) {
-            *total *= g.weight;
-        }
-        &self.totals
+/// The group totals of R = K_A u_n + Σ_j K_j m_n^j − F_n + Cᵀ λ (collective with a
+/// backend that holds a share of the unknowns).
+pub(super) fn reactions<'a, const D: usize>(
+    r: &'a mut Reactions,
+    sim: &Simulation<D>,
+    backend: &dyn Backend<D>,
+    state: StepState,
+) -> &'a [f64] {
+    if r.k_a.is_some() {
+        r.through_columns(sim, state);
+    } else {
+        reactions_through_products(r, sim, backend, state);
     }
+    // an overlap row takes back what its groups count twice (docs/method.md §7.5)
+    for (total, g) in r.totals.iter_mut().zip(&sim.dirichlet.reaction_groups) {
+        *total *= g.weight;
+    }
+    &r.totals
+}
 
-    /// R over the held unknowns through the backend's products.
-    fn through_products<const D: usize>(
-        &mut self,
-        sim: &Simulation<D>,
-        backend: &dyn Backend<D>,
-        StepState {
-            u,
-            memory,
-            load,
-            contact,
-        }: StepState,
-    ) -> &[f64] {
-        let global = |k: usize| backend.held_unknowns().map_or(k, |held| held[k]);
-        let mut r = vec![0.0; u.len()];
-        backend.product(sim, Stiffness::Elastic, u, &mut r);
-        if let Some(m) = memory {
-            for (j, m) in m.chunks_exact(u.len()).enumerate() {
-                let mut y = vec![0.0; u.len()];
-                backend.product(sim, Stiffness::Memory(j), m, &mut y);
-                r.iter_mut().zip(&y).for_each(|(a, b)| *a += b);
-            }
+/// R over the held unknowns through the backend's products.
+fn reactions_through_products<const D: usize>(
+    reactions: &mut Reactions,
+    sim: &Simulation<D>,
+    backend: &dyn Backend<D>,
+    StepState {
+        u,
+        memory,
+        load,
+        contact,
+    }: StepState,
+) {
+    let global = |k: usize| backend.held_unknowns().map_or(k, |held| held[k]);
+    let mut r = vec![0.0; u.len()];
+    backend.product(sim, Stiffness::Elastic, u, &mut r);
+    if let Some(m) = memory {
+        for (j, m) in m.chunks_exact(u.len()).enumerate() {
+            let mut y = vec![0.0; u.len()];
+            backend.product(sim, Stiffness::Memory(j), m, &mut y);
+            r.iter_mut().zip(&y).for_each(|(a, b)| *a += b);
         }
-        // Cᵀλ at the prescribed unknowns: the prescribed parts of the contact rows.
-        let mut force: std::collections::HashMap<usize, f64> = std::collections::HashMap::new();
-        if let (Some(c), Some(state)) = (&sim.contact, contact) {
-            for (l, fixed) in state.force.iter().zip(c.condensed_rows().prescribed_rows()) {
-                for &(d, coefficient) in fixed {
-                    *force.entry(d).or_insert(0.0) += l * coefficient;
-                }
-            }
-        }
-        for (total, members) in self.totals.iter_mut().zip(&self.groups) {
-            *total = members
-                .iter()
-                .map(|&k| r[k] + force.get(&global(k)).copied().unwrap_or(0.0) - load[k])
-                .sum();
-        }
-        backend.sum(&mut self.totals);
-        &self.totals
     }
+    // Cᵀλ at the prescribed unknowns: the prescribed parts of the contact rows.
+    let mut force: std::collections::HashMap<usize, f64> = std::collections::HashMap::new();
+    if let (Some(c), Some(state)) = (&sim.contact, contact) {
+        for (l, fixed) in state.force.iter().zip(c.condensed_rows().prescribed_rows()) {
+            for &(d, coefficient) in fixed {
+                *force.entry(d).or_insert(0.0) += l * coefficient;
+            }
+        }
+    }
+    for (total, members) in reactions.totals.iter_mut().zip(&reactions.groups) {
+        *total = members
+            .iter()
+            .map(|&k| r[k] + force.get(&global(k)).copied().unwrap_or(0.0) - load[k])
+            .sum();
+    }
+    backend.sum(&mut reactions.totals);
 }
 
 fn contact_solve<const D: usize>(

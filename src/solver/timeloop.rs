@@ -280,8 +280,14 @@ impl<'s, const D: usize> Stepper<'s, D> {
                 u: &mut self.displacement,
                 state: self.contact.as_mut().map(|s| (s, &mut self.contact_cache)),
             };
-            self.main
-                .solve(sim, &*self.backend, step, &self.counters, &mut self.stats)?
+            super::step::solve(
+                &mut self.main,
+                sim,
+                &*self.backend,
+                step,
+                &self.counters,
+                &mut self.stats,
+            )?
         };
         self.rhs = rhs;
         if self.backend.any(self.displacement.iter().any(|v| !v.is_finite())) {
@@ -317,7 +323,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
             load: &self.load,
             contact: self.contact.as_ref(),
         };
-        let values = r.compute(sim, &*self.backend, state);
+        let values = super::step::reactions(r, sim, &*self.backend, state);
         if let Some(g) = values.iter().position(|v| !v.is_finite()) {
             let g = &sim.dirichlet.reaction_groups[g];
             return Err(SolveError::NonFinite {
@@ -401,7 +407,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
             u: &mut self.displacement,
             state: self.contact.as_mut().map(|s| (s, &mut self.contact_cache)),
         };
-        op.solve(sim, &*self.backend, step, &self.counters, &mut self.stats)
+        super::step::solve(&mut op, sim, &*self.backend, step, &self.counters, &mut self.stats)
     }
 
     /// rhs ← rhs − Σ_j K_j h_n^j (docs/method.md §3, §15); h_0 = 0.

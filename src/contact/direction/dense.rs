@@ -4,6 +4,7 @@
 
 use super::super::outcome::ContactOutcome;
 use super::super::problem::ContactProblem;
+use super::super::settings::TUNING;
 use super::system::{Direction, DirectionSolver, NewtonSystem};
 use crate::linalg::dense::DenseCholesky;
 
@@ -93,9 +94,9 @@ pub fn factor_rows(
                     break (llt, diagonal, coupling);
                 }
                 shift = if shift == 0.0 {
-                    1e-12 * problem.c(rows[0])
+                    TUNING.convex_shift * problem.c(rows[0])
                 } else {
-                    shift * 10.0
+                    shift * TUNING.convex_growth
                 };
             }
         }

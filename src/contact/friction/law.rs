@@ -105,4 +105,3 @@ impl<const D: usize> Friction<D> {
         vec![t, t2]
     }
 }
-

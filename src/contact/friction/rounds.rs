@@ -16,8 +16,8 @@
 //! the bound forces still move.
 
 use super::super::condensed::NormalStiffness;
-use super::super::nodal::NodalLaws;
 use super::super::newton::ActiveSetSolver;
+use super::super::nodal::NodalLaws;
 use super::super::outcome::{ContactFailure, ContactOutcome};
 use super::super::problem::ContactProblem;
 use super::super::settings::{ContactSettings, TUNING};
@@ -138,8 +138,8 @@ fn solve_increment<const D: usize>(
     let offset: Vec<f64> = (0..all)
         .map(|r| if r < m { step.offset.map_or(0.0, |o| o[r]) } else { 0.0 })
         .collect();
-    let bound: Option<Vec<f64>> = (step.bound)
-        .map(|g| (0..all).map(|r| if r < m { g[r] } else { f64::INFINITY }).collect());
+    let bound: Option<Vec<f64>> =
+        (step.bound).map(|g| (0..all).map(|r| if r < m { g[r] } else { f64::INFINITY }).collect());
     // bilateral normal rows (docs/method.md §17.4), over all rows
     let fixed: Option<Vec<bool>> = step.bilateral.map(|b| (0..all).map(|r| r < m && b[r]).collect());
     // the laws of all rows, built once; the bound forces of Tresca and Coulomb set below
@@ -196,7 +196,13 @@ fn solve_increment<const D: usize>(
     // origin like bilateral rows — whose normal forces give the first bound forces.
     if coulomb && step.singular && forces.iter().all(|&f| f == 0.0) {
         let stick_bound: Vec<f64> = (0..all)
-            .map(|r| if r < m { bound.as_ref().map_or(f64::INFINITY, |g| g[r]) } else { 0.0 })
+            .map(|r| {
+                if r < m {
+                    bound.as_ref().map_or(f64::INFINITY, |g| g[r])
+                } else {
+                    0.0
+                }
+            })
             .collect();
         let stick: Vec<bool> = (0..all)
             .map(|r| r >= m || fixed.as_ref().is_some_and(|f| f[r]))
@@ -217,7 +223,11 @@ fn solve_increment<const D: usize>(
     // settle, which the last round always is (docs/method.md §17.2)
     let tolerance = step.settings.tolerance;
     let inexact = coulomb && on.inexact_rounds;
-    let mut round_tolerance = if inexact { tolerance.max(TUNING.first_round) } else { tolerance };
+    let mut round_tolerance = if inexact {
+        tolerance.max(TUNING.first_round)
+    } else {
+        tolerance
+    };
     // Coulomb's first round with no normal force yet (a step's first contact) is the frictionless
     // problem: solved on the normal rows alone (`unloaded.rs`), the rounds go on from it
     let mut first = 0;
