@@ -4,6 +4,7 @@ strategies were introduced for, with every strategy on and with one switched off
 
     python3 benches/ablation.py HVI [--rounds 3] [--only a,b+c] [--cases slab_coulomb,soft_layer]
                                 [--csv ablation.csv]
+    python3 benches/ablation.py HVI --against OLD_HVI [--rounds 5]    # two binaries, every strategy on
     python3 benches/ablation.py --table ablation.csv          # the medians as a Markdown table
 
 Each round runs every (variant, case) pair once, the variants in an order rotated by one each
@@ -83,10 +84,10 @@ def difference(a, b):
     return worst / scale
 
 
-def run(hvi, case, variant, out):
+def run(hvi, case, variant, out, against=None):
     args, _ = CASES[case]
-    command = [hvi, "solve", *args, "--out", str(out), "--quiet"]
-    if variant != "all":
+    command = [against if variant == "old" else hvi, "solve", *args, "--out", str(out), "--quiet"]
+    if variant not in ("all", "old"):
         names = ", ".join(f'"{v}"' for v in variant.split("+"))
         command += ["--set", f"solver.without=[{names}]"]
     shutil.rmtree(out, ignore_errors=True)
@@ -107,7 +108,7 @@ def run(hvi, case, variant, out):
 
 
 def measure(args):
-    variants = ["all"] + (args.only or STRATEGIES)
+    variants = ["all"] + (["old"] if args.against else args.only or STRATEGIES)
     cases = [c for c in CASES if not args.cases or c in args.cases]
     new = not os.path.exists(args.csv)
     with open(args.csv, "a", newline="") as f, tempfile.TemporaryDirectory(prefix="hvi-ablation-") as tmp:
@@ -122,7 +123,7 @@ def measure(args):
                     if set(variant.split("+")) <= FRICTION_ONLY and not CASES[case][1]:
                         continue
                     out = tmp / f"{case}-{variant}"
-                    seconds, status, iterations, contact = run(args.hvi, case, variant, out)
+                    seconds, status, iterations, contact = run(args.hvi, case, variant, out, args.against)
                     writer.writerow({"round": r, "case": case, "variant": variant, "seconds": f"{seconds:.3f}",
                                      "status": status, "newton_iterations": iterations,
                                      "contact_seconds": contact, "diff": ""})
@@ -188,6 +189,7 @@ def main():
     ap.add_argument("--only", type=lambda s: s.split(","), default=None)
     ap.add_argument("--cases", type=lambda s: s.split(","), default=None)
     ap.add_argument("--csv", default="ablation.csv")
+    ap.add_argument("--against", metavar="OLD_HVI", help="time another binary (variant `old`) against HVI")
     ap.add_argument("--table", metavar="CSV")
     args = ap.parse_args()
     if args.table:
