@@ -65,15 +65,8 @@ impl ActiveSetSolver<'_> {
         cache: &mut SolverCache,
     ) -> Result<ContactOutcome, ContactFailure> {
         let m = problem.m();
-        let on = self.settings.strategies;
         let r = &mut state.normal_displacement;
-        for (p, rp) in r.iter_mut().enumerate() {
-            *rp = if problem.is_fixed(p) {
-                problem.g(p)
-            } else {
-                rp.min(problem.g(p))
-            };
-        }
+        onto_bounds(problem, r);
         let scale = problem.force_scale(q);
         let tol = self.settings.tolerance * scale;
         let mut outcome = ContactOutcome::default();
@@ -99,11 +92,8 @@ impl ActiveSetSolver<'_> {
                 break;
             }
             if outcome.iterations == self.settings.max_iterations {
-                return Err(ContactFailure {
-                    outcome,
-                    reason: format!("no convergence in {} iterations", self.settings.max_iterations),
-                    smallest_residual: it.best_residual / scale,
-                });
+                let reason = format!("no convergence in {} iterations", self.settings.max_iterations);
+                return Err(failure(outcome, it.best_residual / scale, reason));
             }
             outcome.iterations += 1;
 
@@ -122,13 +112,7 @@ impl ActiveSetSolver<'_> {
                 forcing: self.forcing(residual / scale, tol / residual),
             };
             let step = self.newton_direction(problem, &system, (r, &kink, it.full_step), cache, &mut outcome);
-            for (k, &p) in free.iter().enumerate() {
-                direction[p] = step.x[k];
-            }
-            for p in (0..m).filter(|&p| held[p]) {
-                direction[p] = it.grad[p] / problem.c(p);
-            }
-            let predicted_slope: f64 = free.iter().zip(&step.x).map(|(&p, d)| it.grad[p] * d).sum();
+            let slope = spread(problem, (&system, &held), &step, &mut direction);
 
             // 4. projected Armijo backtracking on the energy
             let path = Path {
@@ -138,20 +122,12 @@ impl ActiveSetSolver<'_> {
                 held: &held,
                 kink: &kink,
                 grad: &it.grad,
-                stops: on.kink_stops,
+                stops: self.settings.strategies.kink_stops,
             };
-            match line_search::search(&path, predicted_slope, &mut work, &mut outcome) {
+            match line_search::search(&path, slope, &mut work, &mut outcome) {
                 Search::Accepted(alpha) => it.take(problem, r, &work, alpha == 1.0),
                 // at the round-off floor the energy cannot decrease measurably
-                Search::Floor => {
-                    return Err(ContactFailure {
-                        outcome,
-                        smallest_residual: it.best_residual / scale,
-                        reason: "the line search could not decrease the energy (the regularised law may be too \
-                                 steep: increase `contact.law.regularisation` or reduce the time step)"
-                            .into(),
-                    });
-                }
+                Search::Floor => return Err(failure(outcome, it.best_residual / scale, STALLED.into())),
             }
         }
         finish(problem, &it.qrd, state, &mut outcome);
@@ -273,6 +249,44 @@ impl Iterate {
             }
         }
         self.full_step = full;
+    }
+}
+
+/// r moved onto the bound where it is past it, and onto it where the row is held (bilateral).
+fn onto_bounds(problem: &ContactProblem, r: &mut [f64]) {
+    for (p, rp) in r.iter_mut().enumerate() {
+        *rp = if problem.is_fixed(p) {
+            problem.g(p)
+        } else {
+            rp.min(problem.g(p))
+        };
+    }
+}
+
+/// The direction d over all rows: the Newton step's on the free rows, G_p/c_p on the held ones
+/// (which the path moves onto their bound); returns the predicted slope Gᵀd on the free rows.
+fn spread(problem: &ContactProblem, (system, held): (&NewtonSystem, &[bool]), step: &Direction, d: &mut [f64]) -> f64 {
+    for (k, &p) in system.free.iter().enumerate() {
+        d[p] = step.x[k];
+    }
+    for p in (0..problem.m()).filter(|&p| held[p]) {
+        d[p] = system.gradient[p] / problem.c(p);
+    }
+    (system.free.iter().zip(&step.x))
+        .map(|(&p, x)| system.gradient[p] * x)
+        .sum()
+}
+
+/// Why a solve stalls at the line search's floor.
+const STALLED: &str = "the line search could not decrease the energy (the regularised law may be too steep: \
+                       increase `contact.law.regularisation` or reduce the time step)";
+
+/// A failed solve's report: its work, the smallest relative residual it reached and why it stopped.
+fn failure(outcome: ContactOutcome, smallest_residual: f64, reason: String) -> ContactFailure {
+    ContactFailure {
+        outcome,
+        reason,
+        smallest_residual,
     }
 }
 
