@@ -117,23 +117,14 @@ impl<'a> ContactProblem<'a> {
         }
     }
 
-    /// Q r − q (minus the contact force λ), by a product by Q.
-    pub fn residual_force(&self, r: &[f64], q: &[f64], qrd: &mut [f64]) {
+    /// Q r − q (minus the contact force λ, by a product by Q) and the gradient
+    /// G = (Q r − q) + λ_law(r) of E at r.
+    pub fn gradient(&self, r: &[f64], q: &[f64], qrd: &mut [f64], grad: &mut [f64]) {
         self.operator.apply_q(r, qrd);
         qrd.iter_mut().zip(q).for_each(|(a, b)| *a -= b);
-    }
-
-    /// G = (Q r − q) + λ_law(r), given Q r − q.
-    pub fn gradient_from(&self, r: &[f64], qrd: &[f64], grad: &mut [f64]) {
         for p in 0..self.m() {
             grad[p] = qrd[p] + self.law_force(r, p);
         }
-    }
-
-    /// Q r − q and the gradient G of E at r.
-    pub fn gradient(&self, r: &[f64], q: &[f64], qrd: &mut [f64], grad: &mut [f64]) {
-        self.residual_force(r, q, qrd);
-        self.gradient_from(r, qrd, grad);
     }
 
     /// Row p's share of the complementarity residual: |min(c_p(g_p − r_p), −G_p)| (|G_p| without

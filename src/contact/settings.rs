@@ -20,6 +20,13 @@ pub struct ContactSettings {
     pub trace: bool,
 }
 
+impl ContactSettings {
+    /// The same settings with another tolerance (Coulomb's inexact rounds, docs/method.md §17.2).
+    pub fn with_tolerance(self, tolerance: f64) -> Self {
+        ContactSettings { tolerance, ..self }
+    }
+}
+
 impl Default for ContactSettings {
     fn default() -> Self {
         ContactSettings {

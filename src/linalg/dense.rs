@@ -119,11 +119,6 @@ impl DenseCholesky {
 pub struct DenseLu(faer::linalg::solvers::PartialPivLu<f64>);
 
 impl DenseLu {
-    /// Factors the matrix with entries `a(i, j)`.
-    pub fn new(k: usize, a: impl Fn(usize, usize) -> f64) -> Self {
-        DenseLu(faer::Mat::from_fn(k, k, a).partial_piv_lu())
-    }
-
     /// Factors the k × k matrix whose column j is `column(j)` written into a slice of k zeros
     /// (built a column at a time into faer's storage, without a call per entry).
     pub fn from_columns(k: usize, mut column: impl FnMut(usize, &mut [f64])) -> Self {
@@ -142,43 +137,10 @@ impl DenseLu {
 
     /// x ← A⁻¹ x.
     pub fn solve_in_place(&self, x: &mut [f64]) {
-        self.solve_columns_in_place(x, 1);
-    }
-
-    /// X ← A⁻¹ X for the k × c column-major X (c right-hand sides at once).
-    pub fn solve_columns_in_place(&self, x: &mut [f64], c: usize) {
         use faer::linalg::solvers::Solve;
-        let k = x.len() / c.max(1);
-        self.0.solve_in_place(MatMut::from_column_major_slice_mut(x, k, c));
+        let k = x.len();
+        self.0.solve_in_place(MatMut::from_column_major_slice_mut(x, k, 1));
     }
-}
-
-/// Aᵀ X (k × c, column-major) for the column-major n × k A and n × c X (faer's product, on the
-/// run's threads from order 512).
-pub fn transpose_product(a: &[f64], x: &[f64], (n, k, c): (usize, usize, usize)) -> Vec<f64> {
-    let mut out = vec![0.0; k * c];
-    faer::linalg::matmul::matmul(
-        MatMut::from_column_major_slice_mut(&mut out, k, c),
-        faer::Accum::Replace,
-        MatRef::from_column_major_slice(a, n, k).transpose(),
-        MatRef::from_column_major_slice(x, n, c),
-        1.0,
-        par(n),
-    );
-    out
-}
-
-/// Y ← Y − Z T for the column-major n × k Y, n × u Z and u × k T (faer's product, on the run's
-/// threads from order 512).
-pub fn subtract_product(y: &mut [f64], z: &[f64], t: &[f64], (n, u, k): (usize, usize, usize)) {
-    faer::linalg::matmul::matmul(
-        MatMut::from_column_major_slice_mut(y, n, k),
-        faer::Accum::Add,
-        MatRef::from_column_major_slice(z, n, u),
-        MatRef::from_column_major_slice(t, u, k),
-        -1.0,
-        par(n),
-    );
 }
 
 /// A ← ½(A + Aᵀ) for a row-major n × n matrix: exact symmetry against the round-off of a

@@ -93,7 +93,7 @@ impl DirectionSolver for Kept<'_> {
         let exact = system.exact_diagonal();
         let reused = (self.factor.as_mut())
             .filter(|k| k.serves(problem))
-            .and_then(|k| preconditioned(problem, k, system, &exact, &on));
+            .and_then(|k| preconditioned(problem, k, system, &on));
         if let Some((direction, _)) = reused {
             outcome.iterative += 1;
             return Some(direction);
@@ -116,7 +116,7 @@ impl DirectionSolver for Kept<'_> {
         let indefinite = outcome.convexified > convexified;
         let mut solved = None;
         if factored.len() < nf {
-            solved = preconditioned(problem, &mut fresh, system, &exact, &on).map(|(d, _)| d);
+            solved = preconditioned(problem, &mut fresh, system, &on).map(|(d, _)| d);
             if solved.is_none() {
                 // CG met a direction of non-positive curvature or did not converge: the dense
                 // direction on every free row
@@ -149,8 +149,9 @@ pub(crate) fn stiff(problem: &ContactProblem, system: &NewtonSystem, curvature: 
     }
 }
 
-/// (Q_ℐℐ + diag(curvature) + the pairs' coupling) x = G_ℐ by CG preconditioned with the kept
-/// factor brought to the present system (this file's doc), to the relative residual
+/// The Newton system (Q_ℐℐ + diag(curvature) + the pairs' coupling) x = G_ℐ, its curvature the
+/// laws' diagonal with the proximal shift, by CG preconditioned with the kept factor brought to
+/// the present system (this file's doc), to the relative residual
 /// `system.forcing` within [`TUNING`]`.cg_iterations` + |ℐ|/`cg_rows_per_iteration`
 /// iterations. Returns the direction and the iterations; None where the factor does not serve
 /// (the caller refactors).
@@ -158,9 +159,9 @@ pub fn preconditioned(
     problem: &ContactProblem,
     kept: &mut KeptFactor,
     system: &NewtonSystem,
-    curvature: &[f64],
     on: &Strategies,
 ) -> Option<(Direction, usize)> {
+    let curvature = &system.exact_diagonal()[..];
     let (free, hessian) = (system.free, system.hessian);
     let nf = free.len();
     // a free row outside the factor that no law holds stiffly: the factor does not serve

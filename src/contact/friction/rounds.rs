@@ -172,12 +172,12 @@ fn solve_increment<const D: usize>(
     let forces_at = |state: &ContactState, total: ContactOutcome| {
         bound_forces(step, state, (&before, &accumulated)).map_err(|reason| failure(reason, total))
     };
-    let coulomb = friction.laws.iter().any(|l| matches!(l, FrictionLaw::Coulomb(_)));
-    // Coulomb's first round uses the previous step's normal forces (the warm start)
-    let mut forces = forces_at(state, ContactOutcome::default())?;
     let is_coulomb: Vec<bool> = (friction.laws.iter())
         .map(|l| matches!(l, FrictionLaw::Coulomb(_)))
         .collect();
+    let coulomb = is_coulomb.contains(&true);
+    // Coulomb's first round uses the previous step's normal forces (the warm start)
+    let mut forces = forces_at(state, ContactOutcome::default())?;
     if cache.trend.bound_change.len() == k_rows {
         for (k, change) in cache.trend.bound_change.iter().enumerate() {
             if is_coulomb[k] {
@@ -234,10 +234,7 @@ fn solve_increment<const D: usize>(
     let unloaded = coulomb && on.unloaded_round && forces.iter().all(|&f| f == 0.0);
     if unloaded && is_coulomb.iter().all(|&c| c) && !step.singular {
         let round = ActiveSetSolver {
-            settings: ContactSettings {
-                tolerance: round_tolerance,
-                ..step.settings
-            },
+            settings: step.settings.with_tolerance(round_tolerance),
             ..solver
         };
         let rows = (step.operator, step.normal_laws, m);
@@ -272,10 +269,7 @@ fn solve_increment<const D: usize>(
             ..ContactProblem::new(step.operator, &laws)
         };
         let round = ActiveSetSolver {
-            settings: ContactSettings {
-                tolerance: round_tolerance,
-                ..step.settings
-            },
+            settings: step.settings.with_tolerance(round_tolerance),
             ..solver
         };
         let outcome = round.solve_forces(&problem, q, state, cache).map_err(|mut f| {
