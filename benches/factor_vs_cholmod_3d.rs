@@ -11,6 +11,8 @@
 //!
 //! Settings (environment):
 //! - `HVI_BENCH_N` = sizes n (default `32,40`: 52 800 and 101 680 free unknowns);
+//! - `HVI_BENCH_MESH` = gmsh files (comma-separated) instead of the slab, with the scene
+//!   `HVI_BENCH_SCENE` (e.g. the graded tetrahedral blocks of benches/graded/README.md);
 //! - `HVI_BENCH_REPEATS` = numeric factorisations per row, medians reported (default 5);
 //! - `HVI_BENCH_THREADS` = threads for both sides (default 1, hvi's default `threads`; CHOLMOD's
 //!   BLAS gets `OPENBLAS_NUM_THREADS` / `OMP_NUM_THREADS`);
@@ -445,38 +447,94 @@ fn millions(v: usize) -> String {
     format!("{:.2} M", v as f64 / 1e6)
 }
 
-fn main() {
+/// A case of the bench: a label, the simulation and its step matrix with identity rows.
+struct Case {
+    label: String,
+    sim: Simulation<3>,
+    matrix: SymmetricMatrix,
+}
+
+/// K = K_A + (k/2) b(0) K_B with identity rows (K_A alone without memory), as the time loop
+/// factors it (one memory channel on I, as examples/slab.toml; a scene with other memory is
+/// refused by the bench).
+fn step_matrix(sim: &Simulation<3>) -> SymmetricMatrix {
+    let (cells, points) = (&sim.mesh.cells, &sim.mesh.points);
+    match &sim.memory {
+        None => {
+            let [k_a] = assemble_stiffness(cells, points, &sim.dofs, &[sim.elasticity.tensor()]);
+            k_a.with_identity_rows(&sim.dofs)
+        }
+        Some(m) => {
+            let [k_a, k_b] = assemble_stiffness(cells, points, &sim.dofs, &[sim.elasticity.tensor(), IDENTITY_TENSOR]);
+            let b0 = m.kernel_value(0, 0.0);
+            k_a.plus_scaled(0.5 * sim.time.step() * b0, &k_b)
+                .with_identity_rows(&sim.dofs)
+        }
+    }
+}
+
+/// The cases: `HVI_BENCH_MESH` (gmsh files, comma-separated) with the scene `HVI_BENCH_SCENE`,
+/// else the slab boxes of `HVI_BENCH_N`.
+fn cases() -> Vec<Box<dyn FnOnce() -> Case>> {
+    if let Ok(meshes) = std::env::var("HVI_BENCH_MESH") {
+        let scene_path = std::env::var("HVI_BENCH_SCENE").expect("HVI_BENCH_MESH needs HVI_BENCH_SCENE");
+        return meshes
+            .split(',')
+            .map(|m| {
+                let (m, scene_path) = (PathBuf::from(m.trim()), PathBuf::from(&scene_path));
+                Box::new(move || {
+                    let scene = Scene::load(Some(&scene_path), &[]).expect("the scene");
+                    let mesh = hvi::mesh::read_mesh::<3>(&m).expect("a 3D gmsh mesh");
+                    let sim = Simulation::new(&scene, mesh).expect("the scene on the mesh");
+                    let matrix = step_matrix(&sim);
+                    let tets = sim.mesh.cells.len();
+                    Case {
+                        label: format!(
+                            "{}: {tets} cells, {} contact nodes",
+                            m.display(),
+                            sim.contact.as_ref().map_or(0, |c| c.nodes.len())
+                        ),
+                        sim,
+                        matrix,
+                    }
+                }) as Box<dyn FnOnce() -> Case>
+            })
+            .collect();
+    }
+    let slab = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/slab.toml"));
     let sizes: Vec<usize> = std::env::var("HVI_BENCH_N")
         .unwrap_or_else(|_| "32,40".into())
         .split(',')
         .filter_map(|s| s.trim().parse().ok())
         .collect();
+    sizes
+        .into_iter()
+        .map(|n| {
+            Box::new(move || {
+                let scene = Scene::load(Some(slab), &[]).expect("examples/slab.toml");
+                let mesh = block([2.0, 1.0, 0.25], [2 * n, n, (n / 4).max(1)], SolidShape::Hex);
+                let sim = Simulation::new(&scene, mesh).expect("slab scene on the box");
+                let matrix = step_matrix(&sim);
+                Case {
+                    label: format!("n = {n}: Q1 box {}x{}x{}", 2 * n, n, (n / 4).max(1)),
+                    sim,
+                    matrix,
+                }
+            }) as Box<dyn FnOnce() -> Case>
+        })
+        .collect()
+}
+
+fn main() {
     let repeats: usize = env_or("HVI_BENCH_REPEATS", 5).max(1);
     let threads: usize = env_or("HVI_BENCH_THREADS", 1).max(1);
     hvi::linalg::set_parallelism(threads);
-    let slab = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/slab.toml"));
-    let scene = Scene::load(Some(slab), &[]).expect("examples/slab.toml");
     println!("factor_vs_cholmod_3d: {threads} thread(s) each side, medians of {repeats}, interleaved");
-    for n in sizes {
+    for (case_number, case) in cases().into_iter().enumerate() {
         let bench_start = Instant::now();
-        let mesh = block([2.0, 1.0, 0.25], [2 * n, n, (n / 4).max(1)], SolidShape::Hex);
-        let sim = Simulation::new(&scene, mesh).expect("slab scene on the box");
-        let [k_a, k_b] = assemble_stiffness(
-            &sim.mesh.cells,
-            &sim.mesh.points,
-            &sim.dofs,
-            &[sim.elasticity.tensor(), IDENTITY_TENSOR],
-        );
-        let b0 = sim.memory.as_ref().map_or(0.0, |m| m.kernel_value(0, 0.0)); // one channel on I (slab.toml)
-        let matrix = k_a
-            .plus_scaled(0.5 * sim.time.step() * b0, &k_b)
-            .with_identity_rows(&sim.dofs);
-        drop((k_a, k_b));
+        let Case { label, sim, matrix } = case();
         println!(
-            "\nn = {n}: Q1 box {}x{}x{}, {} unknowns ({} free, {} identity rows), {} stored entries (both triangles)",
-            2 * n,
-            n,
-            (n / 4).max(1),
+            "\n{label}: {} unknowns ({} free, {} identity rows), {} stored entries (both triangles)",
             matrix.n(),
             sim.dofs.n_free(),
             matrix.n() - sim.dofs.n_free(),
@@ -565,7 +623,7 @@ fn main() {
         }
 
         // the same matrix for CHOLMOD
-        let dir = std::env::temp_dir().join(format!("hvi_factor3d_{}_{n}", std::process::id()));
+        let dir = std::env::temp_dir().join(format!("hvi_factor3d_{}_{case_number}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("temp dir");
         let mtx: PathBuf = dir.join("K.mtx");
         let entries = write_matrix_market(&matrix, &structure, &mtx).expect("writing the MatrixMarket file");

@@ -155,6 +155,15 @@ pub fn symmetrise_row_major(a: &mut [f64], n: usize) {
     }
 }
 
+/// Copies the lower triangle of the row-major n × n matrix `a` onto its upper one.
+pub fn mirror_lower_row_major(a: &mut [f64], n: usize) {
+    for p in 0..n {
+        for q in 0..p {
+            a[q * n + p] = a[p * n + q];
+        }
+    }
+}
+
 /// y = A x for a row-major n × n matrix `a`: faer's SIMD product, on two threads from n = 512
 /// (the contact solve's products by Q were its largest cost at m in the thousands).
 pub fn matvec_row_major(a: &[f64], n: usize, x: &[f64], y: &mut [f64]) {

@@ -33,18 +33,31 @@ pub struct ForwardColumns {
 
 impl ForwardColumns {
     /// The forward sweeps of the columns of Bᵀ; `rows[c]` lists the (unknown, coefficient)
-    /// pairs of row c of B. One sparse sweep per row (counted).
+    /// pairs of row c of B. Counted as one sparse sweep per row. From
+    /// [`BLOCKED_FROM_COLUMNS`] rows on, the columns go through the tree together, in blocks of
+    /// [`block_columns`] ([`blocked_sweeps`]: dense triangular solves and products on each
+    /// supernode, docs/method.md §9.9); below, one sparse sweep each.
     pub fn new(factor: &Factor, rows: &[Vec<(usize, f64)>], counters: &Counters) -> Self {
         counters.sparse_forward_sweeps.fetch_add(rows.len(), Ordering::Relaxed);
         let n = factor.n();
         let n_supernodes = factor.analysis().supernodes().len();
-        let columns: Vec<(Vec<Segment>, Vec<f64>)> = rows
-            .par_iter()
-            .map_init(
-                || (vec![0.0; n], vec![false; n_supernodes]),
-                |(work, marked), row| sparse_forward_sweep(factor, row, work, marked),
-            )
-            .collect();
+        let columns: Vec<(Vec<Segment>, Vec<f64>)> = if rows.len() >= BLOCKED_FROM_COLUMNS {
+            rows.par_chunks(block_columns(rows.len()))
+                .flat_map_iter(|chunk| blocked_sweeps(factor, chunk))
+                .collect()
+        } else {
+            rows.par_iter()
+                .map_init(
+                    || (vec![0.0; n], vec![false; n_supernodes]),
+                    |(work, marked), row| sparse_forward_sweep(factor, row, work, marked),
+                )
+                .collect()
+        };
+        Self::from_columns(columns)
+    }
+
+    /// The columns' segments and values, in column order, concatenated.
+    fn from_columns(columns: impl IntoIterator<Item = (Vec<Segment>, Vec<f64>)>) -> Self {
         let mut out = ForwardColumns {
             column_start: vec![0],
             segments: Vec::new(),
@@ -109,9 +122,19 @@ impl ForwardColumns {
     /// Gᵀ G (row-major, symmetric) = B K⁻¹ Bᵀ, supernode by supernode: the segments of the
     /// k columns whose paths pass through a supernode of width w form a dense w × k block G_s,
     /// and W = Σ_s G_sᵀ G_s, each term one matrix product (faer) scattered into W. Two threads
-    /// take alternate supernodes into their own W, summed at the end.
+    /// take alternate supernodes into their own W, summed at the end. From
+    /// [`BLOCKED_FROM_COLUMNS`] columns on, only the products' lower triangles are formed (half
+    /// the work: the graded block at 10⁵ unknowns, m = 3 594, 2.2 s → 1.4 s) and W's upper
+    /// triangle is copied from its lower one; below, the whole products, averaged with their
+    /// transposes (the bits the 2D runs have always had).
     pub fn gram(&self) -> Vec<f64> {
+        use faer::linalg::matmul::triangular::{matmul, BlockStructure};
         let m = self.len();
+        let lower_only = m >= BLOCKED_FROM_COLUMNS;
+        let structure = match lower_only {
+            true => BlockStructure::TriangularLower,
+            false => BlockStructure::Rectangular,
+        };
         let n_supernodes = self.segments.iter().map(|s| s.supernode + 1).max().unwrap_or(0);
         // (column, segment) pairs on each supernode, columns ascending
         let mut on: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n_supernodes];
@@ -147,17 +170,21 @@ impl ForwardColumns {
                     block.clear();
                     block.resize(k * k, 0.0);
                     let g = faer::MatRef::from_column_major_slice(&g, rows, k);
-                    faer::linalg::matmul::matmul(
+                    matmul(
                         faer::MatMut::from_column_major_slice_mut(&mut block, k, k),
+                        structure,
                         faer::Accum::Replace,
                         g.transpose(),
+                        BlockStructure::Rectangular,
                         g,
+                        BlockStructure::Rectangular,
                         1.0,
                         faer::get_global_parallelism(),
                     );
                     for (a, &(ca, _)) in list.iter().enumerate() {
                         let row = &mut w[ca * m..(ca + 1) * m];
-                        for (b, &(cb, _)) in list.iter().enumerate() {
+                        let upto = if lower_only { a + 1 } else { k };
+                        for (b, &(cb, _)) in list[..upto].iter().enumerate() {
                             row[cb] += block[b * k + a];
                         }
                     }
@@ -172,7 +199,10 @@ impl ForwardColumns {
             }
         }
         // exact symmetry
-        super::dense::symmetrise_row_major(&mut w, m);
+        match lower_only {
+            true => super::dense::mirror_lower_row_major(&mut w, m),
+            false => super::dense::symmetrise_row_major(&mut w, m),
+        }
         w
     }
 }
@@ -258,6 +288,163 @@ fn sparse_forward_sweep(
     (segments, values)
 }
 
+/// From how many columns [`ForwardColumns::new`] sweeps them together ([`blocked_sweeps`]) and
+/// [`ForwardColumns::gram`] forms only lower triangles (docs/method.md §9.9). The blocks win at
+/// every size measured (two threads, medians of 5: the graded block of benches/graded, 1 656
+/// columns on a factor of 18.3 M entries, 0.98 s by single sweeps, 0.24 s by blocks; the 2D
+/// paper at h = 1/128, 16 to 256 columns, 2.3–2.8× faster), but below 128 columns they save
+/// under a millisecond (rect_q1_h32's 64: 0.3 ms either way) and would change the bits of the 2D
+/// paper run, so the single sweeps stay there.
+pub const BLOCKED_FROM_COLUMNS: usize = 128;
+/// At most this many columns per block of [`blocked_sweeps`].
+pub const MAX_BLOCK_COLUMNS: usize = 512;
+
+/// Columns per block of [`blocked_sweeps`] for m columns: at least four blocks per thread (the
+/// blocks' costs differ with where their nodes sit in the tree) and at most
+/// [`MAX_BLOCK_COLUMNS`] columns each. Measured on two threads (benches/graded, blocked sweeps
+/// alone): m = 1 656, blocks of 207 0.24 s, 256 0.25 s, 512 0.37–0.40 s; m = 3 594, 64 3.9 s,
+/// 128 3.0 s, 256 2.4 s, 450 1.8–1.9 s, 512 2.0 s, 1 024 2.9 s, 1 797 2.4 s (larger blocks
+/// fall out of cache in the scatter into the ancestors).
+fn block_columns(m: usize) -> usize {
+    let threads = rayon::current_num_threads().max(1);
+    let blocks = (4 * threads).max(m.div_ceil(MAX_BLOCK_COLUMNS));
+    m.div_ceil(blocks).max(1)
+}
+
+/// L⁻¹ P bᵢ for the columns `rows` together (a supernodal forward sweep with many sparse
+/// right-hand sides): on each supernode s, in increasing order, the columns whose paths pass
+/// through it form a dense block X_s (the rows of s from the first that any of them reaches);
+/// X_s ← L_ss⁻¹ X_s (one triangular solve) and the rows below, L_ps X_s (one product), are
+/// subtracted from the blocks of the ancestors that hold them. The same numbers as one sweep per
+/// column, in matrix–matrix operations. Returns each column's segments and values (a segment
+/// per supernode on its path, trimmed as the single sweep trims it).
+fn blocked_sweeps(factor: &Factor, rows: &[Vec<(usize, f64)>]) -> Vec<(Vec<Segment>, Vec<f64>)> {
+    use faer::reborrow::{Reborrow, ReborrowMut};
+    use faer::{Accum, MatMut, MatRef, Par};
+    let sn = factor.analysis().supernodes();
+    let ns = sn.len();
+    let ordered_last = factor.analysis().ordered_last() > 0;
+    // each column's first row (as sparse_forward_sweep trims) and the supernodes it reaches
+    let first: Vec<usize> = rows
+        .iter()
+        .map(|row| match ordered_last {
+            true => row.iter().map(|&(i, _)| factor.position(i)).min().unwrap_or(0),
+            false => 0,
+        })
+        .collect();
+    let mut active: Vec<Vec<usize>> = vec![Vec::new(); ns];
+    let mut reached: Vec<Option<usize>> = vec![None; ns];
+    for (c, row) in rows.iter().enumerate() {
+        for &(i, _) in row {
+            let mut s = Some(sn.supernode_of[factor.position(i)]);
+            while let Some(t) = s.filter(|&t| t != usize::MAX && reached[t] != Some(c)) {
+                reached[t] = Some(c);
+                active[t].push(c);
+                s = Some(sn.parent[t]);
+            }
+        }
+    }
+    // X_s: rows top[s]..end of s, one column per active column, column-major, at offset[s]
+    let mut top = vec![0; ns];
+    let mut offset = vec![0; ns + 1];
+    for s in 0..ns {
+        let end = sn.start[s] + sn.width[s];
+        top[s] = active[s]
+            .iter()
+            .map(|&c| sn.start[s].max(first[c]))
+            .min()
+            .unwrap_or(end);
+        offset[s + 1] = offset[s] + (end - top[s]) * active[s].len();
+    }
+    let mut x = vec![0.0; offset[ns]];
+    for (c, row) in rows.iter().enumerate() {
+        for &(i, coefficient) in row {
+            let r = factor.position(i);
+            let s = sn.supernode_of[r];
+            let h = sn.start[s] + sn.width[s] - top[s];
+            let j = active[s]
+                .binary_search(&c)
+                .expect("a column is active on its own supernode");
+            x[offset[s] + j * h + r - top[s]] += coefficient;
+        }
+    }
+    let values = factor.values();
+    let mut product = Vec::new();
+    let mut map = Vec::new();
+    for s in 0..ns {
+        let k = active[s].len();
+        if k == 0 {
+            continue;
+        }
+        let (width, rows_s, below) = (sn.width[s], sn.rows(s), sn.pattern_len[s]);
+        let skip = top[s] - sn.start[s];
+        let h = width - skip;
+        let block = sn.block(values, s);
+        let (head, tail) = x.split_at_mut(offset[s + 1]);
+        let mut xs = MatMut::from_column_major_slice_mut(&mut head[offset[s]..], h, k);
+        let diagonal = MatRef::from_column_major_slice_with_stride(&block[skip * rows_s + skip..], h, h, rows_s);
+        faer::linalg::triangular_solve::solve_lower_triangular_in_place(diagonal, xs.rb_mut(), Par::Seq);
+        if below == 0 {
+            continue;
+        }
+        // the rows below: P = L_ps X_s, subtracted from the ancestors' blocks
+        product.clear();
+        product.resize(below * k, 0.0);
+        let lower = MatRef::from_column_major_slice_with_stride(&block[skip * rows_s + width..], below, h, rows_s);
+        faer::linalg::matmul::matmul(
+            MatMut::from_column_major_slice_mut(&mut product, below, k),
+            Accum::Replace,
+            lower,
+            xs.rb(),
+            1.0,
+            Par::Seq,
+        );
+        let pattern = sn.pattern(s);
+        let mut p = 0;
+        while p < below {
+            // the run of pattern rows in one ancestor t
+            let t = sn.supernode_of[pattern[p]];
+            let end_t = sn.start[t] + sn.width[t];
+            let q = p + pattern[p..].partition_point(|&r| r < end_t);
+            // the columns of s among t's (every column reaching s reaches t)
+            map.clear();
+            let mut from = 0;
+            for &c in &active[s] {
+                from += active[t][from..].partition_point(|&d| d < c);
+                map.push(from);
+            }
+            let h_t = end_t - top[t];
+            let base = offset[t] - offset[s + 1];
+            for (j, &jt) in map.iter().enumerate() {
+                let target = &mut tail[base + jt * h_t..base + (jt + 1) * h_t];
+                for (&r, v) in pattern[p..q].iter().zip(&product[j * below + p..j * below + q]) {
+                    target[r - top[t]] -= v;
+                }
+            }
+            p = q;
+        }
+    }
+    // each column's segments, in increasing supernode order
+    let mut columns: Vec<(Vec<Segment>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); rows.len()];
+    for s in 0..ns {
+        let end = sn.start[s] + sn.width[s];
+        let h = end - top[s];
+        for (j, &c) in active[s].iter().enumerate() {
+            let start = sn.start[s].max(first[c]);
+            let (segments, values) = &mut columns[c];
+            let from = offset[s] + j * h + start - top[s];
+            segments.push(Segment {
+                supernode: s,
+                start,
+                len: end - start,
+                offset: values.len(),
+            });
+            values.extend_from_slice(&x[from..from + end - start]);
+        }
+    }
+    columns
+}
+
 #[cfg(test)]
 mod tests {
     //! G = L⁻¹ P Cᵀ against whole solves: Gᵀ (L⁻¹ P r) = C K⁻¹ r, Gᵀ G = C K⁻¹ Cᵀ, and
@@ -322,6 +509,64 @@ mod tests {
             }
             let expected_u = solve(&factor, &shifted);
             prop_assert!(rel(&u, &expected_u) < 1e-12, "K⁻¹(r − Cᵀλ): {:.1e}", rel(&u, &expected_u));
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(12))]
+        /// The blocked sweeps give the single sweeps' columns (to rounding: the sums run in
+        /// another order), in chunks and whole, on factors with and without the rows' unknowns
+        /// ordered last (where both trim the columns above their first row); W = Gᵀ G on either
+        /// side of BLOCKED_FROM_COLUMNS is C K⁻¹ Cᵀ.
+        #[test]
+        fn blocked_sweeps_agree_with_single_sweeps(
+            quad in any::<bool>(),
+            last in any::<bool>(),
+            picks in proptest::collection::vec((0usize..10_000, 0usize..10_000, -1.0f64..1.0, any::<bool>()), 1..200),
+        ) {
+            let k = grid_stiffness(14, 9, quad);
+            let n = k.n();
+            let rows: Vec<Vec<(usize, f64)>> = picks
+                .iter()
+                .map(|&(i, j, a, two)| {
+                    let (i, j) = (i % n, j % n);
+                    if two && i != j { vec![(i, a + 1.5), (j, 0.5 - a)] } else { vec![(i, a + 1.5)] }
+                })
+                .collect();
+            let mut unknowns: Vec<usize> = rows.iter().flatten().map(|&(i, _)| i).collect();
+            unknowns.sort_unstable();
+            unknowns.dedup();
+            let analysis = if last { Factor::analyse_with_last(&k, &unknowns).unwrap() } else { Factor::analyse(&k).unwrap() };
+            let factor = Factor::new(&analysis, &k, &Counters::default()).unwrap();
+            let (mut work, mut marked) = (vec![0.0; n], vec![false; analysis.supernodes().len()]);
+            let single = ForwardColumns::from_columns(rows.iter().map(|row| sparse_forward_sweep(&factor, row, &mut work, &mut marked)));
+            for chunk in [7, rows.len()] {
+                let blocked = ForwardColumns::from_columns(rows.chunks(chunk).flat_map(|c| blocked_sweeps(&factor, c)));
+                prop_assert_eq!(&blocked.column_start, &single.column_start);
+                for (a, b) in blocked.segments.iter().zip(&single.segments) {
+                    prop_assert_eq!((a.supernode, a.start, a.len), (b.supernode, b.start, b.len));
+                    let (va, vb) = (blocked.segment_values(a), single.segment_values(b));
+                    let scale = vb.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+                    for (x, y) in va.iter().zip(vb) {
+                        prop_assert!((x - y).abs() <= 1e-13 * scale, "{x} against {y}");
+                    }
+                }
+            }
+            // W = Gᵀ G (from BLOCKED_FROM_COLUMNS on, formed by lower triangles): symmetric,
+            // and its columns C K⁻¹ cᵢ by whole solves
+            let m = rows.len();
+            let w = ForwardColumns::new(&factor, &rows, &Counters::default()).gram();
+            for q in [0, m / 2, m - 1] {
+                let mut e = vec![0.0; n];
+                for (d, c) in &rows[q] { e[*d] += c; }
+                let mut x = e.clone();
+                factor.solve_in_place(&mut x, &Counters::default());
+                let column: Vec<f64> = rows.iter().map(|r| r.iter().map(|(d, c)| c * x[*d]).sum()).collect();
+                let ours: Vec<f64> = (0..m).map(|p| w[p * m + q]).collect();
+                let transposed: Vec<f64> = (0..m).map(|p| w[q * m + p]).collect();
+                prop_assert_eq!(&ours, &transposed);
+                prop_assert!(rel(&ours, &column) < 1e-12, "W column {q}: {:.1e}", rel(&ours, &column));
+            }
         }
     }
 }

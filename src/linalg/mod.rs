@@ -46,7 +46,7 @@ mod supernodes;
 mod trailing;
 
 pub use factor::{decoupled_unknowns, set_parallelism, Analysis, Counters, Factor, FactorError, Forward, NodeOrdering};
-pub use forward_columns::{forward_columns_entries, ForwardColumns};
+pub use forward_columns::{forward_columns_entries, ForwardColumns, BLOCKED_FROM_COLUMNS};
 pub use trailing::TrailingBlock;
 
 /// Solves with a fixed matrix K (docs/method.md §9): the seam a second linear-algebra backend

@@ -206,7 +206,8 @@ impl Plan {
                         ((2 + usize::from(sim.forms_w_off_trailing_block())) * m * m * 8) as f64 / 1048576.0
                     ),
                     crate::scene::CondensationKind::SplitSweeps => format!(
-                        "condensation by split sweeps: G = L⁻¹ P Cᵀ ({m} sparse forward sweeps) and W = Gᵀ G once, {:.1} MiB dense; per step one dense active-set solve of size {m} between the forward and backward sweeps of the step's one solve",
+                        "condensation by split sweeps: G = L⁻¹ P Cᵀ ({m} sparse forward sweeps{}) and W = Gᵀ G once, {:.1} MiB dense; per step one dense active-set solve of size {m} between the forward and backward sweeps of the step's one solve",
+                        if m >= crate::linalg::BLOCKED_FROM_COLUMNS { ", blocked" } else { "" },
                         (2 * m * m * 8) as f64 / 1048576.0
                     ),
                     crate::scene::CondensationKind::StoredResponses => format!(

@@ -208,18 +208,19 @@ impl<const D: usize> Simulation<D> {
         })
     }
 
-    /// The unknowns the factor orders last: in 3D, with up to 2 000 contact nodes, those of the
-    /// contact normals (docs/method.md §9.1: G and W then live in the factor's trailing block),
-    /// else none. Only the unknowns a row uses (non-zero coefficient): a row lists every free
-    /// component of its node, and ordering the zero ones last too cost 13–17 % more fill (box
-    /// n = 32: 30.05 M → 26.54 M entries below the diagonal; n = 40: 91.1 M → 77.8 M stored).
-    /// Measured: m = 1 248 (slab 96x48x12) condensation 12.0 s → 3.4 s; m = 4 096 (box 64x4x63)
-    /// 16.5 s → 49 s, because the sparse sweeps then run through a dense m × m block. Since
-    /// 2026-12-03 also at any m where Q is read off the trailing block ([`Self::trailing_block`],
-    /// docs/method.md §9.4): no sweeps at all there.
+    /// The unknowns the factor orders last: those of the contact normals where Q is read off the
+    /// factor's trailing block ([`Self::trailing_block`], docs/method.md §9.1, §9.4), else none.
+    /// Only the unknowns a row uses (non-zero coefficient): a row lists every free component of
+    /// its node, and ordering the zero ones last too cost 13–17 % more fill (box n = 32:
+    /// 30.05 M → 26.54 M entries below the diagonal; n = 40: 91.1 M → 77.8 M stored).
+    /// Until 2026-12-06 also up to 2 000 contact nodes with the sweeps of G: on a graded
+    /// tetrahedral block with its whole face in contact (benches/graded, 1 656 nodes on a
+    /// sphere) that tripled the factor (57.4 M entries against 18.3 M, CHOLMOD's METIS 18.7 M)
+    /// and the run took 4.5 s against 1.6 s with the sweeps blocked on the unconstrained
+    /// factor (docs/method.md §9.9).
     pub fn unknowns_ordered_last(&self) -> Vec<usize> {
         match &self.contact {
-            Some(c) if D == 3 && (c.nodes.len() <= 2000 || self.trailing_block()) => c.condensed_rows().unknowns(),
+            Some(c) if self.trailing_block() => c.condensed_rows().unknowns(),
             _ => Vec::new(),
         }
     }
