@@ -1507,3 +1507,36 @@ proptest! {
         }
     }
 }
+
+/// A well-held body whose material is incompressible to ten digits (ν = 1 − 10⁻¹⁰, K/G = 5·10⁹)
+/// makes K ill-conditioned by the material, not by the supports: the refusal names the material
+/// and its K/G before the supports (it blamed the supports alone before).
+#[test]
+fn an_incompressible_material_is_named_when_the_matrix_is_singular() {
+    let scene = Scene::load(
+        None,
+        &[
+            "material.plane=\"strain\"".to_string(),
+            "material.poisson_ratio=0.4999999999".to_string(),
+        ],
+    )
+    .unwrap();
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/rect_q1_h32.msh");
+    let mesh = hvi::mesh::read_mesh::<2>(&path).unwrap();
+    let e = solve_in_memory(&scene, mesh)
+        .err()
+        .expect("a matrix singular to the probe");
+    let text = e.to_string();
+    assert_contains(
+        &text,
+        &[
+            "rect_q1_h32.msh",
+            "nearly incompressible",
+            "K/G = 5.000e9",
+            "ν = 0.4999999999",
+        ],
+    );
+    let material = text.find("nearly incompressible").unwrap();
+    let supports = text.find("not held").unwrap();
+    assert!(material < supports, "{text}");
+}

@@ -77,14 +77,8 @@ impl StepOperator {
         let factor = timed(&mut stats.phases.factorisation, || {
             Factor::new_consuming(symbolic, matrix, counters)
         })
-        .map_err(|e| SolveError::Singular {
-            mesh: sim.mesh.path.display().to_string(),
-            detail: e.to_string(),
-        })?;
-        timed(&mut stats.phases.factorisation, || probe.verdict(&factor)).map_err(|detail| SolveError::Singular {
-            mesh: sim.mesh.path.display().to_string(),
-            detail,
-        })?;
+        .map_err(|e| singular(sim, e.to_string()))?;
+        timed(&mut stats.phases.factorisation, || probe.verdict(&factor)).map_err(|detail| singular(sim, detail))?;
         let factor = Arc::new(factor);
         let mut condensed: Option<Box<dyn Condensation>> = match &sim.contact {
             Some(c) if !c.nodes.is_empty() => Some(
@@ -181,6 +175,38 @@ impl Probe {
             .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()))
             / scale;
         singularity_verdict(error)
+    }
+}
+
+/// From this K/G on, a (nearly) singular matrix is put down to the material before the supports
+/// (ν ≥ 0.49995): the probe's error grows like K/G times the mesh's own condition number, and
+/// 2D runs of the paper's mesh fail it from ν = 1 − 10⁻¹⁰ (K/G ≈ 10¹⁰) while ν = 0.49999999 still
+/// passes.
+pub const MATERIAL_SINGULAR_BULK_TO_SHEAR: f64 = 1e4;
+
+/// The error of a factor that failed or a probe that was off (`detail`): with a nearly
+/// incompressible material (K/G ≥ [`MATERIAL_SINGULAR_BULK_TO_SHEAR`], not in plane stress)
+/// the message names the material first, the supports second.
+pub fn singular<const D: usize>(sim: &Simulation<D>, detail: String) -> SolveError {
+    let e = &sim.elasticity;
+    let ratio = e.bulk_to_shear();
+    let detail = match e.plane != Some(crate::material::PlaneModel::Stress) && ratio >= MATERIAL_SINGULAR_BULK_TO_SHEAR {
+        true => format!(
+            "{}: the material is nearly incompressible (ν = {}, K/G = {ratio:.3e}), so the matrix is ill-conditioned by \
+             the material rather than by the supports; lower ν (hvi's elements lock from about ν = 0.495, K/G = 100, on: \
+             docs/troubleshooting.md), and if that does not help, the body is not held: clamp a part of its boundary",
+            detail
+                .split(": the body is not held")
+                .next()
+                .and_then(|d| d.split("; usually").next())
+                .unwrap_or(&detail),
+            e.poisson_ratio
+        ),
+        false => detail,
+    };
+    SolveError::Singular {
+        mesh: sim.mesh.path.display().to_string(),
+        detail,
     }
 }
 
