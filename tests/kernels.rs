@@ -111,7 +111,15 @@ fn last_cell_stresses<const D: usize>(sim: &Simulation<D>, sink: &MemorySink) ->
             .collect(),
         _ => Vec::new(),
     };
-    cell_stresses(&sim.mesh.cells, &sim.mesh.points, &sim.elasticity, &u, Some(&memory)).tensor
+    cell_stresses(
+        &sim.mesh.cells,
+        &sim.mesh.points,
+        &sim.elasticity,
+        sim.volumetric,
+        &u,
+        Some(&memory),
+    )
+    .tensor
 }
 
 /// A standard material of the tests: bulk and shear relax with different times, shear with two.

@@ -780,7 +780,13 @@ fn a_pyramid_stiffness_is_exact_on_linear_fields() {
         mu: e / (2.0 * (1.0 + nu)),
     };
     let mut k = vec![0.0; 15 * 15];
-    hvi::fem::assembly::local_stiffness(&cell, &pts, &[c], &mut [&mut k[..]]);
+    hvi::fem::assembly::local_stiffness(
+        &cell,
+        &pts,
+        &[c],
+        hvi::fem::assembly::Volumetric::Pointwise,
+        &mut [&mut k[..]],
+    );
     let u: Vec<f64> = pts
         .iter()
         .flat_map(|x| (0..3).map(move |i| (0..3).map(|j| a[i][j] * x[j]).sum::<f64>()))

@@ -289,7 +289,14 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
             let stresses = wants_stress(&self.fields).then(|| {
                 timed(&mut self.stress_seconds, || {
                     let memory = memory_fields(sim, view.memory_displacement);
-                    let cell = cell_stresses(&mesh.cells, &mesh.points, &sim.elasticity, &nodal, Some(&memory));
+                    let cell = cell_stresses(
+                        &mesh.cells,
+                        &mesh.points,
+                        &sim.elasticity,
+                        sim.volumetric,
+                        &nodal,
+                        Some(&memory),
+                    );
                     let node = nodal_stresses(&mesh.cells, &self.cell_measures, &cell.tensor, mesh.points.len());
                     (cell, node)
                 })

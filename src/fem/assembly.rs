@@ -11,6 +11,27 @@ use crate::mesh::Cell;
 use rayon::prelude::*;
 use std::sync::Arc;
 
+/// How a cell's volumetric strain enters the stiffness (docs/method.md §8.4).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Volumetric {
+    /// tr ε(u) at every quadrature point: the plain displacement element.
+    #[default]
+    Pointwise,
+    /// Mean dilatation (B-bar): on quadrilaterals, hexahedra, prisms and pyramids the bulk part
+    /// K tr ε(v) tr ε(u) is taken with the cell's mean of tr ε, θ̄ = (1/|c|) ∫_c div u, so that
+    /// the cell holds one volumetric constraint and does not lock as K/G grows. Simplices (constant
+    /// strain) are the same either way.
+    CellMean,
+}
+
+impl Volumetric {
+    /// Whether `cell` takes its volumetric strain as the cell's mean.
+    pub fn projects(self, cell: &Cell) -> bool {
+        self == Volumetric::CellMean && !matches!(cell, Cell::Tri3(_) | Cell::Tet4(_))
+    }
+}
+
 /// Local stiffness ∫_cell ε(v) : C ε(u) dx for each isotropic tensor C = (λ, μ) in `cs`: for
 /// dofs (a, i) and (b, j),
 ///
@@ -19,11 +40,14 @@ use std::sync::Arc;
 /// ```
 ///
 /// (computed together: they share the shape gradients), written row-major into `out[m]`
-/// (each nl × nl, nl = D · nodes of the cell, zeroed here).
+/// (each nl × nl, nl = D · nodes of the cell, zeroed here). With [`Volumetric::CellMean`] on a
+/// cell it projects, the bulk part K ∂ᵢN_a ∂ⱼN_b (K = λ + 2μ/3, the 3D bulk modulus: 3D and
+/// plane strain) is replaced by K b̄_(a,i) b̄_(b,j) |c| with b̄ the cell's mean of ∂ᵢN_a.
 pub fn local_stiffness<const D: usize, const M: usize>(
     cell: &Cell,
     points: &[[f64; D]],
     cs: &[Isotropic; M],
+    volumetric: Volumetric,
     out: &mut [&mut [f64]; M],
 ) {
     let n = cell.nodes().len();
@@ -31,23 +55,53 @@ pub fn local_stiffness<const D: usize, const M: usize>(
     for km in out.iter_mut() {
         km[..nl * nl].fill(0.0);
     }
+    let project = volumetric.projects(cell);
+    // ∫ ∂ᵢN_a (nl values) and |c|, for the cell's mean dilatation
+    let mut mean = [0.0; 3 * 8];
+    let mut measure = 0.0;
     for q in stiffness_rule(cell) {
         let s = shape_at(cell, points, q.xi);
         let w = q.weight * s.det_j;
+        if project {
+            measure += w;
+            for a in 0..n {
+                for i in 0..D {
+                    mean[D * a + i] += w * s.grad[a][i];
+                }
+            }
+        }
         for a in 0..n {
             let ga = s.grad[a];
             for b in a..n {
                 let gb = s.grad[b];
                 let dot: f64 = (0..D).map(|r| ga[r] * gb[r]).sum();
                 for (c, km) in cs.iter().zip(out.iter_mut()) {
+                    // the pointwise bulk part leaves λ as λ − K = −2μ/3 on a projected cell
+                    let lambda = if project { -2.0 * c.mu / 3.0 } else { c.lambda };
                     for i in 0..D {
                         let row = (D * a + i) * nl + D * b;
                         for j in 0..D {
-                            let mut v = c.lambda * ga[i] * gb[j] + c.mu * ga[j] * gb[i];
+                            let mut v = lambda * ga[i] * gb[j] + c.mu * ga[j] * gb[i];
                             if i == j {
                                 v += c.mu * dot;
                             }
                             km[row + j] += w * v;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    if project {
+        // K |c| b̄ b̄ᵀ = K (∫∂N)(∫∂N)ᵀ / |c|, upper node blocks (mirrored below)
+        for (c, km) in cs.iter().zip(out.iter_mut()) {
+            let bulk = (c.lambda + 2.0 * c.mu / 3.0) / measure;
+            for a in 0..n {
+                for b in a..n {
+                    for i in 0..D {
+                        let row = (D * a + i) * nl + D * b;
+                        for j in 0..D {
+                            km[row + j] += bulk * mean[D * a + i] * mean[D * b + j];
                         }
                     }
                 }
@@ -78,8 +132,19 @@ pub fn assemble_stiffness<const D: usize, const M: usize>(
     dofs: &DofMap<D>,
     cs: &[Isotropic; M],
 ) -> [SymmetricMatrix; M] {
+    assemble_stiffness_with(cells, points, dofs, cs, Volumetric::Pointwise)
+}
+
+/// [`assemble_stiffness`] with the cells' volumetric strain taken as `volumetric` says.
+pub fn assemble_stiffness_with<const D: usize, const M: usize>(
+    cells: &[Cell],
+    points: &[[f64; D]],
+    dofs: &DofMap<D>,
+    cs: &[Isotropic; M],
+    volumetric: Volumetric,
+) -> [SymmetricMatrix; M] {
     let pattern = Arc::new(Pattern::new(cells, dofs.n_nodes(), D));
-    assemble_values(&pattern, cells, points, cs).map(|values| SymmetricMatrix {
+    assemble_values(&pattern, cells, points, cs, volumetric).map(|values| SymmetricMatrix {
         pattern: pattern.clone(),
         values,
     })
@@ -93,6 +158,7 @@ fn assemble_values<const D: usize, const M: usize>(
     cells: &[Cell],
     points: &[[f64; D]],
     cs: &[Isotropic; M],
+    volumetric: Volumetric,
 ) -> [Vec<f64>; M] {
     let mut out: [Vec<f64>; M] = std::array::from_fn(|_| vec![0.0; pattern.nnz()]);
     let nl_max = D * cells.iter().map(|c| c.nodes().len()).max().unwrap_or(0);
@@ -109,7 +175,7 @@ fn assemble_values<const D: usize, const M: usize>(
             .for_each(|((local, at), cell)| {
                 let mut parts = local.chunks_mut(stride);
                 let mut views: [&mut [f64]; M] = std::array::from_fn(|_| parts.next().expect("M parts"));
-                local_stiffness(cell, points, cs, &mut views);
+                local_stiffness(cell, points, cs, volumetric, &mut views);
                 pattern.cell_positions(cell.nodes(), at);
             });
         for ((cell, local), at) in cell_chunk
@@ -145,4 +211,100 @@ pub(crate) fn rectangle_stiffness<const M: usize>(
     let dofs = DofMap::<2>::new(mesh.points.len(), &clamped);
     let mats = assemble_stiffness(&mesh.cells, &mesh.points, &dofs, cs);
     mats.map(|m| m.with_identity_rows(&dofs))
+}
+
+#[cfg(test)]
+mod tests {
+    //! Mean dilatation on one distorted cell: a linear field u = G x (constant strain) has the
+    //! energy |c| (K θ² + 2μ dev ε : dev ε) of the continuum, whatever K/G, and the rigid motions
+    //! cost nothing; a field whose divergence varies over the cell costs only the bulk modulus of
+    //! its mean divergence, which is what relieves locking.
+    use super::*;
+
+    fn energy<const D: usize>(cell: &Cell, points: &[[f64; D]], c: Isotropic, v: Volumetric, u: &[f64]) -> f64 {
+        let nl = D * cell.nodes().len();
+        let mut k = vec![0.0; nl * nl];
+        local_stiffness(cell, points, &[c], v, &mut [&mut k[..]]);
+        (0..nl)
+            .map(|i| u[i] * (0..nl).map(|j| k[i * nl + j] * u[j]).sum::<f64>())
+            .sum()
+    }
+
+    fn linear<const D: usize>(points: &[[f64; D]], g: [[f64; 3]; 3]) -> Vec<f64> {
+        points
+            .iter()
+            .flat_map(|x| (0..D).map(move |i| (0..D).map(|j| g[i][j] * x[j]).sum::<f64>()))
+            .collect()
+    }
+
+    /// |c| (K θ² + 2μ dev ε : dev ε) for ε = sym(G) (D × D; the 3D deviator, ε₃₃ = 0 in 2D).
+    fn continuum<const D: usize>(g: [[f64; 3]; 3], c: Isotropic, measure: f64) -> f64 {
+        let e = |i: usize, j: usize| if i < D && j < D { 0.5 * (g[i][j] + g[j][i]) } else { 0.0 };
+        let theta: f64 = (0..D).map(|i| e(i, i)).sum();
+        let dev: f64 = (0..3)
+            .flat_map(|i| (0..3).map(move |j| (i, j)))
+            .map(|(i, j)| (e(i, j) - if i == j { theta / 3.0 } else { 0.0 }).powi(2))
+            .sum();
+        measure * ((c.lambda + 2.0 * c.mu / 3.0) * theta * theta + 2.0 * c.mu * dev)
+    }
+
+    #[test]
+    fn mean_dilatation_keeps_constant_strains_and_rigid_motions() {
+        let c = Isotropic {
+            lambda: 4999.0 * 2.0 / 3.0,
+            mu: 1.0,
+        }; // ν ≈ 0.4999
+        let g = [[0.3, -0.2, 0.1], [0.4, 0.1, -0.3], [0.2, 0.5, -0.1]];
+        let quad = [[0.0, 0.0], [1.1, 0.1], [1.3, 0.9], [-0.1, 1.2]];
+        let hex = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.1, 0.0],
+            [1.2, 1.0, 0.1],
+            [0.1, 0.9, -0.1],
+            [0.1, 0.0, 1.0],
+            [0.9, 0.2, 1.1],
+            [1.1, 1.1, 0.9],
+            [0.0, 1.0, 1.2],
+        ];
+        let quad_cell = Cell::Quad4([0, 1, 2, 3]);
+        let hex_cell = Cell::Hex8([0, 1, 2, 3, 4, 5, 6, 7]);
+        let area: f64 = stiffness_rule(&quad_cell)
+            .iter()
+            .map(|q| q.weight * shape_at(&quad_cell, &quad, q.xi).det_j)
+            .sum();
+        let volume: f64 = stiffness_rule(&hex_cell)
+            .iter()
+            .map(|q| q.weight * shape_at(&hex_cell, &hex, q.xi).det_j)
+            .sum();
+        for v in [Volumetric::Pointwise, Volumetric::CellMean] {
+            let e2 = energy(&quad_cell, &quad, c, v, &linear(&quad, g));
+            let e3 = energy(&hex_cell, &hex, c, v, &linear(&hex, g));
+            assert!(
+                (e2 / continuum::<2>(g, c, area) - 1.0).abs() < 1e-11,
+                "{v:?} quad: {e2}"
+            );
+            assert!(
+                (e3 / continuum::<3>(g, c, volume) - 1.0).abs() < 1e-11,
+                "{v:?} hex: {e3}"
+            );
+            // a rotation costs nothing
+            let w = [[0.0, -0.3, 0.2], [0.3, 0.0, -0.1], [-0.2, 0.1, 0.0]];
+            assert!(energy(&hex_cell, &hex, c, v, &linear(&hex, w)).abs() < 1e-9);
+        }
+        // u = (x y, 0) on the unit square: div u = y varies; its mean costs K, the rest only μ
+        let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        let u: Vec<f64> = square.iter().flat_map(|x| [x[0] * x[1], 0.0]).collect();
+        let plain = energy(&quad_cell, &square, c, Volumetric::Pointwise, &u);
+        let mean = energy(&quad_cell, &square, c, Volumetric::CellMean, &u);
+        let bulk = c.lambda + 2.0 * c.mu / 3.0;
+        // ∫ θ² = 1/3 against θ̄² |c| = 1/4 (the μ part adds a few μ)
+        assert!(
+            plain >= bulk / 3.0,
+            "the plain element pays K ∫ θ²: {plain} against K = {bulk}"
+        );
+        assert!(
+            mean < bulk / 4.0 + 5.0 * c.mu,
+            "mean dilatation pays K θ̄² |c| only: {mean} against K = {bulk}"
+        );
+    }
 }

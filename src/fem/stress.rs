@@ -1,9 +1,12 @@
 //! Cell stresses for output: σ = Aε(u_n) + Σ_j T_j ε(m_n^j) at the cell centroid, where
 //! m_n^j = h_n^j + (k/2) b_j(0) u_n is the memory displacement of memory channel j with tensor
-//! T_j (docs/method.md §3, §15), and the von Mises equivalent stress, in any dimension.
+//! T_j (docs/method.md §3, §15), and the von Mises equivalent stress, in any dimension. With mean
+//! dilatation (docs/method.md §8.4) the bulk part is the cell's: σ = K θ̄ I + 2μ dev ε, i.e. σ(ε)
+//! plus K (θ̄ − tr ε) on the diagonal (out of plane too), θ̄ the cell's mean of tr ε.
 
+use super::assembly::Volumetric;
 use crate::material::{Elasticity, Isotropic, PlaneModel};
-use crate::mesh::element::{reference_centroid, shape_at, strain};
+use crate::mesh::element::{reference_centroid, shape_at, stiffness_rule, strain};
 use crate::mesh::Cell;
 use rayon::prelude::*;
 
@@ -30,6 +33,7 @@ pub fn cell_stresses<const D: usize>(
     cells: &[Cell],
     points: &[[f64; D]],
     elasticity: &Elasticity,
+    volumetric: Volumetric,
     u: &[[f64; D]],
     memory: Option<&[MemoryField<D>]>,
 ) -> CellStresses {
@@ -46,8 +50,19 @@ pub fn cell_stresses<const D: usize>(
             let trace: f64 = (0..D).map(|i| e[i][i]).sum();
             let mut full = [[0.0; 3]; 3];
             let mut out_of_plane = 0.0;
+            // mean dilatation: K (θ̄ − tr ε) on the diagonal, for A and each memory tensor
+            let project = volumetric.projects(cell);
+            let mut bulk_shift = 0.0;
+            let mut shift = |t: &Isotropic, field: &[[f64; D]], e: &[[f64; D]; D]| {
+                if project {
+                    let mean = mean_trace(cell, points, &local(field));
+                    bulk_shift += (t.lambda + 2.0 * t.mu / 3.0) * (mean - (0..D).map(|i| e[i][i]).sum::<f64>());
+                }
+            };
+            shift(&a, u, &e);
             for (t, m) in memory {
                 let em = strain(&s, &local(m));
+                shift(t, m, &em);
                 let sm = t.apply(&em);
                 for i in 0..D {
                     for j in 0..D {
@@ -57,6 +72,12 @@ pub fn cell_stresses<const D: usize>(
                 if plane_strain && t.lambda != 0.0 {
                     out_of_plane += t.lambda * (0..D).map(|i| em[i][i]).sum::<f64>();
                 }
+            }
+            for (i, row) in sig.iter_mut().enumerate() {
+                row[i] += bulk_shift;
+            }
+            if D == 2 && project {
+                out_of_plane += bulk_shift;
             }
             for i in 0..D {
                 for j in 0..D {
@@ -75,6 +96,19 @@ pub fn cell_stresses<const D: usize>(
         tensor: per_cell.iter().flat_map(|(t, _)| t.iter().copied()).collect(),
         von_mises: per_cell.iter().map(|(_, v)| *v).collect(),
     }
+}
+
+/// The cell's mean of tr ε(u) for its nodal values `u`, over its stiffness rule.
+fn mean_trace<const D: usize>(cell: &Cell, points: &[[f64; D]], u: &[[f64; D]]) -> f64 {
+    let (mut integral, mut measure) = (0.0, 0.0);
+    for q in stiffness_rule(cell) {
+        let s = shape_at(cell, points, q.xi);
+        let w = q.weight * s.det_j;
+        let e = strain(&s, u);
+        integral += w * (0..D).map(|i| e[i][i]).sum::<f64>();
+        measure += w;
+    }
+    integral / measure
 }
 
 /// Nodal (recovered) stresses: at each node the volume-weighted mean of the stress tensors of

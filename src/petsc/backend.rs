@@ -278,7 +278,7 @@ impl<'p, const D: usize> PetscBackend<'p, D> {
         for &e in &self.own_cells {
             let cell = &cells[e];
             let nl = D * cell.nodes().len();
-            local_stiffness(cell, points, &[tensor], &mut [&mut local[..]]);
+            local_stiffness(cell, points, &[tensor], sim.volumetric, &mut [&mut local[..]]);
             index.clear();
             for &p in cell.nodes() {
                 for c in 0..D {

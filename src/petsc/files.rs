@@ -264,7 +264,7 @@ impl<'a, const D: usize> PieceSink<'a, D> {
         memory: Option<&[crate::fem::stress::MemoryField<D>]>,
     ) -> Result<(crate::fem::stress::CellStresses, crate::fem::stress::CellStresses), hvi_petsc::Error> {
         let p = &self.piece;
-        let cell = cell_stresses(&p.cells, &p.points, &sim.elasticity, nodal, memory);
+        let cell = cell_stresses(&p.cells, &p.points, &sim.elasticity, sim.volumetric, nodal, memory);
         let (sum, weight) = nodal_stress_sums(&p.cells, &p.measures, &cell.tensor, p.nodes.len());
         let mut packed = vec![0.0; SUMS * p.nodes.len()];
         for (k, chunk) in packed.chunks_exact_mut(SUMS).enumerate() {

@@ -161,6 +161,27 @@ pub struct Material {
     pub poisson_ratio: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub relaxation_modulus: Option<RelaxationModulusSpec>,
+    /// How the volumetric strain enters (docs/method.md §8.4): automatic by K/G, or forced.
+    #[serde(default, skip_serializing_if = "is_auto")]
+    pub formulation: Formulation,
+}
+
+/// The element formulation's volumetric part (docs/method.md §8.4).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Formulation {
+    /// Mean dilatation where the material is nearly incompressible (K/G ≥ 100 at t = 0 or once
+    /// relaxed, plane strain and 3D), the plain element elsewhere.
+    #[default]
+    Auto,
+    /// The plain displacement element everywhere.
+    Standard,
+    /// Mean dilatation (B-bar) on quadrilaterals, hexahedra, prisms and pyramids.
+    MeanDilatation,
+}
+
+fn is_auto(f: &Formulation) -> bool {
+    *f == Formulation::Auto
 }
 
 /// Bulk and shear relaxation moduli κ(t), G(t), each a Prony series.

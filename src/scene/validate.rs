@@ -30,7 +30,13 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
             "output",
         ],
         "groups" => vec!["clamped", "contact"],
-        "material" => vec!["plane", "youngs_modulus", "poisson_ratio", "relaxation_modulus"],
+        "material" => vec![
+            "plane",
+            "youngs_modulus",
+            "poisson_ratio",
+            "relaxation_modulus",
+            "formulation",
+        ],
         "material.relaxation_modulus" => vec!["bulk", "shear"],
         "material.relaxation_modulus.bulk" | "material.relaxation_modulus.shear" => vec!["long_term", "terms"],
         "material.relaxation_modulus.bulk.terms" | "material.relaxation_modulus.shear.terms" => {

@@ -8,34 +8,11 @@ use crate::scene::{BoundSpec, Scene};
 /// counts as curved: a constant bound then follows the curve instead of a flat foundation.
 const CURVED_DEGREES: f64 = 10.0;
 
-/// From this K/G on (ν ≥ 0.495) the material is nearly incompressible for hvi's elements, which
-/// lock: measured on 2D Hertz (a block on a rigid cylinder, docs/troubleshooting.md), the contact
-/// half-width and peak pressure are within 1.5 % at ν = 0.49 (K/G = 50), off by up to 7.8 % at
-/// 0.499 (K/G = 500) and by up to 40 % at 0.4999.
-pub const LOCKING_BULK_TO_SHEAR: f64 = 100.0;
-
-/// K/G of the material at t = 0 and, for a relaxation modulus, as t → ∞ (infinite for a shear
-/// modulus that relaxes to zero); None in plane stress, which does not lock.
-fn bulk_to_shear<const D: usize>(scene: &Scene, sim: &Simulation<D>) -> Option<(f64, Option<f64>)> {
-    if sim.elasticity.plane == Some(crate::material::PlaneModel::Stress) {
-        return None;
-    }
-    let long_term = scene.material.relaxation_modulus.as_ref().map(|r| {
-        let (k, g) = (r.bulk.long_term, r.shear.long_term);
-        if g > 0.0 {
-            k / g
-        } else {
-            f64::INFINITY
-        }
-    });
-    Some((sim.elasticity.bulk_to_shear(), long_term))
-}
-
 /// The warnings for a scene on its simulation (empty: nothing looks unintended).
 pub fn warnings<const D: usize>(scene: &Scene, sim: &Simulation<D>) -> Vec<String> {
     let mut out = Vec::new();
     // a nearly incompressible material (at once, or as its shear relaxes): the elements lock
-    if let Some((at_once, long_term)) = bulk_to_shear(scene, sim) {
+    if let Some((at_once, long_term)) = super::setup::bulk_to_shear(scene, &sim.elasticity) {
         let (ratio, when, nu) = match long_term {
             Some(l) if l > at_once => (
                 l,
@@ -44,11 +21,18 @@ pub fn warnings<const D: usize>(scene: &Scene, sim: &Simulation<D>) -> Vec<Strin
             ),
             _ => (at_once, "", format!("{}", sim.elasticity.poisson_ratio)),
         };
-        if ratio >= LOCKING_BULK_TO_SHEAR {
+        // mean dilatation holds quadrilaterals and hexahedra; triangles and tetrahedra still lock
+        let locking = sim.mesh.cells.iter().filter(|c| !sim.volumetric.projects(c)).count();
+        let cells = match locking == sim.mesh.cells.len() {
+            true => "hvi's P1/Q1 elements".to_string(),
+            false => format!("its {locking} triangles or tetrahedra (mean dilatation holds the other cells)"),
+        };
+        if ratio >= super::setup::LOCKING_BULK_TO_SHEAR && locking > 0 {
             out.push(format!(
-                "the material is nearly incompressible{}{when}: K/G = {ratio:.3e} (ν = {nu}); hvi's P1/Q1 elements \
+                "the material is nearly incompressible{}{when}: K/G = {ratio:.3e} (ν = {nu}); {cells} \
                  lock there and come out too stiff (2D Hertz: up to 7.8 % off in a and p₀ at ν = 0.499, up to 40 % at \
-                 0.4999; docs/troubleshooting.md); check the contact pressure against a coarser and a finer mesh",
+                 0.4999; docs/troubleshooting.md); mesh it with quadrilaterals or hexahedra (mean dilatation, \
+                 `material.formulation`), and check the contact pressure against a coarser and a finer mesh",
                 if when.is_empty() { "" } else { " " }
             ));
         }

@@ -8,7 +8,7 @@ use super::operator::{system_matrix, StepOperator};
 use super::reactions::Reactions;
 use super::setup::Simulation;
 use super::stats::{timed, RunStats};
-use crate::fem::assembly::assemble_stiffness;
+use crate::fem::assembly::assemble_stiffness_with;
 use crate::fem::{NodeBlockMatrix, SymmetricMatrix};
 use crate::linalg::{Analysis, Counters, Factor};
 use crate::material::Isotropic;
@@ -81,15 +81,15 @@ impl<const D: usize> FaerBackend<D> {
         // one assembly pass for K_A and every channel's K_j (one or two, docs/method.md §15.1)
         let assembled = timed(&mut stats.phases.assembly, || match channels[..] {
             [] => {
-                let [a] = assemble_stiffness(cells, points, &sim.dofs, &[a]);
+                let [a] = assemble_stiffness_with(cells, points, &sim.dofs, &[a], sim.volumetric);
                 Some((a, Vec::new()))
             }
             [t] => {
-                let [a, b] = assemble_stiffness(cells, points, &sim.dofs, &[a, t]);
+                let [a, b] = assemble_stiffness_with(cells, points, &sim.dofs, &[a, t], sim.volumetric);
                 Some((a, vec![b]))
             }
             [t, v] => {
-                let [a, b, c] = assemble_stiffness(cells, points, &sim.dofs, &[a, t, v]);
+                let [a, b, c] = assemble_stiffness_with(cells, points, &sim.dofs, &[a, t, v], sim.volumetric);
                 Some((a, vec![b, c]))
             }
             _ => None,
@@ -163,7 +163,13 @@ impl<const D: usize> Backend<D> for FaerBackend<D> {
                     None => {
                         let tensor = sim.elasticity.tensor();
                         let [k_a] = timed(&mut stats.phases.assembly, || {
-                            assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[tensor])
+                            assemble_stiffness_with(
+                                &sim.mesh.cells,
+                                &sim.mesh.points,
+                                &sim.dofs,
+                                &[tensor],
+                                sim.volumetric,
+                            )
                         });
                         assembled = k_a;
                         &assembled
@@ -206,7 +212,13 @@ pub struct ElasticCheck {
 impl ElasticCheck {
     /// Assembles K_A and analyses its pattern as a run would.
     pub fn new<const D: usize>(sim: &Simulation<D>) -> Result<Self, SolveError> {
-        let [k_a] = assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.tensor()]);
+        let [k_a] = assemble_stiffness_with(
+            &sim.mesh.cells,
+            &sim.mesh.points,
+            &sim.dofs,
+            &[sim.elasticity.tensor()],
+            sim.volumetric,
+        );
         let k_a = k_a.with_identity_rows(&sim.dofs);
         let analysis = Factor::analyse_with_last(&k_a, &sim.unknowns_ordered_last())
             .map_err(|e| SolveError::Setup(e.to_string()))?;

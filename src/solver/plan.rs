@@ -27,7 +27,7 @@ impl Plan {
         let mut effects = vec![Effect {
             name: "elasticity",
             detail: format!(
-                "{}, E = {}, ν = {}{}",
+                "{}, E = {}, ν = {}{}{}",
                 match sim.elasticity.plane {
                     Some(p) => format!(
                         "2D, plane {}",
@@ -45,6 +45,14 @@ impl Plan {
                     " (instantaneous: A = G(0) of the relaxation modulus)"
                 } else {
                     ""
+                },
+                match sim.volumetric {
+                    crate::fem::assembly::Volumetric::CellMean => format!(
+                        "; mean dilatation (B-bar) on {} of {} cells (docs/method.md §8.4)",
+                        sim.mesh.cells.iter().filter(|c| sim.volumetric.projects(c)).count(),
+                        sim.mesh.cells.len()
+                    ),
+                    crate::fem::assembly::Volumetric::Pointwise => String::new(),
                 }
             ),
             cost: format!("K_A assembled once ({n} unknowns), factorised once"),

@@ -4,6 +4,12 @@
 //
 //   gmsh -2 hertz_2d.geo -setnumber hf 0.0025 -format msh41 -o hertz_2d_h2.msh
 //
+// Quadrilaterals of half that size (hertz_2d_q3.msh, the nearly incompressible test of
+// tests/hertz.rs; gmsh 4.15.2):
+//
+//   gmsh -2 hertz_2d.geo -setnumber hf 0.0025 -string "Mesh.RecombineAll = 1; Mesh.Algorithm = 8;
+//        Mesh.SubdivisionAlgorithm = 1;" -format msh41 -o hertz_2d_q3.msh
+//
 // Parameters (override with -setnumber):
 //   hf  element size on and near the contact segment              (default 0.0025 = a/20)
 //   hc  element size far from it                                  (default 0.2)
