@@ -122,7 +122,7 @@ fn min_det_3d(points: &[[f64; 3]], cell: &Cell) -> (f64, [f64; 3]) {
         }
     }
     if let Cell::Pyr5(_) = cell {
-        // det J of a pyramid depends on (ξ, η)/(1 − ζ) only (docs/method.md §8.4): its values
+        // det J of a pyramid depends on (ξ, η)/(1 − ζ) only (docs/method.md §8.1): its values
         // at the base corners are also its limits at the apex along the four edges
         at.extend([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]]);
     }

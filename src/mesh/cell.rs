@@ -27,7 +27,7 @@ pub enum Cell {
     Prism6([usize; 6]),
     /// Linear pyramid (gmsh element type 7, what gmsh puts between hexahedra and tetrahedra):
     /// nodes 0–3 the quadrangular base ζ = 0, counter-clockwise seen from the apex, node 4 the
-    /// apex ζ = 1; the rational basis of docs/method.md §8.4 (Q1 on the base, P1 on the
+    /// apex ζ = 1; the rational basis of docs/method.md §8.1 (Q1 on the base, P1 on the
     /// triangles).
     Pyr5([usize; 5]),
 }

@@ -82,7 +82,7 @@ pub fn reference(cell: &Cell, xi: [f64; 3]) -> (usize, [f64; MAX_NODES], [[f64; 
             (6, v, g)
         }
         Cell::Pyr5(_) => {
-            // The rational basis (docs/method.md §8.4): with u = ξ/(1 − ζ), v = η/(1 − ζ),
+            // The rational basis (docs/method.md §8.1): with u = ξ/(1 − ζ), v = η/(1 − ζ),
             //   N_a = (1 − ζ)(1 + ξ_a u)(1 + η_a v)/4 = ((1 − ζ) + ξ_a ξ + η_a η + ξ_a η_a ξη/(1 − ζ))/4
             // at the base corners (ξ_a, η_a) = (±1, ±1) and N_4 = ζ at the apex: Q1 on the base,
             // P1 on the triangles, and Σ N_a = 1, Σ ξ_a N_a = ξ, Σ η_a N_a = η, N_4 = ζ (linear
@@ -365,7 +365,7 @@ mod tests {
         out
     }
 
-    /// The rational pyramid basis (docs/method.md §8.4): a partition of unity, 1 at its own node
+    /// The rational pyramid basis (docs/method.md §8.1): a partition of unity, 1 at its own node
     /// and 0 at the others (the apex included), the isoparametric map reproduces every linear
     /// field and its gradient exactly at points all over the cell, and the reference gradients
     /// are the derivatives of the values (central differences, step 1e-6: their error is

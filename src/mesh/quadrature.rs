@@ -74,7 +74,7 @@ const fn pyramid_point(u: f64, v: f64, (w, weight): (f64, f64), wu: f64, wv: f64
     qp(u * (1.0 - w), v * (1.0 - w), w, wu * wv * weight)
 }
 
-/// 8-point collapsed rule on the reference pyramid (docs/method.md §8.4): 2 × 2 Gauss in (u, v)
+/// 8-point collapsed rule on the reference pyramid (docs/method.md §8.1): 2 × 2 Gauss in (u, v)
 /// times 2-point Gauss–Jacobi in w, no point at the apex. In these coordinates the rational
 /// basis is the trilinear one of a hexahedron whose top face is collapsed to the apex, and the
 /// Jacobian of the pyramid's map and the ξ-gradients of its basis depend on (u, v) only, so the

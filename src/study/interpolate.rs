@@ -561,7 +561,7 @@ fn polygon_distance(p: &[[f64; 2]], x: [f64; 2]) -> f64 {
 mod tests {
     use super::*;
 
-    /// Point location in a pyramid (docs/method.md §8.4): Newton on its rational map recovers
+    /// Point location in a pyramid (docs/method.md §8.1): Newton on its rational map recovers
     /// the reference coordinates of points all over a pyramid with a warped base and a tilted
     /// apex (to 1e-10: Newton's stopping test is 1e-15 of the cell size on the residual, and
     /// det J is of order 1 there), with distance 0; a point at δ below the base or beyond a
