@@ -206,3 +206,52 @@ fn lame_cylinder_nearly_incompressible_with_mean_dilatation() {
     );
     assert!(plain[0].1 > 0.1, "the plain element's pressures scatter: {plain:?}");
 }
+
+/// A relaxing nearly incompressible cylinder: the bulk modulus stays (κ = 5/6), the shear modulus
+/// relaxes 100× (G(0) = 5/13, ν(0) = 0.3; G∞ = G(0)/100, κ∞/G∞ = 217, ν∞ = 0.4977) with τ = 0.1,
+/// so the creep's retardation time is 10. Under a constant internal pressure the displacement
+/// tends to the elastic one with the long-term moduli: at T = 60 (e⁻⁶ of the way left) it is
+/// Lamé's with (E∞, ν∞). On a step the scheme does not resolve (k = τ) its long-term shear modulus
+/// is negative and the run would grow without bound: refused, with the steps that resolve it
+/// (docs/method.md §15.3; it ran and reached 10³⁶ before). On 40 000 steps the memory term's bulk
+/// part projected as the elastic one (docs/method.md §8.4; `auto` at this κ∞/G∞) gives Lamé's
+/// long-term displacement within 1 %; the plain Q1 element, locked, is farther.
+#[test]
+fn relaxing_nearly_incompressible_cylinder_tends_to_the_long_term_lame_solution() {
+    let (kappa, g0) = (5.0 / 6.0, 5.0 / 13.0);
+    let g_inf = g0 / 100.0;
+    let e_inf = 9.0 * kappa * g_inf / (3.0 * kappa + g_inf);
+    let nu_inf = (3.0 * kappa - 2.0 * g_inf) / (2.0 * (3.0 * kappa + g_inf));
+    let p = 0.01;
+    let scale = lame(&[1.0, 0.0], e_inf, nu_inf, p)[0];
+    let text = |formulation: &str, steps: usize| {
+        let material = format!(
+            "[material]\nplane = \"strain\"\nformulation = \"{formulation}\"\nrelaxation_modulus = {{ bulk = {{ long_term = {kappa} }}, \
+             shear = {{ long_term = {g_inf}, terms = [{{ modulus = {}, relaxation_time = 0.1 }}] }} }}\n",
+            g0 - g_inf
+        );
+        RING.replace(
+            "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n",
+            &material,
+        )
+        .replace(
+            "final_time = 1.0\nsteps = 1",
+            &format!("final_time = 60.0\nsteps = {steps}\n[output]\nevery = {steps}"),
+        )
+    };
+    let coarse = Scene::from_toml_str(&text("auto", 600), "relaxing.toml").expect_err("k = τ is refused");
+    let message = coarse.to_string();
+    assert!(
+        message.contains("grow without bound") && message.contains("time.steps ≥"),
+        "{message}"
+    );
+    let run = |formulation: &str| {
+        let (sim, _, sink) = solve_in_memory(&scene(&text(formulation, 40_000)), mesh::<2>("ring_q1_n16.msh")).unwrap();
+        let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
+        nodal_error(&sim.mesh.points, &u, |x| lame(x, e_inf, nu_inf, p)) / scale
+    };
+    let (mean, plain) = (run("auto"), run("standard"));
+    eprintln!("relative error at T: mean dilatation {mean:.3e}, plain Q1 {plain:.3e}");
+    assert!(mean < 1e-2, "mean dilatation: {mean:e}");
+    assert!(plain > 2.0 * mean, "the plain element: {plain:e} against {mean:e}");
+}

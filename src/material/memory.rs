@@ -22,6 +22,11 @@ const PARALLEL_TOLERANCE: f64 = 1e-12;
 /// the exact bound K is singular, and within round-off of it a factorisation still "succeeds".
 pub const STABILITY_MARGIN: f64 = 1e-6;
 
+/// How far (relative) the scheme's long-term moduli of a relaxing material may be from the
+/// material's before `hvi check` warns (docs/method.md §15.3): they set the creep's end value,
+/// and a refusal names the steps that bring them this close.
+pub const LONG_TERM_TOLERANCE: f64 = 0.01;
+
 /// The tensor B_m of one memory term.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum MemoryTensor {
@@ -306,6 +311,73 @@ impl Memory {
         .filter(|(_, slope)| *slope < 0.0)
         .map(|(at0, slope)| -(1.0 - STABILITY_MARGIN) * at0 / slope)
         .reduce(f64::min)
+    }
+
+    /// The long-term memory tensor Σ_j T_j ∫₀^∞ b_j: as the continuum has it (`k` None), or as the
+    /// scheme's trapezoid weights sum it on steps of k, k (b_j(0)/2 + Σ_{n≥1} b_j(nk)), which for
+    /// a term c e^{−s/τ} is c τ (r/2) coth(r/2), r = k/τ: the relaxation over-integrated by about
+    /// r²/12 (docs/method.md §15.3). None unless every kernel is a Prony series (the others do not
+    /// decay).
+    pub fn long_term_share(&self, k: Option<f64>) -> Option<Isotropic> {
+        let integral = |kernel: &RelaxationKernel| match kernel {
+            RelaxationKernel::Exponentials { terms } => Some(
+                terms
+                    .iter()
+                    .map(|&(c, tau)| {
+                        let half = k.map_or(0.0, |k| 0.5 * k / tau);
+                        let factor = if half > 0.0 { half / half.tanh() } else { 1.0 };
+                        c * tau * factor
+                    })
+                    .sum::<f64>(),
+            ),
+            _ => None,
+        };
+        let integrals: Vec<f64> = self.terms.iter().map(|t| integral(&t.kernel)).collect::<Option<_>>()?;
+        let mut s = Isotropic { lambda: 0.0, mu: 0.0 };
+        for c in &self.channels {
+            let b: f64 = c.weights.iter().zip(&integrals).map(|(w, i)| w * i).sum();
+            s.lambda += b * c.tensor.lambda;
+            s.mu += b * c.tensor.mu;
+        }
+        Some(s)
+    }
+
+    /// The long-term tensor's eigenvalues on symmetric D × D tensors, (2μ, 2μ + Dλ), of A plus
+    /// [`Self::long_term_share`]: the continuum's (`k` None) or the scheme's on steps of k.
+    pub fn long_term_eigenvalues(&self, a: Isotropic, dim: usize, k: Option<f64>) -> Option<[f64; 2]> {
+        let s = self.long_term_share(k)?;
+        let (mu, lambda) = (a.mu + s.mu, a.lambda + s.lambda);
+        Some([2.0 * mu, 2.0 * mu + dim as f64 * lambda])
+    }
+
+    /// The largest step whose long-term eigenvalues are within `tolerance` (relative) of the
+    /// continuum's (bisection; the scheme's over-integration grows with k). None without Prony
+    /// kernels or when the continuum's long-term tensor is not positive.
+    pub fn largest_accurate_step(&self, a: Isotropic, dim: usize, tolerance: f64, k_max: f64) -> Option<f64> {
+        let exact = self.long_term_eigenvalues(a, dim, None)?;
+        if exact.iter().any(|&e| e <= 0.0) {
+            return None;
+        }
+        let off = |k: f64| {
+            let d = self.long_term_eigenvalues(a, dim, Some(k)).expect("Prony kernels");
+            d.iter()
+                .zip(&exact)
+                .map(|(d, e)| (d / e - 1.0).abs())
+                .fold(0.0, f64::max)
+        };
+        if off(k_max) <= tolerance {
+            return Some(k_max);
+        }
+        let (mut lo, mut hi) = (0.0, k_max);
+        for _ in 0..100 {
+            let mid = 0.5 * (lo + hi);
+            if off(mid) <= tolerance {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        Some(lo)
     }
 
     /// A one-line description: the terms, and how many channels they make.

@@ -7,4 +7,4 @@ pub mod memory;
 
 pub use elasticity::{Elasticity, Isotropic, PlaneModel, IDENTITY_TENSOR};
 pub use kernel::RelaxationKernel;
-pub use memory::{Channel, Memory, MemoryTensor, MemoryTerm, Prony};
+pub use memory::{Channel, Memory, MemoryTensor, MemoryTerm, Prony, LONG_TERM_TOLERANCE};

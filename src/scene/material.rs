@@ -93,12 +93,9 @@ impl Scene {
     pub fn check_time_step(&self, memory: &Memory, a: Isotropic, dim: usize) -> Result<(), MaterialError> {
         let (t, n) = (self.time.final_time, self.time.steps);
         let k = t / n as f64;
-        let Some(k_max) = memory.largest_stable_step(a, dim) else {
-            return Ok(());
+        let Some(k_max) = memory.largest_stable_step(a, dim).filter(|&k_max| k >= k_max) else {
+            return self.check_long_term_moduli(memory, a, dim);
         };
-        if k < k_max {
-            return Ok(());
-        }
         let n_min = (t / k_max).floor();
         let fix = if !n_min.is_finite() || n_min >= 1e8 {
             format!(
@@ -118,6 +115,42 @@ impl Scene {
             key: "time.steps".into(),
             value: n.to_string(),
             fix,
+        })
+    }
+    /// The scheme's long-term moduli (docs/method.md §15.3) must be positive where the material's
+    /// are: the trapezoid weights over-integrate a relaxation by ≈ (k/τ)²/12 of its strength,
+    /// which eats a small long-term modulus (G(0)/G∞ = 100 at k = τ: 2μ∞ < 0, and the run grows
+    /// without bound). Prony kernels only (the others do not decay).
+    pub fn check_long_term_moduli(&self, memory: &Memory, a: Isotropic, dim: usize) -> Result<(), MaterialError> {
+        let (t, n) = (self.time.final_time, self.time.steps);
+        let k = t / n as f64;
+        let (Some(exact), Some(discrete)) = (
+            memory.long_term_eigenvalues(a, dim, None),
+            memory.long_term_eigenvalues(a, dim, Some(k)),
+        ) else {
+            return Ok(());
+        };
+        if exact.iter().any(|&e| e <= 0.0) || discrete.iter().all(|&d| d > 0.0) {
+            return Ok(());
+        }
+        let needed = memory
+            .largest_accurate_step(a, dim, crate::material::LONG_TERM_TOLERANCE, k)
+            .map_or(String::new(), |k1| {
+                format!(
+                    "; give time.steps ≥ {} (its long-term moduli within 1 %)",
+                    (t / k1).ceil()
+                )
+            });
+        Err(MaterialError {
+            key: "time.steps".into(),
+            value: n.to_string(),
+            fix: format!(
+                "the time step k = T/N = {k:e} is too coarse for this relaxation: on it the scheme's long-term moduli \
+                 (eigenvalues {:.3e}, {:.3e}) are not positive where the material's ({:.3e}, {:.3e}) are, so the run \
+                 would grow without bound (the trapezoid rule over-integrates each relaxation term by about (k/τ)²/12 \
+                 of its strength, docs/method.md §15.3){needed}",
+                discrete[0], discrete[1], exact[0], exact[1]
+            ),
         })
     }
 }
