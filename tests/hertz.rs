@@ -61,6 +61,20 @@ fn run_scene<const D: usize>(scene: &Scene, entry: &str, mesh: &str, symmetry_fa
     }
 }
 
+/// Hertz for a rigid cylinder (2D, plane strain, P per unit length) or sphere (3D, total force
+/// P) of radius 1 on a half-space of E* = E/(1 − ν²): the contact half-width or radius a and the
+/// peak pressure p₀. 2D: a² = 4P/(πE*), p₀ = 2P/(πa); 3D: a³ = 3P/(4E*), p₀ = 3P/(2πa²).
+fn hertz(dim: usize, p: f64, e_star: f64) -> (f64, f64) {
+    use std::f64::consts::PI;
+    if dim == 2 {
+        let a = (4.0 * p / (PI * e_star)).sqrt();
+        (a, 2.0 * p / (PI * a))
+    } else {
+        let a = (3.0 * p / (4.0 * e_star)).cbrt();
+        (a, 3.0 * p / (2.0 * PI * a * a))
+    }
+}
+
 /// Least squares of p² = p₀² (1 − r²/a²) over the nodes in contact: a straight line in r² whose
 /// intercept is p₀² and whose root is a². Every node in contact contributes, so a is located to a
 /// fraction of the node spacing, unlike the last node in contact (which only brackets a within
@@ -90,7 +104,6 @@ fn fit(pressures: &[(f64, f64)]) -> (f64, f64) {
 #[test]
 fn hertz_2d_cylinder_half_width_and_peak_pressure_within_one_percent() {
     let e_star = 1.0 / (1.0 - 0.3f64 * 0.3);
-    let radius = 1.0;
     let mut errors = Vec::new();
     eprintln!("| mesh | nodes in contact | P | a (fit) | a (Hertz) | error | p₀ (fit) | p₀ (Hertz) | error |");
     for mesh in ["hertz_2d_h1.msh", "hertz_2d_h2.msh", "hertz_2d_h3.msh"] {
@@ -103,8 +116,7 @@ fn hertz_2d_cylinder_half_width_and_peak_pressure_within_one_percent() {
             c.force
         );
         let p = c.force;
-        let a_hertz = (4.0 * p * radius / (std::f64::consts::PI * e_star)).sqrt();
-        let p0_hertz = 2.0 * p / (std::f64::consts::PI * a_hertz);
+        let (a_hertz, p0_hertz) = hertz(2, p, e_star);
         let (a, p0) = fit(&c.pressures);
         let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
         eprintln!(
@@ -155,8 +167,7 @@ fn hertz_2d_with_the_circle_obstacle_agrees_with_the_bound() {
     for (direction, tol) in [("body", 1e-9), ("obstacle", 1e-2)] {
         let c = run_scene::<2>(&with(direction), "hertz_2d", mesh, 2.0);
         let (a, p0) = fit(&c.pressures);
-        let a_hertz = (4.0 * c.force / (std::f64::consts::PI * e_star)).sqrt();
-        let p0_hertz = 2.0 * c.force / (std::f64::consts::PI * a_hertz);
+        let (a_hertz, p0_hertz) = hertz(2, c.force, e_star);
         eprintln!(
             "circle, direction {direction}: P = {:.6e} (bound {:.6e}), a = {a:.5} (bound {a_b:.5}, Hertz {a_hertz:.5}), p₀ = {p0:.5} (bound {p0_b:.5}, Hertz {p0_hertz:.5})",
             c.force, bound.force
@@ -182,7 +193,6 @@ fn hertz_2d_with_the_circle_obstacle_agrees_with_the_bound() {
 #[test]
 fn hertz_3d_sphere_contact_radius_within_3_percent_and_peak_pressure_within_5() {
     let e_star = 1.0 / (1.0 - 0.3f64 * 0.3);
-    let radius = 1.0;
     // the quarter model carries a quarter of the force
     let c = run::<3>("hertz_3d", "hertz_3d.msh", 4.0);
     assert!(
@@ -192,8 +202,7 @@ fn hertz_3d_sphere_contact_radius_within_3_percent_and_peak_pressure_within_5() 
         c.force
     );
     let p = c.force;
-    let a_hertz = (3.0 * p * radius / (4.0 * e_star)).cbrt();
-    let p0_hertz = 3.0 * p / (2.0 * std::f64::consts::PI * a_hertz * a_hertz);
+    let (a_hertz, p0_hertz) = hertz(3, p, e_star);
     let (a, p0) = fit(&c.pressures);
     let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
     eprintln!(
@@ -260,13 +269,12 @@ fn hertz_under_force_control_matches_hertz_and_the_displacement_control() {
         );
         let p = forced.force;
         let (a, p0) = fit(&forced.pressures);
-        let (a_hertz, p0_hertz, tol_a, tol_p) = if entry == "hertz_2d" {
-            let a = (4.0 * p / (std::f64::consts::PI * e_star)).sqrt();
-            (a, 2.0 * p / (std::f64::consts::PI * a), 0.01, 0.01)
+        let (dim, tol_a, tol_p) = if entry == "hertz_2d" {
+            (2, 0.01, 0.01)
         } else {
-            let a = (3.0 * p / (4.0 * e_star)).cbrt();
-            (a, 3.0 * p / (2.0 * std::f64::consts::PI * a * a), 0.03, 0.05)
+            (3, 0.03, 0.05)
         };
+        let (a_hertz, p0_hertz) = hertz(dim, p, e_star);
         eprintln!(
             "{entry} under force control: P = {p:.6e}, δ = {:.10e}, a = {a:.5} (Hertz {a_hertz:.5}), p₀ = {p0:.5} (Hertz {p0_hertz:.5})",
             forced.motion
@@ -311,8 +319,7 @@ fn hertz_2d_nearly_incompressible_on_quadrilaterals_with_mean_dilatation() {
         .unwrap();
         let c = run_scene::<2>(&scene, "hertz_2d", "hertz_2d_q3.msh", 2.0);
         let p = c.force;
-        let a_hertz = (4.0 * p / (std::f64::consts::PI * e_star)).sqrt();
-        let p0_hertz = 2.0 * p / (std::f64::consts::PI * a_hertz);
+        let (a_hertz, p0_hertz) = hertz(2, p, e_star);
         let (a, p0) = fit(&c.pressures);
         let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
         eprintln!(

@@ -207,6 +207,21 @@ impl ForwardColumns {
     }
 }
 
+/// The row from which a column's segments are kept. L⁻¹ P b is zero above b's first non-zero
+/// row: with unknowns ordered last (docs/method.md §9.1) the columns of G start deep inside the
+/// wide trailing supernode, so the segments are trimmed to that row (box 96x48x12: 6.8 M values
+/// → 2.2 M); otherwise they are kept whole (0), which leaves every product of the 2D runs as it
+/// was.
+fn first_row(analysis: &Analysis, row: &[(usize, f64)]) -> usize {
+    match analysis.ordered_last() > 0 {
+        true => {
+            let position = analysis.permutation().1;
+            row.iter().map(|&(i, _)| position[i]).min().unwrap_or(0)
+        }
+        false => 0,
+    }
+}
+
 /// The number of values [`ForwardColumns::new`] will store for `rows` on `analysis`: each
 /// column's supernode path, trimmed as the sweep trims it. For predicting a run's memory before
 /// the numeric factorisation (docs/method.md §16.1).
@@ -216,11 +231,7 @@ pub fn forward_columns_entries(analysis: &Analysis, rows: &[Vec<(usize, f64)>]) 
     let mut marked = vec![usize::MAX; supernodes.len()];
     let mut total = 0;
     for (c, row) in rows.iter().enumerate() {
-        let first = if analysis.ordered_last() > 0 {
-            row.iter().map(|&(i, _)| position[i]).min().unwrap_or(0)
-        } else {
-            0
-        };
+        let first = first_row(analysis, row);
         for &(i, _) in row {
             let mut s = supernodes.supernode_of[position[i]];
             while s != usize::MAX && marked[s] != c {
@@ -256,15 +267,7 @@ fn sparse_forward_sweep(
         }
     }
     path.sort_unstable();
-    // L⁻¹ P b is zero above b's first non-zero row. With unknowns ordered last (docs/method.md
-    // §9.1) the columns of G start deep inside the wide trailing supernode, so the segments
-    // are trimmed to that row (box 96x48x12: 6.8 M values → 2.2 M); otherwise they are kept
-    // whole, which leaves every product of the 2D runs as it was.
-    let first = if factor.analysis().ordered_last() > 0 {
-        entries.iter().map(|&(i, _)| factor.position(i)).min().unwrap_or(0)
-    } else {
-        0
-    };
+    let first = first_row(factor.analysis(), entries);
     let mut local = vec![0.0; supernodes.max_rows];
     let mut segments = Vec::with_capacity(path.len());
     let mut values = Vec::new();
@@ -323,24 +326,18 @@ fn blocked_sweeps(factor: &Factor, rows: &[Vec<(usize, f64)>]) -> Vec<(Vec<Segme
     use faer::{Accum, MatMut, MatRef, Par};
     let sn = factor.analysis().supernodes();
     let ns = sn.len();
-    let ordered_last = factor.analysis().ordered_last() > 0;
-    // each column's first row (as sparse_forward_sweep trims) and the supernodes it reaches
-    let first: Vec<usize> = rows
-        .iter()
-        .map(|row| match ordered_last {
-            true => row.iter().map(|&(i, _)| factor.position(i)).min().unwrap_or(0),
-            false => 0,
-        })
-        .collect();
+    // each column's first row and the supernodes it reaches
+    let first: Vec<usize> = rows.iter().map(|row| first_row(factor.analysis(), row)).collect();
     let mut active: Vec<Vec<usize>> = vec![Vec::new(); ns];
     let mut reached: Vec<Option<usize>> = vec![None; ns];
     for (c, row) in rows.iter().enumerate() {
         for &(i, _) in row {
-            let mut s = Some(sn.supernode_of[factor.position(i)]);
-            while let Some(t) = s.filter(|&t| t != usize::MAX && reached[t] != Some(c)) {
-                reached[t] = Some(c);
-                active[t].push(c);
-                s = Some(sn.parent[t]);
+            // up the path to the root (a root's parent is usize::MAX), until a reached supernode
+            let mut s = sn.supernode_of[factor.position(i)];
+            while s != usize::MAX && reached[s] != Some(c) {
+                reached[s] = Some(c);
+                active[s].push(c);
+                s = sn.parent[s];
             }
         }
     }

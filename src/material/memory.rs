@@ -350,28 +350,36 @@ impl Memory {
         Some([2.0 * mu, 2.0 * mu + dim as f64 * lambda])
     }
 
-    /// The largest step whose long-term eigenvalues are within `tolerance` (relative) of the
-    /// continuum's (bisection; the scheme's over-integration grows with k). None without Prony
-    /// kernels or when the continuum's long-term tensor is not positive.
-    pub fn largest_accurate_step(&self, a: Isotropic, dim: usize, tolerance: f64, k_max: f64) -> Option<f64> {
+    /// How far (relative, the larger of the two eigenvalues) the scheme's long-term moduli on
+    /// steps of k are from the continuum's; None without Prony kernels or when the continuum's
+    /// long-term tensor is not positive.
+    pub fn long_term_error(&self, a: Isotropic, dim: usize, k: f64) -> Option<f64> {
         let exact = self.long_term_eigenvalues(a, dim, None)?;
         if exact.iter().any(|&e| e <= 0.0) {
             return None;
         }
-        let off = |k: f64| {
-            let d = self.long_term_eigenvalues(a, dim, Some(k)).expect("Prony kernels");
-            d.iter()
+        let discrete = self.long_term_eigenvalues(a, dim, Some(k))?;
+        Some(
+            discrete
+                .iter()
                 .zip(&exact)
                 .map(|(d, e)| (d / e - 1.0).abs())
-                .fold(0.0, f64::max)
-        };
-        if off(k_max) <= tolerance {
+                .fold(0.0, f64::max),
+        )
+    }
+
+    /// The largest step whose long-term eigenvalues are within `tolerance` (relative) of the
+    /// continuum's (bisection; the scheme's over-integration grows with k). None where
+    /// [`Self::long_term_error`] is.
+    pub fn largest_accurate_step(&self, a: Isotropic, dim: usize, tolerance: f64, k_max: f64) -> Option<f64> {
+        let off = |k: f64| self.long_term_error(a, dim, k);
+        if off(k_max)? <= tolerance {
             return Some(k_max);
         }
         let (mut lo, mut hi) = (0.0, k_max);
         for _ in 0..100 {
             let mid = 0.5 * (lo + hi);
-            if off(mid) <= tolerance {
+            if off(mid)? <= tolerance {
                 lo = mid;
             } else {
                 hi = mid;

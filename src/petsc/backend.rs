@@ -397,7 +397,7 @@ impl<const D: usize> PetscBackend<'_, D> {
         let solver = Arc::new(self.build(sim, memory).map_err(|e| self.error(sim, e))?);
         counters.factorisations.fetch_add(1, Ordering::Relaxed);
         let error = solver.probe().map_err(|e| self.error(sim, e))?;
-        singularity_verdict(error).map_err(|detail| crate::solver::singular(sim, detail))?;
+        singularity_verdict(error).map_err(|what| crate::solver::singular(sim, what))?;
         let condensed: Option<Box<dyn Condensation>> = match &sim.contact {
             Some(c) if !c.nodes.is_empty() => {
                 let keep = keeps_responses(sim.condensation, solver.n(), c.nodes.len(), self.solver_bytes(&solver));

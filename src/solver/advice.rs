@@ -15,32 +15,25 @@ pub fn warnings<const D: usize>(scene: &Scene, sim: &Simulation<D>) -> Vec<Strin
     // creep's end value, are off (docs/method.md §15.3; not positive at all is refused)
     if let Some(m) = &sim.memory {
         let (a, k) = (sim.elasticity.tensor(), sim.time.step());
-        if let (Some(exact), Some(discrete)) = (
-            m.long_term_eigenvalues(a, D, None),
-            m.long_term_eigenvalues(a, D, Some(k)),
-        ) {
-            let off = discrete
-                .iter()
-                .zip(&exact)
-                .map(|(d, e)| (d / e - 1.0).abs())
-                .fold(0.0, f64::max);
-            if exact.iter().all(|&e| e > 0.0) && off > crate::material::LONG_TERM_TOLERANCE {
-                let needed = m
-                    .largest_accurate_step(a, D, crate::material::LONG_TERM_TOLERANCE, k)
-                    .map_or(String::new(), |k1| {
-                        format!(
-                            "; time.steps ≥ {} bring them within 1 %",
-                            (scene.time.final_time / k1).ceil()
-                        )
-                    });
-                out.push(format!(
-                    "the time step k = {k:e} does not resolve the relaxation: the scheme's long-term moduli are {:.1} % \
-                     off the material's (the trapezoid rule over-integrates each relaxation term by about (k/τ)²/12 of its \
-                     strength, which a small long-term modulus feels most), and a creep under a constant load ends at the \
-                     displacement those moduli give{needed} (docs/method.md §15.3)",
-                    100.0 * off
-                ));
-            }
+        if let Some(off) = m
+            .long_term_error(a, D, k)
+            .filter(|&off| off > crate::material::LONG_TERM_TOLERANCE)
+        {
+            let needed = m
+                .largest_accurate_step(a, D, crate::material::LONG_TERM_TOLERANCE, k)
+                .map_or(String::new(), |k1| {
+                    format!(
+                        "; time.steps ≥ {} bring them within 1 %",
+                        (scene.time.final_time / k1).ceil()
+                    )
+                });
+            out.push(format!(
+                "the time step k = {k:e} does not resolve the relaxation: the scheme's long-term moduli are {:.1} % \
+                 off the material's (the trapezoid rule over-integrates each relaxation term by about (k/τ)²/12 of its \
+                 strength, which a small long-term modulus feels most), and a creep under a constant load ends at the \
+                 displacement those moduli give{needed} (docs/method.md §15.3)",
+                100.0 * off
+            ));
         }
     }
     // a nearly incompressible material (at once, or as its shear relaxes): the elements lock

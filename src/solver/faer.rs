@@ -243,8 +243,8 @@ impl ElasticCheck {
             .as_ref()
             .ok_or_else(|| SolveError::Setup("no contact".into()))?;
         let counters = Counters::default();
-        let factor = Factor::new(&self.analysis, &self.k_a, &counters)
-            .map_err(|e| super::operator::singular(sim, e.to_string()))?;
+        let factor =
+            Factor::new(&self.analysis, &self.k_a, &counters).map_err(|e| super::operator::factor_failed(sim, e))?;
         let op =
             super::operator::condensation(sim, &std::sync::Arc::new(factor), &counters).map_err(SolveError::Setup)?;
         // (the tangential rows of friction, after the normal ones, have no normal law)

@@ -22,7 +22,7 @@ pub mod timeloop;
 
 pub use backend::{Backend, Stiffness};
 pub use error::SolveError;
-pub use operator::{singular, singularity_verdict};
+pub use operator::{singular, singularity_verdict, Singularity};
 pub use plan::Plan;
 pub use setup::{ContactSetup, Simulation, TimeGrid};
 pub use stats::{PhaseTimes, Reaction, RunStats};

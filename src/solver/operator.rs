@@ -8,7 +8,7 @@ use super::setup::Simulation;
 use super::stats::{timed, RunStats};
 use crate::contact::{Condensation, SplitSweeps, StoredResponses};
 use crate::fem::SymmetricMatrix;
-use crate::linalg::{Analysis, Counters, Factor, LinearSolver};
+use crate::linalg::{Analysis, Counters, Factor, FactorError, LinearSolver};
 use crate::scene::CondensationKind;
 use std::sync::Arc;
 
@@ -77,8 +77,8 @@ impl StepOperator {
         let factor = timed(&mut stats.phases.factorisation, || {
             Factor::new_consuming(symbolic, matrix, counters)
         })
-        .map_err(|e| singular(sim, e.to_string()))?;
-        timed(&mut stats.phases.factorisation, || probe.verdict(&factor)).map_err(|detail| singular(sim, detail))?;
+        .map_err(|e| factor_failed(sim, e))?;
+        timed(&mut stats.phases.factorisation, || probe.verdict(&factor)).map_err(|what| singular(sim, what))?;
         let factor = Arc::new(factor);
         let mut condensed: Option<Box<dyn Condensation>> = match &sim.contact {
             Some(c) if !c.nodes.is_empty() => Some(
@@ -165,7 +165,7 @@ impl Probe {
     }
 
     /// K⁻¹(K v) against v with the factor of K.
-    fn verdict(mut self, factor: &Factor) -> Result<(), String> {
+    fn verdict(mut self, factor: &Factor) -> Result<(), Singularity> {
         factor.solve_in_place(&mut self.product, &Counters::default());
         let scale = self.v.iter().fold(0.0f64, |a, b| a.max(b.abs()));
         let error = self
@@ -184,25 +184,43 @@ impl Probe {
 /// passes.
 pub const MATERIAL_SINGULAR_BULK_TO_SHEAR: f64 = 1e4;
 
-/// The error of a factor that failed or a probe that was off (`detail`): with a nearly
-/// incompressible material (K/G ≥ [`MATERIAL_SINGULAR_BULK_TO_SHEAR`], not in plane stress)
-/// the message names the material first, the supports second.
-pub fn singular<const D: usize>(sim: &Simulation<D>, detail: String) -> SolveError {
+/// What showed the step matrix (nearly) singular, before its likely cause is named.
+#[derive(Clone, Copy, Debug)]
+pub enum Singularity {
+    /// A pivot of the Cholesky factorisation failed.
+    Pivot,
+    /// A probe solve was off by this much (relative).
+    Probe(f64),
+}
+
+/// The supports' cause of a singular matrix, as a probe names it.
+const NOT_HELD: &str =
+    "the body is not held against rigid motions; clamp a part of the boundary (groups.clamped) that stops translations and rotations";
+
+/// The error of a singular step matrix (`what` showed it): with a nearly incompressible
+/// material (K/G ≥ [`MATERIAL_SINGULAR_BULK_TO_SHEAR`], not in plane stress) the message names
+/// the material first, the supports second; otherwise the supports.
+pub fn singular<const D: usize>(sim: &Simulation<D>, what: Singularity) -> SolveError {
     let e = &sim.elasticity;
     let ratio = e.bulk_to_shear();
-    let detail = match e.plane != Some(crate::material::PlaneModel::Stress) && ratio >= MATERIAL_SINGULAR_BULK_TO_SHEAR {
-        true => format!(
-            "{}: the material is nearly incompressible (ν = {}, K/G = {ratio:.3e}), so the matrix is ill-conditioned by \
-             the material rather than by the supports; lower ν (hvi's elements lock from about ν = 0.495, K/G = 100, on: \
-             docs/troubleshooting.md), and if that does not help, the body is not held: clamp a part of its boundary",
-            detail
-                .split(": the body is not held")
-                .next()
-                .and_then(|d| d.split("; usually").next())
-                .unwrap_or(&detail),
+    let material = e.plane != Some(crate::material::PlaneModel::Stress) && ratio >= MATERIAL_SINGULAR_BULK_TO_SHEAR;
+    let symptom = match what {
+        Singularity::Pivot => {
+            "the stiffness matrix is not positive definite (pivot failed in the Cholesky factorisation)".to_string()
+        }
+        Singularity::Probe(error) => {
+            format!("the stiffness matrix is singular or nearly so (a probe solve is off by {error:.1e} relative)")
+        }
+    };
+    let detail = match (material, what) {
+        (true, _) => format!(
+            "{symptom}: the material is nearly incompressible (ν = {}, K/G = {ratio:.3e}), so the matrix is ill-conditioned \
+             by the material rather than by the supports; lower ν (hvi's elements lock from about ν = 0.495, K/G = 100, \
+             on: docs/troubleshooting.md), and if that does not help, the body is not held: clamp a part of its boundary",
             e.poisson_ratio
         ),
-        false => detail,
+        (false, Singularity::Pivot) => FactorError::NotPositiveDefinite.to_string(),
+        (false, Singularity::Probe(_)) => format!("{symptom}: {NOT_HELD}"),
     };
     SolveError::Singular {
         mesh: sim.mesh.path.display().to_string(),
@@ -210,14 +228,24 @@ pub fn singular<const D: usize>(sim: &Simulation<D>, detail: String) -> SolveErr
     }
 }
 
+/// The error of a factorisation that failed: a failed pivot is a [`singular`] matrix, anything
+/// else (memory, the analysis) is said as it is.
+pub fn factor_failed<const D: usize>(sim: &Simulation<D>, e: FactorError) -> SolveError {
+    match e {
+        FactorError::NotPositiveDefinite => singular(sim, Singularity::Pivot),
+        other => SolveError::Singular {
+            mesh: sim.mesh.path.display().to_string(),
+            detail: other.to_string(),
+        },
+    }
+}
+
 /// The verdict of a probe solve whose relative error is `error` (any backend's probe).
-pub fn singularity_verdict(error: f64) -> Result<(), String> {
+pub fn singularity_verdict(error: f64) -> Result<(), Singularity> {
     if error.is_finite() && error <= 1e-6 {
         Ok(())
     } else {
-        Err(format!(
-            "the stiffness matrix is singular or nearly so (a probe solve is off by {error:.1e} relative): the body is not held against rigid motions; clamp a part of the boundary (groups.clamped) that stops translations and rotations"
-        ))
+        Err(Singularity::Probe(error))
     }
 }
 
