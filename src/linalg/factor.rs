@@ -654,8 +654,9 @@ fn nested_dissection(
     let mut nvtxs = n as idx_t;
     let (mut perm, mut iperm) = (vec![0 as idx_t; n], vec![0 as idx_t; n]);
     let mut options = [0 as idx_t; metis_sys::METIS_NOPTIONS as usize];
+    let _metis = super::metis_lock();
     // SAFETY: every array has the length METIS reads or writes: options METIS_NOPTIONS, xadj
-    // n + 1, adjncy xadj[n], vwgt, perm and iperm n.
+    // n + 1, adjncy xadj[n], vwgt, perm and iperm n; no other METIS call runs (the lock).
     let status = unsafe {
         metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
         metis_sys::METIS_NodeND(

@@ -76,7 +76,9 @@ impl Partition {
         let mut options = [0 as idx_t; metis_sys::METIS_NOPTIONS as usize];
         let (mut nvtxs, mut ncon, mut nparts, mut cut) = (n as idx_t, 1 as idx_t, ranks as idx_t, 0 as idx_t);
         let mut part = vec![0 as idx_t; n];
-        // SAFETY: CSR arrays of the sizes METIS expects; null optional weights.
+        let _metis = crate::linalg::metis_lock();
+        // SAFETY: CSR arrays of the sizes METIS expects; null optional weights; no other METIS
+        // call runs (the lock).
         let status = unsafe {
             metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
             metis_sys::METIS_PartGraphKway(
