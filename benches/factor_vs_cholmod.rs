@@ -30,7 +30,7 @@ fn main() {
             &sim.mesh.cells,
             &sim.mesh.points,
             &sim.dofs,
-            &[sim.elasticity.tensor(), IDENTITY_TENSOR],
+            &[sim.materials.list()[0].elasticity.tensor(), IDENTITY_TENSOR],
         );
         let k = 1.0 / n as f64;
         let matrix = k_a.plus_scaled(0.5 * k * 0.25, &k_b).with_identity_rows(&sim.dofs); // b(0) = 0.25 for (0.5 + s)²

@@ -459,13 +459,18 @@ struct Case {
 /// refused by the bench).
 fn step_matrix(sim: &Simulation<3>) -> SymmetricMatrix {
     let (cells, points) = (&sim.mesh.cells, &sim.mesh.points);
-    match &sim.memory {
+    match sim.materials.memory() {
         None => {
-            let [k_a] = assemble_stiffness(cells, points, &sim.dofs, &[sim.elasticity.tensor()]);
+            let [k_a] = assemble_stiffness(cells, points, &sim.dofs, &[sim.materials.list()[0].elasticity.tensor()]);
             k_a.with_identity_rows(&sim.dofs)
         }
         Some(m) => {
-            let [k_a, k_b] = assemble_stiffness(cells, points, &sim.dofs, &[sim.elasticity.tensor(), IDENTITY_TENSOR]);
+            let [k_a, k_b] = assemble_stiffness(
+                cells,
+                points,
+                &sim.dofs,
+                &[sim.materials.list()[0].elasticity.tensor(), IDENTITY_TENSOR],
+            );
             let b0 = m.kernel_value(0, 0.0);
             k_a.plus_scaled(0.5 * sim.time.step() * b0, &k_b)
                 .with_identity_rows(&sim.dofs)

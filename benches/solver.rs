@@ -31,7 +31,7 @@ fn phases(c: &mut Criterion) {
     hvi::linalg::set_parallelism(1);
     for n in [64, 128] {
         let sim = paper(n, n);
-        let d = sim.elasticity.tensor();
+        let d = sim.materials.list()[0].elasticity.tensor();
         let mut g = c.benchmark_group(format!("h=1/{n}"));
         g.sample_size(20).measurement_time(Duration::from_secs(4));
         g.bench_function("assembly K_A+K_B", |b| {

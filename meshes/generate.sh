@@ -30,6 +30,9 @@ mesh rect_q1_h16_v22.msh -setnumber n 16 -setnumber quads 1 -format msh22
 mesh rect_q1_h16_wide.msh -setnumber n 16 -setnumber quads 1 -setnumber wide 1 -format msh41
 # Mixed: quadrangles on x < 1, triangles on x > 1, h = 1/4.
 mesh rect_mixed_h4.msh -setnumber n 4 -setnumber mixed 1 -format msh41
+# Two halves x < 1 and x > 1, each its own physical group (Left 6, Right 7): two materials.
+mesh rect_halves_q1_h4.msh -setnumber n 4 -setnumber halves 1 -setnumber quads 1 -format msh41
+mesh rect_halves_p1_h4.msh -setnumber n 4 -setnumber halves 1 -setnumber quads 0 -format msh41
 # Only the groups the paper names (Gamma1, Gamma2, Gamma3, Omega; no Gamma2_top).
 mesh rect_q1_h16_plain.msh -setnumber n 16 -setnumber quads 1 -setnumber plain 1 -format msh41
 mesh rect_p1_h8_plain.msh -setnumber n 8 -setnumber quads 0 -setnumber plain 1 -format msh41

@@ -383,7 +383,10 @@ fn assert_equivalent(what: &str, off: &Scene, neutral: &Scene, mesh: &Mesh<2>) -
     let (sim_neutral, stats_neutral, b) = run(&format!("{what} (neutral twin)"), neutral, mesh.clone());
     // the switched-off run really has fewer effects than its twin
     assert!(stats_off.effects.len() <= stats_neutral.effects.len(), "{what}");
-    assert!(sim_off.memory.is_none() || sim_neutral.memory.is_some(), "{what}");
+    assert!(
+        sim_off.materials.memory().is_none() || sim_neutral.materials.memory().is_some(),
+        "{what}"
+    );
     let du = relative_difference(&a, &b);
     let dl = contact_force_difference(&sim_neutral, &a, &b);
     println!("{what}: relative difference of u {du:.2e}, of contact forces {dl:.2e}");
@@ -498,7 +501,7 @@ fn elastic_only_allocates_no_history_factorises_once_and_solves_once() {
         let scene = load("elastic_only.toml", &steps(n));
         let (sim, stats, sink) = run("elastic_only", &scene, mesh("rect_q1_h8.msh"));
         assert!(
-            sim.memory.is_none() && sim.contact.is_none(),
+            sim.materials.memory().is_none() && sim.contact.is_none(),
             "nothing but elasticity is built"
         );
         assert!(!sim.loads.is_time_dependent());
@@ -609,7 +612,11 @@ fn the_plan_lists_exactly_the_effects_in_force() {
         }
         expected.sort();
         assert_eq!(names, expected, "{name}: plan {plan}");
-        assert_eq!(sim.memory.is_some(), want.history.is_some(), "{name}: kernel built");
+        assert_eq!(
+            sim.materials.memory().is_some(),
+            want.history.is_some(),
+            "{name}: kernel built"
+        );
         assert_eq!(sim.contact.is_some(), want.bound || want.law, "{name}: contact built");
         let detail = |effect: &str| {
             plan.effects

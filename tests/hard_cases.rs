@@ -962,8 +962,12 @@ fn case8_several_local_minima() {
         // d = r + W λ from the converged state.
         let sim = &run.sim;
         let c = sim.contact.as_ref().unwrap();
-        let [k_a] =
-            hvi::fem::assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.tensor()]);
+        let [k_a] = hvi::fem::assemble_stiffness(
+            &sim.mesh.cells,
+            &sim.mesh.points,
+            &sim.dofs,
+            &[sim.materials.list()[0].elasticity.tensor()],
+        );
         let k_a = k_a.with_identity_rows(&sim.dofs);
         let counters = hvi::linalg::Counters::default();
         let symbolic = hvi::linalg::Factor::analyse(&k_a).unwrap();

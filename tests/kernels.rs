@@ -102,7 +102,7 @@ fn prescribed(groups: &[&str], value: &[&str]) -> String {
 fn last_cell_stresses<const D: usize>(sim: &Simulation<D>, sink: &MemorySink) -> Vec<f64> {
     let last = sink.steps.last().unwrap();
     let u = sim.dofs.to_nodal(&last.displacement);
-    let memory: Vec<_> = match (&sim.memory, &last.memory_displacement) {
+    let memory: Vec<_> = match (sim.materials.memory(), &last.memory_displacement) {
         (Some(m), Some(values)) => m
             .channels()
             .iter()
@@ -114,8 +114,8 @@ fn last_cell_stresses<const D: usize>(sim: &Simulation<D>, sink: &MemorySink) ->
     cell_stresses(
         &sim.mesh.cells,
         &sim.mesh.points,
-        &sim.elasticity,
-        sim.volumetric,
+        &sim.materials,
+        None,
         &u,
         Some(&memory),
     )
@@ -165,7 +165,7 @@ fn shear_relaxation_matches_g_of_t_at_order_two() {
             );
             let (sim, stats, sink) = solve_in_memory(&scene(&text), rectangle(2.0, 1.0, 4, 2, shape)).unwrap();
             assert_eq!(
-                sim.memory.as_ref().unwrap().channels().len(),
+                sim.materials.memory().unwrap().channels().len(),
                 2,
                 "bulk and shear differ"
             );
@@ -236,7 +236,7 @@ fn volumetric_relaxation_in_3d_matches_kappa_of_t_at_order_two() {
                 )
             );
             let (sim, stats, sink) = solve_in_memory(&scene(&text), block([1.0; 3], [2, 2, 2], shape)).unwrap();
-            assert_eq!(sim.memory.as_ref().unwrap().channels().len(), 2);
+            assert_eq!(sim.materials.memory().unwrap().channels().len(), 2);
             let k = 1.0 / steps as f64;
             let mut err: f64 = 0.0;
             for n in 0..=steps {
@@ -375,9 +375,9 @@ fn creep_errors<const D: usize>(
     let (mut ks, mut errs) = (vec![], vec![]);
     for steps in [8usize, 16, 32, 64] {
         let (sim, _, sink) = solve_in_memory(&scene(&text(steps)), mesh()).unwrap();
-        let memory = sim.memory.as_ref().unwrap();
+        let memory = sim.materials.memory().unwrap();
         assert_eq!(memory.channels().len(), 1, "proportional relaxation: one channel");
-        let a = sim.elasticity.tensor();
+        let a = sim.materials.list()[0].elasticity.tensor();
         let t = memory.channels()[0].tensor;
         assert!(
             (t.lambda * a.mu - t.mu * a.lambda).abs() <= 1e-12 * a.mu * a.mu,
@@ -577,7 +577,7 @@ fn mesh() -> Mesh<2> {
 fn identity_tensor_is_the_default_and_the_papers_path() {
     let paper = Scene::from_toml_str(DEFAULT_SCENE_TOML, "paper").unwrap();
     let sim = Simulation::new(&paper, mesh()).unwrap();
-    let m = sim.memory.as_ref().unwrap();
+    let m = sim.materials.memory().unwrap();
     assert_eq!(
         m.channels(),
         &[Channel {
@@ -610,7 +610,7 @@ fn a_kernel_on_a_equals_own_moduli_with_one_or_two_channels() {
     let kernel = "kind = \"exponential\"\nterms = [{ coefficient = 0.8, relaxation_time = 0.3 }, { coefficient = -0.2, relaxation_time = 0.05 }]\n";
     let on_a = paper_with_memory(&format!("[memory]\n{kernel}tensor = \"elasticity\"\n"), 16);
     let sim = Simulation::new(&on_a, mesh()).unwrap();
-    let (l, m) = sim.elasticity.lame();
+    let (l, m) = sim.materials.list()[0].elasticity.lame();
     let one = paper_with_memory(
         &format!(
             "[memory]\n{kernel}tensor = {{ bulk = {:e}, shear = {m:e} }}\n",
@@ -626,10 +626,10 @@ fn a_kernel_on_a_equals_own_moduli_with_one_or_two_channels() {
         16,
     );
     let (sa, _, a) = solve_in_memory(&on_a, mesh()).unwrap();
-    assert_eq!(sa.memory.as_ref().unwrap().channels().len(), 1);
+    assert_eq!(sa.materials.memory().unwrap().channels().len(), 1);
     for (what, s, channels) in [("one own-moduli tensor", one, 1), ("two own-moduli terms", two, 2)] {
         let (sb, stats, b) = solve_in_memory(&s, mesh()).unwrap();
-        assert_eq!(sb.memory.as_ref().unwrap().channels().len(), channels, "{what}");
+        assert_eq!(sb.materials.memory().unwrap().channels().len(), channels, "{what}");
         // the two kernels share their exponential atoms: 2 accumulators, not 4
         assert_eq!(stats.history_bytes, 2 * sb.dofs.n() * 8, "{what}");
         let (du, dl) = run_difference(&a, &b);
@@ -671,8 +671,8 @@ fn relaxation_modulus_equals_its_memory_written_by_hand() {
         16,
     ));
     let (sb, _, b) = solve_in_memory(&by_hand, mesh()).unwrap();
-    assert_eq!(sa.memory.as_ref().unwrap().channels().len(), 2);
-    assert_eq!(sb.memory.as_ref().unwrap().channels().len(), 2);
+    assert_eq!(sa.materials.memory().unwrap().channels().len(), 2);
+    assert_eq!(sb.materials.memory().unwrap().channels().len(), 2);
     let (du, dl) = run_difference(&a, &b);
     eprintln!("relaxation modulus vs by hand: relative difference of u {du:.2e}, of contact forces {dl:.2e}");
     assert!(du <= 1e-12 && dl <= 1e-12, "{du:e} {dl:e}");
@@ -841,8 +841,8 @@ fn bad_memory_tensors_name_the_key_the_value_and_the_range() {
     .replace("\"strain\"", "\"stress\"");
     let s = scene(&text);
     let sim = Simulation::new(&s, rectangle(2.0, 1.0, 2, 1, CellShape::Quad)).unwrap();
-    let t = sim.memory.as_ref().unwrap().channels()[0].tensor;
-    let a = sim.elasticity.tensor();
+    let t = sim.materials.memory().unwrap().channels()[0].tensor;
+    let a = sim.materials.list()[0].elasticity.tensor();
     assert!(
         (t.lambda - 2.0 * a.lambda).abs() < 1e-14 && (t.mu - 2.0 * a.mu).abs() < 1e-14,
         "{t:?} vs 2·{a:?}"
@@ -936,13 +936,13 @@ fn the_readme_examples_are_valid_scenes() {
     for (i, b) in blocks.iter().enumerate() {
         let s = scene(&format!("{b}{TIME}"));
         let sim = Simulation::new(&s, rectangle(2.0, 1.0, 2, 1, CellShape::Quad)).unwrap();
-        let m = sim.memory.as_ref().unwrap();
+        let m = sim.materials.memory().unwrap();
         assert_eq!(m.channels().len(), 1, "block {i}");
         if i == 0 {
-            assert_eq!(m.channels()[0].tensor, sim.elasticity.tensor());
+            assert_eq!(m.channels()[0].tensor, sim.materials.list()[0].elasticity.tensor());
             assert_eq!(m.kernel_value(0, 0.0), -1.2);
         } else {
-            let a = sim.elasticity.tensor();
+            let a = sim.materials.list()[0].elasticity.tensor();
             assert!((a.mu - 0.385).abs() < 1e-12 && (a.lambda + 2.0 * a.mu / 3.0 - 0.833).abs() < 1e-12);
         }
     }

@@ -60,10 +60,10 @@ fn held_indentation_relaxes_the_force_as_the_modulus() {
 
     let scene = Scene::load(Some(&root().join(SCENE)), &[]).unwrap();
     let (sim, stats, sink) = solve_in_memory(&scene, read_mesh::<2>(&root().join(MESH)).unwrap()).unwrap();
-    let memory = sim.memory.as_ref().expect("a relaxation modulus is a memory");
+    let memory = sim.materials.memory().expect("a relaxation modulus is a memory");
     assert!(memory.is_from_relaxation_modulus());
     assert_eq!(memory.channels().len(), 1, "bulk and shear relax proportionally");
-    let a = sim.elasticity.tensor();
+    let a = sim.materials.list()[0].elasticity.tensor();
     assert!(
         (a.mu - 1.2).abs() < 1e-12 && (a.lambda + 2.0 * a.mu / 3.0 - 2.0).abs() < 1e-12,
         "A = (κ₀, G₀)"

@@ -37,7 +37,12 @@ const SPHERE: [&str; 2] = [
 
 /// nnz(L) of the run's analysis and of the unconstrained one, and how many unknowns go last.
 fn fill(sim: &Simulation<3>) -> (usize, usize, usize) {
-    let [k] = assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.tensor()]);
+    let [k] = assemble_stiffness(
+        &sim.mesh.cells,
+        &sim.mesh.points,
+        &sim.dofs,
+        &[sim.materials.list()[0].elasticity.tensor()],
+    );
     let k = k.with_identity_rows(&sim.dofs);
     let last = sim.unknowns_ordered_last();
     let run = Factor::analyse_with_last(&k, &last).unwrap().factor_entries();
@@ -101,7 +106,12 @@ fn blocked_sweeps_give_the_steps_of_the_stored_responses() {
 #[test]
 fn nested_dissection_is_the_same_on_threads_at_once() {
     let sim = Simulation::new(&hertz_scene(&SPHERE), hertz_mesh()).unwrap();
-    let [k] = assemble_stiffness(&sim.mesh.cells, &sim.mesh.points, &sim.dofs, &[sim.elasticity.tensor()]);
+    let [k] = assemble_stiffness(
+        &sim.mesh.cells,
+        &sim.mesh.points,
+        &sim.dofs,
+        &[sim.materials.list()[0].elasticity.tensor()],
+    );
     let k = k.with_identity_rows(&sim.dofs);
     let entries = || {
         Factor::analyse_with(&k, hvi::linalg::NodeOrdering::NestedDissection)

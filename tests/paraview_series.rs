@@ -181,19 +181,18 @@ fn nodal_stress_is_the_volume_weighted_mean() {
         poisson_ratio: 0.3,
         plane: Some(hvi::material::PlaneModel::Strain),
     };
+    let materials = hvi::fem::materials::Materials::one(hvi::fem::materials::BodyMaterial {
+        name: "[material]".into(),
+        elasticity: e,
+        memory: None,
+        volumetric: hvi::fem::assembly::Volumetric::Pointwise,
+    });
     let linear: Vec<[f64; 2]> = mesh
         .points
         .iter()
         .map(|p| [0.1 * p[0] + 0.3 * p[1], -0.2 * p[0] + 0.05 * p[1]])
         .collect();
-    let cell = cell_stresses(
-        &mesh.cells,
-        &mesh.points,
-        &e,
-        hvi::fem::assembly::Volumetric::Pointwise,
-        &linear,
-        None,
-    );
+    let cell = cell_stresses(&mesh.cells, &mesh.points, &materials, None, &linear, None);
     let m = cell_measures(&mesh.cells, &mesh.points);
     // the measures add up to the rectangle's area
     assert!((m.iter().sum::<f64>() - 2.0).abs() < 1e-12);
@@ -210,14 +209,7 @@ fn nodal_stress_is_the_volume_weighted_mean() {
         .iter()
         .map(|p| [(3.0 * p[0]).sin() * p[1], p[0] * p[0]])
         .collect();
-    let cell = cell_stresses(
-        &mesh.cells,
-        &mesh.points,
-        &e,
-        hvi::fem::assembly::Volumetric::Pointwise,
-        &wavy,
-        None,
-    );
+    let cell = cell_stresses(&mesh.cells, &mesh.points, &materials, None, &wavy, None);
     let node = nodal_stresses(&mesh.cells, &m, &cell.tensor, mesh.points.len());
     for p in 0..mesh.points.len() {
         let around: Vec<usize> = (0..mesh.cells.len())

@@ -178,14 +178,7 @@ fn lame_cylinder_nearly_incompressible_with_mean_dilatation() {
         let (sim, _, sink) = solve_in_memory(&scene(&text), mesh::<2>(&format!("ring_q1_n{n}.msh"))).unwrap();
         let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
         let error = nodal_error(&sim.mesh.points, &u, |x| lame(x, e, nu, p)) / scale;
-        let stress = hvi::fem::stress::cell_stresses(
-            &sim.mesh.cells,
-            &sim.mesh.points,
-            &sim.elasticity,
-            sim.volumetric,
-            &u,
-            None,
-        );
+        let stress = hvi::fem::stress::cell_stresses(&sim.mesh.cells, &sim.mesh.points, &sim.materials, None, &u, None);
         let pressure_error = stress
             .tensor
             .chunks_exact(9)

@@ -166,6 +166,18 @@ pub(crate) fn check_scene_report<const D: usize>(scene_path: Option<&Path>, sim:
         sim.time.steps,
         sim.time.step()
     );
+    let counts = sim.materials.cell_counts(sim.mesh.cells.len());
+    let _ = writeln!(out, "  materials (docs/method.md §8.5):");
+    for (m, count) in sim.materials.list().iter().zip(counts) {
+        let _ = writeln!(
+            out,
+            "    {:<24} {count} cells, E = {}, ν = {}{}",
+            m.name,
+            m.elasticity.youngs_modulus,
+            m.elasticity.poisson_ratio,
+            if m.memory.is_some() { ", with memory" } else { "" }
+        );
+    }
     let _ = writeln!(out, "plan:");
     let _ = write!(out, "{}", Plan::new(sim));
     out
@@ -174,7 +186,7 @@ pub(crate) fn check_scene_report<const D: usize>(scene_path: Option<&Path>, sim:
 /// True when the memory's share of the step matrix, Σ_j (k/2) b_j(0) T_j, has a negative
 /// eigenvalue (b(0) < 0, a relaxing material): K is then softer than K_A in some strain.
 fn softening_memory<const D: usize>(sim: &Simulation<D>) -> bool {
-    sim.memory.as_ref().is_some_and(|m| {
+    sim.materials.list().iter().filter_map(|m| m.memory.as_ref()).any(|m| {
         let s = m.step_share(sim.time.step());
         s.mu < 0.0 || 2.0 * s.mu + D as f64 * s.lambda < 0.0
     })

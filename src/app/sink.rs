@@ -48,7 +48,7 @@ impl<const D: usize> FrameSink<D> for MemorySink {
 
 /// Each memory channel's tensor and nodal memory displacement (docs/method.md §15).
 fn memory_fields<const D: usize>(sim: &Simulation<D>, memory: Option<&[f64]>) -> Vec<MemoryField<D>> {
-    match (&sim.memory, memory) {
+    match (sim.materials.memory(), memory) {
         (Some(m), Some(values)) => m
             .channels()
             .iter()
@@ -78,6 +78,8 @@ pub struct FileSink<const D: usize> {
     contact: Option<ContactSeries<D>>,
     /// The physical tag of each cell's group (-1 for a cell in none).
     cell_groups: Vec<i32>,
+    /// Each cell's material index, with several materials (the `material` cell array).
+    cell_materials: Vec<i32>,
     /// Areas or volumes of the cells, for the nodal stresses.
     cell_measures: Vec<f64>,
     gamma3: Option<CsvTable>,
@@ -168,10 +170,10 @@ impl<const D: usize> FileSink<D> {
             }
             _ => None,
         };
-        let cell_groups = if series.is_some() {
-            cell_groups(&sim.mesh)
+        let (cell_groups, cell_materials) = if series.is_some() {
+            (cell_groups(&sim.mesh), cell_materials(sim))
         } else {
-            Vec::new()
+            (Vec::new(), Vec::new())
         };
         let cell_measures = if series.is_some() && wants_stress(fields) {
             cell_measures(&sim.mesh.cells, &sim.mesh.points)
@@ -242,6 +244,7 @@ impl<const D: usize> FileSink<D> {
             series,
             contact,
             cell_groups,
+            cell_materials,
             cell_measures,
             gamma3,
             reactions,
@@ -289,14 +292,7 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
             let stresses = wants_stress(&self.fields).then(|| {
                 timed(&mut self.stress_seconds, || {
                     let memory = memory_fields(sim, view.memory_displacement);
-                    let cell = cell_stresses(
-                        &mesh.cells,
-                        &mesh.points,
-                        &sim.elasticity,
-                        sim.volumetric,
-                        &nodal,
-                        Some(&memory),
-                    );
+                    let cell = cell_stresses(&mesh.cells, &mesh.points, &sim.materials, None, &nodal, Some(&memory));
                     let node = nodal_stresses(&mesh.cells, &self.cell_measures, &cell.tensor, mesh.points.len());
                     (cell, node)
                 })
@@ -311,8 +307,13 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
                     });
                 }
             }
-            let (mut point_fields, mut cell_fields) =
-                body_fields(&self.fields, &displacement, stresses.as_ref(), &self.cell_groups);
+            let (mut point_fields, mut cell_fields) = body_fields(
+                &self.fields,
+                &displacement,
+                stresses.as_ref(),
+                &self.cell_groups,
+                &self.cell_materials,
+            );
             mark_active(&mut point_fields, &mut cell_fields, self.active_scalar.as_deref());
             let frame = Frame {
                 step: view.step,
@@ -433,6 +434,7 @@ pub(crate) fn body_fields<'a>(
     displacement: &'a [f64],
     stresses: Option<&'a (CellStresses, CellStresses)>,
     cell_groups: &'a [i32],
+    cell_materials: &'a [i32],
 ) -> (Vec<Field<'a>>, Vec<Field<'a>>) {
     let mut point_fields = Vec::new();
     let mut cell_fields = Vec::new();
@@ -450,6 +452,9 @@ pub(crate) fn body_fields<'a>(
         point_fields.insert(0, Field::f64("displacement", 3, displacement));
     }
     cell_fields.push(Field::i32("group", 1, cell_groups));
+    if !cell_materials.is_empty() {
+        cell_fields.push(Field::i32("material", 1, cell_materials));
+    }
     (point_fields, cell_fields)
 }
 
@@ -462,6 +467,17 @@ pub(crate) fn mark_active<'a>(point_fields: &mut [Field<'a>], cell_fields: &mut 
             f.active = f.name == name;
         }
     }
+}
+
+/// Each cell's material (its index in `hvi check`'s list, docs/method.md §8.5); empty with one
+/// material (no `material` array is written).
+pub(crate) fn cell_materials<const D: usize>(sim: &Simulation<D>) -> Vec<i32> {
+    if sim.materials.list().len() < 2 {
+        return Vec::new();
+    }
+    (0..sim.mesh.cells.len())
+        .map(|c| sim.materials.id_of_cell(c).index() as i32)
+        .collect()
 }
 
 /// The physical tag of each cell's group (-1 for a cell in none): the last group of dimension

@@ -43,12 +43,12 @@ impl Volumetric {
 /// (each nl × nl, nl = D · nodes of the cell, zeroed here). With [`Volumetric::CellMean`] on a
 /// cell it projects, the bulk part K ∂ᵢN_a ∂ⱼN_b (K = λ + 2μ/3, the 3D bulk modulus: 3D and
 /// plane strain) is replaced by K b̄_(a,i) b̄_(b,j) |c| with b̄ the cell's mean of ∂ᵢN_a.
-pub fn local_stiffness<const D: usize, const M: usize>(
+pub fn local_stiffness<const D: usize>(
     cell: &Cell,
     points: &[[f64; D]],
-    cs: &[Isotropic; M],
+    cs: &[Isotropic],
     volumetric: Volumetric,
-    out: &mut [&mut [f64]; M],
+    out: &mut [&mut [f64]],
 ) {
     let n = cell.nodes().len();
     let nl = D * n;
@@ -57,7 +57,7 @@ pub fn local_stiffness<const D: usize, const M: usize>(
     }
     let project = volumetric.projects(cell);
     // ∫ ∂ᵢN_a (nl values) and |c|, for the cell's mean dilatation
-    let mut mean = [0.0; 3 * 8];
+    let mut mean = [0.0; 3 * 27];
     let mut measure = 0.0;
     for q in stiffness_rule(cell) {
         let s = shape_at(cell, points, q.xi);
@@ -118,12 +118,6 @@ pub fn local_stiffness<const D: usize, const M: usize>(
     }
 }
 
-/// K_A and K_B on one pattern.
-pub struct StiffnessPair {
-    pub elastic: SymmetricMatrix,
-    pub memory: SymmetricMatrix,
-}
-
 /// Assembles the stiffness matrices of the tensors `cs` on a pattern built here, over every
 /// unknown of `dofs` (prescribed ones included: docs/method.md §7).
 pub fn assemble_stiffness<const D: usize, const M: usize>(
@@ -143,49 +137,93 @@ pub fn assemble_stiffness_with<const D: usize, const M: usize>(
     cs: &[Isotropic; M],
     volumetric: Volumetric,
 ) -> [SymmetricMatrix; M] {
+    let one = CellTensors {
+        tensors: &[cs.to_vec()],
+        volumetric: &[volumetric],
+        of_cell: None,
+    };
+    let matrices = assemble_by_cell(cells, points, dofs, &one);
+    matrices
+        .try_into()
+        .unwrap_or_else(|_| unreachable!("one matrix per tensor"))
+}
+
+/// What each cell's local stiffness is made of (docs/method.md §8.5): its material's tensor for
+/// every matrix assembled and its volumetric rule.
+pub struct CellTensors<'a> {
+    /// Per material, one tensor per matrix (the same number for every material; a zero tensor
+    /// leaves the material's cells out of that matrix).
+    pub tensors: &'a [Vec<Isotropic>],
+    /// Per material.
+    pub volumetric: &'a [Volumetric],
+    /// Each cell's material; None: every cell has material 0.
+    pub of_cell: Option<&'a [u32]>,
+}
+
+/// Assembles one matrix per tensor of [`CellTensors`] on a pattern built here, over every
+/// unknown of `dofs` (prescribed ones included: docs/method.md §7).
+pub fn assemble_by_cell<const D: usize>(
+    cells: &[Cell],
+    points: &[[f64; D]],
+    dofs: &DofMap<D>,
+    materials: &CellTensors,
+) -> Vec<SymmetricMatrix> {
     let pattern = Arc::new(Pattern::new(cells, dofs.n_nodes(), D));
-    assemble_values(&pattern, cells, points, cs, volumetric).map(|values| SymmetricMatrix {
-        pattern: pattern.clone(),
-        values,
-    })
+    assemble_values(&pattern, cells, points, materials)
+        .into_iter()
+        .map(|values| SymmetricMatrix {
+            pattern: pattern.clone(),
+            values,
+        })
+        .collect()
 }
 
 /// The values of the stiffness matrices on `pattern`. Cells are done in chunks, each chunk's
 /// local matrices and their positions computed in parallel into two buffers kept across
 /// chunks, so that what is held at once stays bounded; the sums then go in cell by cell.
-fn assemble_values<const D: usize, const M: usize>(
+fn assemble_values<const D: usize>(
     pattern: &Pattern,
     cells: &[Cell],
     points: &[[f64; D]],
-    cs: &[Isotropic; M],
-    volumetric: Volumetric,
-) -> [Vec<f64>; M] {
-    let mut out: [Vec<f64>; M] = std::array::from_fn(|_| vec![0.0; pattern.nnz()]);
+    materials: &CellTensors,
+) -> Vec<Vec<f64>> {
+    let m = materials.tensors.first().map_or(0, |t| t.len());
+    let mut out: Vec<Vec<f64>> = (0..m).map(|_| vec![0.0; pattern.nnz()]).collect();
+    if m == 0 || cells.is_empty() {
+        return out;
+    }
     let nl_max = D * cells.iter().map(|c| c.nodes().len()).max().unwrap_or(0);
     let stride = nl_max * nl_max;
     const CHUNK: usize = 4096;
     let chunk_len = CHUNK.min(cells.len());
-    let mut buffer = vec![0.0; chunk_len * M * stride];
+    let mut buffer = vec![0.0; chunk_len * m * stride];
     let mut positions = vec![0usize; chunk_len * stride];
-    for cell_chunk in cells.chunks(CHUNK) {
+    for (chunk_index, cell_chunk) in cells.chunks(CHUNK).enumerate() {
+        let first = chunk_index * CHUNK;
         buffer
-            .par_chunks_mut(M * stride)
+            .par_chunks_mut(m * stride)
             .zip(positions.par_chunks_mut(stride))
-            .zip(cell_chunk.par_iter())
-            .for_each(|((local, at), cell)| {
-                let mut parts = local.chunks_mut(stride);
-                let mut views: [&mut [f64]; M] = std::array::from_fn(|_| parts.next().expect("M parts"));
-                local_stiffness(cell, points, cs, volumetric, &mut views);
+            .zip(cell_chunk.par_iter().enumerate())
+            .for_each(|((local, at), (i, cell))| {
+                let material = materials.of_cell.map_or(0, |of| of[first + i] as usize);
+                let mut views: Vec<&mut [f64]> = local.chunks_mut(stride).collect();
+                local_stiffness(
+                    cell,
+                    points,
+                    &materials.tensors[material],
+                    materials.volumetric[material],
+                    &mut views,
+                );
                 pattern.cell_positions(cell.nodes(), at);
             });
         for ((cell, local), at) in cell_chunk
             .iter()
-            .zip(buffer.chunks(M * stride))
+            .zip(buffer.chunks(m * stride))
             .zip(positions.chunks(stride))
         {
             let nl = D * cell.nodes().len();
-            for (m, mat) in out.iter_mut().enumerate() {
-                let km = &local[m * stride..m * stride + nl * nl];
+            for (j, mat) in out.iter_mut().enumerate() {
+                let km = &local[j * stride..j * stride + nl * nl];
                 for (p, v) in at[..nl * nl].iter().zip(km) {
                     mat[*p] += v;
                 }

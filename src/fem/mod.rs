@@ -12,11 +12,12 @@
 pub mod assembly;
 pub mod dofs;
 pub mod loads;
+pub mod materials;
 pub mod node_blocks;
 pub mod norms;
 pub mod stress;
 
 pub use crate::linalg::sparse::{Pattern, SymmetricMatrix};
-pub use assembly::{assemble_stiffness, StiffnessPair};
+pub use assembly::assemble_stiffness;
 pub use dofs::DofMap;
 pub use node_blocks::NodeBlockMatrix;

@@ -4,8 +4,8 @@
 //! dilatation (docs/method.md §8.4) the bulk part is the cell's: σ = K θ̄ I + 2μ dev ε, i.e. σ(ε)
 //! plus K (θ̄ − tr ε) on the diagonal (out of plane too), θ̄ the cell's mean of tr ε.
 
-use super::assembly::Volumetric;
-use crate::material::{Elasticity, Isotropic, PlaneModel};
+use super::materials::Materials;
+use crate::material::{Isotropic, PlaneModel};
 use crate::mesh::element::{reference_centroid, shape_at, stiffness_rule, strain};
 use crate::mesh::Cell;
 use rayon::prelude::*;
@@ -26,23 +26,37 @@ pub fn von_mises(s: &[[f64; 3]; 3]) -> f64 {
     (0.5 * d + 3.0 * shear).sqrt()
 }
 
-/// Evaluates the stress of every cell at its centroid; `memory` holds each memory channel's
-/// tensor T_j and nodal memory displacement m^j (None or empty without memory). In 2D the out-of-plane
-/// stress σ₃₃ of plane strain is included, λ_A tr ε(u) + Σ_j λ_j tr ε(m^j) (zero in plane stress).
+/// Evaluates the stress of every cell at its centroid with its material's constants: cell c is
+/// the mesh's cell `of_mesh[c]` (None: `cells` are the mesh's cells);
+/// `memory` holds each memory channel's tensor T_j and nodal memory displacement m^j, in the
+/// order of the materials' channels (None or empty without memory), each acting on its own
+/// material's cells. In 2D the out-of-plane stress σ₃₃ of plane strain is included,
+/// λ_A tr ε(u) + Σ_j λ_j tr ε(m^j) (zero in plane stress).
 pub fn cell_stresses<const D: usize>(
     cells: &[Cell],
     points: &[[f64; D]],
-    elasticity: &Elasticity,
-    volumetric: Volumetric,
+    materials: &Materials,
+    of_mesh: Option<&[usize]>,
     u: &[[f64; D]],
     memory: Option<&[MemoryField<D>]>,
 ) -> CellStresses {
     let memory = memory.unwrap_or_default();
-    let plane_strain = D == 2 && elasticity.plane == Some(PlaneModel::Strain);
-    let a = elasticity.tensor();
     let per_cell: Vec<([f64; 9], f64)> = cells
         .par_iter()
-        .map(|cell| {
+        .enumerate()
+        .map(|(c, cell)| {
+            let c = of_mesh.map_or(c, |of| of[c]);
+            let id = materials.id_of_cell(c);
+            let material = materials.of_cell(c);
+            let elasticity = &material.elasticity;
+            let volumetric = material.volumetric;
+            let plane_strain = D == 2 && elasticity.plane == Some(PlaneModel::Strain);
+            let a = elasticity.tensor();
+            let own = memory
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| materials.channel_owner(*j) == id)
+                .map(|(_, f)| f);
             let s = shape_at(cell, points, reference_centroid(cell));
             let local = |field: &[[f64; D]]| -> Vec<[f64; D]> { cell.nodes().iter().map(|&p| field[p]).collect() };
             let e = strain(&s, &local(u));
@@ -60,7 +74,7 @@ pub fn cell_stresses<const D: usize>(
                 }
             };
             shift(&a, u, &e);
-            for (t, m) in memory {
+            for (t, m) in own {
                 let em = strain(&s, &local(m));
                 shift(t, m, &em);
                 let sm = t.apply(&em);

@@ -79,7 +79,6 @@ impl Elasticity {
         }
     }
 
-    /// Lamé constants (λ, μ) of the 3D material.
     /// K/G, the bulk over the shear modulus of the 3D material: 2(1 + ν) / (3(1 − 2ν)), infinite
     /// at ν = 1/2. What measures how nearly incompressible the body is (docs/troubleshooting.md).
     pub fn bulk_to_shear(&self) -> f64 {
@@ -87,6 +86,7 @@ impl Elasticity {
         2.0 * (1.0 + nu) / (3.0 * (1.0 - 2.0 * nu))
     }
 
+    /// Lamé constants (λ, μ) of the 3D material.
     pub fn lame(&self) -> (f64, f64) {
         let (e, nu) = (self.youngs_modulus, self.poisson_ratio);
         (e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), e / (2.0 * (1.0 + nu)))

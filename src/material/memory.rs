@@ -259,6 +259,38 @@ impl Memory {
         Ok((elasticity, Some(memory)))
     }
 
+    /// The memories of several materials as one, for the time loop (docs/method.md §8.5): their
+    /// terms one after another, and each material's channels with weights on its own terms only
+    /// (zero on the others'), so that the history's accumulators are shared where relaxation
+    /// times coincide. Returns it and, per channel, the index in `parts` of the memory it came
+    /// from. One part is returned as it is (the same bits).
+    pub fn combined(parts: &[&Memory]) -> (Memory, Vec<usize>) {
+        if let [one] = parts {
+            return ((*one).clone(), vec![0; one.channels.len()]);
+        }
+        let total: usize = parts.iter().map(|m| m.terms.len()).sum();
+        let (mut terms, mut channels, mut owner) = (Vec::with_capacity(total), Vec::new(), Vec::new());
+        for (p, m) in parts.iter().enumerate() {
+            let offset = terms.len();
+            terms.extend(m.terms.iter().cloned());
+            for c in &m.channels {
+                let mut weights = vec![0.0; total];
+                weights[offset..offset + c.weights.len()].copy_from_slice(&c.weights);
+                channels.push(Channel {
+                    tensor: c.tensor,
+                    weights,
+                });
+                owner.push(p);
+            }
+        }
+        let memory = Memory {
+            terms,
+            channels,
+            from_relaxation_modulus: parts.iter().all(|m| m.from_relaxation_modulus),
+        };
+        (memory, owner)
+    }
+
     /// True when built from a relaxation modulus (A = G(0), B = G′).
     pub fn is_from_relaxation_modulus(&self) -> bool {
         self.from_relaxation_modulus

@@ -13,7 +13,7 @@ use crate::contact::{Condensation, ContactNodes, DenseNormalStiffness};
 use crate::contact::{ContactOutcome, ContactState};
 use crate::fem::assembly::local_stiffness;
 use crate::linalg::{Counters, LinearSolver};
-use crate::material::{Isotropic, IDENTITY_TENSOR};
+use crate::material::Isotropic;
 use crate::scene::CondensationKind;
 use crate::solver::operator::StepOperator;
 use crate::solver::reactions::Reactions;
@@ -110,26 +110,40 @@ pub struct PetscBackend<'p, const D: usize> {
 
 unsafe impl<const D: usize> Sync for PetscBackend<'_, D> {}
 
-/// The tensor of K_B: the memory's one channel tensor T (B₀ = I for the paper; the time loop
-/// refuses two channels with a backend, docs/method.md §15.1).
-fn memory_tensor<const D: usize>(sim: &Simulation<D>) -> Isotropic {
-    sim.memory
-        .as_ref()
-        .and_then(|m| m.channels().first())
-        .map_or(IDENTITY_TENSOR, |c| c.tensor)
+/// Which stiffness [`PetscBackend::assemble`] builds, cell by cell with the cell's material
+/// (docs/method.md §8.5).
+#[derive(Clone, Copy, Debug)]
+enum Tensors {
+    /// K_A.
+    Elastic,
+    /// K_B of the memory's one channel (the time loop refuses two with a backend,
+    /// docs/method.md §15.1): its tensor T on its material's cells, zero elsewhere.
+    Memory,
+    /// The step matrix K_A + c K_B (c None: K_A). Linear in (λ, μ): the stiffness of
+    /// (λ_A + c λ_T, μ_A + c μ_T) on the channel's material, of A elsewhere (docs/method.md §3, §15.1).
+    Step(Option<f64>),
 }
 
-/// The element stiffness of K_A + c K_B: linear in (λ, μ), and K_B is the stiffness of the
-/// channel tensor T (docs/method.md §3, §15.1), so it is the stiffness of (λ_A + c λ_T, μ_A + c μ_T).
-fn step_tensor<const D: usize>(sim: &Simulation<D>, memory: Option<f64>) -> Isotropic {
-    let a = sim.elasticity.tensor();
-    let t = memory_tensor(sim);
-    match memory {
-        Some(c) => Isotropic {
-            lambda: a.lambda + c * t.lambda,
-            mu: a.mu + c * t.mu,
-        },
-        None => a,
+impl Tensors {
+    /// The tensor on cell `e` of the mesh.
+    fn of_cell<const D: usize>(self, sim: &Simulation<D>, e: usize) -> Isotropic {
+        let a = sim.materials.of_cell(e).elasticity.tensor();
+        let channel = sim
+            .materials
+            .memory()
+            .and_then(|m| m.channels().first())
+            .filter(|_| sim.materials.channel_owner(0) == sim.materials.id_of_cell(e))
+            .map(|c| c.tensor);
+        match (self, channel) {
+            (Tensors::Elastic, _) | (Tensors::Step(None), _) => a,
+            (Tensors::Memory, Some(t)) => t,
+            (Tensors::Memory, None) => Isotropic { lambda: 0.0, mu: 0.0 },
+            (Tensors::Step(Some(c)), Some(t)) => Isotropic {
+                lambda: a.lambda + c * t.lambda,
+                mu: a.mu + c * t.mu,
+            },
+            (Tensors::Step(Some(_)), None) => a,
+        }
     }
 }
 
@@ -227,12 +241,14 @@ impl<'p, const D: usize> PetscBackend<'p, D> {
     pub fn prepare_products(&self, sim: &Simulation<D>) -> Result<(), SolveError> {
         let elastic = !sim.dirichlet.reaction_groups.is_empty() || sim.dirichlet.is_nonzero();
         let build = || -> Result<Products, hvi_petsc::Error> {
-            let a = sim.elasticity.tensor();
-            let elastic = elastic.then(|| self.assemble(sim, a, false)).transpose()?;
+            let elastic = elastic
+                .then(|| self.assemble(sim, Tensors::Elastic, false))
+                .transpose()?;
             let memory = sim
-                .memory
+                .materials
+                .memory()
                 .is_some()
-                .then(|| self.assemble(sim, memory_tensor(sim), false))
+                .then(|| self.assemble(sim, Tensors::Memory, false))
                 .transpose()?;
             let bytes = elastic
                 .iter()
@@ -253,15 +269,10 @@ impl<'p, const D: usize> PetscBackend<'p, D> {
         Ok(())
     }
 
-    /// This rank's cells of the stiffness of `tensor` as an MPIAIJ matrix (collective): with
+    /// This rank's cells of the stiffness `tensors` as an MPIAIJ matrix (collective): with
     /// `identity_rows`, the prescribed rows and columns are left empty and get a unit diagonal
     /// (docs/method.md §7.2); without, the matrix is the unmodified one.
-    fn assemble(
-        &self,
-        sim: &Simulation<D>,
-        tensor: Isotropic,
-        identity_rows: bool,
-    ) -> Result<Matrix, hvi_petsc::Error> {
+    fn assemble(&self, sim: &Simulation<D>, tensors: Tensors, identity_rows: bool) -> Result<Matrix, hvi_petsc::Error> {
         let layout = &self.layout;
         let mut matrix = Matrix::mpiaij(
             self.petsc,
@@ -278,7 +289,9 @@ impl<'p, const D: usize> PetscBackend<'p, D> {
         for &e in &self.own_cells {
             let cell = &cells[e];
             let nl = D * cell.nodes().len();
-            local_stiffness(cell, points, &[tensor], sim.volumetric, &mut [&mut local[..]]);
+            let volumetric = sim.materials.of_cell(e).volumetric;
+            let tensor = tensors.of_cell(sim, e);
+            local_stiffness(cell, points, &[tensor], volumetric, &mut [&mut local[..]]);
             index.clear();
             for &p in cell.nodes() {
                 for c in 0..D {
@@ -310,11 +323,11 @@ impl<'p, const D: usize> PetscBackend<'p, D> {
     /// it (collective; nothing is factorised).
     pub fn analyse(&self, sim: &Simulation<D>, mumps: bool) -> Result<(f64, Option<MumpsMemory>), String> {
         let memory = sim
-            .memory
-            .as_ref()
+            .materials
+            .memory()
             .map(|m| 0.5 * sim.time.step() * m.kernel_value(0, 0.0));
         let matrix = self
-            .assemble(sim, step_tensor(sim, memory), true)
+            .assemble(sim, Tensors::Step(memory), true)
             .map_err(|e| e.to_string())?;
         let bytes = matrix.local_bytes().map_err(|e| e.to_string())?;
         let estimate = mumps
@@ -327,7 +340,7 @@ impl<'p, const D: usize> PetscBackend<'p, D> {
     /// The step matrix K = K_A + c K_B with identity rows, and its solver (collective).
     fn build(&self, sim: &Simulation<D>, memory: Option<f64>) -> Result<PetscSolver, hvi_petsc::Error> {
         let layout = &self.layout;
-        let mut matrix = self.assemble(sim, step_tensor(sim, memory), true)?;
+        let mut matrix = self.assemble(sim, Tensors::Step(memory), true)?;
         if let Method::CgGamg { .. } = self.method {
             let mut coords = matrix.vector()?;
             let points = &sim.mesh.points;
@@ -430,13 +443,14 @@ impl<const D: usize> Backend<D> for PetscBackend<'_, D> {
         stats: &mut RunStats,
     ) -> Result<StepOperator, SolveError> {
         if memory.len() > 1 {
-            return Err(SolveError::Setup(
-                "this memory has two channels (tensors that are not proportional, docs/method.md §15.1), and the \
-                 PETSc backend runs memory of one channel only: run it without --backend petsc, or give memory \
-                 terms whose tensors are proportional (e.g. all \"identity\" or all \"elasticity\", or bulk and \
-                 shear relaxing proportionally)"
-                    .into(),
-            ));
+            return Err(SolveError::Setup(format!(
+                "this memory has {} channels (tensors that are not proportional make two, docs/method.md §15.1; \
+                 each material with memory has its own, §8.5), and the PETSc backend runs memory of one channel \
+                 only: run it without --backend petsc, or give one material memory terms whose tensors are \
+                 proportional (e.g. all \"identity\" or all \"elasticity\", or bulk and shear relaxing \
+                 proportionally)",
+                memory.len()
+            )));
         }
         let c = memory.first().copied();
         let (solver, condensed) = timed(&mut stats.phases.factorisation, || {

@@ -217,7 +217,7 @@ fn check_dim<const D: usize>(
 /// Step matrices and factors held at once: K̃ and, with memory, K_A for step 0 (its factor is
 /// made while K̃'s exists) unless u_0 = 0 solves step 0 (docs/method.md §3).
 fn factors_held<const D: usize>(sim: &Simulation<D>) -> usize {
-    if sim.memory.is_none() {
+    if sim.materials.memory().is_none() {
         return 1;
     }
     let mut load = vec![0.0; sim.dofs.n()];
@@ -236,7 +236,7 @@ fn factors_held<const D: usize>(sim: &Simulation<D>) -> usize {
 /// reactions and the lifting) and K_B (memory) for the products.
 fn matrices_held<const D: usize>(sim: &Simulation<D>, factors: usize) -> usize {
     let elastic = !sim.dirichlet.reaction_groups.is_empty() || sim.dirichlet.is_nonzero();
-    factors + usize::from(elastic) + usize::from(sim.memory.is_some())
+    factors + usize::from(elastic) + usize::from(sim.materials.memory().is_some())
 }
 
 /// What a run holds at once: its factors, and whether its condensation keeps its rows of Z.
@@ -258,7 +258,7 @@ fn predict<const D: usize>(
     let local = backend.unknowns().len() as f64;
     let all = sim.dofs.n() as f64;
     let m = sim.contact.as_ref().map_or(0, |c| c.nodes.len()) as f64;
-    let history = sim.memory.as_ref().map_or(0.0, |b| {
+    let history = sim.materials.memory().map_or(0.0, |b| {
         let h = History::new(b, backend.unknowns().len(), sim.time.step());
         if h.bytes_held() > 0 {
             h.bytes_held() as f64

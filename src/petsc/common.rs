@@ -121,13 +121,14 @@ pub(super) fn unsupported<const D: usize>(
             }
         ));
     }
-    match &sim.memory {
+    match sim.materials.memory() {
         Some(m) if m.channels().len() > 1 => Err(format!(
-            "{origin}: the memory has two channels (its tensors are not proportional: own bulk and shear \
-                 moduli that are not A's ratio, docs/method.md §15.1), which the PETSc backend does not support \
-                 (it runs memory of one channel only): run this scene without --backend petsc, or give memory \
-                 terms whose tensors are proportional (e.g. all \"identity\" or all \"elasticity\", or bulk and \
-                 shear relaxing proportionally)"
+            "{origin}: the memory has {} channels (tensors that are not proportional — own bulk and shear moduli \
+                 that are not A's ratio — make two, docs/method.md §15.1; each material with memory has its own, \
+                 §8.5), which the PETSc backend does not support (it runs memory of one channel only): run this \
+                 scene without --backend petsc, or give memory terms whose tensors are proportional (e.g. all \
+                 \"identity\" or all \"elasticity\", or bulk and shear relaxing proportionally) to one material",
+            m.channels().len()
         )),
         _ => Ok(()),
     }

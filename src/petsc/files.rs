@@ -11,7 +11,7 @@
 
 use super::common::agree;
 use super::partition::Partition;
-use crate::app::sink::{body_fields, cell_groups, displacement_3, mark_active, wants_stress, FileSink};
+use crate::app::sink::{body_fields, cell_groups, cell_materials, displacement_3, mark_active, wants_stress, FileSink};
 use crate::fem::stress::{cell_measures, cell_stresses, nodal_stress_sums, nodal_stresses_from_sums};
 use crate::mesh::{Cell, GroupSelector};
 use crate::output::{Field, Frame, SeriesWriter, CELL_IDS, NODE_IDS};
@@ -34,7 +34,11 @@ struct Piece<const D: usize> {
     cells: Vec<Cell>,
     node_ids: Vec<i32>,
     cell_ids: Vec<i32>,
+    /// The mesh's index of each cell (for its material).
+    mesh_cells: Vec<usize>,
     cell_groups: Vec<i32>,
+    /// Each cell's material index, with several materials.
+    cell_materials: Vec<i32>,
     measures: Vec<f64>,
 }
 
@@ -78,6 +82,11 @@ impl<const D: usize> Piece<D> {
             node_ids: nodes.iter().map(|&p| p as i32).collect(),
             cell_ids: own.iter().map(|&e| e as i32).collect(),
             cell_groups: own.iter().map(|&e| groups[e]).collect(),
+            cell_materials: {
+                let all = cell_materials(sim);
+                own.iter().filter(|_| !all.is_empty()).map(|&e| all[e]).collect()
+            },
+            mesh_cells: own.clone(),
             measures: if with_stress {
                 cell_measures(&cells, &points)
             } else {
@@ -244,7 +253,7 @@ impl<'a, const D: usize> PieceSink<'a, D> {
             u
         });
         // one memory channel with a backend (docs/method.md §15.1): its tensor and m_n
-        let memory = match (view.memory_displacement, &sim.memory) {
+        let memory = match (view.memory_displacement, sim.materials.memory()) {
             (Some(m), Some(memory)) => {
                 x.owned.set_local(m)?;
                 x.to_piece.gather(&x.owned, &mut flat)?;
@@ -264,7 +273,7 @@ impl<'a, const D: usize> PieceSink<'a, D> {
         memory: Option<&[crate::fem::stress::MemoryField<D>]>,
     ) -> Result<(crate::fem::stress::CellStresses, crate::fem::stress::CellStresses), hvi_petsc::Error> {
         let p = &self.piece;
-        let cell = cell_stresses(&p.cells, &p.points, &sim.elasticity, sim.volumetric, nodal, memory);
+        let cell = cell_stresses(&p.cells, &p.points, &sim.materials, Some(&p.mesh_cells), nodal, memory);
         let (sum, weight) = nodal_stress_sums(&p.cells, &p.measures, &cell.tensor, p.nodes.len());
         let mut packed = vec![0.0; SUMS * p.nodes.len()];
         for (k, chunk) in packed.chunks_exact_mut(SUMS).enumerate() {
@@ -326,8 +335,13 @@ impl<const D: usize> FrameSink<D> for PieceSink<'_, D> {
         // 3. Every rank writes its piece.
         let p = &self.piece;
         let displacement = displacement_3(&nodal);
-        let (mut point_fields, mut cell_fields) =
-            body_fields(&self.fields, &displacement, stresses.as_ref(), &p.cell_groups);
+        let (mut point_fields, mut cell_fields) = body_fields(
+            &self.fields,
+            &displacement,
+            stresses.as_ref(),
+            &p.cell_groups,
+            &p.cell_materials,
+        );
         mark_active(&mut point_fields, &mut cell_fields, self.active_scalar.as_deref());
         point_fields.push(Field::i32(NODE_IDS, 1, &p.node_ids));
         cell_fields.push(Field::i32(CELL_IDS, 1, &p.cell_ids));

@@ -3,7 +3,7 @@
 //! sections, or from a relaxation modulus; and the time-step bound a relaxing memory sets. Used
 //! by the scene's checks (so that an error names the scene file) and by the solver's set-up.
 
-use super::types::{MemoryKernelSpec, PronySeriesSpec, Scene, TensorSpec};
+use super::types::{Constants, MemoryKernelSpec, PronySeriesSpec, Scene, TensorSpec};
 use crate::expr::Expr;
 use crate::material::{Elasticity, Isotropic, Memory, MemoryTensor, MemoryTerm, PlaneModel, Prony, RelaxationKernel};
 
@@ -15,25 +15,43 @@ pub struct MaterialError {
     pub fix: String,
 }
 
+impl MaterialError {
+    /// The error of material `c` among several: the fix names it (`[material]`, or
+    /// `materials[1]` and its group).
+    pub fn of(self, c: &Constants, several: bool) -> MaterialError {
+        if !several {
+            return self;
+        }
+        let which = match c.group {
+            Some(g) => format!("{} (group {g})", c.table()),
+            None => "[material]".into(),
+        };
+        MaterialError {
+            fix: format!("for the material of {which}: {}", self.fix),
+            ..self
+        }
+    }
+}
+
 impl std::fmt::Display for MaterialError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "`{}` = {}: {}", self.key, self.value, self.fix)
     }
 }
 
-impl Scene {
-    /// A and the memory of the scene's material for the 2D model `plane` (None: 3D). The values
-    /// are those `check_values` accepts (a missing E or ν reads as NaN).
-    pub fn material_model(&self, plane: Option<PlaneModel>) -> Result<(Elasticity, Option<Memory>), MaterialError> {
-        let m = &self.material;
-        if let Some(r) = &m.relaxation_modulus {
+impl Constants<'_> {
+    /// A and the memory of this material for the 2D model `plane` (None: 3D). The values are
+    /// those `check_values` accepts (a missing E or ν reads as NaN).
+    pub fn model(&self, plane: Option<PlaneModel>) -> Result<(Elasticity, Option<Memory>), MaterialError> {
+        let m = self;
+        if let Some(r) = m.relaxation_modulus {
             let prony = |p: &PronySeriesSpec| Prony {
                 long_term: p.long_term,
                 terms: p.terms.iter().map(|t| (t.modulus, t.relaxation_time)).collect(),
             };
             return Memory::from_relaxation_modulus(&prony(&r.bulk), &prony(&r.shear), plane).map_err(|e| {
                 MaterialError {
-                    key: "material.relaxation_modulus".into(),
+                    key: self.key("relaxation_modulus"),
                     value: "(bulk and shear terms)".into(),
                     fix: format!("with material.plane = \"stress\": {e}"),
                 }
@@ -86,7 +104,9 @@ impl Scene {
         })?;
         Ok((elasticity, Some(memory)))
     }
+}
 
+impl Scene {
     /// The step matrix K = K_A + Σ_j (k/2) b_j(0) K_j must be positive definite: with a negative
     /// b_j(0) (a relaxing material) that bounds the time step (docs/method.md §15.3). Checked on
     /// the tensors (A = `a`, in dimension `dim`), before anything is assembled.

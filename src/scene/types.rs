@@ -18,7 +18,12 @@ pub struct Scene {
     #[serde(default)]
     pub groups: Groups,
     pub material: Material,
-    /// `[memory]` (one term) or `[[memory]]` sections (B(s) = Σ_m b_m(s) B_m, docs/method.md §15).
+    /// `[[materials]]`: the materials of physical groups of the body, each with its own constants
+    /// and memory (docs/method.md §8.5); the cells of no such group have `[material]`'s.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub materials: Vec<MaterialPart>,
+    /// `[memory]` (one term) or `[[memory]]` sections (B(s) = Σ_m b_m(s) B_m, docs/method.md §15)
+    /// of `[material]`'s constants.
     #[serde(
         default,
         skip_serializing_if = "Vec::is_empty",
@@ -164,6 +169,81 @@ pub struct Material {
     /// How the volumetric strain enters (docs/method.md §8.4): automatic by K/G, or forced.
     #[serde(default, skip_serializing_if = "is_auto")]
     pub formulation: Formulation,
+}
+
+/// `[[materials]]`: the material of the cells of one physical group of the body (a surface in
+/// 2D, a volume in 3D), with its own constants, formulation and memory (docs/method.md §8.5).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialPart {
+    pub group: GroupSelector,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub youngs_modulus: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub poisson_ratio: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub relaxation_modulus: Option<RelaxationModulusSpec>,
+    /// Absent: `material.formulation`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub formulation: Option<Formulation>,
+    /// Its memory terms, as `[[memory]]` (`[materials.memory]` or `[[materials.memory]]`).
+    #[serde(
+        default,
+        skip_serializing_if = "Vec::is_empty",
+        deserialize_with = "memory_sections",
+        serialize_with = "write_memory_sections"
+    )]
+    pub memory: Vec<MemorySpec>,
+}
+
+/// One material's constants as the scene gives them: `[material]` with the `[memory]` sections,
+/// or a `[[materials]]` entry — what the checks and the set-up read, whichever it is.
+#[derive(Clone, Copy, Debug)]
+pub struct Constants<'a> {
+    /// Its index in [`Scene::constants`].
+    pub index: usize,
+    /// The `[[materials]]` entry's group; None for `[material]`.
+    pub group: Option<&'a GroupSelector>,
+    pub youngs_modulus: Option<f64>,
+    pub poisson_ratio: Option<f64>,
+    pub relaxation_modulus: Option<&'a RelaxationModulusSpec>,
+    pub formulation: Formulation,
+    pub memory: &'a [MemorySpec],
+    /// Its place in `[[materials]]`; None for `[material]`.
+    part: Option<usize>,
+}
+
+impl Constants<'_> {
+    /// How messages name one of its keys: `material.youngs_modulus` or
+    /// `materials[1].youngs_modulus`.
+    pub fn key(&self, key: &str) -> String {
+        match self.part {
+            None => format!("material.{key}"),
+            Some(i) => format!("materials[{i}].{key}"),
+        }
+    }
+
+    /// The key of the whole table: `material` or `materials[1]`.
+    pub fn table(&self) -> String {
+        match self.part {
+            None => "material".into(),
+            Some(i) => format!("materials[{i}]"),
+        }
+    }
+
+    /// How messages name its memory section `i`: `memory` / `memory[i]` for `[material]`'s,
+    /// `materials[1].memory` / `materials[1].memory[i]` for an entry's.
+    pub fn memory_key(&self, i: usize) -> String {
+        let prefix = match self.part {
+            None => String::new(),
+            Some(p) => format!("materials[{p}]."),
+        };
+        if self.memory.len() > 1 {
+            format!("{prefix}memory[{i}]")
+        } else {
+            format!("{prefix}memory")
+        }
+    }
 }
 
 /// The element formulation's volumetric part (docs/method.md §8.4).
@@ -405,13 +485,57 @@ fn write_memory_sections<S: serde::Serializer>(specs: &[MemorySpec], s: S) -> Re
 }
 
 impl Scene {
-    /// How messages name memory section `i`: `memory` for one, else `memory[i]`.
+    /// How messages name memory section `i` of `[material]`: `memory` for one, else `memory[i]`.
     pub fn memory_key(&self, i: usize) -> String {
-        if self.memory.len() > 1 {
-            format!("memory[{i}]")
-        } else {
-            "memory".into()
+        self.material_constants().memory_key(i)
+    }
+
+    /// `[material]`'s constants with the `[memory]` sections.
+    pub fn material_constants(&self) -> Constants<'_> {
+        let m = &self.material;
+        Constants {
+            index: 0,
+            group: None,
+            youngs_modulus: m.youngs_modulus,
+            poisson_ratio: m.poisson_ratio,
+            relaxation_modulus: m.relaxation_modulus.as_ref(),
+            formulation: m.formulation,
+            memory: &self.memory,
+            part: None,
         }
+    }
+
+    /// Whether `[material]` gives constants of its own (the material of the cells no
+    /// `[[materials]]` entry claims): always without `[[materials]]`, else when it has any.
+    pub fn has_unnamed_material(&self) -> bool {
+        let m = &self.material;
+        self.materials.is_empty()
+            || m.youngs_modulus.is_some()
+            || m.poisson_ratio.is_some()
+            || m.relaxation_modulus.is_some()
+            || !self.memory.is_empty()
+    }
+
+    /// Every material's constants: `[material]`'s first when it has its own
+    /// ([`Self::has_unnamed_material`]), then the `[[materials]]` entries in order.
+    pub fn constants(&self) -> Vec<Constants<'_>> {
+        let unnamed = self.has_unnamed_material().then(|| self.material_constants());
+        let parts = self.materials.iter().enumerate().map(|(i, p)| Constants {
+            index: 0,
+            group: Some(&p.group),
+            youngs_modulus: p.youngs_modulus,
+            poisson_ratio: p.poisson_ratio,
+            relaxation_modulus: p.relaxation_modulus.as_ref(),
+            formulation: p.formulation.unwrap_or(self.material.formulation),
+            memory: &p.memory,
+            part: Some(i),
+        });
+        unnamed
+            .into_iter()
+            .chain(parts)
+            .enumerate()
+            .map(|(index, c)| Constants { index, ..c })
+            .collect()
     }
 }
 

@@ -6,7 +6,7 @@
 
 use super::error::SceneError;
 use super::types::{
-    BoundSpec, ContactDirection, ContactLawSpec, LawKind, MemoryKernelSpec, MemorySpec, ObstacleSpec, Scene,
+    BoundSpec, Constants, ContactDirection, ContactLawSpec, LawKind, MemoryKernelSpec, MemorySpec, ObstacleSpec, Scene,
     TensorSpec, BOUND_VARIABLES,
 };
 use crate::expr::Expr;
@@ -15,10 +15,17 @@ use toml::Value;
 /// The keys allowed in a table, given its path and contents.
 fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
     let kind = table.get("kind").and_then(|v| v.as_str());
-    Some(match path {
+    // a `[[materials]]` entry's relaxation modulus and memory are those of `[material]`
+    let path = match path.strip_prefix("materials.") {
+        Some(rest) if rest.starts_with("relaxation_modulus") => format!("material.{rest}"),
+        Some(rest) => rest.to_string(),
+        None => path.to_string(),
+    };
+    Some(match path.as_str() {
         "" => vec![
             "groups",
             "material",
+            "materials",
             "memory",
             "time",
             "dirichlet",
@@ -36,6 +43,14 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
             "poisson_ratio",
             "relaxation_modulus",
             "formulation",
+        ],
+        "materials" => vec![
+            "group",
+            "youngs_modulus",
+            "poisson_ratio",
+            "relaxation_modulus",
+            "formulation",
+            "memory",
         ],
         "material.relaxation_modulus" => vec!["bulk", "shear"],
         "material.relaxation_modulus.bulk" | "material.relaxation_modulus.shear" => vec!["long_term", "terms"],
@@ -221,7 +236,9 @@ fn invalid(origin: &str, key: &str, value: impl std::fmt::Display, fix: &str) ->
 
 /// Range checks of every value; expressions compile and are finite at a probe point.
 pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
-    check_material(scene, origin)?;
+    for c in scene.constants() {
+        check_material(&c, origin)?;
+    }
     let t = &scene.time;
     if !(t.final_time.is_finite() && t.final_time > 0.0) {
         return Err(invalid(
@@ -242,10 +259,12 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
             "more than 10⁸ steps is surely a typo",
         ));
     }
-    for (i, spec) in scene.memory.iter().enumerate() {
-        check_memory(spec, origin, &scene.memory_key(i))?;
+    for c in scene.constants() {
+        for (i, spec) in c.memory.iter().enumerate() {
+            check_memory(spec, origin, &c.memory_key(i))?;
+        }
+        check_memory_model(scene, &c, origin)?;
     }
-    check_memory_model(scene, origin)?;
     for (i, dc) in scene.dirichlet.iter().enumerate() {
         if dc.components.is_empty() {
             return Err(invalid(
@@ -476,35 +495,40 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
     Ok(())
 }
 
-/// `[material]`: either Young's modulus and Poisson's ratio, or a relaxation modulus (then no
-/// `[memory]`: the relaxation modulus is the memory, docs/method.md §15.2).
-fn check_material(scene: &Scene, origin: &str) -> Result<(), SceneError> {
-    let m = &scene.material;
-    if let Some(r) = &m.relaxation_modulus {
+/// A material (`[material]` or a `[[materials]]` entry): either Young's modulus and Poisson's
+/// ratio, or a relaxation modulus (then no memory sections: the relaxation modulus is the memory,
+/// docs/method.md §15.2).
+fn check_material(m: &Constants, origin: &str) -> Result<(), SceneError> {
+    if let Some(r) = m.relaxation_modulus {
         for (key, given) in [("youngs_modulus", m.youngs_modulus), ("poisson_ratio", m.poisson_ratio)] {
             if let Some(v) = given {
                 return Err(invalid(
                     origin,
-                    &format!("material.{key}"),
+                    &m.key(key),
                     v,
                     &format!(
-                        "material.relaxation_modulus is given too, and sets A = G(0): give either youngs_modulus and \
-                         poisson_ratio, or relaxation_modulus; remove material.{key} or the relaxation modulus"
+                        "{} is given too, and sets A = G(0): give either youngs_modulus and poisson_ratio, or \
+                         relaxation_modulus; remove {} or the relaxation modulus",
+                        m.key("relaxation_modulus"),
+                        m.key(key)
                     ),
                 ));
             }
         }
-        if !scene.memory.is_empty() {
+        if !m.memory.is_empty() {
             return Err(invalid(
                 origin,
-                "memory",
-                format!("({} section(s))", scene.memory.len()),
-                "material.relaxation_modulus is given too, and is the material's memory (B = G′): give either \
-                 [memory] or material.relaxation_modulus, not both",
+                &m.memory_key(0),
+                format!("({} section(s))", m.memory.len()),
+                &format!(
+                    "{} is given too, and is the material's memory (B = G′): give either the memory sections or the \
+                     relaxation modulus, not both",
+                    m.key("relaxation_modulus")
+                ),
             ));
         }
         for (part, p) in [("bulk", &r.bulk), ("shear", &r.shear)] {
-            let at = format!("material.relaxation_modulus.{part}");
+            let at = m.key(&format!("relaxation_modulus.{part}"));
             if !(p.long_term.is_finite() && p.long_term >= 0.0) {
                 return Err(invalid(
                     origin,
@@ -550,7 +574,7 @@ fn check_material(scene: &Scene, origin: &str) -> Result<(), SceneError> {
         if !(k0.is_finite() && g0.is_finite() && e0.is_finite() && e0 > 0.0) {
             return Err(invalid(
                 origin,
-                "material.relaxation_modulus",
+                &m.key("relaxation_modulus"),
                 format!("κ(0) = {k0:e}, G(0) = {g0:e}"),
                 "the instantaneous moduli κ(0) = long_term + Σ modulus and G(0) (and E(0) = 9κG/(3κ + G)) must be \
                  positive and finite",
@@ -560,13 +584,13 @@ fn check_material(scene: &Scene, origin: &str) -> Result<(), SceneError> {
     }
     let (Some(e), Some(nu)) = (m.youngs_modulus, m.poisson_ratio) else {
         let missing = if m.youngs_modulus.is_none() {
-            "material.youngs_modulus"
+            m.key("youngs_modulus")
         } else {
-            "material.poisson_ratio"
+            m.key("poisson_ratio")
         };
         return Err(invalid(
             origin,
-            missing,
+            &missing,
             "(missing)",
             "give youngs_modulus and poisson_ratio (e.g. youngs_modulus = 1.0, poisson_ratio = 0.3), or a \
              relaxation_modulus = { bulk = { long_term = κ∞, terms = [...] }, shear = { ... } }",
@@ -575,7 +599,7 @@ fn check_material(scene: &Scene, origin: &str) -> Result<(), SceneError> {
     if !(e.is_finite() && e > 0.0) {
         return Err(invalid(
             origin,
-            "material.youngs_modulus",
+            &m.key("youngs_modulus"),
             e,
             "Young's modulus must be positive and finite",
         ));
@@ -583,7 +607,7 @@ fn check_material(scene: &Scene, origin: &str) -> Result<(), SceneError> {
     if !(nu > -1.0 && nu < 0.5) {
         return Err(invalid(
             origin,
-            "material.poisson_ratio",
+            &m.key("poisson_ratio"),
             nu,
             "Poisson's ratio must lie in (−1, 0.5)",
         ));
@@ -595,17 +619,19 @@ fn check_material(scene: &Scene, origin: &str) -> Result<(), SceneError> {
 /// moduli only when ∝ A (a relaxation modulus only when bulk and shear relax proportionally), and
 /// a time step within the bound a relaxing memory sets. The dimension is the scene's: 2 with
 /// `material.plane` (a 2D mesh requires it), 3 without.
-fn check_memory_model(scene: &Scene, origin: &str) -> Result<(), SceneError> {
+fn check_memory_model(scene: &Scene, c: &Constants, origin: &str) -> Result<(), SceneError> {
     use crate::material::PlaneModel;
     let plane = scene.material.plane.map(|p| match p {
         super::Plane::Stress => PlaneModel::Stress,
         super::Plane::Strain => PlaneModel::Strain,
     });
     let bad = |e: super::MaterialError| invalid(origin, &e.key, e.value, &e.fix);
-    let (elasticity, memory) = scene.material_model(plane).map_err(bad)?;
+    let (elasticity, memory) = c.model(plane).map_err(bad)?;
     if let Some(m) = memory {
         let dim = if plane.is_some() { 2 } else { 3 };
-        scene.check_time_step(&m, elasticity.tensor(), dim).map_err(bad)?;
+        scene
+            .check_time_step(&m, elasticity.tensor(), dim)
+            .map_err(|e| bad(e.of(c, !scene.materials.is_empty())))?;
     }
     Ok(())
 }

@@ -1,7 +1,9 @@
 //! Warnings of `hvi check`: set-ups that are valid but probably not what the user meant
 //! (docs/method.md §14.5). Each is a sentence naming the group and what to do instead.
 
+use super::materials::LOCKING_BULK_TO_SHEAR;
 use super::setup::Simulation;
+use crate::fem::materials::BodyMaterial;
 use crate::scene::{BoundSpec, Scene};
 
 /// The angle (degrees) between two nodal normals of one contact group above which its Γ₃
@@ -11,56 +13,19 @@ const CURVED_DEGREES: f64 = 10.0;
 /// The warnings for a scene on its simulation (empty: nothing looks unintended).
 pub fn warnings<const D: usize>(scene: &Scene, sim: &Simulation<D>) -> Vec<String> {
     let mut out = Vec::new();
-    // a relaxation the time step does not resolve: the scheme's long-term moduli, which set the
-    // creep's end value, are off (docs/method.md §15.3; not positive at all is refused)
-    if let Some(m) = &sim.memory {
-        let (a, k) = (sim.elasticity.tensor(), sim.time.step());
-        if let Some(off) = m
-            .long_term_error(a, D, k)
-            .filter(|&off| off > crate::material::LONG_TERM_TOLERANCE)
-        {
-            let needed = m
-                .largest_accurate_step(a, D, crate::material::LONG_TERM_TOLERANCE, k)
-                .map_or(String::new(), |k1| {
-                    format!(
-                        "; time.steps ≥ {} bring them within 1 %",
-                        (scene.time.final_time / k1).ceil()
-                    )
-                });
-            out.push(format!(
-                "the time step k = {k:e} does not resolve the relaxation: the scheme's long-term moduli are {:.1} % \
-                 off the material's (the trapezoid rule over-integrates each relaxation term by about (k/τ)²/12 of its \
-                 strength, which a small long-term modulus feels most), and a creep under a constant load ends at the \
-                 displacement those moduli give{needed} (docs/method.md §15.3)",
-                100.0 * off
-            ));
-        }
-    }
-    // a nearly incompressible material (at once, or as its shear relaxes): the elements lock
-    if let Some((at_once, long_term)) = super::setup::bulk_to_shear(scene, &sim.elasticity) {
-        let (ratio, when, nu) = match long_term {
-            Some(l) if l > at_once => (
-                l,
-                "once relaxed (κ∞/G∞)",
-                format!("{:.6}", (3.0 * l - 2.0) / (6.0 * l + 2.0)),
-            ),
-            _ => (at_once, "", format!("{}", sim.elasticity.poisson_ratio)),
+    let several = sim.materials.list().len() > 1;
+    for (i, material) in sim.materials.list().iter().enumerate() {
+        let which = if several {
+            format!("the material of {}", material.name)
+        } else {
+            "the material".to_string()
         };
-        // mean dilatation holds quadrilaterals and hexahedra; triangles and tetrahedra still lock
-        let locking = sim.mesh.cells.iter().filter(|c| !sim.volumetric.projects(c)).count();
-        let cells = match locking == sim.mesh.cells.len() {
-            true => "hvi's P1/Q1 elements".to_string(),
-            false => format!("its {locking} triangles or tetrahedra (mean dilatation holds the other cells)"),
-        };
-        if ratio >= super::setup::LOCKING_BULK_TO_SHEAR && locking > 0 {
-            out.push(format!(
-                "the material is nearly incompressible{}{when}: K/G = {ratio:.3e} (ν = {nu}); {cells} \
-                 lock there and come out too stiff (2D Hertz: up to 7.8 % off in a and p₀ at ν = 0.499, up to 40 % at \
-                 0.4999; docs/troubleshooting.md); mesh it with quadrilaterals or hexahedra (mean dilatation, \
-                 `material.formulation`), and check the contact pressure against a coarser and a finer mesh",
-                if when.is_empty() { "" } else { " " }
-            ));
-        }
+        out.extend(unresolved_relaxation(scene, sim, material, &which));
+        let cells: Vec<&crate::mesh::Cell> = (0..sim.mesh.cells.len())
+            .filter(|&c| sim.materials.id_of_cell(c).index() == i)
+            .map(|c| &sim.mesh.cells[c])
+            .collect();
+        out.extend(locking(material, &cells, &which));
     }
     // a traction on a group whose displacement is prescribed does work only on the reaction
     let prescribed: Vec<(String, String)> = scene
@@ -191,4 +156,62 @@ fn body_diameter<const D: usize>(points: &[[f64; D]]) -> f64 {
         })
         .sum::<f64>()
         .sqrt()
+}
+
+/// A relaxation the time step does not resolve: the scheme's long-term moduli, which set the
+/// creep's end value, are off (docs/method.md §15.3; not positive at all is refused).
+fn unresolved_relaxation<const D: usize>(
+    scene: &Scene,
+    sim: &Simulation<D>,
+    material: &BodyMaterial,
+    which: &str,
+) -> Option<String> {
+    let m = material.memory.as_ref()?;
+    let (a, k) = (material.elasticity.tensor(), sim.time.step());
+    let off = m
+        .long_term_error(a, D, k)
+        .filter(|&off| off > crate::material::LONG_TERM_TOLERANCE)?;
+    let needed = m
+        .largest_accurate_step(a, D, crate::material::LONG_TERM_TOLERANCE, k)
+        .map_or(String::new(), |k1| {
+            format!(
+                "; time.steps ≥ {} bring them within 1 %",
+                (scene.time.final_time / k1).ceil()
+            )
+        });
+    Some(format!(
+        "the time step k = {k:e} does not resolve the relaxation of {which}: the scheme's long-term moduli are {:.1} % \
+         off the material's (the trapezoid rule over-integrates each relaxation term by about (k/τ)²/12 of its \
+         strength, which a small long-term modulus feels most), and a creep under a constant load ends at the \
+         displacement those moduli give{needed} (docs/method.md §15.3)",
+        100.0 * off
+    ))
+}
+
+/// A nearly incompressible material (at once, or as its shear relaxes) on `cells`, its cells:
+/// those that do not project their volumetric strain lock (docs/method.md §8.4).
+fn locking(material: &BodyMaterial, cells: &[&crate::mesh::Cell], which: &str) -> Option<String> {
+    let (at_once, long_term) = material.bulk_to_shear()?;
+    let (ratio, when, nu) = match long_term {
+        Some(l) if l > at_once => (
+            l,
+            " once relaxed (κ∞/G∞)",
+            format!("{:.6}", (3.0 * l - 2.0) / (6.0 * l + 2.0)),
+        ),
+        _ => (at_once, "", format!("{}", material.elasticity.poisson_ratio)),
+    };
+    // mean dilatation holds quadrilaterals and hexahedra; triangles and tetrahedra still lock
+    let locked = cells.iter().filter(|c| !material.volumetric.projects(c)).count();
+    let what = match locked == cells.len() {
+        true => "hvi's P1/Q1 elements".to_string(),
+        false => format!("its {locked} triangles or tetrahedra (mean dilatation holds the other cells)"),
+    };
+    (ratio >= LOCKING_BULK_TO_SHEAR && locked > 0).then(|| {
+        format!(
+            "{which} is nearly incompressible{when}: K/G = {ratio:.3e} (ν = {nu}); {what} lock there and come out \
+             too stiff (2D Hertz: up to 7.8 % off in a and p₀ at ν = 0.499, up to 40 % at 0.4999; \
+             docs/troubleshooting.md); mesh it with quadrilaterals or hexahedra (mean dilatation, \
+             `material.formulation`), and check the contact pressure against a coarser and a finer mesh"
+        )
+    })
 }

@@ -8,10 +8,8 @@ use super::operator::{system_matrix, StepOperator};
 use super::reactions::Reactions;
 use super::setup::Simulation;
 use super::stats::{timed, RunStats};
-use crate::fem::assembly::assemble_stiffness_with;
 use crate::fem::{NodeBlockMatrix, SymmetricMatrix};
 use crate::linalg::{Analysis, Counters, Factor};
-use crate::material::Isotropic;
 
 /// K_j as the time loop multiplies it: in node blocks (a third of the memory traffic) when
 /// its pattern allows, else as assembled. Unmodified: the memory load includes the history of
@@ -66,40 +64,19 @@ impl<const D: usize> FaerBackend<D> {
         stats: &mut RunStats,
     ) -> Result<StepOperator, SolveError> {
         let (points, cells) = (&sim.mesh.points, &sim.mesh.cells);
-        let a = sim.elasticity.tensor();
-        let channels: Vec<Isotropic> = sim
-            .memory
-            .as_ref()
-            .map_or(Vec::new(), |m| m.channels().iter().map(|c| c.tensor).collect());
-        if channels.len() != memory.len() {
+        let channels = sim.materials.memory().map_or(0, |m| m.channels().len());
+        if channels != memory.len() {
             return Err(SolveError::Setup(format!(
-                "the step matrix names {} memory channels and the memory term has {}",
-                memory.len(),
-                channels.len()
+                "the step matrix names {} memory channels and the materials' memories have {channels}",
+                memory.len()
             )));
         }
-        // one assembly pass for K_A and every channel's K_j (one or two, docs/method.md §15.1)
-        let assembled = timed(&mut stats.phases.assembly, || match channels[..] {
-            [] => {
-                let [a] = assemble_stiffness_with(cells, points, &sim.dofs, &[a], sim.volumetric);
-                Some((a, Vec::new()))
-            }
-            [t] => {
-                let [a, b] = assemble_stiffness_with(cells, points, &sim.dofs, &[a, t], sim.volumetric);
-                Some((a, vec![b]))
-            }
-            [t, v] => {
-                let [a, b, c] = assemble_stiffness_with(cells, points, &sim.dofs, &[a, t, v], sim.volumetric);
-                Some((a, vec![b, c]))
-            }
-            _ => None,
+        // one assembly pass for K_A and every channel's K_j (docs/method.md §8.5, §15.1)
+        let mut assembled = timed(&mut stats.phases.assembly, || {
+            sim.materials.assemble(cells, points, &sim.dofs, true, true)
         });
-        let Some((k_a, k_b)) = assembled else {
-            return Err(SolveError::Setup(format!(
-                "a memory term has one or two channels, this one {}",
-                channels.len()
-            )));
-        };
+        let k_b = assembled.split_off(1);
+        let k_a = assembled.pop().expect("K_A");
         stats.matrix_nonzeros = k_a.values.len();
         // The pattern the factors have: identity rows, fully prescribed nodes decoupled. In 3D the
         // contact normals' unknowns go last (docs/method.md §4.5): G and W then live in the
@@ -161,15 +138,9 @@ impl<const D: usize> Backend<D> for FaerBackend<D> {
                 let k_a = match &self.k_a {
                     Some(k_a) => k_a,
                     None => {
-                        let tensor = sim.elasticity.tensor();
-                        let [k_a] = timed(&mut stats.phases.assembly, || {
-                            assemble_stiffness_with(
-                                &sim.mesh.cells,
-                                &sim.mesh.points,
-                                &sim.dofs,
-                                &[tensor],
-                                sim.volumetric,
-                            )
+                        let k_a = timed(&mut stats.phases.assembly, || {
+                            sim.materials
+                                .assemble_elastic(&sim.mesh.cells, &sim.mesh.points, &sim.dofs)
                         });
                         assembled = k_a;
                         &assembled
@@ -212,13 +183,9 @@ pub struct ElasticCheck {
 impl ElasticCheck {
     /// Assembles K_A and analyses its pattern as a run would.
     pub fn new<const D: usize>(sim: &Simulation<D>) -> Result<Self, SolveError> {
-        let [k_a] = assemble_stiffness_with(
-            &sim.mesh.cells,
-            &sim.mesh.points,
-            &sim.dofs,
-            &[sim.elasticity.tensor()],
-            sim.volumetric,
-        );
+        let k_a = sim
+            .materials
+            .assemble_elastic(&sim.mesh.cells, &sim.mesh.points, &sim.dofs);
         let k_a = k_a.with_identity_rows(&sim.dofs);
         let analysis = Factor::analyse_with_last(&k_a, &sim.unknowns_ordered_last())
             .map_err(|e| SolveError::Setup(e.to_string()))?;

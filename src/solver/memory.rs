@@ -60,7 +60,7 @@ impl MemoryEstimate {
     pub fn new<const D: usize>(sim: &Simulation<D>, analysis: &Analysis, matrix_entries: usize) -> Self {
         let n = sim.dofs.n() as u64;
         let factor = 8 * analysis.factor_entries() as u64;
-        let channels = sim.memory.as_ref().map_or(0, |m| m.channels().len()) as u64;
+        let channels = sim.materials.memory().map_or(0, |m| m.channels().len()) as u64;
         let matrices = (16.0 * matrix_entries as f64 * (MATRIX_COPIES + channels.saturating_sub(1) as f64)) as u64;
         let mut parts = vec![("factor", factor), ("matrices", matrices)];
         if let Some(c) = &sim.contact {
@@ -89,7 +89,7 @@ impl MemoryEstimate {
                 ((copies + kept) * 8.0 * (m * m) as f64) as u64,
             ));
         }
-        let history = sim.memory.as_ref().map_or(0, |_| 8 * n * (2 + 3 * channels.max(1)));
+        let history = sim.materials.memory().map_or(0, |_| 8 * n * (2 + 3 * channels.max(1)));
         // step vectors (load, right-hand side, displacement, forward sweep) and one frame's
         // fields (nodal and cell stresses, 9 components each)
         let cells = sim.mesh.cells.len() as u64;

@@ -10,6 +10,7 @@ pub mod contact;
 pub mod dirichlet;
 pub mod error;
 pub mod faer;
+pub mod materials;
 pub mod memory;
 pub mod operator;
 pub mod plan;

@@ -201,9 +201,14 @@ const NOT_HELD: &str =
 /// material (K/G ≥ [`MATERIAL_SINGULAR_BULK_TO_SHEAR`], not in plane stress) the message names
 /// the material first, the supports second; otherwise the supports.
 pub fn singular<const D: usize>(sim: &Simulation<D>, what: Singularity) -> SolveError {
-    let e = &sim.elasticity;
+    let m = sim.materials.most_incompressible();
+    let e = &m.elasticity;
     let ratio = e.bulk_to_shear();
     let material = e.plane != Some(crate::material::PlaneModel::Stress) && ratio >= MATERIAL_SINGULAR_BULK_TO_SHEAR;
+    let which = match sim.materials.list().len() {
+        1 => "the material".to_string(),
+        _ => format!("the material of {}", m.name),
+    };
     let symptom = match what {
         Singularity::Pivot => {
             "the stiffness matrix is not positive definite (pivot failed in the Cholesky factorisation)".to_string()
@@ -214,7 +219,7 @@ pub fn singular<const D: usize>(sim: &Simulation<D>, what: Singularity) -> Solve
     };
     let detail = match (material, what) {
         (true, _) => format!(
-            "{symptom}: the material is nearly incompressible (ν = {}, K/G = {ratio:.3e}), so the matrix is ill-conditioned \
+            "{symptom}: {which} is nearly incompressible (ν = {}, K/G = {ratio:.3e}), so the matrix is ill-conditioned \
              by the material rather than by the supports; lower ν (hvi's elements lock from about ν = 0.495, K/G = 100, \
              on: docs/troubleshooting.md), and if that does not help, the body is not held: clamp a part of its boundary",
             e.poisson_ratio

@@ -20,41 +20,59 @@ pub struct Plan {
     pub solves_per_step: usize,
 }
 
+/// The materials: the 2D model, and per material E, ν and the formulation (its name first when
+/// there are several).
+fn elasticity_detail<const D: usize>(sim: &Simulation<D>) -> String {
+    let model = match sim.materials.plane() {
+        Some(crate::material::PlaneModel::Stress) => "2D, plane stress",
+        Some(crate::material::PlaneModel::Strain) => "2D, plane strain",
+        None => "3D",
+    };
+    let several = sim.materials.list().len() > 1;
+    let counts = sim.materials.cell_counts(sim.mesh.cells.len());
+    let parts: Vec<String> = sim
+        .materials
+        .list()
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            let projected = (0..sim.mesh.cells.len())
+                .filter(|&c| sim.materials.id_of_cell(c).index() == i && m.volumetric.projects(&sim.mesh.cells[c]))
+                .count();
+            format!(
+                "{}E = {}, ν = {}{}{}",
+                if several {
+                    format!("{} ({} cells): ", m.name, counts[i])
+                } else {
+                    String::new()
+                },
+                m.elasticity.youngs_modulus,
+                m.elasticity.poisson_ratio,
+                if m.memory.as_ref().is_some_and(|m| m.is_from_relaxation_modulus()) {
+                    " (instantaneous: A = G(0) of the relaxation modulus)"
+                } else {
+                    ""
+                },
+                match m.volumetric {
+                    crate::fem::assembly::Volumetric::CellMean => format!(
+                        "; mean dilatation (B-bar) on {projected} of {} cells (docs/method.md §8.4)",
+                        counts[i]
+                    ),
+                    crate::fem::assembly::Volumetric::Pointwise => String::new(),
+                }
+            )
+        })
+        .collect();
+    format!("{model}, {}", parts.join("; "))
+}
+
 impl Plan {
     /// The plan of `sim`.
     pub fn new<const D: usize>(sim: &Simulation<D>) -> Self {
         let n = sim.dofs.n_free();
         let mut effects = vec![Effect {
             name: "elasticity",
-            detail: format!(
-                "{}, E = {}, ν = {}{}{}",
-                match sim.elasticity.plane {
-                    Some(p) => format!(
-                        "2D, plane {}",
-                        if p == crate::material::PlaneModel::Stress {
-                            "stress"
-                        } else {
-                            "strain"
-                        }
-                    ),
-                    None => "3D".to_string(),
-                },
-                sim.elasticity.youngs_modulus,
-                sim.elasticity.poisson_ratio,
-                if sim.memory.as_ref().is_some_and(|m| m.is_from_relaxation_modulus()) {
-                    " (instantaneous: A = G(0) of the relaxation modulus)"
-                } else {
-                    ""
-                },
-                match sim.volumetric {
-                    crate::fem::assembly::Volumetric::CellMean => format!(
-                        "; mean dilatation (B-bar) on {} of {} cells (docs/method.md §8.4)",
-                        sim.mesh.cells.iter().filter(|c| sim.volumetric.projects(c)).count(),
-                        sim.mesh.cells.len()
-                    ),
-                    crate::fem::assembly::Volumetric::Pointwise => String::new(),
-                }
-            ),
+            detail: elasticity_detail(sim),
             cost: format!("K_A assembled once ({n} unknowns), factorised once"),
         }];
         if sim.dirichlet.is_nonzero() {
@@ -105,7 +123,7 @@ impl Plan {
         }
         let mut factorisations = 1;
         let mut solves_per_step = 1;
-        if let Some(memory) = &sim.memory {
+        if let Some(memory) = sim.materials.memory() {
             // the accumulated atoms of all kernels: one vector per distinct relaxation time and
             // per monomial degree, every step's displacement for a general kernel (§5, §15)
             let mut taus: Vec<f64> = Vec::new();
@@ -136,17 +154,28 @@ impl Plan {
             .collect();
             let algo = algo.join(" + ");
             let j = memory.channels().len();
-            let d = sim.elasticity.plane.map_or(3, |_| 2);
-            let bound = match memory.largest_stable_step(sim.elasticity.tensor(), d) {
-                Some(k_max) => format!(
-                    "; b(0) < 0: K positive definite for k < {k_max:.4e} (here k = {:.4e})",
-                    sim.time.step()
-                ),
-                None => String::new(),
-            };
+            let d = sim.materials.plane().map_or(3, |_| 2);
+            let several = sim.materials.list().len() > 1;
+            let mut described = Vec::new();
+            for m in sim.materials.list() {
+                let Some(own) = &m.memory else { continue };
+                let bound = match own.largest_stable_step(m.elasticity.tensor(), d) {
+                    Some(k_max) => format!(
+                        "; b(0) < 0: K positive definite for k < {k_max:.4e} (here k = {:.4e})",
+                        sim.time.step()
+                    ),
+                    None => String::new(),
+                };
+                let name = if several {
+                    format!("{}: ", m.name)
+                } else {
+                    String::new()
+                };
+                described.push(format!("{name}{}{bound}", own.describe()));
+            }
             effects.push(Effect {
                 name: "memory",
-                detail: format!("{}{bound}", memory.describe()),
+                detail: described.join("; "),
                 cost: format!(
                     "{j} K_B matri{} assembled once; history by {algo}: {vectors} vectors of {n} unknowns ({:.1} MiB), {j} K_B product(s) per step",
                     if j == 1 { "x" } else { "ces" },
@@ -255,7 +284,7 @@ impl Plan {
                 ),
             });
         }
-        if sim.memory.is_some() {
+        if sim.materials.memory().is_some() {
             factorisations += 1; // possibly K_A for step 0
         }
         if sim.is_static() {

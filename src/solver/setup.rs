@@ -4,10 +4,10 @@
 
 use super::dirichlet::Dirichlet;
 use super::error::SolveError;
-use crate::fem::assembly::Volumetric;
 use crate::fem::loads::Loads;
+use crate::fem::materials::Materials;
 use crate::fem::DofMap;
-use crate::material::{Elasticity, Memory, PlaneModel};
+use crate::material::PlaneModel;
 use crate::mesh::{GroupSelector, Mesh};
 use crate::scene::{self, Expr, Scene};
 
@@ -56,9 +56,8 @@ pub struct Simulation<const D: usize> {
     pub dofs: DofMap<D>,
     /// The prescribed components and their values (docs/method.md §7).
     pub dirichlet: Dirichlet<D>,
-    pub elasticity: Elasticity,
-    /// The memory term B(s) = Σ_m b_m(s) B_m and its channels (docs/method.md §15).
-    pub memory: Option<Memory>,
+    /// The materials, each cell's, and their memories as one (docs/method.md §8.5, §15).
+    pub materials: Materials,
     pub loads: Loads<D>,
     pub contact: Option<ContactSetup<D>>,
     pub time: TimeGrid,
@@ -66,8 +65,6 @@ pub struct Simulation<const D: usize> {
     pub threads: usize,
     /// How a step is condensed onto the contact normals.
     pub condensation: scene::CondensationKind,
-    /// How the cells' volumetric strain enters the stiffness (docs/method.md §8.4).
-    pub volumetric: Volumetric,
 }
 
 fn exprs<const D: usize>(
@@ -94,36 +91,12 @@ fn exprs<const D: usize>(
     Ok(out.try_into().unwrap_or_else(|_| unreachable!("D expressions")))
 }
 
-/// From this K/G on (ν ≥ 0.495) the material is nearly incompressible for hvi's elements, which
-/// lock (the plain P1/Q1 cells; [`Volumetric::CellMean`] is chosen from here on by
-/// `material.formulation = "auto"`): measured on 2D Hertz (a block on a rigid cylinder, docs/troubleshooting.md), the contact
-/// half-width and peak pressure are within 1.5 % at ν = 0.49 (K/G = 50), off by up to 7.8 % at
-/// 0.499 (K/G = 500) and by up to 40 % at 0.4999.
-pub const LOCKING_BULK_TO_SHEAR: f64 = 100.0;
-
-/// K/G of the material at t = 0 and, for a relaxation modulus, as t → ∞ (infinite for a shear
-/// modulus that relaxes to zero); None in plane stress, which does not lock.
-pub fn bulk_to_shear(scene: &Scene, elasticity: &crate::material::Elasticity) -> Option<(f64, Option<f64>)> {
-    if elasticity.plane == Some(crate::material::PlaneModel::Stress) {
-        return None;
-    }
-    let long_term = scene.material.relaxation_modulus.as_ref().map(|r| {
-        let (k, g) = (r.bulk.long_term, r.shear.long_term);
-        if g > 0.0 {
-            k / g
-        } else {
-            f64::INFINITY
-        }
-    });
-    Some((elasticity.bulk_to_shear(), long_term))
-}
-
 impl<const D: usize> Simulation<D> {
     /// Whether the state of step 0 stands for every step (one solve for the run): no memory and
     /// nothing that changes in time — loads, prescribed values, forces, a moving obstacle
     /// (docs/method.md §14.2). The plan and the time loop both ask here.
     pub fn is_static(&self) -> bool {
-        self.memory.is_none()
+        self.materials.memory().is_none()
             && !self.loads.is_time_dependent()
             && !self.dirichlet.is_time_dependent()
             && self.contact.as_ref().is_none_or(|c| c.motion.is_none())
@@ -184,12 +157,7 @@ impl<const D: usize> Simulation<D> {
             }
             (_, None) => None,
         };
-        // the scene's checks have run these too (with D from material.plane), naming the file
-        let scene_error = |e: scene::MaterialError| SolveError::Setup(format!("the scene's {e}"));
-        let (elasticity, memory) = scene.material_model(plane).map_err(scene_error)?;
-        if let Some(m) = &memory {
-            scene.check_time_step(m, elasticity.tensor(), D).map_err(scene_error)?;
-        }
+        let materials = super::materials::build(scene, &mesh, plane)?;
         let mut loads = Loads::new();
         for (i, t) in scene.traction.iter().enumerate() {
             let part = mesh.boundary(&t.group).map_err(super::error::group_error(
@@ -220,34 +188,17 @@ impl<const D: usize> Simulation<D> {
             );
         }
         let contact = super::contact::build(scene, &mesh, &dofs, &origin)?;
-        // mean dilatation where the material is nearly incompressible, or as the scene forces
-        let nearly_incompressible = bulk_to_shear(scene, &elasticity)
-            .is_some_and(|(at_once, long_term)| at_once.max(long_term.unwrap_or(0.0)) >= LOCKING_BULK_TO_SHEAR);
-        let volumetric = match scene.material.formulation {
-            scene::Formulation::Auto if nearly_incompressible => Volumetric::CellMean,
-            scene::Formulation::MeanDilatation if elasticity.plane == Some(PlaneModel::Stress) => {
-                return Err(SolveError::Setup(format!(
-                    "{}: `material.formulation` = \"mean_dilatation\": plane stress has no volumetric constraint to \
-                     relieve (it does not lock); use plane = \"strain\", or leave `formulation` out",
-                    scene.origin
-                )))
-            }
-            scene::Formulation::MeanDilatation => Volumetric::CellMean,
-            _ => Volumetric::Pointwise,
-        };
         Ok(Simulation {
             mesh,
             dofs,
             dirichlet,
-            elasticity,
-            memory,
+            materials,
             loads,
             contact,
             time,
             output_every: scene.output.every,
             threads: 1,
             condensation: scene.solver.condensation,
-            volumetric,
         })
     }
 

@@ -126,7 +126,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
         };
         let k = sim.time.step();
         // (k/2) b_j(0) of each memory channel (docs/method.md §15.1)
-        let memory_diagonal: Vec<f64> = sim.memory.as_ref().map_or(Vec::new(), |m| {
+        let memory_diagonal: Vec<f64> = sim.materials.memory().map_or(Vec::new(), |m| {
             (0..m.channels().len())
                 .map(|j| 0.5 * k * m.kernel_value(j, 0.0))
                 .collect()
@@ -143,7 +143,7 @@ impl<'s, const D: usize> Stepper<'s, D> {
                 stats.smallness = Some(op.trace_constant(&weights));
             }
         }
-        let history = sim.memory.as_ref().map(|m| History::new(m, n_dof, sim.time.step()));
+        let history = sim.materials.memory().map(|m| History::new(m, n_dof, sim.time.step()));
         let n_channels = memory_diagonal.len();
         let contact = sim
             .contact
