@@ -181,12 +181,15 @@ fn nodal_stress_is_the_volume_weighted_mean() {
         poisson_ratio: 0.3,
         plane: Some(hvi::material::PlaneModel::Strain),
     };
-    let materials = hvi::fem::materials::Materials::one(hvi::fem::materials::BodyMaterial {
-        name: "[material]".into(),
-        elasticity: e,
-        memory: None,
-        volumetric: hvi::fem::assembly::Volumetric::Pointwise,
-    });
+    let materials = hvi::fem::materials::Materials::one(
+        hvi::fem::materials::BodyMaterial {
+            name: "[material]".into(),
+            elasticity: e,
+            memory: None,
+            volumetric: hvi::fem::assembly::Volumetric::Pointwise,
+        },
+        &mesh.cells,
+    );
     let linear: Vec<[f64; 2]> = mesh
         .points
         .iter()

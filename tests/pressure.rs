@@ -167,6 +167,20 @@ fn value_and_pressure_exclude_each_other() {
 /// other's on the coarsest) and its cell pressures scatter.
 #[test]
 fn lame_cylinder_nearly_incompressible_with_mean_dilatation() {
+    nearly_incompressible_lame("q1");
+}
+
+/// The same on triangles (ring_p1_n*.msh) with the nodal-averaged dilatation (docs/method.md
+/// §8.4): the displacement converges at order 2 where the plain P1 element locks; the pressure
+/// (each cell's the mean of its nodes' patch pressures) oscillates from ring to ring of nodes
+/// (one pressure per node is not inf-sup stable): its largest error falls, from 3.2 to 1.5 ×
+/// Lamé's over the three meshes, but slowly (the plain P1's grows, 12 to 42 ×).
+#[test]
+fn lame_cylinder_nearly_incompressible_on_triangles_with_nodal_dilatation() {
+    nearly_incompressible_lame("p1");
+}
+
+fn nearly_incompressible_lame(kind: &str) {
     let (e, nu, p) = (1.0, 0.4999, 0.01);
     let scale = lame(&[1.0, 0.0], e, nu, p)[0];
     let exact_pressure = -2.0 * (1.0 + nu) * p / (3.0 * 3.0);
@@ -175,24 +189,32 @@ fn lame_cylinder_nearly_incompressible_with_mean_dilatation() {
             "poisson_ratio = 0.3",
             &format!("poisson_ratio = {nu}\nformulation = \"{formulation}\""),
         );
-        let (sim, _, sink) = solve_in_memory(&scene(&text), mesh::<2>(&format!("ring_q1_n{n}.msh"))).unwrap();
+        let (sim, _, sink) = solve_in_memory(&scene(&text), mesh::<2>(&format!("ring_{kind}_n{n}.msh"))).unwrap();
         let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
         let error = nodal_error(&sim.mesh.points, &u, |x| lame(x, e, nu, p)) / scale;
         let stress = hvi::fem::stress::cell_stresses(&sim.mesh.cells, &sim.mesh.points, &sim.materials, None, &u, None);
-        let pressure_error = stress
+        let pressures: Vec<f64> = stress
             .tensor
             .chunks_exact(9)
-            .map(|s| ((-(s[0] + s[4] + s[8]) / 3.0) / exact_pressure - 1.0).abs())
-            .fold(0.0, f64::max);
-        (error, pressure_error)
+            .map(|s| (-(s[0] + s[4] + s[8]) / 3.0) / exact_pressure - 1.0)
+            .collect();
+        (error, pressures.iter().map(|e| e.abs()).fold(0.0, f64::max))
     };
     let mean: Vec<(f64, f64)> = [4, 8, 16].iter().map(|&n| run(n, "auto")).collect();
     let plain: Vec<(f64, f64)> = [4, 8, 16].iter().map(|&n| run(n, "standard")).collect();
-    eprintln!("mean dilatation (error, pressure error): {mean:?}\nplain Q1: {plain:?}");
+    eprintln!("{kind} mean dilatation (error, pressure error): {mean:?}\nplain: {plain:?}");
     let orders: Vec<f64> = mean.windows(2).map(|w| (w[0].0 / w[1].0).log2()).collect();
-    assert!(orders.iter().all(|q| (q - 2.0).abs() < 0.25), "orders {orders:?}");
+    // (P1: 1.95 and 2.28, the coarsest ring's four cells across the wall not yet asymptotic)
+    assert!(orders.iter().all(|q| (q - 2.0).abs() < 0.35), "orders {orders:?}");
     assert!(mean[2].0 < 1e-2, "{mean:?}");
-    assert!(mean.iter().all(|m| m.1 < 1e-2), "pressure {mean:?}");
+    if kind == "q1" {
+        assert!(mean.iter().all(|m| m.1 < 1e-2), "pressure {mean:?}");
+    } else {
+        assert!(
+            mean.windows(2).all(|w| w[1].1 < w[0].1),
+            "the P1 pressures' oscillation falls: {mean:?}"
+        );
+    }
     assert!(
         plain[0].0 > 3.0 * mean[0].0,
         "the plain element locks: {plain:?} against {mean:?}"

@@ -4,6 +4,7 @@
 //! sequential pass in cell order.
 
 use super::dofs::DofMap;
+use super::nodal_dilatation::NodalPatches;
 use crate::linalg::sparse::{Pattern, SymmetricMatrix};
 use crate::material::Isotropic;
 use crate::mesh::element::{shape_at, stiffness_rule};
@@ -18,18 +19,32 @@ pub enum Volumetric {
     /// tr ε(u) at every quadrature point: the plain displacement element.
     #[default]
     Pointwise,
-    /// Mean dilatation (B-bar): on quadrilaterals, hexahedra, prisms and pyramids the bulk part
-    /// K tr ε(v) tr ε(u) is taken with the cell's mean of tr ε, θ̄ = (1/|c|) ∫_c div u, so that
-    /// the cell holds one volumetric constraint and does not lock as K/G grows. Simplices (constant
-    /// strain) are the same either way.
-    CellMean,
+    /// A mean dilatation, so that a nearly incompressible body does not lock: on quadrilaterals,
+    /// hexahedra, prisms and pyramids the bulk part K tr ε(v) tr ε(u) is taken with the cell's
+    /// mean θ̄ = (1/|c|) ∫_c div u (B-bar), on triangles and tetrahedra (one divergence per cell
+    /// already) with the mean over the patch of each node ([`super::nodal_dilatation`]).
+    Mean,
 }
 
 impl Volumetric {
-    /// Whether `cell` takes its volumetric strain as the cell's mean.
-    pub fn projects(self, cell: &Cell) -> bool {
-        self == Volumetric::CellMean && !matches!(cell, Cell::Tri3(_) | Cell::Tet4(_))
+    /// Whether `cell`'s bulk part is not taken pointwise (the cell keeps its deviatoric part).
+    pub fn projects(self, _cell: &Cell) -> bool {
+        self == Volumetric::Mean
     }
+
+    /// Whether `cell`'s bulk part is the cell's mean dilatation (B-bar).
+    pub fn cell_mean(self, cell: &Cell) -> bool {
+        self == Volumetric::Mean && !is_simplex(cell)
+    }
+
+    /// Whether `cell`'s bulk part goes to its nodes' patches (a simplex).
+    pub fn nodal_mean(self, cell: &Cell) -> bool {
+        self == Volumetric::Mean && is_simplex(cell)
+    }
+}
+
+fn is_simplex(cell: &Cell) -> bool {
+    matches!(cell, Cell::Tri3(_) | Cell::Tet4(_))
 }
 
 /// Local stiffness ∫_cell ε(v) : C ε(u) dx for each isotropic tensor C = (λ, μ) in `cs`: for
@@ -40,7 +55,7 @@ impl Volumetric {
 /// ```
 ///
 /// (computed together: they share the shape gradients), written row-major into `out[m]`
-/// (each nl × nl, nl = D · nodes of the cell, zeroed here). With [`Volumetric::CellMean`] on a
+/// (each nl × nl, nl = D · nodes of the cell, zeroed here). With [`Volumetric::Mean`] on a
 /// cell it projects, the bulk part K ∂ᵢN_a ∂ⱼN_b (K = λ + 2μ/3, the 3D bulk modulus: 3D and
 /// plane strain) is replaced by K b̄_(a,i) b̄_(b,j) |c| with b̄ the cell's mean of ∂ᵢN_a.
 pub fn local_stiffness<const D: usize>(
@@ -55,7 +70,9 @@ pub fn local_stiffness<const D: usize>(
     for km in out.iter_mut() {
         km[..nl * nl].fill(0.0);
     }
-    let project = volumetric.projects(cell);
+    let project = volumetric.cell_mean(cell);
+    // the pointwise bulk part leaves λ as λ − K = −2μ/3 where the bulk part is a mean's
+    let deviatoric = volumetric.projects(cell);
     // ∫ ∂ᵢN_a (nl values) and |c|, for the cell's mean dilatation
     let mut mean = [0.0; 3 * 27];
     let mut measure = 0.0;
@@ -76,8 +93,7 @@ pub fn local_stiffness<const D: usize>(
                 let gb = s.grad[b];
                 let dot: f64 = (0..D).map(|r| ga[r] * gb[r]).sum();
                 for (c, km) in cs.iter().zip(out.iter_mut()) {
-                    // the pointwise bulk part leaves λ as λ − K = −2μ/3 on a projected cell
-                    let lambda = if project { -2.0 * c.mu / 3.0 } else { c.lambda };
+                    let lambda = if deviatoric { -2.0 * c.mu / 3.0 } else { c.lambda };
                     for i in 0..D {
                         let row = (D * a + i) * nl + D * b;
                         for j in 0..D {
@@ -137,10 +153,12 @@ pub fn assemble_stiffness_with<const D: usize, const M: usize>(
     cs: &[Isotropic; M],
     volumetric: Volumetric,
 ) -> [SymmetricMatrix; M] {
+    let patches = NodalPatches::new(cells, None, |_, cell| volumetric.nodal_mean(cell));
     let one = CellTensors {
         tensors: &[cs.to_vec()],
         volumetric: &[volumetric],
         of_cell: None,
+        patches: Some(&patches).filter(|p| !p.is_empty()),
     };
     let matrices = assemble_by_cell(cells, points, dofs, &one);
     matrices
@@ -158,18 +176,36 @@ pub struct CellTensors<'a> {
     pub volumetric: &'a [Volumetric],
     /// Each cell's material; None: every cell has material 0.
     pub of_cell: Option<&'a [u32]>,
+    /// The node patches of the simplices whose bulk part is averaged there.
+    pub patches: Option<&'a NodalPatches>,
 }
 
 /// Assembles one matrix per tensor of [`CellTensors`] on a pattern built here, over every
-/// unknown of `dofs` (prescribed ones included: docs/method.md §7).
+/// unknown of `dofs` (prescribed ones included: docs/method.md §7). With node patches the
+/// pattern holds each patch as a cell and their bulk parts are added (docs/method.md §8.4).
 pub fn assemble_by_cell<const D: usize>(
     cells: &[Cell],
     points: &[[f64; D]],
     dofs: &DofMap<D>,
     materials: &CellTensors,
 ) -> Vec<SymmetricMatrix> {
-    let pattern = Arc::new(Pattern::new(cells, dofs.n_nodes(), D));
-    assemble_values(&pattern, cells, points, materials)
+    let pattern = Arc::new(match materials.patches {
+        None => Pattern::new(cells, dofs.n_nodes(), D),
+        Some(patches) => {
+            let lists = patches.node_lists(cells);
+            let all: Vec<&[usize]> = cells
+                .iter()
+                .map(|c| c.nodes())
+                .chain(lists.iter().map(|l| &l[..]))
+                .collect();
+            Pattern::new(&all, dofs.n_nodes(), D)
+        }
+    });
+    let mut values = assemble_values(&pattern, cells, points, materials);
+    if let Some(patches) = materials.patches {
+        patches.add_stiffness(&pattern, cells, points, materials.tensors, &mut values);
+    }
+    values
         .into_iter()
         .map(|values| SymmetricMatrix {
             pattern: pattern.clone(),
@@ -314,7 +350,7 @@ mod tests {
             .iter()
             .map(|q| q.weight * shape_at(&hex_cell, &hex, q.xi).det_j)
             .sum();
-        for v in [Volumetric::Pointwise, Volumetric::CellMean] {
+        for v in [Volumetric::Pointwise, Volumetric::Mean] {
             let e2 = energy(&quad_cell, &quad, c, v, &linear(&quad, g));
             let e3 = energy(&hex_cell, &hex, c, v, &linear(&hex, g));
             assert!(
@@ -333,7 +369,7 @@ mod tests {
         let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
         let u: Vec<f64> = square.iter().flat_map(|x| [x[0] * x[1], 0.0]).collect();
         let plain = energy(&quad_cell, &square, c, Volumetric::Pointwise, &u);
-        let mean = energy(&quad_cell, &square, c, Volumetric::CellMean, &u);
+        let mean = energy(&quad_cell, &square, c, Volumetric::Mean, &u);
         let bulk = c.lambda + 2.0 * c.mu / 3.0;
         // ∫ θ² = 1/3 against θ̄² |c| = 1/4 (the μ part adds a few μ)
         assert!(
@@ -343,6 +379,60 @@ mod tests {
         assert!(
             mean < bulk / 4.0 + 5.0 * c.mu,
             "mean dilatation pays K θ̄² |c| only: {mean} against K = {bulk}"
+        );
+    }
+
+    /// The patch test of the node patches' bulk part (docs/method.md §8.4): a constant strain
+    /// keeps the continuum's energy |Ω| (K θ² + 2μ dev ε : dev ε) on a distorted mesh of
+    /// triangles (Σ_a V_a = |Ω|), and the rigid motions cost nothing.
+    #[test]
+    fn a_constant_strain_keeps_the_continuum_energy() {
+        use crate::mesh::structured::{rectangle, CellShape};
+        let mut mesh = rectangle(2.0, 1.0, 6, 4, CellShape::Tri);
+        for p in mesh.points.iter_mut() {
+            let (x, y) = (p[0], p[1]);
+            // interior nodes moved, the boundary kept straight
+            if x > 0.0 && x < 2.0 && y > 0.0 && y < 1.0 {
+                p[0] += 0.08 * (7.0 * y).sin();
+                p[1] += 0.06 * (5.0 * x).cos();
+            }
+        }
+        let dofs = DofMap::<2>::new(mesh.points.len(), &[]);
+        let c = Isotropic {
+            lambda: 4999.0 * 2.0 / 3.0,
+            mu: 1.0,
+        };
+        let [k] = assemble_stiffness_with(&mesh.cells, &mesh.points, &dofs, &[c], Volumetric::Mean);
+        let energy = |g: [[f64; 2]; 2]| {
+            let u: Vec<f64> = mesh
+                .points
+                .iter()
+                .flat_map(|x| (0..2).map(move |i| g[i][0] * x[0] + g[i][1] * x[1]))
+                .collect();
+            let mut ku = vec![0.0; u.len()];
+            k.matvec(&u, &mut ku);
+            u.iter().zip(&ku).map(|(a, b)| a * b).sum::<f64>()
+        };
+        let g = [[0.3, -0.2], [0.4, 0.1]];
+        let e = |i: usize, j: usize| 0.5 * (g[i][j] + g[j][i]);
+        let theta = e(0, 0) + e(1, 1);
+        // the 3D deviator of the plane strain (ε₃₃ = 0)
+        let dev = (0..3)
+            .flat_map(|i| (0..3).map(move |j| (i, j)))
+            .map(|(i, j)| {
+                let eij: f64 = if i < 2 && j < 2 { e(i, j) } else { 0.0 };
+                (eij - if i == j { theta / 3.0 } else { 0.0 }).powi(2)
+            })
+            .sum::<f64>();
+        let continuum = 2.0 * ((c.lambda + 2.0 * c.mu / 3.0) * theta * theta + 2.0 * c.mu * dev);
+        assert!(
+            (energy(g) / continuum - 1.0).abs() < 1e-11,
+            "{} against {continuum}",
+            energy(g)
+        );
+        assert!(
+            energy([[0.0, -0.3], [0.3, 0.0]]).abs() < 1e-9,
+            "a rotation costs nothing"
         );
     }
 }

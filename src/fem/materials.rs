@@ -6,6 +6,7 @@
 
 use super::assembly::{assemble_by_cell, CellTensors, Volumetric};
 use super::dofs::DofMap;
+use super::nodal_dilatation::NodalPatches;
 use crate::linalg::sparse::SymmetricMatrix;
 use crate::material::{Elasticity, Isotropic, Memory, PlaneModel};
 use crate::mesh::Cell;
@@ -61,16 +62,19 @@ pub struct Materials {
     memory: Option<Memory>,
     /// The material of each channel of `memory`.
     owner: Vec<MaterialId>,
+    /// The node patches of the simplices whose bulk part is averaged there (docs/method.md §8.4).
+    patches: NodalPatches,
 }
 
 impl Materials {
-    /// A body of one material.
-    pub fn one(material: BodyMaterial) -> Self {
-        Self::new(vec![material], Vec::new())
+    /// A body of one material on `cells`.
+    pub fn one(material: BodyMaterial, cells: &[Cell]) -> Self {
+        Self::new(vec![material], Vec::new(), cells)
     }
 
-    /// Materials `list` with `of_cell[c]` the index of cell c's (ignored with one material).
-    pub fn new(list: Vec<BodyMaterial>, of_cell: Vec<u32>) -> Self {
+    /// Materials `list` on `cells`, with `of_cell[c]` the index of cell c's (ignored with one
+    /// material).
+    pub fn new(list: Vec<BodyMaterial>, of_cell: Vec<u32>, cells: &[Cell]) -> Self {
         let with_memory: Vec<(usize, &Memory)> = list
             .iter()
             .enumerate()
@@ -85,11 +89,15 @@ impl Materials {
             (Some(memory), owner)
         };
         let of_cell = (list.len() > 1).then_some(of_cell);
+        let patches = NodalPatches::new(cells, of_cell.as_deref(), |m, cell| {
+            list[m as usize].volumetric.nodal_mean(cell)
+        });
         Materials {
             list,
             of_cell,
             memory,
             owner,
+            patches,
         }
     }
 
@@ -116,6 +124,11 @@ impl Materials {
             None => counts[0] = n_cells,
         }
         counts
+    }
+
+    /// The node patches of the averaged simplices (empty: none).
+    pub fn patches(&self) -> &NodalPatches {
+        &self.patches
     }
 
     /// The memory of all materials, as the time loop runs it; None when no material has any.
@@ -188,6 +201,7 @@ impl Materials {
             tensors: &tensors,
             volumetric: &volumetric,
             of_cell: self.of_cell.as_deref(),
+            patches: Some(&self.patches).filter(|p| !p.is_empty()),
         };
         assemble_by_cell(cells, points, dofs, &by_cell)
     }

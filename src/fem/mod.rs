@@ -13,6 +13,7 @@ pub mod assembly;
 pub mod dofs;
 pub mod loads;
 pub mod materials;
+pub mod nodal_dilatation;
 pub mod node_blocks;
 pub mod norms;
 pub mod stress;

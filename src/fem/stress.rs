@@ -41,6 +41,18 @@ pub fn cell_stresses<const D: usize>(
     memory: Option<&[MemoryField<D>]>,
 ) -> CellStresses {
     let memory = memory.unwrap_or_default();
+    // the nodal dilatations of the averaged simplices' patches (docs/method.md §8.4): of u and
+    // of each memory field (a simplex's bulk part is the mean of its nodes')
+    let patches = materials.patches();
+    let nodal: Vec<Vec<f64>> = if patches.is_empty() {
+        Vec::new()
+    } else {
+        assert!(of_mesh.is_none(), "averaged simplices' stresses need the mesh's cells");
+        std::iter::once(u)
+            .chain(memory.iter().map(|(_, m)| &m[..]))
+            .map(|field| patches.dilatation(cells, points, field))
+            .collect()
+    };
     let per_cell: Vec<([f64; 9], f64)> = cells
         .par_iter()
         .enumerate()
@@ -56,7 +68,7 @@ pub fn cell_stresses<const D: usize>(
                 .iter()
                 .enumerate()
                 .filter(|(j, _)| materials.channel_owner(*j) == id)
-                .map(|(_, f)| f);
+                .map(|(j, f)| (j + 1, f));
             let s = shape_at(cell, points, reference_centroid(cell));
             let local = |field: &[[f64; D]]| -> Vec<[f64; D]> { cell.nodes().iter().map(|&p| field[p]).collect() };
             let e = strain(&s, &local(u));
@@ -64,19 +76,31 @@ pub fn cell_stresses<const D: usize>(
             let trace: f64 = (0..D).map(|i| e[i][i]).sum();
             let mut full = [[0.0; 3]; 3];
             let mut out_of_plane = 0.0;
-            // mean dilatation: K (θ̄ − tr ε) on the diagonal, for A and each memory tensor
+            // mean dilatation: K (θ̄ − tr ε) on the diagonal, for A and each memory tensor; θ̄
+            // the cell's mean, or on a simplex the mean of its nodes' patch dilatations
             let project = volumetric.projects(cell);
             let mut bulk_shift = 0.0;
-            let mut shift = |t: &Isotropic, field: &[[f64; D]], e: &[[f64; D]; D]| {
-                if project {
-                    let mean = mean_trace(cell, points, &local(field));
-                    bulk_shift += (t.lambda + 2.0 * t.mu / 3.0) * (mean - (0..D).map(|i| e[i][i]).sum::<f64>());
+            let mut shift = |t: &Isotropic, field: usize, e: &[[f64; D]; D]| {
+                if !project {
+                    return;
                 }
+                let mean = if volumetric.nodal_mean(cell) {
+                    let at = |a: &usize| {
+                        patches
+                            .find(id.0, *a)
+                            .expect("an averaged simplex's node has its patch")
+                    };
+                    cell.nodes().iter().map(|a| nodal[field][at(a)]).sum::<f64>() / cell.nodes().len() as f64
+                } else {
+                    let values = if field == 0 { u } else { &memory[field - 1].1[..] };
+                    mean_trace(cell, points, &local(values))
+                };
+                bulk_shift += (t.lambda + 2.0 * t.mu / 3.0) * (mean - (0..D).map(|i| e[i][i]).sum::<f64>());
             };
-            shift(&a, u, &e);
-            for (t, m) in own {
+            shift(&a, 0, &e);
+            for (field, (t, m)) in own {
                 let em = strain(&s, &local(m));
-                shift(t, m, &em);
+                shift(t, field, &em);
                 let sm = t.apply(&em);
                 for i in 0..D {
                     for j in 0..D {

@@ -121,6 +121,15 @@ pub(super) fn unsupported<const D: usize>(
             }
         ));
     }
+    if !sim.materials.patches().is_empty() {
+        return Err(format!(
+            "{origin}: the nearly incompressible material's triangles or tetrahedra take their volumetric strain \
+             as the mean over each node's patch (docs/method.md §8.4), which couples the patches across the ranks' \
+             parts and the PETSc backend does not assemble: run this scene without --backend petsc, mesh the body \
+             with quadrilaterals or hexahedra (mean dilatation per cell runs on PETSc), or set \
+             material.formulation = \"standard\" (the element then locks)"
+        ));
+    }
     match sim.materials.memory() {
         Some(m) if m.channels().len() > 1 => Err(format!(
             "{origin}: the memory has {} channels (tensors that are not proportional — own bulk and shear moduli \

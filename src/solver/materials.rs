@@ -11,7 +11,7 @@ use crate::mesh::Mesh;
 use crate::scene::{self, Constants, Scene};
 
 /// From this K/G on (ν ≥ 0.495) a material is nearly incompressible for hvi's elements, which
-/// lock (the plain P1/Q1 cells; [`Volumetric::CellMean`] is chosen from here on by
+/// lock (the plain P1/Q1 cells; [`Volumetric::Mean`] is chosen from here on by
 /// `formulation = "auto"`): measured on 2D Hertz (a block on a rigid cylinder,
 /// docs/troubleshooting.md), the contact half-width and peak pressure are within 1.5 % at
 /// ν = 0.49 (K/G = 50), off by up to 7.8 % at 0.499 (K/G = 500) and by up to 40 % at 0.4999.
@@ -30,10 +30,10 @@ pub fn build<const D: usize>(
         list.push(material(scene, mesh, c, plane, several)?);
     }
     if scene.materials.is_empty() {
-        return Ok(Materials::one(list.pop().expect("[material]")));
+        return Ok(Materials::one(list.pop().expect("[material]"), &mesh.cells));
     }
     // (one entry alone must still claim every cell)
-    Ok(Materials::new(list, of_cell(scene, mesh, &constants)?))
+    Ok(Materials::new(list, of_cell(scene, mesh, &constants)?, &mesh.cells))
 }
 
 /// One material: its constants, its memory (checked against the time step), its formulation.
@@ -70,7 +70,7 @@ fn material<const D: usize>(
         .bulk_to_shear()
         .is_some_and(|(at_once, long_term)| at_once.max(long_term.unwrap_or(0.0)) >= LOCKING_BULK_TO_SHEAR);
     material.volumetric = match c.formulation {
-        scene::Formulation::Auto if nearly_incompressible => Volumetric::CellMean,
+        scene::Formulation::Auto if nearly_incompressible => Volumetric::Mean,
         scene::Formulation::MeanDilatation if elasticity.plane == Some(PlaneModel::Stress) => {
             return Err(SolveError::Setup(format!(
                 "{}: `{}` = \"mean_dilatation\": plane stress has no volumetric constraint to relieve (it does not \
@@ -79,7 +79,7 @@ fn material<const D: usize>(
                 c.key("formulation")
             )))
         }
-        scene::Formulation::MeanDilatation => Volumetric::CellMean,
+        scene::Formulation::MeanDilatation => Volumetric::Mean,
         _ => Volumetric::Pointwise,
     };
     Ok(material)

@@ -36,9 +36,12 @@ fn elasticity_detail<const D: usize>(sim: &Simulation<D>) -> String {
         .iter()
         .enumerate()
         .map(|(i, m)| {
-            let projected = (0..sim.mesh.cells.len())
-                .filter(|&c| sim.materials.id_of_cell(c).index() == i && m.volumetric.projects(&sim.mesh.cells[c]))
-                .count();
+            let mine: Vec<&crate::mesh::Cell> = (0..sim.mesh.cells.len())
+                .filter(|&c| sim.materials.id_of_cell(c).index() == i)
+                .map(|c| &sim.mesh.cells[c])
+                .collect();
+            let by_cell = mine.iter().filter(|c| m.volumetric.cell_mean(c)).count();
+            let by_node = mine.len() - by_cell;
             format!(
                 "{}E = {}, ν = {}{}{}",
                 if several {
@@ -54,9 +57,9 @@ fn elasticity_detail<const D: usize>(sim: &Simulation<D>) -> String {
                     ""
                 },
                 match m.volumetric {
-                    crate::fem::assembly::Volumetric::CellMean => format!(
-                        "; mean dilatation (B-bar) on {projected} of {} cells (docs/method.md §8.4)",
-                        counts[i]
+                    crate::fem::assembly::Volumetric::Mean => format!(
+                        "; mean dilatation (docs/method.md §8.4): per cell (B-bar) on {by_cell}, over node patches \
+                         on {by_node} triangles or tetrahedra (each node's second ring joins the matrix)",
                     ),
                     crate::fem::assembly::Volumetric::Pointwise => String::new(),
                 }
