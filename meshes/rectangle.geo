@@ -21,6 +21,7 @@
 //   Surface "Omega"      5  the body
 //   Surface "Left"       6  x < 1 (halves 1 only)
 //   Surface "Right"      7  x > 1 (halves 1 only)
+//   Curve   "Gamma2_right" 8  right side x = 2 only (halves 1 only; its facets are also in Gamma2)
 // With plain 1 the tags stay as above (Omega is still 5), only Gamma2_top is left out.
 
 DefineConstant[ n = 16, quads = 1, wide = 0, mixed = 0, plain = 0, halves = 0 ];
@@ -90,5 +91,6 @@ Else
   If (halves == 1)
     Physical Surface("Left", 6) = {1};
     Physical Surface("Right", 7) = {2};
+    Physical Curve("Gamma2_right", 8) = {3};
   EndIf
 EndIf

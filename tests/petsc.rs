@@ -709,7 +709,7 @@ fn memory_of_two_channels_is_refused_by_solve_and_check() {
         let (error, err) = the_one_error(&out);
         for part in [
             scene_arg.as_str(),
-            "two channels",
+            "2 channels",
             "PETSc backend does not support",
             "without --backend petsc",
             "proportional",
@@ -828,4 +828,26 @@ fn force_control_is_refused_by_the_petsc_backend() {
         assert!(error.contains(part), "`{part}` missing from the error:\n{err}");
     }
     assert!(!tmp.path().join("mpi").join("summary.json").exists());
+}
+
+/// Several materials (docs/method.md §8.5) under PETSc: the paper's scene on the two halves, its
+/// material with its memory on the left, a stiffer elastic one on the right
+/// (`[[materials]]`), gives the serial Γ₃ on 1 and 2 ranks to 1e-10 (each rank assembles its
+/// cells with their material).
+#[test]
+fn two_materials_match_faer_on_1_and_2_ranks() {
+    let dir = tempfile::tempdir().unwrap();
+    let paper = std::fs::read_to_string("examples/paper.toml").unwrap();
+    let scene = dir.path().join("two_materials.toml");
+    std::fs::write(
+        &scene,
+        format!("{paper}\n[[materials]]\ngroup = \"Right\"\nyoungs_modulus = 3.0\npoisson_ratio = 0.3\n"),
+    )
+    .unwrap();
+    for (np, (du, df)) in compare("meshes/rect_halves_q1_h4.msh", scene.to_str(), "mumps") {
+        assert!(
+            du <= 1e-10 && df <= 1e-10,
+            "np {np}: u_ν off by {du:.2e}, force by {df:.2e}"
+        );
+    }
 }

@@ -33,7 +33,14 @@ pub fn build<const D: usize>(
         return Ok(Materials::one(list.pop().expect("[material]"), &mesh.cells));
     }
     // (one entry alone must still claim every cell)
-    Ok(Materials::new(list, of_cell(scene, mesh, &constants)?, &mesh.cells))
+    let mut of = of_cell(scene, mesh, &constants)?;
+    // [material]'s constants where the entries claim every cell: not a material of the body (its
+    // memory would cost a product per step for nothing)
+    if scene.has_unnamed_material() && !of.contains(&0) {
+        list.remove(0);
+        of.iter_mut().for_each(|m| *m -= 1);
+    }
+    Ok(Materials::new(list, of, &mesh.cells))
 }
 
 /// One material: its constants, its memory (checked against the time step), its formulation.
