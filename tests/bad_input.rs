@@ -754,7 +754,7 @@ fn wrong_types_name_the_line_and_the_key() {
             vec![
                 "line 17",
                 "`material.plane`",
-                "unknown variant `stres`, expected `stress` or `strain`",
+                "unknown variant `stres`, expected one of `stress`, `strain`, `axisymmetric`",
             ],
         ),
         (

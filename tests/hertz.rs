@@ -390,3 +390,38 @@ fn nearly_incompressible_hertz_2d(mesh: &str) {
         "the plain element locks: a {sa:+.4}, p₀ {sp:+.4}"
     );
 }
+
+/// The sphere as a body of revolution (docs/method.md §8.6): the 2D gallery's meridian half
+/// (0, 2) × (−2, 0) with `material.plane = "axisymmetric"`, x = r, the same gap
+/// 1 − sqrt(1 − r²) (now a sphere's), the axis x = 0 where u_r = 0: a and p₀ of 3D Hertz,
+/// a³ = 3PR/(4E*), p₀ = 3P/(2πa²), within 1 % on quadrilaterals of a/50 and on triangles of a/60,
+/// the total force P off the revolved contact weights; the base's reaction is that force to 1e-9.
+#[test]
+fn hertz_sphere_as_a_body_of_revolution_within_one_percent() {
+    let e_star = 1.0 / (1.0 - 0.3f64 * 0.3);
+    for mesh in ["hertz_2d_q3.msh", "hertz_2d_h3.msh"] {
+        let scene = Scene::load(
+            Some(&gallery("hertz_2d", "hertz_2d.toml")),
+            &["material.plane=\"axisymmetric\"".to_string()],
+        )
+        .unwrap();
+        let c = run_scene::<2>(&scene, "hertz_2d", mesh, 1.0);
+        assert!(
+            (c.reaction - c.force).abs() <= 1e-9 * c.force,
+            "{mesh}: reaction {} against the contact force {}",
+            c.reaction,
+            c.force
+        );
+        let (a_hertz, p0_hertz) = hertz(3, c.force, e_star);
+        let (a, p0) = fit(&c.pressures);
+        let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
+        eprintln!(
+            "axisymmetric {mesh}: {} nodes, P = {:.5e}, a {:+.2} %, p₀ {:+.2} %",
+            c.pressures.len(),
+            c.force,
+            100.0 * ea,
+            100.0 * ep
+        );
+        assert!(ea.abs() < 0.01 && ep.abs() < 0.01, "{mesh}: a {ea:+.4}, p₀ {ep:+.4}");
+    }
+}

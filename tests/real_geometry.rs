@@ -785,6 +785,7 @@ fn a_pyramid_stiffness_is_exact_on_linear_fields() {
         &pts,
         &[c],
         hvi::fem::assembly::Volumetric::Pointwise,
+        false,
         &mut [&mut k[..]],
     );
     let u: Vec<f64> = pts

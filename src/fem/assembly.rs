@@ -58,11 +58,15 @@ fn is_simplex(cell: &Cell) -> bool {
 /// (each nl × nl, nl = D · nodes of the cell, zeroed here). With [`Volumetric::Mean`] on a
 /// cell it projects, the bulk part K ∂ᵢN_a ∂ⱼN_b (K = λ + 2μ/3, the 3D bulk modulus: 3D and
 /// plane strain) is replaced by K b̄_(a,i) b̄_(b,j) |c| with b̄ the cell's mean of ∂ᵢN_a.
+/// `axisymmetric` (2D, x = r): the measure is 2πr dr dz and the strain has the hoop component
+/// u_r/r, so the divergence of N_a e_i is ∂ᵢN_a + δᵢ₀ N_a/r and the hoop term adds
+/// 2μ δᵢ₀ δⱼ₀ N_a N_b / r² (docs/method.md §8.6).
 pub fn local_stiffness<const D: usize>(
     cell: &Cell,
     points: &[[f64; D]],
     cs: &[Isotropic],
     volumetric: Volumetric,
+    axisymmetric: bool,
     out: &mut [&mut [f64]],
 ) {
     let n = cell.nodes().len();
@@ -76,14 +80,29 @@ pub fn local_stiffness<const D: usize>(
     // ∫ ∂ᵢN_a (nl values) and |c|, for the cell's mean dilatation
     let mut mean = [0.0; 3 * 27];
     let mut measure = 0.0;
-    for q in stiffness_rule(cell) {
+    // a body of revolution's triangle: its hoop terms N_a N_b / r times r are quadratic, which
+    // the 3-point rule integrates exactly (the centroid alone lost an order on the thick cylinder)
+    let rule = match cell {
+        Cell::Tri3(_) if axisymmetric => &crate::mesh::quadrature::TRI_3POINT[..],
+        _ => stiffness_rule(cell),
+    };
+    for q in rule {
         let s = shape_at(cell, points, q.xi);
-        let w = q.weight * s.det_j;
+        let mut w = q.weight * s.det_j;
+        // the hoop strain of N_a e_0 is N_a/r (axisymmetric)
+        let inv_r = axisymmetric.then(|| 1.0 / s.x[0]);
+        let hoop = |a: usize, i: usize| match inv_r {
+            Some(inv_r) if i == 0 => s.value[a] * inv_r,
+            _ => 0.0,
+        };
+        if axisymmetric {
+            w *= 2.0 * std::f64::consts::PI * s.x[0];
+        }
         if project {
             measure += w;
             for a in 0..n {
                 for i in 0..D {
-                    mean[D * a + i] += w * s.grad[a][i];
+                    mean[D * a + i] += w * (s.grad[a][i] + hoop(a, i));
                 }
             }
         }
@@ -100,6 +119,10 @@ pub fn local_stiffness<const D: usize>(
                             let mut v = lambda * ga[i] * gb[j] + c.mu * ga[j] * gb[i];
                             if i == j {
                                 v += c.mu * dot;
+                            }
+                            if axisymmetric {
+                                let (ha, hb) = (hoop(a, i), hoop(b, j));
+                                v += lambda * (ga[i] * hb + ha * gb[j] + ha * hb) + 2.0 * c.mu * ha * hb;
                             }
                             km[row + j] += w * v;
                         }
@@ -159,6 +182,7 @@ pub fn assemble_stiffness_with<const D: usize, const M: usize>(
         volumetric: &[volumetric],
         of_cell: None,
         patches: Some(&patches).filter(|p| !p.is_empty()),
+        axisymmetric: false,
     };
     let matrices = assemble_by_cell(cells, points, dofs, &one);
     matrices
@@ -178,6 +202,8 @@ pub struct CellTensors<'a> {
     pub of_cell: Option<&'a [u32]>,
     /// The node patches of the simplices whose bulk part is averaged there.
     pub patches: Option<&'a NodalPatches>,
+    /// A body of revolution (x = r, docs/method.md §8.6).
+    pub axisymmetric: bool,
 }
 
 /// Assembles one matrix per tensor of [`CellTensors`] on a pattern built here, over every
@@ -248,6 +274,7 @@ fn assemble_values<const D: usize>(
                     points,
                     &materials.tensors[material],
                     materials.volumetric[material],
+                    materials.axisymmetric,
                     &mut views,
                 );
                 pattern.cell_positions(cell.nodes(), at);
@@ -298,7 +325,7 @@ mod tests {
     fn energy<const D: usize>(cell: &Cell, points: &[[f64; D]], c: Isotropic, v: Volumetric, u: &[f64]) -> f64 {
         let nl = D * cell.nodes().len();
         let mut k = vec![0.0; nl * nl];
-        local_stiffness(cell, points, &[c], v, &mut [&mut k[..]]);
+        local_stiffness(cell, points, &[c], v, false, &mut [&mut k[..]]);
         (0..nl)
             .map(|i| u[i] * (0..nl).map(|j| k[i * nl + j] * u[j]).sum::<f64>())
             .sum()

@@ -54,11 +54,16 @@ struct LoadTerm<const D: usize> {
 #[derive(Clone, Debug)]
 pub struct Loads<const D: usize> {
     terms: Vec<LoadTerm<D>>,
+    /// A body of revolution (x = r): every weight carries 2πr (docs/method.md §8.6).
+    axisymmetric: bool,
 }
 
 impl<const D: usize> Default for Loads<D> {
     fn default() -> Self {
-        Loads { terms: Vec::new() }
+        Loads {
+            terms: Vec::new(),
+            axisymmetric: false,
+        }
     }
 }
 
@@ -118,6 +123,24 @@ impl<const D: usize> Loads<D> {
         Loads::default()
     }
 
+    /// No loads on a body of revolution about the y axis (x = r): the loads added integrate
+    /// over the surfaces and the volume it sweeps, with the measure 2πr (docs/method.md §8.6).
+    pub fn axisymmetric() -> Self {
+        Loads {
+            terms: Vec::new(),
+            axisymmetric: true,
+        }
+    }
+
+    /// The weight of a quadrature point at x: `weight`, times 2π x₀ on a body of revolution.
+    fn revolved(&self, x: &[f64; D], weight: f64) -> f64 {
+        if self.axisymmetric {
+            weight * 2.0 * std::f64::consts::PI * x[0]
+        } else {
+            weight
+        }
+    }
+
     /// Adds a traction density on a boundary part.
     pub fn add_traction(&mut self, part: &BoundaryPart<D>, points: &[[f64; D]], value: [Expr; D], label: &str) {
         self.add_boundary_term(part, points, Density::Vector(value), label);
@@ -133,9 +156,9 @@ impl<const D: usize> Loads<D> {
         for f in &part.facets {
             for (x, normal, weight, shape) in facet_points(points, f) {
                 qp.push(LoadPoint {
+                    weight: self.revolved(&x, weight),
                     x,
                     normal,
-                    weight,
                     shape,
                 });
             }
@@ -156,7 +179,7 @@ impl<const D: usize> Loads<D> {
                 qp.push(LoadPoint {
                     x: s.x,
                     normal: [0.0; D],
-                    weight: q.weight * s.det_j,
+                    weight: self.revolved(&s.x, q.weight * s.det_j),
                     shape: cell.nodes().iter().zip(&s.value).map(|(&n, &v)| (n, v)).collect(),
                 });
             }

@@ -202,6 +202,7 @@ impl Materials {
             volumetric: &volumetric,
             of_cell: self.of_cell.as_deref(),
             patches: Some(&self.patches).filter(|p| !p.is_empty()),
+            axisymmetric: self.plane() == Some(PlaneModel::Axisymmetric),
         };
         assemble_by_cell(cells, points, dofs, &by_cell)
     }

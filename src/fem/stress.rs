@@ -63,6 +63,7 @@ pub fn cell_stresses<const D: usize>(
             let elasticity = &material.elasticity;
             let volumetric = material.volumetric;
             let plane_strain = D == 2 && elasticity.plane == Some(PlaneModel::Strain);
+            let axisymmetric = D == 2 && elasticity.plane == Some(PlaneModel::Axisymmetric);
             let a = elasticity.tensor();
             let own = memory
                 .iter()
@@ -71,11 +72,34 @@ pub fn cell_stresses<const D: usize>(
                 .map(|(j, f)| (j + 1, f));
             let s = shape_at(cell, points, reference_centroid(cell));
             let local = |field: &[[f64; D]]| -> Vec<[f64; D]> { cell.nodes().iter().map(|&p| field[p]).collect() };
+            // the hoop strain u_r/r of a body of revolution (zero otherwise)
+            let hoop = |field: &[[f64; D]]| -> f64 {
+                if !axisymmetric {
+                    return 0.0;
+                }
+                cell.nodes()
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &p)| s.value[k] * field[p][0])
+                    .sum::<f64>()
+                    / s.x[0]
+            };
             let e = strain(&s, &local(u));
             let mut sig = a.apply(&e);
             let trace: f64 = (0..D).map(|i| e[i][i]).sum();
             let mut full = [[0.0; 3]; 3];
             let mut out_of_plane = 0.0;
+            // λ ε_θθ on the in-plane diagonal; returns σ_θθ = λ tr ε + 2μ ε_θθ
+            let add_hoop = |t: &Isotropic, sig: &mut [[f64; D]; D], trace: f64, eh: f64| -> f64 {
+                if !axisymmetric {
+                    return 0.0;
+                }
+                for (i, row) in sig.iter_mut().enumerate() {
+                    row[i] += t.lambda * eh;
+                }
+                t.lambda * (trace + eh) + 2.0 * t.mu * eh
+            };
+            out_of_plane += add_hoop(&a, &mut sig, trace, hoop(u));
             // mean dilatation: K (θ̄ − tr ε) on the diagonal, for A and each memory tensor; θ̄
             // the cell's mean, or on a simplex the mean of its nodes' patch dilatations
             let project = volumetric.projects(cell);
@@ -93,15 +117,18 @@ pub fn cell_stresses<const D: usize>(
                     cell.nodes().iter().map(|a| nodal[field][at(a)]).sum::<f64>() / cell.nodes().len() as f64
                 } else {
                     let values = if field == 0 { u } else { &memory[field - 1].1[..] };
-                    mean_trace(cell, points, &local(values))
+                    mean_trace(cell, points, &local(values), axisymmetric)
                 };
-                bulk_shift += (t.lambda + 2.0 * t.mu / 3.0) * (mean - (0..D).map(|i| e[i][i]).sum::<f64>());
+                let values = if field == 0 { u } else { &memory[field - 1].1[..] };
+                let trace = (0..D).map(|i| e[i][i]).sum::<f64>() + hoop(values);
+                bulk_shift += (t.lambda + 2.0 * t.mu / 3.0) * (mean - trace);
             };
             shift(&a, 0, &e);
             for (field, (t, m)) in own {
                 let em = strain(&s, &local(m));
                 shift(t, field, &em);
-                let sm = t.apply(&em);
+                let mut sm = t.apply(&em);
+                out_of_plane += add_hoop(t, &mut sm, (0..D).map(|i| em[i][i]).sum(), hoop(m));
                 for i in 0..D {
                     for j in 0..D {
                         sig[i][j] += sm[i][j];
@@ -136,14 +163,20 @@ pub fn cell_stresses<const D: usize>(
     }
 }
 
-/// The cell's mean of tr ε(u) for its nodal values `u`, over its stiffness rule.
-fn mean_trace<const D: usize>(cell: &Cell, points: &[[f64; D]], u: &[[f64; D]]) -> f64 {
+/// The cell's mean of tr ε(u) for its nodal values `u`, over its stiffness rule (of a body of
+/// revolution: with the hoop strain u_r/r, over the measure 2πr).
+fn mean_trace<const D: usize>(cell: &Cell, points: &[[f64; D]], u: &[[f64; D]], axisymmetric: bool) -> f64 {
     let (mut integral, mut measure) = (0.0, 0.0);
     for q in stiffness_rule(cell) {
         let s = shape_at(cell, points, q.xi);
-        let w = q.weight * s.det_j;
         let e = strain(&s, u);
-        integral += w * (0..D).map(|i| e[i][i]).sum::<f64>();
+        let (w, hoop) = if axisymmetric {
+            let ur: f64 = (0..cell.nodes().len()).map(|k| s.value[k] * u[k][0]).sum();
+            (q.weight * s.det_j * s.x[0], ur / s.x[0])
+        } else {
+            (q.weight * s.det_j, 0.0)
+        };
+        integral += w * ((0..D).map(|i| e[i][i]).sum::<f64>() + hoop);
         measure += w;
     }
     integral / measure

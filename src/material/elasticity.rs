@@ -54,6 +54,9 @@ pub enum PlaneModel {
     Stress,
     /// ε₃₃ = 0 (long body).
     Strain,
+    /// A body of revolution: x = r, y = z, the third strain the hoop strain u_r/r (docs/method.md
+    /// §8.6); the 3D moduli.
+    Axisymmetric,
 }
 
 /// Isotropic elasticity with Young's modulus E and Poisson's ratio ν; `plane` is the 2D
@@ -75,7 +78,7 @@ impl Elasticity {
                 lambda: e * nu / (1.0 - nu * nu),
                 mu,
             },
-            Some(PlaneModel::Strain) | None => Isotropic { lambda, mu },
+            Some(PlaneModel::Strain) | Some(PlaneModel::Axisymmetric) | None => Isotropic { lambda, mu },
         }
     }
 
@@ -97,6 +100,8 @@ impl Elasticity {
     pub fn out_of_plane_stress(&self, trace: f64) -> f64 {
         match self.plane {
             Some(PlaneModel::Strain) => self.lame().0 * trace,
+            // (the hoop stress is the stress's own, src/fem/stress.rs)
+            Some(PlaneModel::Axisymmetric) => 0.0,
             _ => 0.0,
         }
     }

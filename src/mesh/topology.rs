@@ -33,6 +33,23 @@ pub struct BoundaryPart<const D: usize> {
 }
 
 impl<const D: usize> BoundaryPart<D> {
+    /// The part of a 2D mesh as the surface it sweeps about the y axis (x = r ≥ 0): each node's
+    /// weight becomes ∫ N_p 2πr ds — on an edge of length L from r_a to r_b, 2πL (2r_a + r_b)/6
+    /// to its first node (exact for the linear N and r). Only for D = 2 (edges).
+    pub fn revolve(&mut self, points: &[[f64; D]]) {
+        assert_eq!(D, 2, "a body of revolution is a 2D mesh");
+        let two_pi = 2.0 * std::f64::consts::PI;
+        self.weights.iter_mut().for_each(|w| *w = 0.0);
+        for (f, &length) in self.facets.iter().zip(&self.facet_lengths) {
+            let [a, b] = [f.nodes()[0], f.nodes()[1]];
+            let (ra, rb) = (points[a][0], points[b][0]);
+            for (p, (r1, r2)) in [(a, (ra, rb)), (b, (rb, ra))] {
+                let k = self.nodes.binary_search(&p).expect("a facet's node is on its part");
+                self.weights[k] += two_pi * length * (2.0 * r1 + r2) / 6.0;
+            }
+        }
+    }
+
     /// Position of node index `p` in [`BoundaryPart::nodes`], if it is on the part.
     pub fn local(&self, p: usize) -> Option<usize> {
         self.nodes.binary_search(&p).ok()

@@ -291,7 +291,7 @@ impl<'p, const D: usize> PetscBackend<'p, D> {
             let nl = D * cell.nodes().len();
             let volumetric = sim.materials.of_cell(e).volumetric;
             let tensor = tensors.of_cell(sim, e);
-            local_stiffness(cell, points, &[tensor], volumetric, &mut [&mut local[..]]);
+            local_stiffness(cell, points, &[tensor], volumetric, false, &mut [&mut local[..]]);
             index.clear();
             for &p in cell.nodes() {
                 for c in 0..D {

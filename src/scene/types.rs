@@ -150,6 +150,8 @@ pub struct ForceControlSpec {
 pub enum Plane {
     Stress,
     Strain,
+    /// A body of revolution about the y axis: x = r ≥ 0, y = z (docs/method.md §8.6).
+    Axisymmetric,
 }
 
 /// Isotropic linear elasticity A: Young's modulus and Poisson's ratio, or a relaxation modulus

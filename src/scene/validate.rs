@@ -624,6 +624,7 @@ fn check_memory_model(scene: &Scene, c: &Constants, origin: &str) -> Result<(), 
     let plane = scene.material.plane.map(|p| match p {
         super::Plane::Stress => PlaneModel::Stress,
         super::Plane::Strain => PlaneModel::Strain,
+        super::Plane::Axisymmetric => PlaneModel::Axisymmetric,
     });
     let bad = |e: super::MaterialError| invalid(origin, &e.key, e.value, &e.fix);
     let (elasticity, memory) = c.model(plane).map_err(bad)?;

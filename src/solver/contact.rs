@@ -254,7 +254,12 @@ pub fn build<const D: usize>(
             "groups.contact".to_string()
         };
         let keyed = super::error::group_error(&scene.origin, &group_key);
-        parts.push(mesh.boundary(&scene.contact_group(i)).map_err(&keyed)?);
+        let mut part = mesh.boundary(&scene.contact_group(i)).map_err(&keyed)?;
+        // a body of revolution: the weights of the swept surface (docs/method.md §8.6)
+        if scene.material.plane == Some(crate::scene::Plane::Axisymmetric) {
+            part.revolve(&mesh.points);
+        }
+        parts.push(part);
         group_tags.push(mesh.group(&scene.contact_group(i), (D - 1) as u8).map_err(&keyed)?.tag);
         obstacles.push(match &c.obstacle {
             Some(o) => Some(obstacle_of::<D>(o, &format!("{key}.obstacle"), origin, length)?),

@@ -61,6 +61,8 @@ pub struct Dirichlet<const D: usize> {
     /// The rigid motions that only the contact holds (empty: the prescribed components hold
     /// every one), by name.
     pub held_by_contact: Vec<String>,
+    /// A body of revolution: its only rigid motion is the translation along the axis (y).
+    axisymmetric: bool,
 }
 
 const COMPONENTS: [&str; 3] = ["x", "y", "z"];
@@ -79,6 +81,7 @@ impl<const D: usize> Dirichlet<D> {
         mesh: &Mesh<D>,
         (clamped, sections, force_control): (Option<&GroupSelector>, &[DirichletSpec], &[ForceControlSpec]),
         contact_nodes: Option<&[usize]>,
+        axis: Option<&[usize]>,
         times: &[f64],
         scene_origin: &str,
     ) -> Result<(DofMap<D>, Self), SolveError> {
@@ -91,6 +94,7 @@ impl<const D: usize> Dirichlet<D> {
             reaction_groups: Vec::new(),
             rigid: Vec::new(),
             held_by_contact: Vec::new(),
+            axisymmetric: axis.is_some(),
         };
         // unknown → (who set it, the value's text, its expression)
         let mut set_by: HashMap<usize, (String, String, Option<usize>)> = HashMap::new();
@@ -156,6 +160,10 @@ impl<const D: usize> Dirichlet<D> {
                     weight: 1.0,
                 });
             }
+        }
+        // a body of revolution: u_r = 0 on the axis r = 0 (docs/method.md §8.6)
+        for &p in axis.unwrap_or_default() {
+            prescribe(&mut dofs, &mut out, p, 0, "the axis r = 0 (axisymmetric)", "0", None)?;
         }
         for (i, section) in sections.iter().enumerate() {
             let key = format!("dirichlet[{i}].group");
@@ -432,6 +440,15 @@ impl<const D: usize> Dirichlet<D> {
             modes: Vec::new(),
             names: Vec::new(),
         };
+        if self.axisymmetric {
+            // a radial displacement strains the hoops: only the translation along the axis is free
+            // unless some component y is prescribed (docs/method.md §8.6)
+            if !(0..dofs.n()).any(|d| d % D == 1 && dofs.is_prescribed(d)) {
+                free.modes = vec![vec![0.0, 1.0, 0.0]];
+                free.names = vec!["translation in y (along the axis of revolution)".to_string()];
+            }
+            return free;
+        }
         let modes = if D == 2 { 3 } else { 6 };
         let mut gram = nalgebra::DMatrix::<f64>::zeros(modes, modes);
         for d in (0..dofs.n()).filter(|&d| dofs.is_prescribed(d)) {

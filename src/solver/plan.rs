@@ -26,6 +26,7 @@ fn elasticity_detail<const D: usize>(sim: &Simulation<D>) -> String {
     let model = match sim.materials.plane() {
         Some(crate::material::PlaneModel::Stress) => "2D, plane stress",
         Some(crate::material::PlaneModel::Strain) => "2D, plane strain",
+        Some(crate::material::PlaneModel::Axisymmetric) => "2D, axisymmetric (x = r, y = z)",
         None => "3D",
     };
     let several = sim.materials.list().len() > 1;

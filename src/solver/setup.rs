@@ -91,6 +91,33 @@ fn exprs<const D: usize>(
     Ok(out.try_into().unwrap_or_else(|_| unreachable!("D expressions")))
 }
 
+/// The nodes on the axis r = x = 0 of a body of revolution (None: not one): u_r = 0 there
+/// (docs/method.md §8.6). A node at r < 0 is refused: the meridian section lies in x ≥ 0.
+fn axis_nodes<const D: usize>(scene: &Scene, mesh: &Mesh<D>) -> Result<Option<Vec<usize>>, SolveError> {
+    if D != 2 || scene.material.plane != Some(scene::Plane::Axisymmetric) {
+        return Ok(None);
+    }
+    let size = mesh
+        .points
+        .iter()
+        .map(|p| p[0].abs().max(p[1].abs()))
+        .fold(0.0, f64::max);
+    let tolerance = 1e-12 * size.max(f64::MIN_POSITIVE);
+    if let Some(p) = mesh.points.iter().position(|p| p[0] < -tolerance) {
+        return Err(SolveError::Setup(format!(
+            "{}: material.plane = \"axisymmetric\" takes x as the radius r ≥ 0, but node {p} is at {}: mesh the \
+             meridian section on the side x ≥ 0 of the axis x = 0",
+            mesh.path.display(),
+            crate::mesh::fmt_point(mesh.points[p])
+        )));
+    }
+    Ok(Some(
+        (0..mesh.points.len())
+            .filter(|&p| mesh.points[p][0] <= tolerance)
+            .collect(),
+    ))
+}
+
 impl<const D: usize> Simulation<D> {
     /// Whether the state of step 0 stands for every step (one solve for the run): no memory and
     /// nothing that changes in time — loads, prescribed values, forces, a moving obstacle
@@ -124,10 +151,12 @@ impl<const D: usize> Simulation<D> {
                 .flat_map(|part| part.nodes)
                 .collect()
         });
+        let axis = axis_nodes(scene, &mesh)?;
         let (dofs, dirichlet) = Dirichlet::new(
             &mesh,
             (clamped.as_ref(), &scene.dirichlet, &scene.force_control),
             contact_nodes.as_deref().filter(|n| !n.is_empty()),
+            axis.as_deref(),
             &times,
             &scene.origin,
         )?;
@@ -135,10 +164,11 @@ impl<const D: usize> Simulation<D> {
             (2, Some(p)) => Some(match p {
                 scene::Plane::Stress => PlaneModel::Stress,
                 scene::Plane::Strain => PlaneModel::Strain,
+                scene::Plane::Axisymmetric => PlaneModel::Axisymmetric,
             }),
             (2, None) => {
                 return Err(SolveError::Setup(format!(
-                    "{origin} is a 2D mesh: say which 2D model in the scene, material.plane = \"stress\" or \"strain\""
+                    "{origin} is a 2D mesh: say which 2D model in the scene, material.plane = \"stress\", \"strain\" or \"axisymmetric\""
                 )))
             }
             (_, Some(_)) if scene.origin == scene::DEFAULT_SCENE_ORIGIN => {
@@ -158,7 +188,12 @@ impl<const D: usize> Simulation<D> {
             (_, None) => None,
         };
         let materials = super::materials::build(scene, &mesh, plane)?;
-        let mut loads = Loads::new();
+        let axisymmetric = plane == Some(PlaneModel::Axisymmetric);
+        let mut loads = if axisymmetric {
+            Loads::axisymmetric()
+        } else {
+            Loads::new()
+        };
         for (i, t) in scene.traction.iter().enumerate() {
             let part = mesh.boundary(&t.group).map_err(super::error::group_error(
                 &scene.origin,

@@ -172,6 +172,14 @@ pub fn run_with<const D: usize>(
     reset_peak_rss();
     let started = Instant::now();
     let h = options.h.unwrap_or_else(|| mesh.longest_edge());
+    if scene.material.plane == Some(crate::scene::Plane::Axisymmetric) {
+        // its error norms would need the measure 2πr (docs/method.md §8.6)
+        return Err(SolveError::Setup(format!(
+            "{}: `hvi study` measures its errors over the mesh's plane, not over the body of revolution \
+             (material.plane = \"axisymmetric\"): run the levels with `hvi solve` and compare their outputs",
+            scene.origin
+        )));
+    }
     let sim = Simulation::new(scene, mesh)?;
     let mut sink = KeepSink {
         keep: &options.keep,
