@@ -137,3 +137,46 @@ fn a_thick_walled_cylinder_converges_to_lame() {
         }
     }
 }
+
+/// Memory on a body of revolution: the solid cylinder under a constant radial pressure with a
+/// relaxation modulus relaxing bulk and shear alike, φ(t) = φ∞ + (1 − φ∞) e^{−t/τ}: the state
+/// stays uniform and creeps as the standard linear solid's compliance,
+/// u(t) = u(0) [1/φ∞ − (1/φ∞ − 1) e^{−φ∞ t/τ}], which the scheme follows at order 2 in k.
+#[test]
+fn a_relaxing_solid_cylinder_creeps_as_the_standard_linear_solid() {
+    let (nu, p, tau, long_term) = (0.3, 0.01, 0.5, 0.4);
+    let (k0, g0) = (1.0 / (3.0 * (1.0 - 2.0 * nu)), 1.0 / (2.0 * (1.0 + nu)));
+    let relaxing = format!(
+        "relaxation_modulus = {{ bulk = {{ long_term = {}, terms = [{{ modulus = {}, relaxation_time = {tau} }}] }}, \
+         shear = {{ long_term = {}, terms = [{{ modulus = {}, relaxation_time = {tau} }}] }} }}",
+        k0 * long_term,
+        k0 * (1.0 - long_term),
+        g0 * long_term,
+        g0 * (1.0 - long_term)
+    );
+    let creep = |t: f64| 1.0 / long_term - (1.0 / long_term - 1.0) * (-long_term * t / tau).exp();
+    let error = |steps: usize| {
+        let text = cylinder_scene(nu, "Right", "")
+            .replace("youngs_modulus = 1.0\npoisson_ratio = 0.3\n", &format!("{relaxing}\n"))
+            .replace(
+                "final_time = 1.0\nsteps = 1",
+                &format!("final_time = 2.0\nsteps = {steps}"),
+            );
+        let mesh = section(0.0, 1.0, 0.5, 4, 2, CellShape::Quad);
+        let (sim, _, sink) = solve_in_memory(&scene(&text), mesh).unwrap();
+        let at_once = -p * (1.0 + nu) * (1.0 - 2.0 * nu);
+        sink.steps
+            .iter()
+            .map(|step| {
+                let u = sim.dofs.to_nodal(&step.displacement);
+                nodal_error(&sim.mesh.points, &u, |x| [at_once * creep(step.time) * x[0], 0.0])
+                    / (at_once.abs() * creep(2.0))
+            })
+            .fold(0.0, f64::max)
+    };
+    let (coarse, fine) = (error(20), error(40));
+    let order = (coarse / fine).log2();
+    eprintln!("axisymmetric creep: {coarse:.3e} (k = 0.1), {fine:.3e} (k = 0.05), order {order:.2}");
+    assert!(coarse < 1e-2, "{coarse:e}");
+    assert!((order - 2.0).abs() < 0.2, "order {order}");
+}
