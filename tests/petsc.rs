@@ -851,3 +851,21 @@ fn two_materials_match_faer_on_1_and_2_ranks() {
         );
     }
 }
+
+/// A body of revolution (docs/method.md §8.6) under PETSc: Hertz's sphere on the 2D gallery's
+/// meridian mesh with `material.plane = "axisymmetric"` gives the serial Γ₃ on 1 and 2 ranks to
+/// 1e-10 (each rank's cells carry the hoop strain and 2πr; the loads and contact weights are the
+/// serial ones).
+#[test]
+fn axisymmetric_hertz_matches_faer_on_1_and_2_ranks() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string("examples/gallery/hertz_2d/hertz_2d.toml").unwrap();
+    let scene = dir.path().join("sphere.toml");
+    std::fs::write(&scene, text.replace("plane = \"strain\"", "plane = \"axisymmetric\"")).unwrap();
+    for (np, (du, df)) in compare("examples/gallery/hertz_2d/hertz_2d_h2.msh", scene.to_str(), "mumps") {
+        assert!(
+            du <= 1e-10 && df <= 1e-10,
+            "np {np}: u_ν off by {du:.2e}, force by {df:.2e}"
+        );
+    }
+}

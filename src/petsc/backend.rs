@@ -286,12 +286,13 @@ impl<'p, const D: usize> PetscBackend<'p, D> {
         let nl_max = D * cells.iter().map(|c| c.nodes().len()).max().unwrap_or(0);
         let mut local = vec![0.0; nl_max * nl_max];
         let mut index: Vec<Int> = Vec::with_capacity(nl_max);
+        let axisymmetric = sim.materials.plane() == Some(crate::material::PlaneModel::Axisymmetric);
         for &e in &self.own_cells {
             let cell = &cells[e];
             let nl = D * cell.nodes().len();
             let volumetric = sim.materials.of_cell(e).volumetric;
             let tensor = tensors.of_cell(sim, e);
-            local_stiffness(cell, points, &[tensor], volumetric, false, &mut [&mut local[..]]);
+            local_stiffness(cell, points, &[tensor], volumetric, axisymmetric, &mut [&mut local[..]]);
             index.clear();
             for &p in cell.nodes() {
                 for c in 0..D {

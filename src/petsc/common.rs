@@ -121,12 +121,6 @@ pub(super) fn unsupported<const D: usize>(
             }
         ));
     }
-    if sim.materials.plane() == Some(crate::material::PlaneModel::Axisymmetric) {
-        return Err(format!(
-            "{origin}: a body of revolution (material.plane = \"axisymmetric\", docs/method.md §8.6) runs on the \
-             default backend only: run this scene without --backend petsc"
-        ));
-    }
     if !sim.materials.patches().is_empty() {
         return Err(format!(
             "{origin}: the nearly incompressible material's triangles or tetrahedra take their volumetric strain \
