@@ -102,15 +102,7 @@ fn prescribed(groups: &[&str], value: &[&str]) -> String {
 fn last_cell_stresses<const D: usize>(sim: &Simulation<D>, sink: &MemorySink) -> Vec<f64> {
     let last = sink.steps.last().unwrap();
     let u = sim.dofs.to_nodal(&last.displacement);
-    let memory: Vec<_> = match (sim.materials.memory(), &last.memory_displacement) {
-        (Some(m), Some(values)) => m
-            .channels()
-            .iter()
-            .zip(values.chunks_exact(sim.dofs.n()))
-            .map(|(c, v)| (c.tensor, sim.dofs.to_nodal(v)))
-            .collect(),
-        _ => Vec::new(),
-    };
+    let memory = hvi::app::memory_fields(sim, last.memory_displacement.as_deref());
     cell_stresses(
         &sim.mesh.cells,
         &sim.mesh.points,

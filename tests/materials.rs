@@ -102,15 +102,7 @@ fn exact(x: &[f64; 2]) -> [f64; 2] {
 fn stresses(sim: &Simulation<2>, sink: &MemorySink) -> Vec<f64> {
     let last = sink.steps.last().unwrap();
     let u = sim.dofs.to_nodal(&last.displacement);
-    let memory: Vec<_> = match (sim.materials.memory(), &last.memory_displacement) {
-        (Some(m), Some(values)) => m
-            .channels()
-            .iter()
-            .zip(values.chunks_exact(sim.dofs.n()))
-            .map(|(c, v)| (c.tensor, sim.dofs.to_nodal(v)))
-            .collect(),
-        _ => Vec::new(),
-    };
+    let memory = hvi::app::memory_fields(sim, last.memory_displacement.as_deref());
     cell_stresses(
         &sim.mesh.cells,
         &sim.mesh.points,
@@ -410,15 +402,7 @@ components = ["y"]
         let mut worst: f64 = 0.0;
         for step in &sink.steps {
             let u = sim.dofs.to_nodal(&step.displacement);
-            let memory: Vec<_> = match (sim.materials.memory(), &step.memory_displacement) {
-                (Some(m), Some(values)) => m
-                    .channels()
-                    .iter()
-                    .zip(values.chunks_exact(sim.dofs.n()))
-                    .map(|(c, v)| (c.tensor, sim.dofs.to_nodal(v)))
-                    .collect(),
-                _ => Vec::new(),
-            };
+            let memory = hvi::app::memory_fields(&sim, step.memory_displacement.as_deref());
             let sigma = cell_stresses(
                 &sim.mesh.cells,
                 &sim.mesh.points,

@@ -7,7 +7,6 @@ mod common;
 
 use common::step_differences;
 use hvi::app::solve_in_memory;
-use hvi::fem::assembly::assemble_stiffness;
 use hvi::linalg::Factor;
 use hvi::mesh::{read_mesh, Mesh};
 use hvi::scene::Scene;
@@ -37,13 +36,10 @@ const SPHERE: [&str; 2] = [
 
 /// nnz(L) of the run's analysis and of the unconstrained one, and how many unknowns go last.
 fn fill(sim: &Simulation<3>) -> (usize, usize, usize) {
-    let [k] = assemble_stiffness(
-        &sim.mesh.cells,
-        &sim.mesh.points,
-        &sim.dofs,
-        &[sim.materials.list()[0].elasticity.tensor()],
-    );
-    let k = k.with_identity_rows(&sim.dofs);
+    let k = sim
+        .materials
+        .assemble_elastic(&sim.mesh.cells, &sim.mesh.points, &sim.dofs)
+        .with_identity_rows(&sim.dofs);
     let last = sim.unknowns_ordered_last();
     let run = Factor::analyse_with_last(&k, &last).unwrap().factor_entries();
     let free = Factor::analyse(&k).unwrap().factor_entries();
@@ -106,13 +102,10 @@ fn blocked_sweeps_give_the_steps_of_the_stored_responses() {
 #[test]
 fn nested_dissection_is_the_same_on_threads_at_once() {
     let sim = Simulation::new(&hertz_scene(&SPHERE), hertz_mesh()).unwrap();
-    let [k] = assemble_stiffness(
-        &sim.mesh.cells,
-        &sim.mesh.points,
-        &sim.dofs,
-        &[sim.materials.list()[0].elasticity.tensor()],
-    );
-    let k = k.with_identity_rows(&sim.dofs);
+    let k = sim
+        .materials
+        .assemble_elastic(&sim.mesh.cells, &sim.mesh.points, &sim.dofs)
+        .with_identity_rows(&sim.dofs);
     let entries = || {
         Factor::analyse_with(&k, hvi::linalg::NodeOrdering::NestedDissection)
             .unwrap()

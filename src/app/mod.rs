@@ -21,7 +21,7 @@ pub use check::check;
 
 pub use options::SolveOptions;
 
-pub use sink::{FileSink, MemorySink, StoredStep};
+pub use sink::{memory_fields, FileSink, MemorySink, StoredStep};
 
 pub use solve::{read_mesh, solve, solve_in_memory};
 

@@ -46,8 +46,9 @@ impl<const D: usize> FrameSink<D> for MemorySink {
     }
 }
 
-/// Each memory channel's tensor and nodal memory displacement (docs/method.md §15).
-fn memory_fields<const D: usize>(sim: &Simulation<D>, memory: Option<&[f64]>) -> Vec<MemoryField<D>> {
+/// Each memory channel's tensor and nodal memory displacement (docs/method.md §15), from a
+/// step's memory displacements (`StoredStep::memory_displacement`): what the cell stresses take.
+pub fn memory_fields<const D: usize>(sim: &Simulation<D>, memory: Option<&[f64]>) -> Vec<MemoryField<D>> {
     match (sim.materials.memory(), memory) {
         (Some(m), Some(values)) => m
             .channels()
