@@ -104,6 +104,16 @@ done
 gmsh -2 ring.geo -setnumber n 32 -setnumber quads 1 -format msh41 -o ring_q1_n32.msh >/dev/null
 echo "wrote ring_q1_n32.msh"
 
+# Cook's membrane (tests/cook.rs, docs/method.md §8.4): nested structured grids, n cells per edge,
+# Q1 and P1, in the subfolder cook/ (then checked like the files here).
+mkdir -p cook
+for n in 4 8 16 32 64; do
+    gmsh -2 cook.geo -setnumber n "$n" -setnumber quads 1 -format msh41 -o "cook/cook_q1_n$n.msh" >/dev/null
+    gmsh -2 cook.geo -setnumber n "$n" -setnumber quads 0 -format msh41 -o "cook/cook_p1_n$n.msh" >/dev/null
+    echo "wrote cook/cook_q1_n$n.msh, cook/cook_p1_n$n.msh"
+done
+python3 check_orientation.py cook/*.msh | grep -E '^[^ ]|ERROR'
+
 # Orientation, boundary groups and the slabs' (x, y) grids of every MSH 4.1 ASCII file here: one
 # line per file (OK or FAILED) and any ERROR lines; fails the script if any check fails.
 python3 check_orientation.py | grep -E '^[^ ]|ERROR'
