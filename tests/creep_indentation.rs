@@ -1,0 +1,144 @@
+//! Creep under a constant indentation force of a relaxing, nearly incompressible gel: the
+//! viscoelastic correspondence of Lee & Radok (docs/method.md §8.6, "Creep under a sphere").
+//!
+//! The gallery's gel (examples/gallery/gel): a body of revolution pressed by a rigid sphere
+//! (R = 1) with a constant force P, its base force-controlled. The shear modulus relaxes 100-fold,
+//! G(t) = 0.01 + 0.99 e^{−t}, the bulk modulus K = 10 stays (K/G from 10 to 1000, ν from 0.45 to
+//! 0.4995). While the contact grows, Lee & Radok's solution is Hertz's with the elastic constant
+//! replaced by its hereditary operator: a(t)³ = (3PR/4) C(t), C the creep function of the
+//! operator (1 − ν²)/E = (3K + 4G)/(4G(3K + G)), found in closed form by residues.
+
+use hvi::contact::NodeStatus;
+use hvi::mesh::{read_mesh, Mesh};
+use hvi::scene::Scene;
+use hvi::solver::{timeloop, FrameSink, Simulation, SolveError, StepView};
+use std::path::{Path, PathBuf};
+
+const BULK: f64 = 10.0;
+const SHEAR_AT_ONCE: f64 = 1.0;
+const SHEAR_LONG_TERM: f64 = 0.01;
+const TAU: f64 = 1.0;
+const FORCE: f64 = 1.5e-5;
+const RADIUS: f64 = 1.0;
+
+fn gallery(file: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples/gallery/gel")
+        .join(file)
+}
+
+/// The creep function C(t) of (3K + 4G)/(4G(3K + G)) for the standard linear solid in shear,
+/// G(t) = G∞ + (G₀ − G∞) e^{−t/τ}, and a constant K. In Carson's transform G is N/D with
+/// N = G₀ s + G∞/τ, D = s + 1/τ, so C(s) = (3K D + 4N) D / (s · 4N (3K D + N)): poles at 0,
+/// −G∞/(τ G₀) (the slow creep, here τ·100) and −(3K + G∞)/(τ (3K + G₀)); C(t) is the sum of the
+/// residues of C(s) e^{st}.
+fn creep_function(t: f64) -> f64 {
+    let (k, g0, gi) = (BULK, SHEAR_AT_ONCE, SHEAR_LONG_TERM);
+    let poles = [0.0, -gi / (TAU * g0), -(3.0 * k + gi) / (TAU * (3.0 * k + g0))];
+    let numerator = |s: f64| {
+        let d = s + 1.0 / TAU;
+        let n = g0 * s + gi / TAU;
+        (3.0 * k * d + 4.0 * n) * d
+    };
+    poles
+        .iter()
+        .enumerate()
+        .map(|(i, &si)| {
+            let others: f64 = poles
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(_, &sj)| si - sj)
+                .product();
+            numerator(si) * (si * t).exp() / (4.0 * g0 * (3.0 * k + g0) * others)
+        })
+        .sum()
+}
+
+/// Lee & Radok's contact radius under the constant force.
+fn lee_radok_radius(t: f64) -> f64 {
+    (0.75 * FORCE * RADIUS * creep_function(t)).cbrt()
+}
+
+/// The contact radius of one step, from the gap g(r) = R − sqrt(R² − r²) − u_ν just outside
+/// the contact: near the edge of a Hertzian contact the gap opens as c (r − a)^{3/2}, so the
+/// first two free nodes r₁ < r₂ give (g₁/g₂)^{2/3} = (r₁ − a)/(r₂ − a), solved for a. (The
+/// midpoint between the last node in contact and the first free one is within h/2 = 1 % of a on
+/// this mesh, too coarse a ruler for a 2 % check.)
+fn contact_radius<const D: usize>(sim: &Simulation<D>, view: &StepView) -> f64 {
+    let contact = sim.contact.as_ref().expect("the gel scene has contact");
+    let state = view.contact.expect("a contact state every step");
+    let mut nodes: Vec<(f64, bool, f64)> = contact
+        .nodes
+        .nodes
+        .iter()
+        .enumerate()
+        .map(|(k, &p)| {
+            let r = sim.mesh.points[p][0];
+            let gap = RADIUS - (RADIUS * RADIUS - r * r).sqrt() - state.normal_displacement[k];
+            (r, state.status[k] == NodeStatus::OnBound, gap)
+        })
+        .collect();
+    nodes.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let last = nodes.iter().rposition(|n| n.1).expect("the sphere touches");
+    let ((r1, _, g1), (r2, _, g2)) = (nodes[last + 1], nodes[last + 2]);
+    let q = (g1 / g2).powf(2.0 / 3.0);
+    (r1 - q * r2) / (1.0 - q)
+}
+
+/// Collects (t, a(t)) after every step, nothing else (the steps' fields are not kept).
+struct Radii(Vec<(f64, f64)>);
+
+impl<const D: usize> FrameSink<D> for Radii {
+    fn step_done(&mut self, sim: &Simulation<D>, view: &StepView) {
+        self.0.push((view.time, contact_radius(sim, view)));
+    }
+    fn write_frame(&mut self, _: &Simulation<D>, _: &StepView) -> Result<(), SolveError> {
+        Ok(())
+    }
+}
+
+/// The gallery scene on its mesh, to T = 24 (the slow creep a quarter done, a grown 2.7×) in
+/// 800 steps of k = 0.03 = τ/33: the scheme's trapezoid sums the relaxation's integral 1 + r²/12
+/// too large (r = k/τ, docs/method.md §15.3), which on a 100-fold relaxation shifts the long-term
+/// shear modulus by 99 r²/12 = 0.7 % (`hvi check` warns above 1 %), a by a third of that. The
+/// mesh resolves the edge with cells of a/50 (examples/gallery/gel/gel.geo). Measured: within
+/// 0.7 % of Lee & Radok at every step; 2 % is the issue's bound and leaves room for the 0.2 %
+/// from the time step and the mesh's 0.3 % (the long-term elastic Hertz run on the same mesh).
+#[test]
+fn a_gel_under_a_constant_force_creeps_as_lee_and_radok_predict() {
+    let scene = Scene::load(
+        Some(&gallery("gel.toml")),
+        &["time.final_time=24".to_string(), "time.steps=800".to_string()],
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let mesh: Mesh<2> = read_mesh(&gallery("gel.msh")).unwrap_or_else(|e| panic!("{e}"));
+    let sim = Simulation::new(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
+    let mut radii = Radii(Vec::new());
+    timeloop::run(&sim, &mut radii, None).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(radii.0.len(), 801, "one radius per step, t = 0 included");
+    let mut worst = (0.0f64, 0.0);
+    for &(t, a) in &radii.0 {
+        let error = a / lee_radok_radius(t) - 1.0;
+        if error.abs() > worst.0.abs() {
+            worst = (error, t);
+        }
+    }
+    let (t0, a0) = radii.0[0];
+    let (t1, a1) = *radii.0.last().unwrap();
+    eprintln!(
+        "gel creep: a({t0}) = {a0:.5} (Lee-Radok {:.5}), a({t1}) = {a1:.5} (Lee-Radok {:.5}); \
+         worst {:+.2} % at t = {}",
+        lee_radok_radius(t0),
+        lee_radok_radius(t1),
+        100.0 * worst.0,
+        worst.1
+    );
+    assert!(a1 > 2.5 * a0, "the contact creeps: a grew {:.2}×", a1 / a0);
+    assert!(
+        worst.0.abs() < 0.02,
+        "a off Lee & Radok by {:+.3} % at t = {}",
+        100.0 * worst.0,
+        worst.1
+    );
+}
