@@ -180,3 +180,174 @@ fn a_relaxing_solid_cylinder_creeps_as_the_standard_linear_solid() {
     assert!(coarse < 1e-2, "{coarse:e}");
     assert!((order - 2.0).abs() < 0.2, "order {order}");
 }
+
+/// Lamé's hollow sphere a ≤ ρ ≤ b (a = 1, b = 2, ρ² = r² + z²) under internal pressure p, E = 1:
+/// u_ρ = f(ρ) = p a³ / (b³ − a³) ((1 − 2ν) ρ + (1 + ν) b³ / (2ρ²)), radial, so u = f(ρ) x/ρ and
+/// ∂u_i/∂x_j = (f/ρ) δ_ij + (f′ − f/ρ) x_i x_j / ρ²; its mean stress tr σ/3 = p a³/(b³ − a³) is
+/// constant.
+fn lame_sphere(x: [f64; 2], nu: f64, p: f64) -> ([f64; 2], [[f64; 2]; 2]) {
+    let (a, b) = (1.0f64, 2.0f64);
+    let c = p * a.powi(3) / (b.powi(3) - a.powi(3));
+    let rho = x[0].hypot(x[1]);
+    let f = c * ((1.0 - 2.0 * nu) * rho + (1.0 + nu) * b.powi(3) / (2.0 * rho * rho));
+    let df = c * ((1.0 - 2.0 * nu) - (1.0 + nu) * b.powi(3) / rho.powi(3));
+    let gradient = std::array::from_fn(|i| {
+        std::array::from_fn(|j| if i == j { f / rho } else { 0.0 } + (df - f / rho) * x[i] * x[j] / (rho * rho))
+    });
+    ([f * x[0] / rho, f * x[1] / rho], gradient)
+}
+
+/// The errors of a body of revolution's displacement u_h against `exact` in the norms of the
+/// whole body (the measure 2πr dr dz, by the cells' error rules): ‖u − u_h‖_{L²} and the
+/// H¹ seminorm with the hoop strain, (‖∇(u − u_h)‖² + ‖(u_r − u_r,h)/r‖²)^½.
+fn revolved_errors(
+    sim: &hvi::solver::Simulation<2>,
+    u_h: &[[f64; 2]],
+    exact: impl Fn([f64; 2]) -> ([f64; 2], [[f64; 2]; 2]),
+) -> (f64, f64) {
+    let (mut l2, mut h1) = (0.0, 0.0);
+    for cell in &sim.mesh.cells {
+        for q in hvi::mesh::element::error_rule(cell) {
+            let s = hvi::mesh::element::shape_at(cell, &sim.mesh.points, q.xi);
+            let (u, g) = exact(s.x);
+            let (mut uh, mut gh) = ([0.0; 2], [[0.0; 2]; 2]);
+            for (a, &node) in cell.nodes().iter().enumerate() {
+                for c in 0..2 {
+                    uh[c] += s.value[a] * u_h[node][c];
+                    gh[c] = std::array::from_fn(|d| gh[c][d] + s.grad[a][d] * u_h[node][c]);
+                }
+            }
+            let w = q.weight * s.det_j * 2.0 * std::f64::consts::PI * s.x[0];
+            l2 += w * ((u[0] - uh[0]).powi(2) + (u[1] - uh[1]).powi(2));
+            let hoop = (u[0] - uh[0]) / s.x[0];
+            h1 += w
+                * (g.iter()
+                    .flatten()
+                    .zip(gh.iter().flatten())
+                    .map(|(e, h)| (e - h).powi(2))
+                    .sum::<f64>()
+                    + hoop * hoop);
+        }
+    }
+    (l2.sqrt(), h1.sqrt())
+}
+
+/// A pressurised hollow sphere as a body of revolution: the quarter rings of tests/pressure.rs
+/// (meshes/ring_*.msh, 1 ≤ ρ ≤ 2, n cells across the wall and 2n along the arc) as the meridian
+/// section, x = r, y = z: SymX is the axis (u_r = 0 there by itself, no section names it), SymY
+/// the equator z = 0 (u_z = 0), p on Inner, Outer free. Against Lamé's sphere, in the body's
+/// norms (measure 2πr), relative to the exact field's: the L² error falls at order 2 and the
+/// H¹ error (with the hoop strain) at order 1 — the elements' orders, the polygonal arcs' O(h²)
+/// error in the domain not spoiling them — on Q1 (n = 4 … 32) and P1 (n = 4 … 16, the shipped
+/// triangle rings), and at ν = 0.4999 (K/G = 5 000) on Q1 with mean dilatation (the cell mean of
+/// tr ε + u_r/r over 2πr, docs/method.md §8.4, §8.6), where the plain Q1 element locks. The
+/// largest nodal error falls at order 2 on Q1 at ν = 0.3 (its worst node the inner equator).
+/// At ν = 0.4999 the cells' pressure −tr σ/3 converges to Lamé's constant −p a³/(b³ − a³) at
+/// order 2 in the 2πr-weighted mean square (measured 1.2 %, 0.32 %, 0.083 %, 0.021 %), but not
+/// uniformly near the axis: the worst nodal error and the worst cell pressure sit at the inner
+/// pole on the axis, where they fall more slowly (measured: nodal orders 1.94, 1.49, 1.62; the
+/// pole cell's pressure 2.1 %, 1.9 %, 1.2 % off at n = 8, 16, 32, every other cell within 0.35 %
+/// at n = 32), so neither is asserted pointwise there. (Mean dilatation on axisymmetric
+/// triangles is not run: their node patches leave the hoop strain out,
+/// tests/incompressible_patch.rs.)
+#[test]
+fn a_pressurised_hollow_sphere_converges_to_lame() {
+    let p = 0.01;
+    for (nu, kind, formulation) in [
+        (0.3, "q1", "auto"),
+        (0.3, "p1", "auto"),
+        (0.4999, "q1", "mean_dilatation"),
+        (0.4999, "q1", "standard"),
+        (0.4999, "p1", "mean_dilatation"),
+    ] {
+        let text = format!(
+            "[material]\nplane = \"axisymmetric\"\nyoungs_modulus = 1.0\npoisson_ratio = {nu}\nformulation = \"{formulation}\"\n\
+             [time]\nfinal_time = 1.0\nsteps = 1\n[[dirichlet]]\ngroup = \"SymY\"\ncomponents = [\"y\"]\n\
+             [[traction]]\ngroup = \"Inner\"\npressure = \"{p}\"\n"
+        );
+        let exact = |x: [f64; 2]| lame_sphere(x, nu, p);
+        // (L², H¹, nodal max, pressure's weighted mean square) relative errors
+        let run = |n: usize| {
+            let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("meshes/ring_{kind}_n{n}.msh"));
+            let mesh = hvi::mesh::read_mesh::<2>(&path).unwrap_or_else(|e| panic!("{e}"));
+            let (sim, _, sink) = solve_in_memory(&scene(&text), mesh).unwrap();
+            let u = sim.dofs.to_nodal(&sink.steps[0].displacement);
+            let on_axis = sim.mesh.points.iter().zip(&u).filter(|(x, _)| x[0] == 0.0);
+            assert!(on_axis.clone().count() > n, "the axis has its nodes");
+            assert!(
+                on_axis.clone().all(|(_, v)| v[0] == 0.0),
+                "u_r = 0 on the axis by itself"
+            );
+            let zero = vec![[0.0; 2]; u.len()];
+            let (l2, h1) = revolved_errors(&sim, &u, exact);
+            let (l2_norm, h1_norm) = revolved_errors(&sim, &zero, exact);
+            let nodal = nodal_error(&sim.mesh.points, &u, |x| exact(*x).0) / exact([1.0, 0.0]).0[0];
+            let exact_pressure = -p / 7.0;
+            let stress =
+                hvi::fem::stress::cell_stresses(&sim.mesh.cells, &sim.mesh.points, &sim.materials, None, &u, None)
+                    .tensor;
+            let (mut sum, mut volume) = (0.0, 0.0);
+            for (cell, s) in sim.mesh.cells.iter().zip(stress.chunks_exact(9)) {
+                let off = (-(s[0] + s[4] + s[8]) / 3.0) / exact_pressure - 1.0;
+                let w: f64 = hvi::mesh::element::error_rule(cell)
+                    .iter()
+                    .map(|q| {
+                        let at = hvi::mesh::element::shape_at(cell, &sim.mesh.points, q.xi);
+                        q.weight * at.det_j * at.x[0]
+                    })
+                    .sum();
+                sum += w * off * off;
+                volume += w;
+            }
+            [l2 / l2_norm, h1 / h1_norm, nodal, (sum / volume).sqrt()]
+        };
+        let sizes: &[usize] = if kind == "q1" { &[4, 8, 16, 32] } else { &[4, 8, 16] };
+        let results: Vec<[f64; 4]> = sizes.iter().map(|&n| run(n)).collect();
+        let order = |k: usize| -> Vec<f64> { results.windows(2).map(|w| (w[0][k] / w[1][k]).log2()).collect() };
+        let (l2, h1, nodal, pressure) = (order(0), order(1), order(2), order(3));
+        let shown: Vec<String> = results
+            .iter()
+            .map(|r| format!("({:.2e}, {:.2e}, {:.2e}, {:.2e})", r[0], r[1], r[2], r[3]))
+            .collect();
+        eprintln!(
+            "sphere ν = {nu} {kind} {formulation}: (L², H¹, nodal, pressure) {}; orders L² {l2:.2?}, \
+             H¹ {h1:.2?}, nodal {nodal:.2?}, pressure {pressure:.2?}",
+            shown.join(", ")
+        );
+        if formulation == "standard" {
+            assert!(results[0][2] > 0.3, "the plain Q1 element locks: {results:?}");
+            continue;
+        }
+        // the last pair: P1 on the triangle rings approaches its orders from below (as on the
+        // cylinder, tests/pressure.rs); Q1's are there from n = 8 on
+        let last = sizes.len() - 2;
+        // P1 with node patches at ν = 0.4999 comes to its orders from above (L² 2.02, 2.38, H¹
+        // 1.08, 1.27: the coarse rings' error is the locking's remnant the patches remove as
+        // they refine)
+        if kind == "p1" && nu > 0.49 {
+            assert!(l2[last] > 1.8, "L² orders {l2:?}");
+            assert!(h1[last] > 0.85, "H¹ orders {h1:?}");
+        } else {
+            assert!((l2[last] - 2.0).abs() < 0.2, "L² orders {l2:?}");
+            assert!((h1[last] - 1.0).abs() < 0.15, "H¹ orders {h1:?}");
+        }
+        assert!(results[last + 1][0] < 1e-2, "L² {results:?}");
+        if kind == "q1" && nu < 0.49 {
+            assert!(nodal.iter().all(|q| (q - 2.0).abs() < 0.2), "nodal orders {nodal:?}");
+        }
+        if nu > 0.49 && kind == "p1" {
+            // the node patches' pressure oscillates from ring to ring (docs/method.md §8.4: P1–P1
+            // is not inf-sup stable): 3.8, 2.9, 1.8 × Lamé's in mean square, not asserted beyond
+            // falling; the displacement converges (L² 2.02, 2.38)
+            assert!(l2.iter().all(|&q| q > 1.8), "L² orders {l2:?}");
+            assert!(results.windows(2).all(|w| w[1][3] < w[0][3]), "pressure {results:?}");
+        } else if nu > 0.49 {
+            assert!(l2.iter().all(|q| (q - 2.0).abs() < 0.2), "L² orders {l2:?}");
+            assert!(
+                pressure.iter().all(|q| (q - 2.0).abs() < 0.2),
+                "pressure orders {pressure:?}"
+            );
+            assert!(results[last + 1][3] < 1e-3, "pressure {results:?}");
+        }
+    }
+}

@@ -176,7 +176,7 @@ pub fn assemble_stiffness_with<const D: usize, const M: usize>(
     cs: &[Isotropic; M],
     volumetric: Volumetric,
 ) -> [SymmetricMatrix; M] {
-    let patches = NodalPatches::new(cells, None, |_, cell| volumetric.nodal_mean(cell));
+    let patches = NodalPatches::new(cells, None, false, |_, cell| volumetric.nodal_mean(cell));
     let one = CellTensors {
         tensors: &[cs.to_vec()],
         volumetric: &[volumetric],

@@ -89,7 +89,10 @@ impl Materials {
             (Some(memory), owner)
         };
         let of_cell = (list.len() > 1).then_some(of_cell);
-        let patches = NodalPatches::new(cells, of_cell.as_deref(), |m, cell| {
+        let axisymmetric = list
+            .first()
+            .is_some_and(|m| m.elasticity.plane == Some(PlaneModel::Axisymmetric));
+        let patches = NodalPatches::new(cells, of_cell.as_deref(), axisymmetric, |m, cell| {
             list[m as usize].volumetric.nodal_mean(cell)
         });
         Materials {

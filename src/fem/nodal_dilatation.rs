@@ -11,11 +11,15 @@
 //! (K/V_a) g_a g_aᵀ with g_a = ∂Θ_a/∂u over the patch's nodes, which couples the nodes of a patch
 //! with each other: the matrix's pattern gains each patch as a "cell" (the node's second ring).
 //! It stays symmetric positive definite, and a constant strain keeps the continuum's energy
-//! (Σ_a V_a = |Ω|). Written by hand: no crate assembles it.
+//! (Σ_a V_a = |Ω|). On a body of revolution (docs/method.md §8.6) the same with the weight N_a
+//! and the measure 2πr under the integral, and the hoop strain in the divergence:
+//! Θ_a = ∫ N_a (div u + u_r/r) 2πr dA, V_a = ∫ N_a 2πr dA (three points per triangle: exact).
+//! Written by hand: no crate assembles it.
 
 use crate::linalg::sparse::Pattern;
 use crate::material::Isotropic;
 use crate::mesh::element::{shape_at, stiffness_rule, ShapeAt};
+use crate::mesh::quadrature::TRI_3POINT;
 use crate::mesh::Cell;
 use rayon::prelude::*;
 
@@ -27,19 +31,60 @@ pub struct NodalPatches {
     /// Patch p's cells are `cells[ptr[p]..ptr[p + 1]]`.
     ptr: Vec<usize>,
     cells: Vec<usize>,
+    /// A body of revolution (x = r).
+    axisymmetric: bool,
 }
 
-/// A simplex's measure and the gradients of its shape functions (constant).
-fn simplex<const D: usize>(cell: &Cell, points: &[[f64; D]]) -> (f64, ShapeAt<D>) {
-    let rule = stiffness_rule(cell);
-    let s = shape_at(cell, points, rule[0].xi);
-    let measure: f64 = rule.iter().map(|q| q.weight).sum::<f64>() * s.det_j;
-    (measure, s)
+/// The points of ∫_cell N_a (…) over a simplex of patch centre `a`: (the weight times N_a, the
+/// shapes there). In the plane one point, |e|/(D+1) with the constant gradients; on a body of
+/// revolution the triangle's three points with 2πr (the integrands N_a ∂N_b r and N_a N_b are
+/// quadratic: exact).
+fn weighted_points<const D: usize>(
+    cell: &Cell,
+    points: &[[f64; D]],
+    a: usize,
+    axisymmetric: bool,
+) -> Vec<(f64, ShapeAt<D>)> {
+    if axisymmetric {
+        let k = cell
+            .nodes()
+            .iter()
+            .position(|&b| b == a)
+            .expect("a patch's cells hold its centre");
+        TRI_3POINT
+            .iter()
+            .map(|q| {
+                let s = shape_at(cell, points, q.xi);
+                (q.weight * s.det_j * 2.0 * std::f64::consts::PI * s.x[0] * s.value[k], s)
+            })
+            .collect()
+    } else {
+        let rule = stiffness_rule(cell);
+        let s = shape_at(cell, points, rule[0].xi);
+        let measure: f64 = rule.iter().map(|q| q.weight).sum::<f64>() * s.det_j;
+        vec![(measure / (D as f64 + 1.0), s)]
+    }
+}
+
+/// The divergence of N_b e_i at a point: ∂ᵢN_b, plus N_b/r for i = r on a body of revolution.
+fn divergence<const D: usize>(s: &ShapeAt<D>, b: usize, i: usize, axisymmetric: bool) -> f64 {
+    let hoop = if axisymmetric && i == 0 {
+        s.value[b] / s.x[0]
+    } else {
+        0.0
+    };
+    s.grad[b][i] + hoop
 }
 
 impl NodalPatches {
-    /// The patches of the simplices `averaged` says (by their material, `of_cell`; None: 0).
-    pub fn new(cells: &[Cell], of_cell: Option<&[u32]>, averaged: impl Fn(u32, &Cell) -> bool) -> Self {
+    /// The patches of the simplices `averaged` says (by their material, `of_cell`; None: 0), of
+    /// a body of revolution (x = r) if `axisymmetric`.
+    pub fn new(
+        cells: &[Cell],
+        of_cell: Option<&[u32]>,
+        axisymmetric: bool,
+        averaged: impl Fn(u32, &Cell) -> bool,
+    ) -> Self {
         let mut pairs: Vec<((u32, usize), usize)> = Vec::new();
         for (c, cell) in cells.iter().enumerate() {
             let m = of_cell.map_or(0, |of| of[c]);
@@ -52,6 +97,7 @@ impl NodalPatches {
             centre: Vec::new(),
             ptr: vec![0],
             cells: Vec::with_capacity(pairs.len()),
+            axisymmetric,
         };
         for (i, &(key, c)) in pairs.iter().enumerate() {
             if i > 0 && pairs[i - 1].0 != key {
@@ -106,13 +152,13 @@ impl NodalPatches {
         let mut volume = 0.0;
         for &c in self.cells_of(p) {
             let cell = &cells[c];
-            let (measure, s) = simplex(cell, points);
-            let share = measure / (D as f64 + 1.0);
-            volume += share;
-            for (k, &b) in cell.nodes().iter().enumerate() {
-                let at = nodes.binary_search(&b).expect("a patch holds its cells' nodes");
-                for i in 0..D {
-                    g[D * at + i] += share * s.grad[k][i];
+            for (share, s) in weighted_points(cell, points, self.centre[p].1, self.axisymmetric) {
+                volume += share;
+                for (k, &b) in cell.nodes().iter().enumerate() {
+                    let at = nodes.binary_search(&b).expect("a patch holds its cells' nodes");
+                    for i in 0..D {
+                        g[D * at + i] += share * divergence(&s, k, i, self.axisymmetric);
+                    }
                 }
             }
         }
@@ -171,16 +217,20 @@ impl NodalPatches {
                 let (mut theta, mut volume) = (0.0, 0.0);
                 for &c in self.cells_of(p) {
                     let cell = &cells[c];
-                    let (measure, s) = simplex(cell, points);
-                    let share = measure / (D as f64 + 1.0);
-                    let div: f64 = cell
-                        .nodes()
-                        .iter()
-                        .enumerate()
-                        .map(|(k, &b)| (0..D).map(|i| s.grad[k][i] * u[b][i]).sum::<f64>())
-                        .sum();
-                    theta += share * div;
-                    volume += share;
+                    for (share, s) in weighted_points(cell, points, self.centre[p].1, self.axisymmetric) {
+                        let div: f64 = cell
+                            .nodes()
+                            .iter()
+                            .enumerate()
+                            .map(|(k, &b)| {
+                                (0..D)
+                                    .map(|i| divergence(&s, k, i, self.axisymmetric) * u[b][i])
+                                    .sum::<f64>()
+                            })
+                            .sum();
+                        theta += share * div;
+                        volume += share;
+                    }
                 }
                 theta / volume
             })
