@@ -247,9 +247,9 @@ fn revolved_errors(
 /// uniformly near the axis: the worst nodal error and the worst cell pressure sit at the inner
 /// pole on the axis, where they fall more slowly (measured: nodal orders 1.94, 1.49, 1.62; the
 /// pole cell's pressure 2.1 %, 1.9 %, 1.2 % off at n = 8, 16, 32, every other cell within 0.35 %
-/// at n = 32), so neither is asserted pointwise there. (Mean dilatation on axisymmetric
-/// triangles is not run: their node patches leave the hoop strain out,
-/// tests/incompressible_patch.rs.)
+/// at n = 32), so neither is asserted pointwise there. On P1 rings at ν = 0.4999 the patches of
+/// cells (docs/method.md §8.4) give L² orders 1.89, 1.94, H¹ 0.98, 0.99 and the pressure 3.4 %,
+/// 1.2 %, 0.48 % in mean square.
 #[test]
 fn a_pressurised_hollow_sphere_converges_to_lame() {
     let p = 0.01;
@@ -321,26 +321,18 @@ fn a_pressurised_hollow_sphere_converges_to_lame() {
         // the last pair: P1 on the triangle rings approaches its orders from below (as on the
         // cylinder, tests/pressure.rs); Q1's are there from n = 8 on
         let last = sizes.len() - 2;
-        // P1 with node patches at ν = 0.4999 comes to its orders from above (L² 2.02, 2.38, H¹
-        // 1.08, 1.27: the coarse rings' error is the locking's remnant the patches remove as
-        // they refine)
-        if kind == "p1" && nu > 0.49 {
-            assert!(l2[last] > 1.8, "L² orders {l2:?}");
-            assert!(h1[last] > 0.85, "H¹ orders {h1:?}");
-        } else {
-            assert!((l2[last] - 2.0).abs() < 0.2, "L² orders {l2:?}");
-            assert!((h1[last] - 1.0).abs() < 0.15, "H¹ orders {h1:?}");
-        }
+        assert!((l2[last] - 2.0).abs() < 0.2, "L² orders {l2:?}");
+        assert!((h1[last] - 1.0).abs() < 0.15, "H¹ orders {h1:?}");
         assert!(results[last + 1][0] < 1e-2, "L² {results:?}");
         if kind == "q1" && nu < 0.49 {
             assert!(nodal.iter().all(|q| (q - 2.0).abs() < 0.2), "nodal orders {nodal:?}");
         }
         if nu > 0.49 && kind == "p1" {
-            // the node patches' pressure oscillates from ring to ring (docs/method.md §8.4: P1–P1
-            // is not inf-sup stable): 3.8, 2.9, 1.8 × Lamé's in mean square, not asserted beyond
-            // falling; the displacement converges (L² 2.02, 2.38)
-            assert!(l2.iter().all(|&q| q > 1.8), "L² orders {l2:?}");
-            assert!(results.windows(2).all(|w| w[1][3] < w[0][3]), "pressure {results:?}");
+            // the patches' pressure (docs/method.md §8.4): 3.4 %, 1.2 %, 0.48 % in mean square
+            // (orders 1.47, 1.33: the patches' shapes change from mesh to mesh)
+            assert!(l2.iter().all(|q| (q - 2.0).abs() < 0.2), "L² orders {l2:?}");
+            assert!(pressure.iter().all(|&q| q > 1.2), "pressure orders {pressure:?}");
+            assert!(results[last + 1][3] < 1e-2, "pressure {results:?}");
         } else if nu > 0.49 {
             assert!(l2.iter().all(|q| (q - 2.0).abs() < 0.2), "L² orders {l2:?}");
             assert!(

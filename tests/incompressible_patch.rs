@@ -1,7 +1,7 @@
 //! Patch tests at ν = 0.4999 (K/G ≈ 5 000) with the locking-free formulation forced on
 //! (`material.formulation = "mean_dilatation"`, docs/method.md §8.4): the cell's mean dilatation
-//! (B-bar) on quadrilaterals, hexahedra, prisms and pyramids, the node patches' averaged
-//! dilatation on triangles and tetrahedra, and the cell mean with the hoop strain over 2πr on a
+//! (B-bar) on quadrilaterals, hexahedra, prisms and pyramids, the mean over patches of cells on
+//! triangles and tetrahedra, and the cell mean with the hoop strain over 2πr on a
 //! body of revolution (docs/method.md §8.6). On distorted meshes of every element kind a linear
 //! field u = G x is reproduced to round-off, the stress written — the cells' σ = K θ̄ I + 2μ dev ε
 //! and the nodal (recovered) average of it — is the exact uniform stress, its pressure −tr σ/3
@@ -15,11 +15,11 @@
 //! plain element's (the projection only removes bulk energy, docs/method.md §8.4). The patch
 //! test then fails if the projected bulk part is not consistent — b̄ = (1/|c|) ∫ ∂N not
 //! integrated exactly on a distorted or non-affine cell (pyramids' rational basis, bent prism
-//! faces), a node patch's Σ V_a ≠ |Ω|, the hoop strain or the 2πr measure left out of the mean,
+//! faces), a patch's V_P not its cells' measure, the hoop strain or the 2πr measure left out of the mean,
 //! the memory tensors' bulk part projected differently from A's — most visibly when loaded by
 //! tractions, where the bulk part carries the load; and the stress and pressure checks fail if
-//! the dilatation the stress is written with is not the field's (a cell mean or a node patch's
-//! θ_a that leaves out u_r/r or is not normalised by its own measure), or if the memory's stress
+//! the dilatation the stress is written with is not the field's (a cell mean or a patch's θ_P
+//! that leaves out u_r/r or is not normalised by its own measure), or if the memory's stress
 //! is not the scheme's. (For a linear field θ̄ = tr ε, so they cannot tell θ̄ from tr ε: that the
 //! written stress uses θ̄ is asserted by tests/pressure.rs's nearly incompressible rings.)
 //!
@@ -220,27 +220,21 @@ fn errors<const D: usize>(
 }
 
 /// Asserts that the run's single material takes the projected volumetric strain — the cell mean
-/// on the cells that are no simplices, a node patch at every node of a simplex — and returns a
+/// on the cells that are no simplices, its patch's on every simplex — and returns a
 /// random field's energy under the run's K_A over the plain element's (below 1: the projection
 /// removes bulk energy and adds none).
 fn projected<const D: usize>(sim: &Simulation<D>, name: &str) -> f64 {
     let material = &sim.materials.list()[0];
     assert_eq!(material.volumetric, Volumetric::Mean, "{name}: the formulation");
     let simplex = |c: &Cell| matches!(c, Cell::Tri3(_) | Cell::Tet4(_));
-    let mut nodes: Vec<usize> = sim
-        .mesh
-        .cells
-        .iter()
-        .filter(|c| simplex(c))
-        .flat_map(|c| c.nodes().to_vec())
-        .collect();
-    nodes.sort_unstable();
-    nodes.dedup();
-    assert_eq!(
-        sim.materials.patches().len(),
-        nodes.len(),
-        "{name}: a patch per simplex node"
-    );
+    let patches = sim.materials.patches();
+    for (c, cell) in sim.mesh.cells.iter().enumerate() {
+        assert_eq!(
+            patches.of_cell(c).is_some(),
+            simplex(cell),
+            "{name}: a patch for every simplex, for nothing else (cell {c})"
+        );
+    }
     let plain = Materials::one(
         BodyMaterial {
             volumetric: Volumetric::Pointwise,
@@ -310,7 +304,7 @@ fn block_case(name: &'static str, shape: SolidShape) -> Case<3> {
 }
 
 /// gmsh's mixed meshes (prisms on tetrahedra; hexahedra, pyramids and tetrahedra), distorted as
-/// tests/three_d.rs and tests/real_geometry.rs do: cell means and node patches side by side.
+/// tests/three_d.rs and tests/real_geometry.rs do: cell means and patches of cells side by side.
 fn gmsh_case(name: &'static str, file: &str) -> Case<3> {
     let mut mesh = msh::<3>(file);
     distort_off_groups(&mut mesh, 0.2);
@@ -364,7 +358,7 @@ fn elastic_patch_test<const D: usize>(case: Case<D>, g: &[[f64; D]; D]) {
     }
 }
 
-/// Triangles (node patches) and quadrilaterals (cell means), plane strain.
+/// Triangles (patches of cells) and quadrilaterals (cell means), plane strain.
 #[test]
 fn plane_strain_triangles_and_quadrilaterals_pass_the_patch_test_at_nu_04999() {
     elastic_patch_test(
@@ -388,8 +382,8 @@ fn axisymmetric_quadrilaterals_pass_the_patch_test_at_nu_04999() {
     );
 }
 
-/// Triangles of a body of revolution: their node patches average tr ε + u_r/r with the weight
-/// N_a over 2πr (docs/method.md §8.4, §8.6). (Before 2026-12-06 they took the planar divergence
+/// Triangles of a body of revolution: their patches average tr ε + u_r/r over 2πr
+/// (docs/method.md §8.4, §8.6). (Before 2026-12-06 their node patches took the planar divergence
 /// over the plain area: with u prescribed every pressure was 63 % off, clamped and loaded by σν
 /// the displacement 1.5e3 × max |G x|.)
 #[test]
@@ -400,7 +394,7 @@ fn axisymmetric_triangles_pass_the_patch_test_at_nu_04999() {
     );
 }
 
-/// Tetrahedra (node patches) and hexahedra (cell means), structured and distorted.
+/// Tetrahedra (patches of cells) and hexahedra (cell means), structured and distorted.
 #[test]
 fn tetrahedra_and_hexahedra_pass_the_patch_test_at_nu_04999() {
     elastic_patch_test(block_case("tetrahedra", SolidShape::Tet), &G3);
@@ -408,7 +402,7 @@ fn tetrahedra_and_hexahedra_pass_the_patch_test_at_nu_04999() {
 }
 
 /// Prisms and pyramids (cell means; the pyramids' rational basis at work on their warped bases),
-/// structured, and gmsh's mixed meshes where they meet tetrahedra's node patches.
+/// structured, and gmsh's mixed meshes where they meet tetrahedra's patches.
 #[test]
 fn prisms_and_pyramids_pass_the_patch_test_at_nu_04999() {
     elastic_patch_test(block_case("prisms", SolidShape::Prism), &G3);

@@ -170,13 +170,13 @@ fn lame_cylinder_nearly_incompressible_with_mean_dilatation() {
     nearly_incompressible_lame("q1");
 }
 
-/// The same on triangles (ring_p1_n*.msh) with the nodal-averaged dilatation (docs/method.md
-/// §8.4): the displacement converges at order 2 where the plain P1 element locks; the pressure
-/// (each cell's the mean of its nodes' patch pressures) oscillates from ring to ring of nodes
-/// (one pressure per node is not inf-sup stable): its largest error falls, from 3.2 to 1.5 ×
-/// Lamé's over the three meshes, but slowly (the plain P1's grows, 12 to 42 ×).
+/// The same on triangles (ring_p1_n*.msh) with the patch-mean dilatation (docs/method.md §8.4):
+/// the displacement converges (3.6 %, 1.2 %, 0.39 %) where the plain P1 element locks (71 %, 68 %,
+/// 63 %); the pressure, one per patch of cells (here the ring's 2 × 2 squares of 8 triangles),
+/// has every cell within 3.4 %, 2.7 %, 2.0 % of Lamé's constant, where the plain P1's scatter by
+/// 12, 23, 42 × it (and the node patches hvi had before oscillated by 3.2, 2.4, 1.5 ×).
 #[test]
-fn lame_cylinder_nearly_incompressible_on_triangles_with_nodal_dilatation() {
+fn lame_cylinder_nearly_incompressible_on_triangles_with_patch_dilatation() {
     nearly_incompressible_lame("p1");
 }
 
@@ -204,15 +204,20 @@ fn nearly_incompressible_lame(kind: &str) {
     let plain: Vec<(f64, f64)> = [4, 8, 16].iter().map(|&n| run(n, "standard")).collect();
     eprintln!("{kind} mean dilatation (error, pressure error): {mean:?}\nplain: {plain:?}");
     let orders: Vec<f64> = mean.windows(2).map(|w| (w[0].0 / w[1].0).log2()).collect();
-    // (P1: 1.95 and 2.28, the coarsest ring's four cells across the wall not yet asymptotic)
-    assert!(orders.iter().all(|q| (q - 2.0).abs() < 0.35), "orders {orders:?}");
     assert!(mean[2].0 < 1e-2, "{mean:?}");
     if kind == "q1" {
+        assert!(orders.iter().all(|q| (q - 2.0).abs() < 0.35), "orders {orders:?}");
         assert!(mean.iter().all(|m| m.1 < 1e-2), "pressure {mean:?}");
     } else {
+        // P1 comes to order 2 from below as at ν = 0.3 (1.56, 1.63 here; 1.68, 1.77 there)
         assert!(
-            mean.windows(2).all(|w| w[1].1 < w[0].1),
-            "the P1 pressures' oscillation falls: {mean:?}"
+            orders.iter().all(|&q| q > 1.5) && orders[1] > orders[0],
+            "orders {orders:?}"
+        );
+        // one pressure per patch: every cell within 3.5 % of Lamé's constant, falling
+        assert!(
+            mean.iter().all(|m| m.1 < 0.035) && mean.windows(2).all(|w| w[1].1 < w[0].1),
+            "the P1 pressures {mean:?}"
         );
     }
     assert!(

@@ -4,7 +4,7 @@
 //! sequential pass in cell order.
 
 use super::dofs::DofMap;
-use super::nodal_dilatation::NodalPatches;
+use super::patch_dilatation::CellPatches;
 use crate::linalg::sparse::{Pattern, SymmetricMatrix};
 use crate::material::Isotropic;
 use crate::mesh::element::{shape_at, stiffness_rule};
@@ -22,7 +22,7 @@ pub enum Volumetric {
     /// A mean dilatation, so that a nearly incompressible body does not lock: on quadrilaterals,
     /// hexahedra, prisms and pyramids the bulk part K tr ε(v) tr ε(u) is taken with the cell's
     /// mean θ̄ = (1/|c|) ∫_c div u (B-bar), on triangles and tetrahedra (one divergence per cell
-    /// already) with the mean over the patch of each node ([`super::nodal_dilatation`]).
+    /// already) with the mean over a patch of neighbouring cells ([`super::patch_dilatation`]).
     Mean,
 }
 
@@ -37,8 +37,8 @@ impl Volumetric {
         self == Volumetric::Mean && !is_simplex(cell)
     }
 
-    /// Whether `cell`'s bulk part goes to its nodes' patches (a simplex).
-    pub fn nodal_mean(self, cell: &Cell) -> bool {
+    /// Whether `cell`'s bulk part is its patch's mean (a simplex).
+    pub fn patch_mean(self, cell: &Cell) -> bool {
         self == Volumetric::Mean && is_simplex(cell)
     }
 }
@@ -176,7 +176,7 @@ pub fn assemble_stiffness_with<const D: usize, const M: usize>(
     cs: &[Isotropic; M],
     volumetric: Volumetric,
 ) -> [SymmetricMatrix; M] {
-    let patches = NodalPatches::new(cells, None, false, |_, cell| volumetric.nodal_mean(cell));
+    let patches = CellPatches::new(cells, None, false, |_, cell| volumetric.patch_mean(cell));
     let one = CellTensors {
         tensors: &[cs.to_vec()],
         volumetric: &[volumetric],
@@ -200,14 +200,14 @@ pub struct CellTensors<'a> {
     pub volumetric: &'a [Volumetric],
     /// Each cell's material; None: every cell has material 0.
     pub of_cell: Option<&'a [u32]>,
-    /// The node patches of the simplices whose bulk part is averaged there.
-    pub patches: Option<&'a NodalPatches>,
+    /// The patches of the simplices whose bulk part is averaged there.
+    pub patches: Option<&'a CellPatches>,
     /// A body of revolution (x = r, docs/method.md §8.6).
     pub axisymmetric: bool,
 }
 
 /// Assembles one matrix per tensor of [`CellTensors`] on a pattern built here, over every
-/// unknown of `dofs` (prescribed ones included: docs/method.md §7). With node patches the
+/// unknown of `dofs` (prescribed ones included: docs/method.md §7). With cell patches the
 /// pattern holds each patch as a cell and their bulk parts are added (docs/method.md §8.4).
 pub fn assemble_by_cell<const D: usize>(
     cells: &[Cell],
@@ -409,9 +409,9 @@ mod tests {
         );
     }
 
-    /// The patch test of the node patches' bulk part (docs/method.md §8.4): a constant strain
+    /// The patch test of the cell patches' bulk part (docs/method.md §8.4): a constant strain
     /// keeps the continuum's energy |Ω| (K θ² + 2μ dev ε : dev ε) on a distorted mesh of
-    /// triangles (Σ_a V_a = |Ω|), and the rigid motions cost nothing.
+    /// triangles (the patches tile it), and the rigid motions cost nothing.
     #[test]
     fn a_constant_strain_keeps_the_continuum_energy() {
         use crate::mesh::structured::{rectangle, CellShape};

@@ -6,7 +6,7 @@
 
 use super::assembly::{assemble_by_cell, CellTensors, Volumetric};
 use super::dofs::DofMap;
-use super::nodal_dilatation::NodalPatches;
+use super::patch_dilatation::CellPatches;
 use crate::linalg::sparse::SymmetricMatrix;
 use crate::material::{Elasticity, Isotropic, Memory, PlaneModel};
 use crate::mesh::Cell;
@@ -62,8 +62,8 @@ pub struct Materials {
     memory: Option<Memory>,
     /// The material of each channel of `memory`.
     owner: Vec<MaterialId>,
-    /// The node patches of the simplices whose bulk part is averaged there (docs/method.md §8.4).
-    patches: NodalPatches,
+    /// The patches of the simplices whose bulk part is averaged there (docs/method.md §8.4).
+    patches: CellPatches,
 }
 
 impl Materials {
@@ -92,8 +92,8 @@ impl Materials {
         let axisymmetric = list
             .first()
             .is_some_and(|m| m.elasticity.plane == Some(PlaneModel::Axisymmetric));
-        let patches = NodalPatches::new(cells, of_cell.as_deref(), axisymmetric, |m, cell| {
-            list[m as usize].volumetric.nodal_mean(cell)
+        let patches = CellPatches::new(cells, of_cell.as_deref(), axisymmetric, |m, cell| {
+            list[m as usize].volumetric.patch_mean(cell)
         });
         Materials {
             list,
@@ -129,8 +129,8 @@ impl Materials {
         counts
     }
 
-    /// The node patches of the averaged simplices (empty: none).
-    pub fn patches(&self) -> &NodalPatches {
+    /// The patches of the averaged simplices (empty: none).
+    pub fn patches(&self) -> &CellPatches {
         &self.patches
     }
 

@@ -13,9 +13,9 @@ pub mod assembly;
 pub mod dofs;
 pub mod loads;
 pub mod materials;
-pub mod nodal_dilatation;
 pub mod node_blocks;
 pub mod norms;
+pub mod patch_dilatation;
 pub mod stress;
 
 pub use crate::linalg::sparse::{Pattern, SymmetricMatrix};

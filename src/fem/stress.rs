@@ -41,8 +41,8 @@ pub fn cell_stresses<const D: usize>(
     memory: Option<&[MemoryField<D>]>,
 ) -> CellStresses {
     let memory = memory.unwrap_or_default();
-    // the nodal dilatations of the averaged simplices' patches (docs/method.md §8.4): of u and
-    // of each memory field (a simplex's bulk part is the mean of its nodes')
+    // the dilatations of the averaged simplices' patches (docs/method.md §8.4): of u and of each
+    // memory field (a simplex's bulk part is its patch's)
     let patches = materials.patches();
     let nodal: Vec<Vec<f64>> = if patches.is_empty() {
         Vec::new()
@@ -101,20 +101,15 @@ pub fn cell_stresses<const D: usize>(
             };
             out_of_plane += add_hoop(&a, &mut sig, trace, hoop(u));
             // mean dilatation: K (θ̄ − tr ε) on the diagonal, for A and each memory tensor; θ̄
-            // the cell's mean, or on a simplex the mean of its nodes' patch dilatations
+            // the cell's mean, or on a simplex its patch's
             let project = volumetric.projects(cell);
             let mut bulk_shift = 0.0;
             let mut shift = |t: &Isotropic, field: usize, e: &[[f64; D]; D]| {
                 if !project {
                     return;
                 }
-                let mean = if volumetric.nodal_mean(cell) {
-                    let at = |a: &usize| {
-                        patches
-                            .find(id.0, *a)
-                            .expect("an averaged simplex's node has its patch")
-                    };
-                    cell.nodes().iter().map(|a| nodal[field][at(a)]).sum::<f64>() / cell.nodes().len() as f64
+                let mean = if let Some(patch) = patches.of_cell(c).filter(|_| volumetric.patch_mean(cell)) {
+                    nodal[field][patch.index()]
                 } else {
                     let values = if field == 0 { u } else { &memory[field - 1].1[..] };
                     mean_trace(cell, points, &local(values), axisymmetric)

@@ -202,25 +202,13 @@ fn locking(material: &BodyMaterial, cells: &[&crate::mesh::Cell], which: &str) -
     };
     // the plain element locks wherever the bulk part is taken pointwise
     let locked = cells.iter().filter(|c| !material.volumetric.projects(c)).count();
-    let averaged = cells.iter().filter(|c| material.volumetric.nodal_mean(c)).count();
-    if ratio >= LOCKING_BULK_TO_SHEAR && locked == 0 && averaged > 0 {
-        // one pressure per node is not inf-sup stable: the displacement and the contact are
-        // right, the body's pressure field oscillates (docs/method.md §8.4)
-        return Some(format!(
-            "{which} is nearly incompressible{when} (K/G = {ratio:.3e}) and {averaged} of its cells are triangles or \
-             tetrahedra, which take the volumetric strain over node patches: displacements and contact pressures \
-             converge, but the body's stress and pressure oscillate from node to node there (Lamé's cylinder: up to \
-             1.5× the pressure on a P1 ring of 16 cells across the wall); for the body's pressure mesh it with \
-             quadrilaterals or hexahedra (docs/method.md §8.4)"
-        ));
-    }
     let what = "hvi's plain P1/Q1 elements";
     (ratio >= LOCKING_BULK_TO_SHEAR && locked > 0).then(|| {
         format!(
             "{which} is nearly incompressible{when}: K/G = {ratio:.3e} (ν = {nu}); {what} lock there and come out \
              too stiff (2D Hertz: up to 7.8 % off in a and p₀ at ν = 0.499, up to 40 % at 0.4999; \
              docs/troubleshooting.md); leave `formulation` at \"auto\" or set \"mean_dilatation\" (per cell on \
-             quadrilaterals and hexahedra, over node patches on triangles and tetrahedra, docs/method.md §8.4)"
+             quadrilaterals and hexahedra, over patches of cells on triangles and tetrahedra, docs/method.md §8.4)"
         )
     })
 }

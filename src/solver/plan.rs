@@ -59,8 +59,8 @@ fn elasticity_detail<const D: usize>(sim: &Simulation<D>) -> String {
                 },
                 match m.volumetric {
                     crate::fem::assembly::Volumetric::Mean => format!(
-                        "; mean dilatation (docs/method.md §8.4): per cell (B-bar) on {by_cell}, over node patches \
-                         on {by_node} triangles or tetrahedra (each node's second ring joins the matrix)",
+                        "; mean dilatation (docs/method.md §8.4): per cell (B-bar) on {by_cell}, over patches of \
+                         cells on {by_node} triangles or tetrahedra (each patch joins the matrix as one cell)",
                     ),
                     crate::fem::assembly::Volumetric::Pointwise => String::new(),
                 }

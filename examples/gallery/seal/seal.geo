@@ -10,7 +10,7 @@
 // (hvi has no contact between two bodies; the bond is the shared curve). Quadrilaterals only
 // (Frontal-Delaunay for quads, then each cell subdivided: the sizes below are halved), so that
 // the nearly incompressible elastomer takes mean dilatation per cell with a pressure that does
-// not oscillate (docs/method.md §8.4; axisymmetric triangles' node patches are refused).
+// not oscillate (docs/method.md §8.4).
 //
 // Parameters (override with -setnumber; the mesh sizes before the subdivision):
 //   hs  element size in the seal                                   (default 0.12)
