@@ -326,8 +326,8 @@ fn hertz_2d_nearly_incompressible_on_triangles_with_patch_dilatation() {
 }
 
 /// 3D Hertz at ν = 0.4999 on the gallery's tetrahedra (a/14 on the contact): the patch-mean
-/// dilatation (docs/method.md §8.4) holds a and p₀ within the 2 % (measured −0.49 %,
-/// +1.26 %; the node patches hvi had before: −0.77 %, +2.8 %), where the plain P1 tetrahedron
+/// dilatation (docs/method.md §8.4) holds a and p₀ within the 2 % (measured −0.52 %,
+/// +1.29 %; the node patches hvi had before: −0.77 %, +2.8 %), where the plain P1 tetrahedron
 /// locks (a +550 %).
 #[test]
 fn hertz_3d_nearly_incompressible_on_tetrahedra_with_patch_dilatation() {

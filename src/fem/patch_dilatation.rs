@@ -40,7 +40,8 @@ use rayon::prelude::*;
 /// | 4 | 0.020 / 0.0042 | 0.021 / 0.0021 | −0.52 %, +1.29 % | 21.8 M |
 /// | 8 | | | −0.45 %, +0.81 % | 25.2 M |
 ///
-/// (the plain tetrahedra's nnz(L) is 14.0 M). With 2 a patch of two triangles still carries the
+/// (the plain tetrahedra's nnz(L) is 14.0 M; the rows 2 and 8 took whole stars of any size
+/// first). With 2 a patch of two triangles still carries the
 /// pressure mode of the single triangles; from 4 on the structured ring's patches are its 2 × 2
 /// squares of 8 triangles, Q1–P0's stable macro-element.
 pub const MIN_PATCH_CELLS: usize = 4;
