@@ -162,7 +162,17 @@ fn overrides_set_values_and_create_sections() {
     std::fs::write(&path, elastic).unwrap();
     let s = Scene::load(Some(&path), &["contact.bound=0.3".into()]).unwrap();
     assert_eq!(s.contact[0].bound, Some(0.3.into()));
-    for bad in ["time.steps", "=3", "time..steps=3", "traction.7.group=G"] {
+    // the bracket form of the error messages' keys indexes arrays too
+    let s = with(&["traction[0].value[1]=\"-2\"", "traction[0].group=Gamma2_top"]).unwrap();
+    assert_eq!(s.traction[0].group, "Gamma2_top".into());
+    assert_eq!(s.traction[0].value[1], "-2");
+    for bad in [
+        "time.steps",
+        "=3",
+        "time..steps=3",
+        "traction.7.group=G",
+        "traction[7].group=G",
+    ] {
         assert!(with(&[bad]).unwrap_err().contains("--set"), "{bad}");
     }
 }

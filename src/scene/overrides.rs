@@ -5,14 +5,16 @@ use toml::Value;
 
 /// Applies one `key.path=value` override to `root`. The value is read as a TOML value
 /// (`64`, `1e-6`, `true`, `[1, 0]`, `"text"`) and otherwise taken as a string; missing tables
-/// are created; a numeric segment indexes an array (`traction.0.group=Gamma2`).
+/// are created; a numeric segment indexes an array (`traction.0.group=Gamma2`), and so does the
+/// bracket form the error messages name keys with (`traction[0].value[1]`, `materials[1].group`).
 pub fn apply(root: &mut Value, text: &str) -> Result<(), SceneError> {
     let fail = |reason: &str| SceneError::Override {
         text: text.into(),
         reason: reason.into(),
     };
     let (key, raw) = text.split_once('=').ok_or_else(|| fail("no `=`"))?;
-    let key = key.trim();
+    let key = key.trim().replace('[', ".").replace(']', "");
+    let key = key.as_str();
     if key.is_empty() || key.split('.').any(|s| s.trim().is_empty()) {
         return Err(fail("empty key segment"));
     }
