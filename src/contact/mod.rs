@@ -22,6 +22,7 @@ pub mod newton;
 pub mod nodal;
 pub mod obstacle;
 pub mod outcome;
+pub mod pairing;
 pub mod problem;
 pub mod rows;
 pub mod settings;

@@ -1,0 +1,441 @@
+//! Pairing two surfaces of the mesh for contact between deformable bodies (issue 44; docs/method.md
+//! §18): each node of the slave surface S is projected onto the master surface M, in the
+//! reference configuration (small strain, small sliding: once per run). A projection is the
+//! closest point x_M(ξ) = Σ N_i(ξ) x_i on a facet of M whose reference coordinates ξ lie in the
+//! facet (within [`INSIDE`]); its gap is g₀ = (x_S − x_M)·n, n the master facet's outward unit
+//! normal there (positive: apart; negative: the slave node starts inside the master body), and the
+//! relative normal displacement of a later step is u_ν = (Σ N_i u_i − u_S)·n ≤ g₀ closing the gap.
+//!
+//! This is the geometry only: `hvi check` lists a pair with [`PairSummary`] and refuses surfaces
+//! that face the same way or do not overlap; the contact rows that carry the master nodes'
+//! weights are the next step of issue 44. Written by hand: a brute-force search over the master
+//! facets' bounding boxes (O(slave nodes × master facets), 0.1 s at 10⁴ × 10⁴); a spatial index
+//! is the change to make when surfaces grow beyond that.
+
+use crate::mesh::element::reference;
+use crate::mesh::{BoundaryPart, Cell, Facet};
+
+/// How far outside a facet's reference domain (in reference units) a projection still counts as
+/// on it, clamped onto the facet's edge: a node of S above an edge or the rim of M projects onto
+/// the facets there only to round-off, or, above a warped quadrilateral, to the warp's slope times
+/// the gap (a node 0.01 above the rim of faces warped by 1e-3 over 0.5 lands 1e-4 outside).
+pub const INSIDE: f64 = 1e-3;
+
+/// A slave node's projection onto the master surface.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Projection<const D: usize> {
+    /// The master facet (index into the master part's facets).
+    pub facet: usize,
+    /// The master nodes of the facet and their shape values N_i(ξ) at the projection.
+    pub shape: Vec<(usize, f64)>,
+    /// x_M(ξ).
+    pub point: [f64; D],
+    /// The master facet's outward unit normal at ξ.
+    pub normal: [f64; D],
+    /// g₀ = (x_S − x_M)·n.
+    pub gap: f64,
+}
+
+/// The pairing of a slave surface with a master surface: per slave node (in the order of the
+/// slave part's nodes) its projection, None where it falls off the master surface.
+#[derive(Clone, Debug)]
+pub struct SurfacePair<const D: usize> {
+    pub slave: BoundaryPart<D>,
+    pub master: BoundaryPart<D>,
+    pub projections: Vec<Option<Projection<D>>>,
+}
+
+/// What `hvi check` says of a pair.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PairSummary {
+    /// Slave nodes with a projection, and without.
+    pub paired: usize,
+    pub unpaired: usize,
+    /// The largest initial gap (≥ 0) and the deepest initial penetration (≥ 0) over the paired
+    /// slave nodes.
+    pub largest_gap: f64,
+    pub deepest_penetration: f64,
+    /// Paired slave nodes whose own outward normal points along the master's (n_S·n_M > 0): the
+    /// surfaces face the same way there.
+    pub facing_away: usize,
+}
+
+/// Why two surfaces cannot be paired.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PairingError {
+    /// No slave node projects onto the master surface.
+    NoOverlap,
+    /// Most paired slave nodes' normals point along the master's.
+    SameWay { facing_away: usize, paired: usize },
+}
+
+fn dot<const D: usize>(a: &[f64; D], b: &[f64; D]) -> f64 {
+    (0..D).map(|k| a[k] * b[k]).sum()
+}
+
+/// The closest point of facet `f` to `x` by Gauss–Newton on its reference coordinates (exact in
+/// one step on an edge or a triangle; a few on a warped quadrilateral), if it lies on the facet.
+/// Whether reference coordinates lie on a facet's reference domain (within [`INSIDE`]).
+type OnFacet = fn(&[f64; 3]) -> bool;
+
+/// A projection onto a facet: the facet's shape values there, the point and the unit normal.
+type FacetPoint<const D: usize> = (Vec<f64>, [f64; D], [f64; D]);
+
+fn project<const D: usize>(points: &[[f64; D]], f: &Facet, x: &[f64; D]) -> Option<FacetPoint<D>> {
+    let (cell, mut xi, inside): (Cell, [f64; 3], OnFacet) = match f.len() {
+        2 => (Cell::Tri3([0, 1, 2]), [0.5, 0.0, 0.0], |xi| {
+            xi[0] >= -INSIDE && xi[0] <= 1.0 + INSIDE
+        }),
+        3 => (Cell::Tri3([0, 1, 2]), [1.0 / 3.0, 1.0 / 3.0, 0.0], |xi| {
+            xi[0] >= -INSIDE && xi[1] >= -INSIDE && xi[0] + xi[1] <= 1.0 + INSIDE
+        }),
+        _ => (Cell::Quad4([0, 1, 2, 3]), [0.0; 3], |xi| {
+            xi[0].abs() <= 1.0 + INSIDE && xi[1].abs() <= 1.0 + INSIDE
+        }),
+    };
+    let nodes = f.nodes();
+    // an edge a → b: x(ξ) = (1 − ξ) a + ξ b
+    let map = |xi: &[f64; 3]| -> (Vec<f64>, [f64; D], [[f64; D]; 2]) {
+        if nodes.len() == 2 {
+            let (a, b) = (points[nodes[0]], points[nodes[1]]);
+            let at = std::array::from_fn(|k| (1.0 - xi[0]) * a[k] + xi[0] * b[k]);
+            let t = std::array::from_fn(|k| b[k] - a[k]);
+            return (vec![1.0 - xi[0], xi[0]], at, [t, [0.0; D]]);
+        }
+        let (n, value, grad) = reference(&cell, *xi);
+        let mut at = [0.0; D];
+        let mut t = [[0.0; D]; 2];
+        for i in 0..n {
+            let p = points[nodes[i]];
+            for k in 0..D {
+                at[k] += value[i] * p[k];
+                t[0][k] += grad[i][0] * p[k];
+                t[1][k] += grad[i][1] * p[k];
+            }
+        }
+        (value[..n].to_vec(), at, t)
+    };
+    let dims = if nodes.len() == 2 { 1 } else { 2 };
+    for _ in 0..30 {
+        let (_, at, t) = map(&xi);
+        let r: [f64; D] = std::array::from_fn(|k| x[k] - at[k]);
+        // normal equations of the tangents: (TᵀT) Δξ = Tᵀ r
+        let (a00, a01, a11) = (dot(&t[0], &t[0]), dot(&t[0], &t[1]), dot(&t[1], &t[1]));
+        let (b0, b1) = (dot(&t[0], &r), dot(&t[1], &r));
+        let step = if dims == 1 {
+            [b0 / a00, 0.0]
+        } else {
+            let det = a00 * a11 - a01 * a01;
+            [(a11 * b0 - a01 * b1) / det, (a00 * b1 - a01 * b0) / det]
+        };
+        xi[0] += step[0];
+        xi[1] += step[1];
+        if step[0].abs().max(step[1].abs()) < 1e-14 {
+            break;
+        }
+    }
+    if !inside(&xi) {
+        return None;
+    }
+    // onto the facet: a point just beyond its edge is the edge's
+    xi = match f.len() {
+        2 => [xi[0].clamp(0.0, 1.0), 0.0, 0.0],
+        3 => {
+            let (a, b) = (xi[0].max(0.0), xi[1].max(0.0));
+            let over = (a + b - 1.0).max(0.0) / 2.0;
+            [a - over, b - over, 0.0]
+        }
+        _ => [xi[0].clamp(-1.0, 1.0), xi[1].clamp(-1.0, 1.0), 0.0],
+    };
+    let (shape, at, t) = map(&xi);
+    let normal: [f64; D] = if D == 2 {
+        // the edge's outward normal (dy, −dx): the body on its left
+        let l = dot(&t[0], &t[0]).sqrt();
+        std::array::from_fn(|k| if k == 0 { t[0][1] / l } else { -t[0][0] / l })
+    } else {
+        let c = [
+            t[0][1] * t[1][2] - t[0][2] * t[1][1],
+            t[0][2] * t[1][0] - t[0][0] * t[1][2],
+            t[0][0] * t[1][1] - t[0][1] * t[1][0],
+        ];
+        let l = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+        std::array::from_fn(|k| c[k] / l)
+    };
+    Some((shape, at, normal))
+}
+
+impl<const D: usize> SurfacePair<D> {
+    /// Projects every node of `slave` onto `master` (both parts of the mesh with `points`): of the
+    /// facets the node projects onto, the nearest.
+    pub fn new(points: &[[f64; D]], slave: BoundaryPart<D>, master: BoundaryPart<D>) -> Result<Self, PairingError> {
+        // each master facet's bounding box, for a cheap distance bound
+        let boxes: Vec<([f64; D], [f64; D])> = master
+            .facets
+            .iter()
+            .map(|f| {
+                let mut lo = [f64::INFINITY; D];
+                let mut hi = [f64::NEG_INFINITY; D];
+                for &p in f.nodes() {
+                    for k in 0..D {
+                        lo[k] = lo[k].min(points[p][k]);
+                        hi[k] = hi[k].max(points[p][k]);
+                    }
+                }
+                (lo, hi)
+            })
+            .collect();
+        let projections: Vec<Option<Projection<D>>> = slave
+            .nodes
+            .iter()
+            .map(|&s| {
+                let x = points[s];
+                let mut order: Vec<(f64, usize)> = boxes
+                    .iter()
+                    .enumerate()
+                    .map(|(i, (lo, hi))| {
+                        let d2: f64 = (0..D).map(|k| (lo[k] - x[k]).max(x[k] - hi[k]).max(0.0).powi(2)).sum();
+                        (d2, i)
+                    })
+                    .collect();
+                order.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let mut best: Option<(f64, Projection<D>)> = None;
+                for (d2, i) in order {
+                    if best.as_ref().is_some_and(|(b, _)| d2 > b * b * (1.0 + 1e-12)) {
+                        break;
+                    }
+                    let f = &master.facets[i];
+                    if let Some((values, point, normal)) = project(points, f, &x) {
+                        let distance = (0..D).map(|k| (x[k] - point[k]).powi(2)).sum::<f64>().sqrt();
+                        if best.as_ref().is_none_or(|(b, _)| distance < *b) {
+                            let gap = (0..D).map(|k| (x[k] - point[k]) * normal[k]).sum();
+                            let shape = f.nodes().iter().copied().zip(values).collect();
+                            best = Some((
+                                distance,
+                                Projection {
+                                    facet: i,
+                                    shape,
+                                    point,
+                                    normal,
+                                    gap,
+                                },
+                            ));
+                        }
+                    }
+                }
+                best.map(|(_, p)| p)
+            })
+            .collect();
+        let pair = SurfacePair {
+            slave,
+            master,
+            projections,
+        };
+        let summary = pair.summary();
+        if summary.paired == 0 {
+            return Err(PairingError::NoOverlap);
+        }
+        if 2 * summary.facing_away > summary.paired {
+            return Err(PairingError::SameWay {
+                facing_away: summary.facing_away,
+                paired: summary.paired,
+            });
+        }
+        Ok(pair)
+    }
+
+    /// The pair's numbers for `hvi check`.
+    pub fn summary(&self) -> PairSummary {
+        let mut s = PairSummary {
+            paired: 0,
+            unpaired: 0,
+            largest_gap: 0.0,
+            deepest_penetration: 0.0,
+            facing_away: 0,
+        };
+        for (k, p) in self.projections.iter().enumerate() {
+            match p {
+                Some(p) => {
+                    s.paired += 1;
+                    s.largest_gap = s.largest_gap.max(p.gap);
+                    s.deepest_penetration = s.deepest_penetration.max(-p.gap);
+                    if dot(&self.slave.normals[k], &p.normal) > 0.0 {
+                        s.facing_away += 1;
+                    }
+                }
+                None => s.unpaired += 1,
+            }
+        }
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::structured::{rectangle, CellShape};
+    use crate::mesh::{GroupSelector, Mesh};
+
+    /// Two bodies in one mesh: the rectangle (0, 2) × (0, 1) and a copy of it with `nx_top` cells
+    /// across shifted by (`shift`, 1 + `gap`), so that the lower body's top (Gamma2_top) is the
+    /// master and the upper body's bottom (Gamma3) the slave.
+    fn two_blocks(nx_top: usize, gap: f64, shift: f64) -> (Mesh<2>, BoundaryPart<2>, BoundaryPart<2>) {
+        let lower = rectangle(2.0, 1.0, 4, 2, CellShape::Quad);
+        let upper = rectangle(2.0, 1.0, nx_top, 2, CellShape::Tri);
+        let master = lower.boundary(&GroupSelector::Name("Gamma2_top".into())).unwrap();
+        let mut slave = upper.boundary(&GroupSelector::Name("Gamma3".into())).unwrap();
+        let offset = lower.points.len();
+        let mut points = lower.points.clone();
+        points.extend(upper.points.iter().map(|x| [x[0] + shift, x[1] + 1.0 + gap]));
+        slave.nodes.iter_mut().for_each(|p| *p += offset);
+        for f in slave.facets.iter_mut() {
+            let nodes: Vec<usize> = f.nodes().iter().map(|p| p + offset).collect();
+            *f = Facet::from_slice(&nodes);
+        }
+        let mesh = Mesh { points, ..lower };
+        (mesh, slave, master)
+    }
+
+    /// Non-matching flat surfaces a gap apart: every slave node pairs, with the gap, the master's
+    /// upward normal, and shape values that interpolate its x on the master's edge.
+    #[test]
+    fn flat_surfaces_pair_with_their_gap_and_the_interpolating_weights() {
+        let (mesh, slave, master) = two_blocks(7, 0.01, 0.0);
+        let pair = SurfacePair::new(&mesh.points, slave, master).unwrap();
+        let s = pair.summary();
+        assert_eq!((s.paired, s.unpaired, s.facing_away), (8, 0, 0));
+        for (k, p) in pair.projections.iter().enumerate() {
+            let p = p.as_ref().unwrap();
+            let x = mesh.points[pair.slave.nodes[k]];
+            assert!((p.gap - 0.01).abs() < 1e-14, "gap {}", p.gap);
+            assert!((p.normal[1] - 1.0).abs() < 1e-14 && p.normal[0].abs() < 1e-14);
+            let xm: f64 = p.shape.iter().map(|&(n, v)| v * mesh.points[n][0]).sum();
+            assert!((xm - x[0]).abs() < 1e-14, "interpolates x: {xm} against {}", x[0]);
+            assert!((p.shape.iter().map(|s| s.1).sum::<f64>() - 1.0).abs() < 1e-14);
+        }
+        // an overlap is a negative gap, the penetration
+        let (mesh, slave, master) = two_blocks(7, -0.003, 0.0);
+        let s = SurfacePair::new(&mesh.points, slave, master).unwrap().summary();
+        assert!((s.deepest_penetration - 0.003).abs() < 1e-14, "{s:?}");
+        // shifted half a body along x: the nodes beyond the master's end are unpaired
+        let (mesh, slave, master) = two_blocks(8, 0.0, 1.0);
+        let s = SurfacePair::new(&mesh.points, slave, master).unwrap().summary();
+        assert_eq!((s.paired, s.unpaired), (5, 4), "{s:?}");
+    }
+
+    /// A surface paired with itself faces the same way; surfaces that do not overlap are refused.
+    #[test]
+    fn surfaces_facing_the_same_way_or_apart_are_refused() {
+        let (mesh, _, master) = two_blocks(3, 0.0, 0.0);
+        assert!(matches!(
+            SurfacePair::new(&mesh.points, master.clone(), master.clone()),
+            Err(PairingError::SameWay { .. })
+        ));
+        let (mesh, slave, master) = two_blocks(3, 0.0, 10.0);
+        assert_eq!(
+            SurfacePair::new(&mesh.points, slave, master).unwrap_err(),
+            PairingError::NoOverlap
+        );
+    }
+
+    /// A curved master: the slave node above a circle's arc (a polygon of 64 edges, radius 1)
+    /// projects onto the chord under it, its gap the distance to the chord along the chord's normal.
+    #[test]
+    fn a_node_projects_onto_the_nearest_of_several_facets() {
+        let n = 64;
+        let mut points: Vec<[f64; 2]> = (0..=n)
+            .map(|i| {
+                let a = std::f64::consts::PI * i as f64 / n as f64;
+                [a.cos(), a.sin()]
+            })
+            .collect();
+        points.push([0.3 * 1.5, 0.4 * 1.5]);
+        // the arc's edges counter-clockwise, the disc on their left: (dy, −dx) points out of it
+        let facets: Vec<Facet> = (0..n).map(|i| Facet::from_slice(&[i, i + 1])).collect();
+        let master = BoundaryPart {
+            label: "arc".into(),
+            facet_lengths: vec![0.0; n],
+            nodes: (0..=n).collect(),
+            weights: vec![0.0; n + 1],
+            normals: vec![[0.0, 0.0]; n + 1],
+            facets,
+        };
+        let slave = BoundaryPart {
+            label: "point".into(),
+            facets: Vec::new(),
+            facet_lengths: Vec::new(),
+            nodes: vec![n + 1],
+            weights: vec![1.0],
+            normals: vec![[-0.6, -0.8]],
+        };
+        let pair = SurfacePair::new(&points, slave, master).unwrap();
+        let p = pair.projections[0].as_ref().unwrap();
+        // the node at radius 0.75, angle atan2(0.6, 0.45)
+        let (r, angle) = (0.75f64, 0.6f64.atan2(0.45));
+        let edge = (angle / (std::f64::consts::PI / n as f64)).floor() as usize;
+        assert_eq!(p.facet, edge, "the edge under the node");
+        let half = std::f64::consts::PI / n as f64 / 2.0;
+        let chord = half.cos();
+        // the node is inside the disc (r < 1): a negative gap, the chord's distance minus r's
+        // component along the chord's normal
+        let mid = (edge as f64 + 0.5) * 2.0 * half;
+        let along = r * (angle - mid).cos();
+        assert!(
+            (p.gap - (along - chord)).abs() < 1e-13,
+            "gap {} against {}",
+            p.gap,
+            along - chord
+        );
+    }
+
+    /// In 3D: the top of a hexahedral block (warped: its top nodes moved up and down by 1e-3,
+    /// so its quadrilaterals are not flat) against the bottom of a tetrahedral block above it with
+    /// another grid: every slave node pairs (those above the rim clamped onto it), the point is
+    /// the orthogonal foot (to 1e-9 inside), near the node's x and z, and the gap its height above
+    /// the warped face along the face's normal.
+    #[test]
+    fn three_dimensional_faces_pair_on_warped_quadrilaterals_and_triangles() {
+        use crate::mesh::structured::{block, SolidShape};
+        let lower = block([2.0, 1.0, 1.0], [4, 2, 3], SolidShape::Hex);
+        let upper = block([2.0, 1.0, 1.0], [3, 2, 5], SolidShape::Tet);
+        let master = lower.boundary(&GroupSelector::Name("Gamma2_top".into())).unwrap();
+        let mut slave = upper.boundary(&GroupSelector::Name("Gamma3".into())).unwrap();
+        let offset = lower.points.len();
+        let mut points = lower.points.clone();
+        for (i, x) in points.iter_mut().enumerate() {
+            if (x[1] - 1.0).abs() < 1e-12 {
+                x[1] += if i % 2 == 0 { 1e-3 } else { -1e-3 };
+            }
+        }
+        points.extend(upper.points.iter().map(|x| [x[0], x[1] + 1.01, x[2]]));
+        slave.nodes.iter_mut().for_each(|p| *p += offset);
+        let pair = SurfacePair::new(&points, slave, master).unwrap();
+        let s = pair.summary();
+        assert_eq!((s.paired, s.unpaired, s.facing_away), (24, 0, 0), "{s:?}");
+        for (k, p) in pair.projections.iter().enumerate() {
+            let p = p.as_ref().unwrap();
+            let x = points[pair.slave.nodes[k]];
+            for axis in [0, 2] {
+                let xm: f64 = p.shape.iter().map(|&(n, v)| v * points[n][axis]).sum();
+                // the foot on a tilted face lies off the vertical by the slope (4e-3) × the gap
+                assert!((xm - x[axis]).abs() < 1e-4, "axis {axis}: {xm} against {}", x[axis]);
+            }
+            let along: f64 = (0..3).map(|k| (x[k] - p.point[k]) * p.normal[k]).sum();
+            let across: f64 = (0..3)
+                .map(|k| (x[k] - p.point[k] - along * p.normal[k]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            // inside, the orthogonal foot; on the rim, clamped onto the edge (warp slope × gap)
+            let rim = x[0] < 1e-12 || x[0] > 2.0 - 1e-12 || x[2] < 1e-12 || x[2] > 1.0 - 1e-12;
+            let tolerance = if rim { 1e-4 } else { 1e-9 };
+            assert!(
+                across < tolerance,
+                "the closest point: x − x_M along the normal, off by {across:e}"
+            );
+            assert!(
+                (p.gap - along).abs() < 1e-15 && (p.gap - 0.01).abs() < 1.5e-3,
+                "gap {}",
+                p.gap
+            );
+        }
+    }
+}
