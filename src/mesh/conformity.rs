@@ -370,19 +370,49 @@ fn coincident_nodes<const D: usize>(points: &[[f64; D]], used: &[bool]) -> Optio
     first.map(|(q, p)| (q, p, count))
 }
 
-/// The connected pieces of cells (through shared nodes): (first cell, number of cells) of each,
-/// largest first.
-fn pieces<'a>(cells: impl Iterator<Item = &'a [usize]>, n_points: usize) -> Vec<(usize, usize)> {
-    let mut parent: Vec<usize> = (0..n_points).collect();
-    fn root(parent: &mut [usize], mut p: usize) -> usize {
-        while parent[p] != p {
-            parent[p] = parent[parent[p]];
-            p = parent[p];
+impl<const D: usize> Mesh<D> {
+    /// The bodies of the mesh: its pieces of cells connected through shared nodes, each as its
+    /// nodes (ascending), in the order of their first cell.
+    pub fn bodies(&self) -> Vec<Vec<usize>> {
+        let cells: Vec<&[usize]> = self.cells.iter().map(|c| c.nodes()).collect();
+        let mut parent = union_of_cells(&cells, self.points.len());
+        let mut index: HashMap<usize, usize> = HashMap::default();
+        let mut out: Vec<Vec<usize>> = Vec::new();
+        for nodes in &cells {
+            let r = root(&mut parent, nodes[0]);
+            let next = index.len();
+            index.entry(r).or_insert_with(|| {
+                out.push(Vec::new());
+                next
+            });
         }
-        p
+        let mut seen = vec![false; self.points.len()];
+        for nodes in &cells {
+            for &p in nodes.iter() {
+                if !seen[p] {
+                    seen[p] = true;
+                    let r = root(&mut parent, p);
+                    out[index[&r]].push(p);
+                }
+            }
+        }
+        out.iter_mut().for_each(|b| b.sort_unstable());
+        out
     }
-    let cells: Vec<&[usize]> = cells.collect();
-    for nodes in &cells {
+}
+
+fn root(parent: &mut [usize], mut p: usize) -> usize {
+    while parent[p] != p {
+        parent[p] = parent[parent[p]];
+        p = parent[p];
+    }
+    p
+}
+
+/// Union–find over the nodes, joined through each cell's nodes.
+fn union_of_cells(cells: &[&[usize]], n_points: usize) -> Vec<usize> {
+    let mut parent: Vec<usize> = (0..n_points).collect();
+    for nodes in cells {
         let a = root(&mut parent, nodes[0]);
         for &q in &nodes[1..] {
             let b = root(&mut parent, q);
@@ -391,6 +421,14 @@ fn pieces<'a>(cells: impl Iterator<Item = &'a [usize]>, n_points: usize) -> Vec<
             }
         }
     }
+    parent
+}
+
+/// The connected pieces of cells (through shared nodes): (first cell, number of cells) of each,
+/// largest first.
+fn pieces<'a>(cells: impl Iterator<Item = &'a [usize]>, n_points: usize) -> Vec<(usize, usize)> {
+    let cells: Vec<&[usize]> = cells.collect();
+    let mut parent = union_of_cells(&cells, n_points);
     let mut by_root: HashMap<usize, (usize, usize)> = HashMap::default();
     for (c, nodes) in cells.iter().enumerate() {
         let r = root(&mut parent, nodes[0]);

@@ -263,11 +263,25 @@ impl<const D: usize> Dirichlet<D> {
             });
         }
         out.add_overlap_rows();
-        let free = out.free_rigid_motions(mesh, &dofs);
-        if !free.modes.is_empty() {
-            match contact_nodes {
-                Some(contact) => out.pin(mesh, &mut dofs, free, contact),
-                None => return Err(free.error(mesh, out.entries.len())),
+        // each body (a connected piece of the mesh) is held on its own: by its prescribed
+        // components, or by its contact with one of its motions pinned (docs/method.md §7.6–7.7)
+        let bodies = mesh.bodies();
+        let several = bodies.len() > 1;
+        for (b, nodes) in bodies.iter().enumerate() {
+            let body = several.then_some((b, bodies.len(), nodes.as_slice()));
+            let free = out.free_rigid_motions(mesh, &dofs, body);
+            if free.modes.is_empty() {
+                continue;
+            }
+            let in_body: Option<Vec<usize>> = contact_nodes.map(|c| {
+                c.iter()
+                    .copied()
+                    .filter(|p| !several || nodes.binary_search(p).is_ok())
+                    .collect()
+            });
+            match in_body.filter(|c| !c.is_empty()) {
+                Some(contact) => out.pin(mesh, &mut dofs, free, &contact, body.map(|b| b.2)),
+                None => return Err(free.error(mesh, out.entries.len(), body)),
             }
         }
         Ok((dofs, out))
@@ -285,13 +299,22 @@ impl<const D: usize> Dirichlet<D> {
     /// free unknowns off the contact nodes that best determine those motions, chosen greedily
     /// (each time the one whose values of the motions are largest after removing what the
     /// pins so far fix: a pivoted Gram–Schmidt over the unknowns).
-    fn pin(&mut self, mesh: &Mesh<D>, dofs: &mut DofMap<D>, free: FreeMotions<D>, contact: &[usize]) {
+    /// Of a mesh of several bodies, only the unknowns of `body`'s nodes are candidates.
+    fn pin(
+        &mut self,
+        mesh: &Mesh<D>,
+        dofs: &mut DofMap<D>,
+        free: FreeMotions<D>,
+        contact: &[usize],
+        body: Option<&[usize]>,
+    ) {
         let k = free.modes.len();
         let on_contact: std::collections::HashSet<usize> = contact.iter().copied().collect();
+        let in_body = |d: usize| body.is_none_or(|nodes| nodes.binary_search(&(d / D)).is_ok());
         // (unknown, the motions' values there)
         let candidates_where = |keep: &dyn Fn(usize) -> bool| -> Vec<(usize, Vec<f64>)> {
             (0..dofs.n())
-                .filter(|&d| !dofs.is_prescribed(d) && keep(d))
+                .filter(|&d| !dofs.is_prescribed(d) && in_body(d) && keep(d))
                 .map(|d| {
                     let row = free.row(mesh, d);
                     let values = free
@@ -338,7 +361,7 @@ impl<const D: usize> Dirichlet<D> {
                 group: None,
             });
         }
-        self.held_by_contact = free.names;
+        self.held_by_contact.extend(free.names);
     }
 
     /// Each group's reaction is the whole force on that group, so a component in two groups (the
@@ -420,38 +443,63 @@ impl<const D: usize> Dirichlet<D> {
     }
 
     /// The rigid motions of the body (D translations, D(D−1)/2 rotations about the centroid)
-    /// that no prescribed component stops (docs/method.md §7.6).
-    fn free_rigid_motions(&self, mesh: &Mesh<D>, dofs: &DofMap<D>) -> FreeMotions<D> {
-        let n = mesh.points.len().max(1) as f64;
+    /// that no prescribed component stops (docs/method.md §7.6); of a mesh of several bodies,
+    /// of body (index, count, its nodes), named by it.
+    fn free_rigid_motions(
+        &self,
+        mesh: &Mesh<D>,
+        dofs: &DofMap<D>,
+        body: Option<(usize, usize, &[usize])>,
+    ) -> FreeMotions<D> {
+        let all: Vec<usize>;
+        let nodes: &[usize] = match body {
+            Some((_, _, nodes)) => nodes,
+            None => {
+                all = (0..mesh.points.len()).collect();
+                &all
+            }
+        };
+        let n = nodes.len().max(1) as f64;
         let mut centre = [0.0; D];
-        for p in &mesh.points {
+        for &p in nodes {
             for k in 0..D {
-                centre[k] += p[k] / n;
+                centre[k] += mesh.points[p][k] / n;
             }
         }
-        let extent = mesh
-            .points
+        let extent = nodes
             .iter()
-            .map(|p| (0..D).map(|k| (p[k] - centre[k]).powi(2)).sum::<f64>().sqrt())
+            .map(|&p| {
+                (0..D)
+                    .map(|k| (mesh.points[p][k] - centre[k]).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            })
             .fold(f64::MIN_POSITIVE, f64::max);
         let mut free = FreeMotions {
             centre,
             extent,
             modes: Vec::new(),
             names: Vec::new(),
+            body: body.map(|(b, count, _)| (b, count)),
         };
+        // the prescribed unknowns of the body's nodes
+        let prescribed: Vec<usize> = nodes
+            .iter()
+            .flat_map(|&p| (0..D).map(move |c| p * D + c))
+            .filter(|&d| dofs.is_prescribed(d))
+            .collect();
         if self.axisymmetric {
             // a radial displacement strains the hoops: only the translation along the axis is free
             // unless some component y is prescribed (docs/method.md §8.6)
-            if !(0..dofs.n()).any(|d| d % D == 1 && dofs.is_prescribed(d)) {
+            if !prescribed.iter().any(|&d| d % D == 1) {
                 free.modes = vec![vec![0.0, 1.0, 0.0]];
-                free.names = vec!["translation in y (along the axis of revolution)".to_string()];
+                free.names = vec![free.named("translation in y (along the axis of revolution)")];
             }
             return free;
         }
         let modes = if D == 2 { 3 } else { 6 };
         let mut gram = nalgebra::DMatrix::<f64>::zeros(modes, modes);
-        for d in (0..dofs.n()).filter(|&d| dofs.is_prescribed(d)) {
+        for &d in &prescribed {
             let row = free.row(mesh, d);
             for i in 0..modes {
                 for j in 0..modes {
@@ -471,19 +519,20 @@ impl<const D: usize> Dirichlet<D> {
         // Translations along an axis no prescribed component acts on are free; what is free
         // beyond them are rotations.
         free.names = (0..D)
-            .filter(|&c| !(0..dofs.n()).any(|d| d % D == c && dofs.is_prescribed(d)))
-            .map(|c| format!("translation in {}", COMPONENTS[c]))
+            .filter(|&c| !prescribed.iter().any(|&d| d % D == c))
+            .map(|c| free.named(&format!("translation in {}", COMPONENTS[c])))
             .collect();
         let rotations = free.modes.len().saturating_sub(free.names.len());
         if rotations > 0 {
-            free.names.push(if D == 2 {
+            let name = if D == 2 {
                 "the rotation in the plane (the prescribed components act at a single point)".to_string()
             } else {
                 format!(
                     "{rotations} rotation{} (the prescribed components act at too few points or along one line)",
                     if rotations == 1 { "" } else { "s" }
                 )
-            });
+            };
+            free.names.push(free.named(&name));
         }
         free
     }
@@ -496,9 +545,19 @@ struct FreeMotions<const D: usize> {
     extent: f64,
     modes: Vec<Vec<f64>>,
     names: Vec<String>,
+    /// Of a mesh of several bodies: (this body's index, how many).
+    body: Option<(usize, usize)>,
 }
 
 impl<const D: usize> FreeMotions<D> {
+    /// A motion's name, with its body's in a mesh of several.
+    fn named(&self, motion: &str) -> String {
+        match self.body {
+            Some((b, _)) => format!("{motion} of body {}", b + 1),
+            None => motion.to_string(),
+        }
+    }
+
     /// The value at unknown d (node d / D, component d % D) of each rigid mode: translations
     /// e_k, then rotations (2D: about z; 3D: about x, y, z).
     fn row(&self, mesh: &Mesh<D>, d: usize) -> Vec<f64> {
@@ -521,14 +580,25 @@ impl<const D: usize> FreeMotions<D> {
         row
     }
 
-    /// The error of a body nothing holds against these motions.
-    fn error(&self, mesh: &Mesh<D>, prescribed: usize) -> SolveError {
+    /// The error of a body nothing holds against these motions; of a mesh of several bodies,
+    /// naming which (`body`: its index, count and nodes).
+    fn error(&self, mesh: &Mesh<D>, prescribed: usize, body: Option<(usize, usize, &[usize])>) -> SolveError {
+        let which = match body {
+            Some((b, count, nodes)) => format!(
+                "the mesh has {count} bodies (pieces connected through their nodes), and body {} ({} nodes, the \
+                 first at {}) is not held against rigid motions",
+                b + 1,
+                nodes.len(),
+                crate::mesh::fmt_point(mesh.points[nodes[0]])
+            ),
+            None => "the body is not held against rigid motions".to_string(),
+        };
         SolveError::Singular {
             mesh: mesh.path.display().to_string(),
             detail: format!(
-                "the body is not held against rigid motions: {} {} free ({prescribed} components prescribed); clamp a \
-                 group (groups.clamped), prescribe more components with [[dirichlet]] sections, or give the body a \
-                 contact group that holds it (docs/method.md §7.7)",
+                "{which}: {} {} free ({prescribed} components prescribed); clamp a group (groups.clamped), prescribe \
+                 more components with [[dirichlet]] sections, or give the body a contact group that holds it \
+                 (docs/method.md §7.7)",
                 self.names.join(", "),
                 if self.modes.len() == 1 { "is" } else { "are" },
             ),
