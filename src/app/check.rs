@@ -33,7 +33,7 @@ fn check_dim<const D: usize>(
 ) -> Result<String, SolveError> {
     use std::fmt::Write;
     let mut out = check_mesh_report(mesh_path, &mesh);
-    let mesh_warnings = super::warnings::mesh_warnings(&mesh, accept_mesh_defects)?;
+    let mesh_warnings = super::warnings::mesh_warnings(&mesh, scene, accept_mesh_defects)?;
     let sim = Simulation::new(scene, mesh)?;
     sim.check_data()?;
     out.push_str(&check_scene_report(scene_path, &sim));
@@ -71,6 +71,15 @@ fn check_dim<const D: usize>(
             .map(|(i, g)| format!("\"{g}\" ({})", c.row_group.iter().filter(|&&r| r == i).count()))
             .collect();
         let _ = writeln!(out, "contact: {} rows on {}", c.nodes.len(), per_group.join(", "));
+        // contact with another body: the pairing (docs/method.md §18)
+        for (name, s) in &c.pairs {
+            let _ = writeln!(
+                out,
+                "  pair {name}: {} slave nodes paired, {} off the target (no row); largest initial gap {:.3e}, deepest \
+                 initial penetration {:.3e}",
+                s.paired, s.unpaired, s.largest_gap, s.deepest_penetration
+            );
+        }
         if !c.laws.is_empty() {
             let ratio = elastic.smallness_ratio(&sim)?;
             let _ = writeln!(

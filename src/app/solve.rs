@@ -92,7 +92,7 @@ fn solve_dim<const D: usize>(
     mesh_seconds: f64,
     stop: Option<&AtomicBool>,
 ) -> Result<RunStats, SolveError> {
-    let mesh_warnings = super::warnings::mesh_warnings(&mesh, opts.accept_mesh_defects)?;
+    let mesh_warnings = super::warnings::mesh_warnings(&mesh, scene, opts.accept_mesh_defects)?;
     let sim = Simulation::new(scene, mesh)?;
     // what `hvi check` would warn about, said before the run (and kept in summary.json)
     let warnings = super::warnings::warnings(mesh_warnings, scene, &sim);

@@ -8,8 +8,17 @@ use crate::solver::{Simulation, SolveError};
 
 /// The mesh's defects as one conforming body (docs/method.md §16.3): an error naming the severe
 /// ones unless `accept`; else every defect as a warning (what `hvi check` and `hvi solve` print).
-pub fn mesh_warnings<const D: usize>(mesh: &Mesh<D>, accept: bool) -> Result<Vec<String>, SolveError> {
-    let defects = mesh.defects();
+pub fn mesh_warnings<const D: usize>(mesh: &Mesh<D>, scene: &Scene, accept: bool) -> Result<Vec<String>, SolveError> {
+    // the surfaces of contact between two bodies may share coordinates (docs/method.md §18)
+    let interface: Vec<usize> = scene
+        .contact
+        .iter()
+        .filter(|c| c.target.is_some())
+        .flat_map(|c| c.group.iter().chain(c.target.iter()))
+        .filter_map(|g| mesh.group_nodes(g).ok())
+        .flatten()
+        .collect();
+    let defects = mesh.defects_besides(&interface);
     let severe: Vec<&str> = defects
         .iter()
         .filter(|d| d.severe)

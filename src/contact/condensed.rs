@@ -85,6 +85,20 @@ impl<const D: usize> ContactNodes<D> {
         (out, kept)
     }
 
+    /// Adds to row k the terms c·u_q of other nodes q (`terms`: (node, c)): the master nodes of a
+    /// row of contact between two bodies, u_ν = (Σ N_i u_i − u_S)·n (docs/method.md §18).
+    pub fn add_terms(&mut self, k: usize, terms: &[(usize, [f64; D])], dofs: &DofMap<D>) {
+        for &(q, c) in terms {
+            for (i, &v) in c.iter().enumerate() {
+                match dofs.get(q, i) {
+                    Some(d) => self.rows[k].push((d, v)),
+                    None if v != 0.0 => self.prescribed[k].push((dofs.index(q, i), v)),
+                    None => {}
+                }
+            }
+        }
+    }
+
     /// m, the number of contact nodes.
     pub fn len(&self) -> usize {
         self.nodes.len()

@@ -74,6 +74,12 @@ impl<const D: usize> Mesh<D> {
     /// What is wrong with the mesh as one conforming body (empty: nothing). Severe defects
     /// first; each kind once, with its count and first place.
     pub fn defects(&self) -> Vec<MeshDefect> {
+        self.defects_besides(&[])
+    }
+
+    /// [`Mesh::defects`], where nodes of `interface` that coincide are not a cut: the two sides of
+    /// contact between two bodies (docs/method.md §18).
+    pub fn defects_besides(&self, interface: &[usize]) -> Vec<MeshDefect> {
         let mut out = Vec::new();
         let uses = self.facet_uses();
         let what = if D == 2 { "edge" } else { "face" };
@@ -167,7 +173,9 @@ impl<const D: usize> Mesh<D> {
 
         // coincident nodes of cells: an internal boundary
         let used: Vec<bool> = node_cells.iter().map(|c| !c.is_empty()).collect();
-        if let Some((p, q, n)) = coincident_nodes(&self.points, &used) {
+        let mut on_interface = vec![false; self.points.len()];
+        interface.iter().for_each(|&p| on_interface[p] = true);
+        if let Some((p, q, n)) = coincident_nodes(&self.points, &used, &on_interface) {
             out.push(MeshDefect {
                 severe: true,
                 message: format!(
@@ -319,9 +327,14 @@ fn opposite(a: &Facet, b: &Facet) -> bool {
     (0..n).all(|k| b[(i + n - k) % n] == a[k])
 }
 
-/// The number of used nodes that coincide with an earlier used node, with the first pair:
-/// coordinates hashed on a grid of the tolerance (10⁻¹² of the extent), neighbours compared.
-fn coincident_nodes<const D: usize>(points: &[[f64; D]], used: &[bool]) -> Option<(usize, usize, usize)> {
+/// The number of used nodes that coincide with an earlier used node (both on the `interface`
+/// excepted), with the first pair: coordinates hashed on a grid of the tolerance (10⁻¹² of the
+/// extent), neighbours compared.
+fn coincident_nodes<const D: usize>(
+    points: &[[f64; D]],
+    used: &[bool],
+    interface: &[bool],
+) -> Option<(usize, usize, usize)> {
     let mut lo = [f64::INFINITY; D];
     let mut hi = [f64::NEG_INFINITY; D];
     for x in points.iter().zip(used).filter(|(_, &u)| u).map(|(x, _)| x) {
@@ -361,7 +374,7 @@ fn coincident_nodes<const D: usize>(points: &[[f64; D]], used: &[bool]) -> Optio
                 }
             }
         }
-        if let Some(q) = hit {
+        if let Some(q) = hit.filter(|&q| !(interface[p] && interface[q])) {
             count += 1;
             first.get_or_insert((q, p));
         }

@@ -121,10 +121,17 @@ pub(super) fn unsupported<const D: usize>(
             }
         ));
     }
+    if sim.contact.as_ref().is_some_and(|c| !c.pairs.is_empty()) {
+        return Err(format!(
+            "{origin}: contact between two deformable bodies (a [[contact]] section with `target`, docs/method.md \
+             §18) has rows over the slave and the master nodes, which the PETSc backend does not distribute yet: \
+             run this scene without --backend petsc"
+        ));
+    }
     if !sim.materials.patches().is_empty() {
         return Err(format!(
             "{origin}: the nearly incompressible material's triangles or tetrahedra take their volumetric strain \
-             as the mean over each node's patch (docs/method.md §8.4), which couples the patches across the ranks' \
+             as the mean over a patch of cells (docs/method.md §8.4), which couples the patches across the ranks' \
              parts and the PETSc backend does not assemble: run this scene without --backend petsc, mesh the body \
              with quadrilaterals or hexahedra (mean dilatation per cell runs on PETSc), or set \
              material.formulation = \"standard\" (the element then locks)"
@@ -155,7 +162,7 @@ pub(super) fn simulation_and_partition<const D: usize>(
 ) -> Result<(Simulation<D>, Partition, Vec<String>), SolveError> {
     let (rank, ranks) = (world.rank() as usize, world.size() as usize);
     let collective = |r: Result<(), String>| agree(world, r).map_err(SolveError::Setup);
-    let mesh_warnings = crate::app::warnings::mesh_warnings(&mesh, accept_mesh_defects);
+    let mesh_warnings = crate::app::warnings::mesh_warnings(&mesh, scene, accept_mesh_defects);
     collective(mesh_warnings.as_ref().map(|_| ()).map_err(|e| e.to_string()))?;
     let mesh_warnings = mesh_warnings?;
     // (deterministic: the same verdict on every rank, but agreed on all the same so that no

@@ -599,12 +599,17 @@ pub struct ContactSpec {
     /// §17.4); no law and no bound beside it.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub bilateral: bool,
+    /// The master surface of contact with another deformable body (docs/method.md §18): the
+    /// group is the slave surface, paired once with this one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target: Option<GroupSelector>,
 }
 
 impl ContactSpec {
-    /// True if the section poses contact: a law, a bound, an obstacle or bilateral contact.
+    /// True if the section poses contact: a law, a bound, an obstacle, a target or bilateral
+    /// contact.
     pub fn is_posed(&self) -> bool {
-        self.bound.is_some() || self.law.is_some() || self.obstacle.is_some() || self.bilateral
+        self.bound.is_some() || self.law.is_some() || self.obstacle.is_some() || self.bilateral || self.target.is_some()
     }
 }
 

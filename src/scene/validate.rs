@@ -78,6 +78,7 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
             "direction",
             "friction",
             "bilateral",
+            "target",
         ],
         "contact.friction" => match kind {
             Some("tresca") => vec!["kind", "bound", "regularisation"],
@@ -422,6 +423,25 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
         }
         if let Some(o) = &c.obstacle {
             check_obstacle(o, origin, &format!("{at}.obstacle"))?;
+        }
+        if let Some(t) = &c.target {
+            // contact with another deformable body (docs/method.md §18): what is there so far
+            let refuse = |what: &str, why: &str| invalid(origin, &format!("{at}.{what}"), t, why);
+            if c.obstacle.is_some() || c.bilateral || c.friction.is_some() || c.bound.is_some() || c.direction.is_some()
+            {
+                return Err(refuse(
+                    "target",
+                    "contact with another body (target) takes the gap to the target surface as its bound; an \
+                     obstacle, a bound, a direction, bilateral contact or friction beside it are not supported yet \
+                     (issue 44): remove them",
+                ));
+            }
+            if c.group.is_none() {
+                return Err(refuse(
+                    "group",
+                    "a target needs the slave surface as `group` in a [[contact]] section",
+                ));
+            }
         }
         if c.direction == Some(ContactDirection::Obstacle) && c.obstacle.is_none() {
             return Err(invalid(

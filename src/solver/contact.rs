@@ -4,6 +4,7 @@
 
 use super::error::SolveError;
 use crate::contact::friction::{Coefficient, Friction, FrictionLaw};
+use crate::contact::pairing::{PairSummary, PairingError, SurfacePair};
 use crate::contact::rows::{self, GroupRows};
 use crate::contact::ContactState;
 use crate::contact::{
@@ -56,6 +57,9 @@ pub struct ContactSetup<const D: usize> {
     /// Per normal row, whether its group is bilateral (u_ν = g_p, held from both sides,
     /// docs/method.md §17.4); None when no group is.
     pub bilateral: Option<Vec<bool>>,
+    /// The groups in contact with another body (`target`, docs/method.md §18), whose rows hold
+    /// the master nodes' unknowns too: per pair, how messages name it and its pairing's numbers.
+    pub pairs: Vec<(String, PairSummary)>,
 }
 
 impl<const D: usize> ContactSetup<D> {
@@ -245,6 +249,8 @@ pub fn build<const D: usize>(
     let mut group_tags = Vec::new();
     let mut obstacles = Vec::new();
     let mut specs = Vec::new();
+    // per used section: its pairing with its target surface (docs/method.md §18)
+    let mut pairs: Vec<Option<SurfacePair<D>>> = Vec::new();
     for &i in &used {
         let c = &scene.contact[i];
         let key = scene.contact_key(i);
@@ -259,6 +265,35 @@ pub fn build<const D: usize>(
         if scene.material.plane == Some(crate::scene::Plane::Axisymmetric) {
             part.revolve(&mesh.points);
         }
+        pairs.push(match &c.target {
+            Some(target) => {
+                let mut master = mesh
+                    .boundary(target)
+                    .map_err(super::error::group_error(&scene.origin, &format!("{key}.target")))?;
+                if scene.material.plane == Some(crate::scene::Plane::Axisymmetric) {
+                    master.revolve(&mesh.points);
+                }
+                let names = format!(
+                    "{key}: the surfaces {} (group) and {} (target)",
+                    part.label, master.label
+                );
+                Some(SurfacePair::new(&mesh.points, part.clone(), master).map_err(|e| {
+                    SolveError::Setup(format!(
+                        "{origin}: {names} {}",
+                        match e {
+                            PairingError::NoOverlap => "do not overlap: no node of the group projects onto the \
+                                                       target; check the groups (docs/method.md §18)"
+                                .to_string(),
+                            PairingError::SameWay { facing_away, paired } => format!(
+                                "face the same way ({facing_away} of {paired} paired nodes): the group and the target \
+                                 must be the two sides of the contact, facing each other"
+                            ),
+                        }
+                    ))
+                })?)
+            }
+            None => None,
+        });
         parts.push(part);
         group_tags.push(mesh.group(&scene.contact_group(i), (D - 1) as u8).map_err(&keyed)?.tag);
         obstacles.push(match &c.obstacle {
@@ -321,6 +356,8 @@ pub fn build<const D: usize>(
                 &format!("{}.bound", scene.contact_key(i)),
             )?,
             (None, Some(_), None) => vec![0.0; n],
+            // a target without a law is rigid contact: u_ν ≤ g₀
+            (None, None, None) if c.target.is_some() => vec![0.0; n],
             // bilateral: u_ν = o_p exactly (docs/method.md §17.4)
             _ if c.bilateral => vec![0.0; n],
             _ => vec![f64::INFINITY; n],
@@ -339,12 +376,19 @@ pub fn build<const D: usize>(
             motion: specs[k].1,
         });
     }
-    let rows = rows::build(&inputs, &mesh.points, length).map_err(|e| SolveError::Setup(format!("{origin}: {e}")))?;
-    let (nodes, kept) = ContactNodes::from_rows(&rows.nodes, &rows.weights, &rows.directions, dofs);
+    let mut rows =
+        rows::build(&inputs, &mesh.points, length).map_err(|e| SolveError::Setup(format!("{origin}: {e}")))?;
+    // rows of contact with another body: along −n of the master surface, their gap g₀ and the
+    // master nodes' terms; a slave node off the target has no row (docs/method.md §18)
+    let master_terms = paired_rows(&mut rows, &pairs);
+    let (mut nodes, kept) = ContactNodes::from_rows(&rows.nodes, &rows.weights, &rows.directions, dofs);
+    for (k, &r) in kept.iter().enumerate() {
+        nodes.add_terms(k, &master_terms[r], dofs);
+    }
     let pick = |v: &[f64]| -> Vec<f64> { kept.iter().map(|&k| v[k]).collect() };
     let gap = pick(&rows.gap);
     let layer = pick(&rows.layer);
-    let any_obstacle = obstacles.iter().any(|o| o.is_some());
+    let any_obstacle = obstacles.iter().any(|o| o.is_some()) || pairs.iter().any(|p| p.is_some());
     let bound: Vec<f64> = gap.iter().zip(&layer).map(|(g, l)| g + l).collect();
     let terms: Vec<_> = kept.iter().map(|&k| rows.terms[k].clone()).collect();
     let row_group: Vec<usize> = kept.iter().map(|&k| rows.group[k]).collect();
@@ -352,6 +396,22 @@ pub fn build<const D: usize>(
     let friction = friction_rows(scene, &used, (&nodes, &laws, &row_group), dofs, origin)?;
     let bilateral: Vec<bool> = row_group.iter().map(|&g| scene.contact[used[g]].bilateral).collect();
     Ok(Some(ContactSetup {
+        pairs: used
+            .iter()
+            .zip(&pairs)
+            .filter_map(|(&i, p)| {
+                p.as_ref().map(|p| {
+                    let c = &scene.contact[i];
+                    let name = format!(
+                        "{}: {} against {}",
+                        scene.contact_key(i),
+                        c.group.as_ref().map_or(String::new(), |g| g.to_string()),
+                        c.target.as_ref().map_or(String::new(), |g| g.to_string())
+                    );
+                    (name, p.summary())
+                })
+            })
+            .collect(),
         bilateral: bilateral.contains(&true).then_some(bilateral),
         laws,
         bound: bound.iter().any(|g| g.is_finite()).then_some(bound),
@@ -525,4 +585,57 @@ fn friction_rows<const D: usize>(
         laws,
         laws_of_rows: NodalLaws::new(all_laws, &terms),
     }))
+}
+
+/// Turns the rows of the sections with a target into rows of contact between two bodies
+/// (docs/method.md §18): direction −n (n the master's outward normal at the slave node's
+/// projection), gap g₀, and the master nodes' terms N_i n; rows of slave nodes off the target
+/// are removed (as never touching). Returns each remaining row's master terms.
+fn paired_rows<const D: usize>(
+    rows: &mut rows::Rows<D>,
+    pairs: &[Option<SurfacePair<D>>],
+) -> Vec<Vec<(usize, [f64; D])>> {
+    let mut keep = vec![true; rows.nodes.len()];
+    let mut terms = vec![Vec::new(); rows.nodes.len()];
+    for r in 0..rows.nodes.len() {
+        let Some(pair) = &pairs[rows.group[r]] else {
+            continue;
+        };
+        let p = rows.nodes[r];
+        let projection = pair.slave.local(p).and_then(|k| pair.projections[k].as_ref());
+        match projection {
+            Some(proj) => {
+                rows.directions[r] = std::array::from_fn(|k| -proj.normal[k]);
+                rows.gap[r] = proj.gap;
+                terms[r] = proj
+                    .shape
+                    .iter()
+                    .map(|&(q, v)| (q, std::array::from_fn(|k| v * proj.normal[k])))
+                    .collect();
+            }
+            None => {
+                keep[r] = false;
+                rows.never_touching.push((p, rows.group[r]));
+            }
+        }
+    }
+    retain(&mut rows.nodes, &keep);
+    retain(&mut rows.weights, &keep);
+    retain(&mut rows.directions, &keep);
+    retain(&mut rows.group, &keep);
+    retain(&mut rows.gap, &keep);
+    retain(&mut rows.layer, &keep);
+    retain(&mut rows.motion, &keep);
+    retain(&mut rows.terms, &keep);
+    retain(&mut terms, &keep);
+    terms
+}
+
+/// Keeps the entries of `v` where `keep` is true.
+fn retain<T>(v: &mut Vec<T>, keep: &[bool]) {
+    let mut i = 0;
+    v.retain(|_| {
+        i += 1;
+        keep[i - 1]
+    });
 }
