@@ -179,7 +179,7 @@ fn what_a_target_does_not_take_yet_is_refused() {
         "obstacle = { kind = \"plane\", point = [0.0, 1.0], normal = [0.0, 1.0] }",
     ] {
         let text = format!("{SCENE}{extra}\n");
-        let err = Scene::from_toml_str(&text, "stacked").err().expect(extra).to_string();
+        let err = Scene::from_toml_str(&text, "stacked").expect_err(extra).to_string();
         assert!(
             err.contains("contact[0].target") && err.contains("issue 44"),
             "{extra}: {err}"
@@ -188,8 +188,7 @@ fn what_a_target_does_not_take_yet_is_refused() {
     let one_table = "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n\
                      [time]\nfinal_time = 1.0\nsteps = 1\n[contact]\ntarget = \"LowerTop\"\n";
     let err = Scene::from_toml_str(one_table, "one table")
-        .err()
-        .expect("refused")
+        .expect_err("refused")
         .to_string();
     assert!(err.contains("group"), "{err}");
 }
