@@ -5,59 +5,14 @@
 mod common;
 
 use hvi::app::solve_in_memory;
-use hvi::mesh::structured::{rectangle, CellShape};
-use hvi::mesh::{Cell, Facet, Mesh, PhysicalGroup};
+use hvi::mesh::structured::CellShape;
+use hvi::mesh::Mesh;
 use hvi::scene::Scene;
 
 /// Two blocks 2 × 1 apart in one mesh: the lower (0, 2) × (0, 1) on quadrilaterals, the upper
-/// (0, 2) × (2, 3) on triangles, with the groups LowerLeft (x = 0 of the lower), UpperBottom and
-/// UpperTop (y = 2 and y = 3 of the upper) and the body Omega.
+/// (0, 2) × (2, 3) on triangles ([`common::stacked`]).
 fn two_blocks() -> Mesh<2> {
-    let lower = rectangle(2.0, 1.0, 8, 4, CellShape::Quad);
-    let upper = rectangle(2.0, 1.0, 6, 3, CellShape::Tri);
-    let offset = lower.points.len();
-    let group = |m: &Mesh<2>, name: &str, shift: usize, new: &str, tag: i32| {
-        let g = m.groups.iter().find(|g| g.name.as_deref() == Some(name)).unwrap();
-        PhysicalGroup {
-            dim: 1,
-            tag,
-            name: Some(new.into()),
-            facets: g
-                .facets
-                .iter()
-                .map(|f| Facet::from_slice(&f.nodes().iter().map(|p| p + shift).collect::<Vec<_>>()))
-                .collect(),
-            cells: vec![],
-            nodes: vec![],
-        }
-    };
-    let mut points = lower.points.clone();
-    points.extend(upper.points.iter().map(|x| [x[0], x[1] + 2.0]));
-    let mut cells = lower.cells.clone();
-    cells.extend(upper.cells.iter().map(|c| match c {
-        Cell::Tri3(n) => Cell::Tri3(n.map(|p| p + offset)),
-        _ => unreachable!("triangles"),
-    }));
-    let groups = vec![
-        group(&lower, "Gamma1", 0, "LowerLeft", 11),
-        group(&upper, "Gamma3", offset, "UpperBottom", 13),
-        group(&upper, "Gamma2_top", offset, "UpperTop", 14),
-        PhysicalGroup {
-            dim: 2,
-            tag: 5,
-            name: Some("Omega".into()),
-            facets: vec![],
-            cells: (0..cells.len()).collect(),
-            nodes: vec![],
-        },
-    ];
-    Mesh {
-        path: "<two blocks>".into(),
-        points,
-        cell_tags: (1..=cells.len()).collect(),
-        cells,
-        groups,
-    }
+    common::stacked((8, 4, CellShape::Quad), (6, 3, CellShape::Tri), 2.0)
 }
 
 const BASE: &str = "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n\

@@ -201,3 +201,58 @@ pub fn distort_off_groups<const D: usize>(m: &mut Mesh<D>, amount: f64) {
         }
     }
 }
+
+/// Two bodies in one mesh: a block (0, 2) × (0, 1) of `lower` cells (nx, ny, shape) and one
+/// (0, 2) × (lift, lift + 1) of `upper` cells, sharing no nodes (touching at lift = 1): groups
+/// LowerBottom, LowerLeft, LowerTop, UpperBottom, UpperLeft, UpperTop and the body Omega.
+pub fn stacked(lower: (usize, usize, CellShape), upper: (usize, usize, CellShape), lift: f64) -> Mesh<2> {
+    let a = rectangle(2.0, 1.0, lower.0, lower.1, lower.2);
+    let b = rectangle(2.0, 1.0, upper.0, upper.1, upper.2);
+    let offset = a.points.len();
+    let group = |m: &Mesh<2>, name: &str, shift: usize, new: &str, tag: i32| {
+        let g = m.groups.iter().find(|g| g.name.as_deref() == Some(name)).unwrap();
+        PhysicalGroup {
+            dim: 1,
+            tag,
+            name: Some(new.into()),
+            facets: g
+                .facets
+                .iter()
+                .map(|f| Facet::from_slice(&f.nodes().iter().map(|p| p + shift).collect::<Vec<_>>()))
+                .collect(),
+            cells: vec![],
+            nodes: vec![],
+        }
+    };
+    let mut points = a.points.clone();
+    points.extend(b.points.iter().map(|x| [x[0], x[1] + lift]));
+    let mut cells = a.cells.clone();
+    cells.extend(b.cells.iter().map(|c| match c {
+        Cell::Tri3(n) => Cell::Tri3(n.map(|p| p + offset)),
+        Cell::Quad4(n) => Cell::Quad4(n.map(|p| p + offset)),
+        _ => unreachable!("2D cells"),
+    }));
+    let groups = vec![
+        group(&a, "Gamma3", 0, "LowerBottom", 11),
+        group(&a, "Gamma1", 0, "LowerLeft", 12),
+        group(&a, "Gamma2_top", 0, "LowerTop", 13),
+        group(&b, "Gamma3", offset, "UpperBottom", 14),
+        group(&b, "Gamma1", offset, "UpperLeft", 15),
+        group(&b, "Gamma2_top", offset, "UpperTop", 16),
+        PhysicalGroup {
+            dim: 2,
+            tag: 5,
+            name: Some("Omega".into()),
+            facets: vec![],
+            cells: (0..cells.len()).collect(),
+            nodes: vec![],
+        },
+    ];
+    Mesh {
+        path: "<stacked blocks>".into(),
+        points,
+        cell_tags: (1..=cells.len()).collect(),
+        cells,
+        groups,
+    }
+}

@@ -4,65 +4,10 @@
 
 mod common;
 
+use common::stacked;
 use hvi::app::solve_in_memory;
-use hvi::mesh::structured::{rectangle, CellShape};
-use hvi::mesh::{Cell, Facet, Mesh, PhysicalGroup};
+use hvi::mesh::structured::CellShape;
 use hvi::scene::Scene;
-
-/// A block (0, 2) × (0, 1) of `lower` cells and one (0, 2) × (1, 2) of `upper` cells stacked on
-/// it, touching but not sharing nodes: groups LowerBottom, LowerLeft, LowerTop (y = 1 of the
-/// lower block), UpperBottom (y = 1 of the upper), UpperLeft, UpperTop and the body Omega.
-fn stacked(lower: (usize, usize, CellShape), upper: (usize, usize, CellShape)) -> Mesh<2> {
-    let a = rectangle(2.0, 1.0, lower.0, lower.1, lower.2);
-    let b = rectangle(2.0, 1.0, upper.0, upper.1, upper.2);
-    let offset = a.points.len();
-    let group = |m: &Mesh<2>, name: &str, shift: usize, new: &str, tag: i32| {
-        let g = m.groups.iter().find(|g| g.name.as_deref() == Some(name)).unwrap();
-        PhysicalGroup {
-            dim: 1,
-            tag,
-            name: Some(new.into()),
-            facets: g
-                .facets
-                .iter()
-                .map(|f| Facet::from_slice(&f.nodes().iter().map(|p| p + shift).collect::<Vec<_>>()))
-                .collect(),
-            cells: vec![],
-            nodes: vec![],
-        }
-    };
-    let mut points = a.points.clone();
-    points.extend(b.points.iter().map(|x| [x[0], x[1] + 1.0]));
-    let mut cells = a.cells.clone();
-    cells.extend(b.cells.iter().map(|c| match c {
-        Cell::Tri3(n) => Cell::Tri3(n.map(|p| p + offset)),
-        Cell::Quad4(n) => Cell::Quad4(n.map(|p| p + offset)),
-        _ => unreachable!("2D cells"),
-    }));
-    let groups = vec![
-        group(&a, "Gamma3", 0, "LowerBottom", 11),
-        group(&a, "Gamma1", 0, "LowerLeft", 12),
-        group(&a, "Gamma2_top", 0, "LowerTop", 13),
-        group(&b, "Gamma3", offset, "UpperBottom", 14),
-        group(&b, "Gamma1", offset, "UpperLeft", 15),
-        group(&b, "Gamma2_top", offset, "UpperTop", 16),
-        PhysicalGroup {
-            dim: 2,
-            tag: 5,
-            name: Some("Omega".into()),
-            facets: vec![],
-            cells: (0..cells.len()).collect(),
-            nodes: vec![],
-        },
-    ];
-    Mesh {
-        path: "<stacked blocks>".into(),
-        points,
-        cell_tags: (1..=cells.len()).collect(),
-        cells,
-        groups,
-    }
-}
 
 /// The two blocks on rollers (both left sides u_x = 0, the lower bottom u_y = 0), the upper top
 /// pushed down by δ = 0.01, frictionless contact of the upper bottom with the lower top.
@@ -88,7 +33,7 @@ fn uniform(x: &[f64; 2]) -> [f64; 2] {
 #[test]
 fn stacked_blocks_with_matching_meshes_hold_the_uniform_state() {
     let scene = Scene::from_toml_str(SCENE, "stacked blocks").unwrap_or_else(|e| panic!("{e}"));
-    let mesh = stacked((8, 4, CellShape::Quad), (8, 4, CellShape::Quad));
+    let mesh = stacked((8, 4, CellShape::Quad), (8, 4, CellShape::Quad), 1.0);
     let (sim, _, sink) = solve_in_memory(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
     let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
     let error = common::nodal_error(&sim.mesh.points, &u, uniform);
@@ -113,7 +58,7 @@ fn stacked_blocks_with_matching_meshes_hold_the_uniform_state() {
 #[test]
 fn stacked_blocks_with_non_matching_meshes_balance_the_load() {
     let scene = Scene::from_toml_str(SCENE, "stacked blocks").unwrap_or_else(|e| panic!("{e}"));
-    let mesh = stacked((8, 4, CellShape::Quad), (7, 4, CellShape::Tri));
+    let mesh = stacked((8, 4, CellShape::Quad), (7, 4, CellShape::Tri), 1.0);
     let (sim, stats, sink) = solve_in_memory(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
     let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
     let state = sink.steps.last().unwrap().contact.as_ref().unwrap();
@@ -146,7 +91,7 @@ fn check_lists_the_pair_and_refuses_surfaces_facing_the_same_way() {
     let mesh = dir.path().join("stacked.msh");
     std::fs::write(
         &mesh,
-        common::msh22(&stacked((8, 4, CellShape::Quad), (7, 4, CellShape::Tri))),
+        common::msh22(&stacked((8, 4, CellShape::Quad), (7, 4, CellShape::Tri), 1.0)),
     )
     .unwrap();
     let scene = dir.path().join("stacked.toml");
