@@ -136,7 +136,8 @@ pub fn step_differences(a: &hvi::app::MemorySink, b: &hvi::app::MemorySink) -> V
 }
 
 /// MSH 2.2 text of a mesh with its groups: dim-0 groups as points (type 15), dim-1 groups as
-/// lines, cells in the dim-2 group (tag 5 if there is none), all named in `$PhysicalNames`.
+/// lines, each cell in the first dim-2 group that holds it (else the first dim-2 group, else tag 5), all named in
+/// `$PhysicalNames`.
 pub fn msh22(mesh: &Mesh<2>) -> String {
     let mut s = String::from("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n");
     s += &format!("{}\n", mesh.groups.len());
@@ -156,8 +157,13 @@ pub fn msh22(mesh: &Mesh<2>) -> String {
             el.push(format!("1 2 {} {} {} {}", g.tag, g.tag, f[0] + 1, f[1] + 1));
         }
     }
-    let omega = mesh.groups.iter().find(|g| g.dim == 2).map_or(5, |g| g.tag);
-    for c in &mesh.cells {
+    for (k, c) in mesh.cells.iter().enumerate() {
+        let omega = mesh
+            .groups
+            .iter()
+            .find(|g| g.dim == 2 && g.cells.contains(&k))
+            .or_else(|| mesh.groups.iter().find(|g| g.dim == 2))
+            .map_or(5, |g| g.tag);
         el.push(match c {
             Cell::Tri3(n) => format!("2 2 {omega} {omega} {} {} {}", n[0] + 1, n[1] + 1, n[2] + 1),
             Cell::Quad4(n) => format!(
@@ -204,50 +210,68 @@ pub fn distort_off_groups<const D: usize>(m: &mut Mesh<D>, amount: f64) {
 
 /// Two bodies in one mesh: a block (0, 2) × (0, 1) of `lower` cells (nx, ny, shape) and one
 /// (0, 2) × (lift, lift + 1) of `upper` cells, sharing no nodes (touching at lift = 1): groups
-/// LowerBottom, LowerLeft, LowerTop, UpperBottom, UpperLeft, UpperTop and the body Omega.
+/// LowerBottom, LowerLeft, LowerTop, UpperBottom, UpperLeft, UpperTop and the bodies Lower and
+/// Upper ([`stack`]).
 pub fn stacked(lower: (usize, usize, CellShape), upper: (usize, usize, CellShape), lift: f64) -> Mesh<2> {
-    let a = rectangle(2.0, 1.0, lower.0, lower.1, lower.2);
-    let b = rectangle(2.0, 1.0, upper.0, upper.1, upper.2);
-    let offset = a.points.len();
-    let group = |m: &Mesh<2>, name: &str, shift: usize, new: &str, tag: i32| {
-        let g = m.groups.iter().find(|g| g.name.as_deref() == Some(name)).unwrap();
-        PhysicalGroup {
-            dim: 1,
-            tag,
-            name: Some(new.into()),
-            facets: g
-                .facets
-                .iter()
-                .map(|f| Facet::from_slice(&f.nodes().iter().map(|p| p + shift).collect::<Vec<_>>()))
-                .collect(),
-            cells: vec![],
-            nodes: vec![],
-        }
+    stack(
+        rectangle(2.0, 1.0, lower.0, lower.1, lower.2),
+        rectangle(2.0, 1.0, upper.0, upper.1, upper.2),
+        lift,
+    )
+}
+
+/// Two bodies in one mesh: `upper` lifted by `lift` along y onto `lower` (both from
+/// `mesh::structured`, sharing no nodes): their groups Gamma3, Gamma1, Gamma2_top (and in 3D
+/// Sides) become LowerBottom, LowerLeft, LowerTop, LowerSides, UpperBottom, …, each body's cells
+/// the group Lower (tag 21) or Upper (tag 22).
+pub fn stack<const D: usize>(lower: Mesh<D>, upper: Mesh<D>, lift: f64) -> Mesh<D> {
+    let offset = lower.points.len();
+    let renamed = |m: &Mesh<D>, shift: usize, prefix: &str, tag: i32| -> Vec<PhysicalGroup> {
+        [
+            ("Gamma3", "Bottom"),
+            ("Gamma1", "Left"),
+            ("Gamma2_top", "Top"),
+            ("Sides", "Sides"),
+        ]
+        .iter()
+        .enumerate()
+        .filter_map(|(k, (old, new))| {
+            let g = m.groups.iter().find(|g| g.name.as_deref() == Some(*old))?;
+            Some(PhysicalGroup {
+                dim: g.dim,
+                tag: tag + k as i32,
+                name: Some(format!("{prefix}{new}")),
+                facets: g
+                    .facets
+                    .iter()
+                    .map(|f| Facet::from_slice(&f.nodes().iter().map(|p| p + shift).collect::<Vec<_>>()))
+                    .collect(),
+                cells: vec![],
+                nodes: vec![],
+            })
+        })
+        .collect()
     };
-    let mut points = a.points.clone();
-    points.extend(b.points.iter().map(|x| [x[0], x[1] + lift]));
-    let mut cells = a.cells.clone();
-    cells.extend(b.cells.iter().map(|c| match c {
-        Cell::Tri3(n) => Cell::Tri3(n.map(|p| p + offset)),
-        Cell::Quad4(n) => Cell::Quad4(n.map(|p| p + offset)),
-        _ => unreachable!("2D cells"),
+    let mut points = lower.points.clone();
+    points.extend(upper.points.iter().map(|x| {
+        let mut y = *x;
+        y[1] += lift;
+        y
     }));
-    let groups = vec![
-        group(&a, "Gamma3", 0, "LowerBottom", 11),
-        group(&a, "Gamma1", 0, "LowerLeft", 12),
-        group(&a, "Gamma2_top", 0, "LowerTop", 13),
-        group(&b, "Gamma3", offset, "UpperBottom", 14),
-        group(&b, "Gamma1", offset, "UpperLeft", 15),
-        group(&b, "Gamma2_top", offset, "UpperTop", 16),
-        PhysicalGroup {
-            dim: 2,
-            tag: 5,
-            name: Some("Omega".into()),
-            facets: vec![],
-            cells: (0..cells.len()).collect(),
-            nodes: vec![],
-        },
-    ];
+    let mut cells = lower.cells.clone();
+    cells.extend(upper.cells.iter().map(|c| c.renumbered(|p| p + offset)));
+    let body = |tag: i32, name: &str, cells: Vec<usize>| PhysicalGroup {
+        dim: D as u8,
+        tag,
+        name: Some(name.into()),
+        facets: vec![],
+        cells,
+        nodes: vec![],
+    };
+    let mut groups = renamed(&lower, 0, "Lower", 11);
+    groups.extend(renamed(&upper, offset, "Upper", 15));
+    groups.push(body(21, "Lower", (0..lower.cells.len()).collect()));
+    groups.push(body(22, "Upper", (lower.cells.len()..cells.len()).collect()));
     Mesh {
         path: "<stacked blocks>".into(),
         points,

@@ -85,13 +85,17 @@ impl<const D: usize> ContactNodes<D> {
         (out, kept)
     }
 
-    /// Adds to row k the terms c·u_q of other nodes q (`terms`: (node, c)): the master nodes of a
-    /// row of contact between two bodies, u_ν = (Σ N_i u_i − u_S)·n (docs/method.md §18).
-    pub fn add_terms(&mut self, k: usize, terms: &[(usize, [f64; D])], dofs: &DofMap<D>) {
+    /// Adds to row k (direction d) the terms −c_q d·u_q of other nodes q (`terms`: (q, c_q)): the
+    /// master nodes of a row of contact between two bodies, d·(u_S − Σ c_i u_i) — for the normal
+    /// row (d = −n) u_ν = (Σ c_i u_i − u_S)·n, for a tangential one the slip relative to the master
+    /// (docs/method.md §18).
+    pub fn add_master_terms(&mut self, k: usize, terms: &[(usize, f64)], dofs: &DofMap<D>) {
+        let d = self.normals[k];
         for &(q, c) in terms {
-            for (i, &v) in c.iter().enumerate() {
+            for (i, &v) in d.iter().enumerate() {
+                let v = -c * v;
                 match dofs.get(q, i) {
-                    Some(d) => self.rows[k].push((d, v)),
+                    Some(dof) => self.rows[k].push((dof, v)),
                     None if v != 0.0 => self.prescribed[k].push((dofs.index(q, i), v)),
                     None => {}
                 }

@@ -18,6 +18,7 @@ pub mod friction;
 pub mod hessian;
 pub mod law;
 pub mod line_search;
+pub mod mortar;
 pub mod newton;
 pub mod nodal;
 pub mod obstacle;

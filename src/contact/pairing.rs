@@ -73,56 +73,99 @@ fn dot<const D: usize>(a: &[f64; D], b: &[f64; D]) -> f64 {
     (0..D).map(|k| a[k] * b[k]).sum()
 }
 
-/// The closest point of facet `f` to `x` by Gauss–Newton on its reference coordinates (exact in
-/// one step on an edge or a triangle; a few on a warped quadrilateral), if it lies on the facet.
-/// Whether reference coordinates lie on a facet's reference domain (within [`INSIDE`]).
-type OnFacet = fn(&[f64; 3]) -> bool;
+/// A facet's geometry at reference coordinates ξ (an edge: ξ₀ ∈ [0, 1] from its first node; a
+/// triangle: the unit triangle; a quadrilateral: [−1, 1]²).
+pub(crate) struct FacetAt<const D: usize> {
+    /// The facet's shape values N_i(ξ), in the order of its nodes.
+    pub shape: Vec<f64>,
+    /// x(ξ) = Σ N_i(ξ) x_i.
+    pub point: [f64; D],
+    /// ∂x/∂ξ₀ and ∂x/∂ξ₁ (zero on an edge).
+    pub tangents: [[f64; D]; 2],
+}
 
-/// A projection onto a facet: the facet's shape values there, the point and the unit normal.
-type FacetPoint<const D: usize> = (Vec<f64>, [f64; D], [f64; D]);
+impl<const D: usize> FacetAt<D> {
+    /// The outward unit normal: (dy, −dx) on an edge (the body on its left), t₀ × t₁ on a face.
+    pub fn normal(&self) -> [f64; D] {
+        let t = &self.tangents;
+        if D == 2 {
+            let l = dot(&t[0], &t[0]).sqrt();
+            std::array::from_fn(|k| if k == 0 { t[0][1] / l } else { -t[0][0] / l })
+        } else {
+            let c = cross(t);
+            let l = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+            std::array::from_fn(|k| c[k] / l)
+        }
+    }
 
-fn project<const D: usize>(points: &[[f64; D]], f: &Facet, x: &[f64; D]) -> Option<FacetPoint<D>> {
-    let (cell, mut xi, inside): (Cell, [f64; 3], OnFacet) = match f.len() {
-        2 => (Cell::Tri3([0, 1, 2]), [0.5, 0.0, 0.0], |xi| {
-            xi[0] >= -INSIDE && xi[0] <= 1.0 + INSIDE
-        }),
-        3 => (Cell::Tri3([0, 1, 2]), [1.0 / 3.0, 1.0 / 3.0, 0.0], |xi| {
-            xi[0] >= -INSIDE && xi[1] >= -INSIDE && xi[0] + xi[1] <= 1.0 + INSIDE
-        }),
-        _ => (Cell::Quad4([0, 1, 2, 3]), [0.0; 3], |xi| {
-            xi[0].abs() <= 1.0 + INSIDE && xi[1].abs() <= 1.0 + INSIDE
-        }),
-    };
+    /// ds/dξ: the length or area element of the reference coordinates.
+    pub fn measure(&self) -> f64 {
+        if D == 2 {
+            dot(&self.tangents[0], &self.tangents[0]).sqrt()
+        } else {
+            let c = cross(&self.tangents);
+            (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+        }
+    }
+}
+
+fn cross<const D: usize>(t: &[[f64; D]; 2]) -> [f64; 3] {
+    [
+        t[0][1] * t[1][2] - t[0][2] * t[1][1],
+        t[0][2] * t[1][0] - t[0][0] * t[1][2],
+        t[0][0] * t[1][1] - t[0][1] * t[1][0],
+    ]
+}
+
+/// The geometry of facet `f` at ξ.
+pub(crate) fn facet_at<const D: usize>(points: &[[f64; D]], f: &Facet, xi: [f64; 2]) -> FacetAt<D> {
     let nodes = f.nodes();
-    // an edge a → b: x(ξ) = (1 − ξ) a + ξ b
-    let map = |xi: &[f64; 3]| -> (Vec<f64>, [f64; D], [[f64; D]; 2]) {
-        if nodes.len() == 2 {
-            let (a, b) = (points[nodes[0]], points[nodes[1]]);
-            let at = std::array::from_fn(|k| (1.0 - xi[0]) * a[k] + xi[0] * b[k]);
-            let t = std::array::from_fn(|k| b[k] - a[k]);
-            return (vec![1.0 - xi[0], xi[0]], at, [t, [0.0; D]]);
-        }
-        let (n, value, grad) = reference(&cell, *xi);
-        let mut at = [0.0; D];
-        let mut t = [[0.0; D]; 2];
-        for i in 0..n {
-            let p = points[nodes[i]];
-            for k in 0..D {
-                at[k] += value[i] * p[k];
-                t[0][k] += grad[i][0] * p[k];
-                t[1][k] += grad[i][1] * p[k];
-            }
-        }
-        (value[..n].to_vec(), at, t)
+    if nodes.len() == 2 {
+        let (a, b) = (points[nodes[0]], points[nodes[1]]);
+        return FacetAt {
+            shape: vec![1.0 - xi[0], xi[0]],
+            point: std::array::from_fn(|k| (1.0 - xi[0]) * a[k] + xi[0] * b[k]),
+            tangents: [std::array::from_fn(|k| b[k] - a[k]), [0.0; D]],
+        };
+    }
+    let cell = if nodes.len() == 3 {
+        Cell::Tri3([0, 1, 2])
+    } else {
+        Cell::Quad4([0, 1, 2, 3])
     };
-    let dims = if nodes.len() == 2 { 1 } else { 2 };
+    let (n, value, grad) = reference(&cell, [xi[0], xi[1], 0.0]);
+    let mut at = FacetAt {
+        shape: value[..n].to_vec(),
+        point: [0.0; D],
+        tangents: [[0.0; D]; 2],
+    };
+    for i in 0..n {
+        let p = points[nodes[i]];
+        for k in 0..D {
+            at.point[k] += value[i] * p[k];
+            at.tangents[0][k] += grad[i][0] * p[k];
+            at.tangents[1][k] += grad[i][1] * p[k];
+        }
+    }
+    at
+}
+
+/// The reference coordinates of the closest point to `x` of the surface through facet `f`
+/// (extended beyond its edges), by Gauss–Newton: exact in one step on an edge or a triangle, a
+/// few on a warped quadrilateral.
+pub(crate) fn closest<const D: usize>(points: &[[f64; D]], f: &Facet, x: &[f64; D]) -> [f64; 2] {
+    let mut xi = match f.len() {
+        2 => [0.5, 0.0],
+        3 => [1.0 / 3.0, 1.0 / 3.0],
+        _ => [0.0, 0.0],
+    };
     for _ in 0..30 {
-        let (_, at, t) = map(&xi);
-        let r: [f64; D] = std::array::from_fn(|k| x[k] - at[k]);
+        let FacetAt { point, tangents: t, .. } = facet_at(points, f, xi);
+        let r: [f64; D] = std::array::from_fn(|k| x[k] - point[k]);
         // normal equations of the tangents: (TᵀT) Δξ = Tᵀ r
         let (a00, a01, a11) = (dot(&t[0], &t[0]), dot(&t[0], &t[1]), dot(&t[1], &t[1]));
         let (b0, b1) = (dot(&t[0], &r), dot(&t[1], &r));
-        let step = if dims == 1 {
+        let step = if f.len() == 2 {
             [b0 / a00, 0.0]
         } else {
             let det = a00 * a11 - a01 * a01;
@@ -134,34 +177,32 @@ fn project<const D: usize>(points: &[[f64; D]], f: &Facet, x: &[f64; D]) -> Opti
             break;
         }
     }
-    if !inside(&xi) {
+    xi
+}
+
+/// The closest point of facet `f` to `x`, if it lies on the facet (within [`INSIDE`], then
+/// clamped onto it): the facet's shape values there, the point and the outward unit normal.
+fn project<const D: usize>(points: &[[f64; D]], f: &Facet, x: &[f64; D]) -> Option<FacetAt<D>> {
+    let xi = closest(points, f, x);
+    let inside = match f.len() {
+        2 => xi[0] >= -INSIDE && xi[0] <= 1.0 + INSIDE,
+        3 => xi[0] >= -INSIDE && xi[1] >= -INSIDE && xi[0] + xi[1] <= 1.0 + INSIDE,
+        _ => xi[0].abs() <= 1.0 + INSIDE && xi[1].abs() <= 1.0 + INSIDE,
+    };
+    if !inside {
         return None;
     }
     // onto the facet: a point just beyond its edge is the edge's
-    xi = match f.len() {
-        2 => [xi[0].clamp(0.0, 1.0), 0.0, 0.0],
+    let xi = match f.len() {
+        2 => [xi[0].clamp(0.0, 1.0), 0.0],
         3 => {
             let (a, b) = (xi[0].max(0.0), xi[1].max(0.0));
             let over = (a + b - 1.0).max(0.0) / 2.0;
-            [a - over, b - over, 0.0]
+            [a - over, b - over]
         }
-        _ => [xi[0].clamp(-1.0, 1.0), xi[1].clamp(-1.0, 1.0), 0.0],
+        _ => [xi[0].clamp(-1.0, 1.0), xi[1].clamp(-1.0, 1.0)],
     };
-    let (shape, at, t) = map(&xi);
-    let normal: [f64; D] = if D == 2 {
-        // the edge's outward normal (dy, −dx): the body on its left
-        let l = dot(&t[0], &t[0]).sqrt();
-        std::array::from_fn(|k| if k == 0 { t[0][1] / l } else { -t[0][0] / l })
-    } else {
-        let c = [
-            t[0][1] * t[1][2] - t[0][2] * t[1][1],
-            t[0][2] * t[1][0] - t[0][0] * t[1][2],
-            t[0][0] * t[1][1] - t[0][1] * t[1][0],
-        ];
-        let l = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
-        std::array::from_fn(|k| c[k] / l)
-    };
-    Some((shape, at, normal))
+    Some(facet_at(points, f, xi))
 }
 
 impl<const D: usize> SurfacePair<D> {
@@ -204,11 +245,12 @@ impl<const D: usize> SurfacePair<D> {
                         break;
                     }
                     let f = &master.facets[i];
-                    if let Some((values, point, normal)) = project(points, f, &x) {
+                    if let Some(at) = project(points, f, &x) {
+                        let (point, normal) = (at.point, at.normal());
                         let distance = (0..D).map(|k| (x[k] - point[k]).powi(2)).sum::<f64>().sqrt();
                         if best.as_ref().is_none_or(|(b, _)| distance < *b) {
                             let gap = (0..D).map(|k| (x[k] - point[k]) * normal[k]).sum();
-                            let shape = f.nodes().iter().copied().zip(values).collect();
+                            let shape = f.nodes().iter().copied().zip(at.shape).collect();
                             best = Some((
                                 distance,
                                 Projection {

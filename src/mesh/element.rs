@@ -3,7 +3,7 @@
 
 use super::quadrature::{
     pyramid_collapsed_27, tensor_gauss_3, tet_duffy_27, QuadPoint, HEX_GAUSS_2X2X2, PRISM_6POINT, PYRAMID_8POINT,
-    QUAD_GAUSS_2X2, TET_4POINT, TET_CENTROID, TRI_3POINT, TRI_CENTROID,
+    QUAD_GAUSS_2X2, TET_4POINT, TET_CENTROID, TRI6, TRI_3POINT, TRI_CENTROID,
 };
 use crate::mesh::Cell;
 
@@ -231,16 +231,6 @@ pub fn error_rule(cell: &Cell) -> Vec<QuadPoint> {
         Cell::Pyr5(_) => pyramid_collapsed_27(),
     }
 }
-
-/// A 6-point rule on the reference triangle, exact for quartics.
-const TRI6: [([f64; 2], f64); 6] = [
-    ([0.445_948_490_915_965, 0.445_948_490_915_965], 0.111_690_794_839_005),
-    ([0.445_948_490_915_965, 0.108_103_018_168_070], 0.111_690_794_839_005),
-    ([0.108_103_018_168_070, 0.445_948_490_915_965], 0.111_690_794_839_005),
-    ([0.091_576_213_509_771, 0.091_576_213_509_771], 0.054_975_871_827_661),
-    ([0.091_576_213_509_771, 0.816_847_572_980_459], 0.054_975_871_827_661),
-    ([0.816_847_572_980_459, 0.091_576_213_509_771], 0.054_975_871_827_661),
-];
 
 /// The cell's centroid in reference coordinates.
 pub fn reference_centroid(cell: &Cell) -> [f64; 3] {

@@ -4,6 +4,7 @@
 
 use super::error::SolveError;
 use crate::contact::friction::{Coefficient, Friction, FrictionLaw};
+use crate::contact::mortar::{self, MortarRow};
 use crate::contact::pairing::{PairSummary, PairingError, SurfacePair};
 use crate::contact::rows::{self, GroupRows};
 use crate::contact::ContactState;
@@ -251,6 +252,7 @@ pub fn build<const D: usize>(
     let mut specs = Vec::new();
     // per used section: its pairing with its target surface (docs/method.md §18)
     let mut pairs: Vec<Option<SurfacePair<D>>> = Vec::new();
+    let revolved = scene.material.plane == Some(crate::scene::Plane::Axisymmetric);
     for &i in &used {
         let c = &scene.contact[i];
         let key = scene.contact_key(i);
@@ -380,10 +382,11 @@ pub fn build<const D: usize>(
         rows::build(&inputs, &mesh.points, length).map_err(|e| SolveError::Setup(format!("{origin}: {e}")))?;
     // rows of contact with another body: along −n of the master surface, their gap g₀ and the
     // master nodes' terms; a slave node off the target has no row (docs/method.md §18)
-    let master_terms = paired_rows(&mut rows, &pairs);
+    let master_terms = paired_rows(&mut rows, &pairs, &mesh.points, revolved);
     let (mut nodes, kept) = ContactNodes::from_rows(&rows.nodes, &rows.weights, &rows.directions, dofs);
-    for (k, &r) in kept.iter().enumerate() {
-        nodes.add_terms(k, &master_terms[r], dofs);
+    let master_terms: Vec<Vec<(usize, f64)>> = kept.iter().map(|&r| master_terms[r].clone()).collect();
+    for (k, terms) in master_terms.iter().enumerate() {
+        nodes.add_master_terms(k, terms, dofs);
     }
     let pick = |v: &[f64]| -> Vec<f64> { kept.iter().map(|&k| v[k]).collect() };
     let gap = pick(&rows.gap);
@@ -393,7 +396,7 @@ pub fn build<const D: usize>(
     let terms: Vec<_> = kept.iter().map(|&k| rows.terms[k].clone()).collect();
     let row_group: Vec<usize> = kept.iter().map(|&k| rows.group[k]).collect();
     let laws = NodalLaws::new(laws, &terms);
-    let friction = friction_rows(scene, &used, (&nodes, &laws, &row_group), dofs, origin)?;
+    let friction = friction_rows(scene, &used, (&nodes, &laws, &row_group), &master_terms, dofs, origin)?;
     let bilateral: Vec<bool> = row_group.iter().map(|&g| scene.contact[used[g]].bilateral).collect();
     Ok(Some(ContactSetup {
         pairs: used
@@ -459,6 +462,7 @@ fn friction_rows<const D: usize>(
     scene: &Scene,
     used: &[usize],
     (nodes, normal_laws, row_group): (&ContactNodes<D>, &NodalLaws, &[usize]),
+    master_terms: &[Vec<(usize, f64)>],
     dofs: &DofMap<D>,
     origin: &str,
 ) -> Result<Option<Friction<D>>, SolveError> {
@@ -533,7 +537,12 @@ fn friction_rows<const D: usize>(
         .copied()
         .chain(with.iter().map(|&(_, t)| t))
         .collect();
-    let (rows, kept) = ContactNodes::from_rows(&all_nodes, &weights, &directions, dofs);
+    let (mut rows, kept) = ContactNodes::from_rows(&all_nodes, &weights, &directions, dofs);
+    // the rows of contact with another body: the master nodes' share of each direction
+    for (k, &r) in kept.iter().enumerate() {
+        let p = if r < m { r } else { with[r - m].0 };
+        rows.add_master_terms(k, &master_terms[p], dofs);
+    }
     if kept[..m.min(kept.len())] != (0..m).collect::<Vec<_>>()[..] {
         return Err(SolveError::Setup(format!(
             "{origin}: the contact rows changed when their tangential rows were added (a bug: please report it)"
@@ -589,29 +598,34 @@ fn friction_rows<const D: usize>(
 
 /// Turns the rows of the sections with a target into rows of contact between two bodies
 /// (docs/method.md §18): direction −n (n the master's outward normal at the slave node's
-/// projection), gap g₀, and the master nodes' terms N_i n; rows of slave nodes off the target
-/// are removed (as never touching). Returns each remaining row's master terms.
+/// projection), the mortar rows' weighted gap and master coefficients c_i (src/contact/mortar.rs),
+/// or at the rim of the overlap the node-to-segment ones (g₀, N_i(ξ)); rows of slave nodes off
+/// the target are removed (as never touching). Returns each remaining row's master coefficients.
 fn paired_rows<const D: usize>(
     rows: &mut rows::Rows<D>,
     pairs: &[Option<SurfacePair<D>>],
-) -> Vec<Vec<(usize, [f64; D])>> {
+    points: &[[f64; D]],
+    revolved: bool,
+) -> Vec<Vec<(usize, f64)>> {
+    let mortar: Vec<Option<Vec<Option<MortarRow>>>> = pairs
+        .iter()
+        .map(|p| p.as_ref().map(|p| mortar::rows(points, p, revolved)))
+        .collect();
     let mut keep = vec![true; rows.nodes.len()];
     let mut terms = vec![Vec::new(); rows.nodes.len()];
     for r in 0..rows.nodes.len() {
-        let Some(pair) = &pairs[rows.group[r]] else {
+        let (Some(pair), Some(mortar)) = (&pairs[rows.group[r]], &mortar[rows.group[r]]) else {
             continue;
         };
         let p = rows.nodes[r];
-        let projection = pair.slave.local(p).and_then(|k| pair.projections[k].as_ref());
-        match projection {
+        let local = pair.slave.local(p);
+        match local.and_then(|k| pair.projections[k].as_ref()) {
             Some(proj) => {
                 rows.directions[r] = std::array::from_fn(|k| -proj.normal[k]);
-                rows.gap[r] = proj.gap;
-                terms[r] = proj
-                    .shape
-                    .iter()
-                    .map(|&(q, v)| (q, std::array::from_fn(|k| v * proj.normal[k])))
-                    .collect();
+                (rows.gap[r], terms[r]) = match local.and_then(|k| mortar[k].as_ref()) {
+                    Some(row) => (row.gap, row.terms.clone()),
+                    None => (proj.gap, proj.shape.clone()),
+                };
             }
             None => {
                 keep[r] = false;
