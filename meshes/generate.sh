@@ -114,6 +114,19 @@ for n in 4 8 16 32 64; do
 done
 python3 check_orientation.py cook/*.msh | grep -E '^[^ ]|ERROR'
 
+# Two bodies of one mesh touching at a point (tests/two_body_hertz.rs, docs/method.md §18), in the
+# subfolder two_bodies/ (then checked like the files here): two cylinders R1 = 1 and R2 = 2 (2D,
+# quarter disks, P1 triangles of 0.002 = a/25 near the contact) and two spheres R1 = R2 = 2 (3D,
+# quarters of hemispheres, tetrahedra of 0.01 = a/10 near the contact).
+(
+    cd two_bodies
+    gmsh -2 cylinders.geo -format msh41 -o cylinders_p1.msh >/dev/null
+    echo "wrote two_bodies/cylinders_p1.msh ($(wc -c <cylinders_p1.msh) bytes)"
+    gmsh -3 spheres.geo -format msh41 -o spheres_p1.msh >/dev/null
+    echo "wrote two_bodies/spheres_p1.msh ($(wc -c <spheres_p1.msh) bytes)"
+)
+python3 check_orientation.py two_bodies/*.msh | grep -E '^[^ ]|ERROR'
+
 # Orientation, boundary groups and the slabs' (x, y) grids of every MSH 4.1 ASCII file here: one
 # line per file (OK or FAILED) and any ERROR lines; fails the script if any check fails.
 python3 check_orientation.py | grep -E '^[^ ]|ERROR'

@@ -147,6 +147,116 @@ fn stacked_boxes_with_non_matching_meshes_pass_the_patch_test_either_way() {
     }
 }
 
+/// The upper block dragged over the lower one: the lower bottom clamped, the upper top pressed
+/// down by 0.002 and moved sideways by 0.01 t, Coulomb friction μ = 0.3 between them
+/// (non-matching meshes, the tangential rows carry the master's mortar coefficients too). Once
+/// the whole interface slides (the last two of 10 steps) the total friction force is μ times the
+/// total normal force to 1e-10, the forces on the two sides (the slave's, and the master's through
+/// the rows' master coefficients) are equal and opposite to 1e-12, and each body balances: the
+/// contact forces on the slave side equal the upper top's reactions, and the lower bottom's
+/// reactions are their opposite, in both components, to 1e-10 of the normal force.
+#[test]
+fn a_block_dragged_over_another_slides_with_coulomb_friction() {
+    const MU: f64 = 0.3;
+    let text = format!(
+        "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n\
+         [time]\nfinal_time = 1.0\nsteps = 10\n\
+         [[dirichlet]]\ngroup = \"LowerBottom\"\ncomponents = [\"x\", \"y\"]\n\
+         [[dirichlet]]\ngroup = \"UpperTop\"\ncomponents = [\"x\", \"y\"]\nvalue = [\"0.01*t\", \"-0.002\"]\n\
+         [[contact]]\ngroup = \"UpperBottom\"\ntarget = \"LowerTop\"\n\
+         friction = {{ kind = \"coulomb\", coefficient = {MU} }}\n\
+         [solver]\ntolerance = 1e-13\n"
+    );
+    let scene = Scene::from_toml_str(&text, "dragged blocks").unwrap_or_else(|e| panic!("{e}"));
+    let mesh = stacked((16, 4, CellShape::Quad), (13, 4, CellShape::Tri), 1.0);
+    let (sim, stats, sink) = solve_in_memory(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
+    let c = sim.contact.as_ref().unwrap();
+    let m = c.nodes.len();
+    assert_eq!(c.friction.as_ref().expect("friction rows").normal_row.len(), m);
+    for step in &sink.steps[sink.steps.len() - 2..] {
+        let state = step.contact.as_ref().unwrap();
+        let normal: f64 = state.force[..m].iter().sum();
+        let tangential: f64 = state.force[m..].iter().sum();
+        assert!(normal > 0.0, "t = {}: the blocks are pressed", step.time);
+        assert!(
+            (tangential.abs() - MU * normal).abs() <= 1e-10 * MU * normal,
+            "t = {}: friction {tangential:e} against μ × {normal:e}",
+            step.time
+        );
+        let forces = c.group_forces(state, None);
+        let (on_slave, on_master) = (forces[0], forces[1]);
+        assert_eq!(c.force_names(), ["UpperBottom", "LowerTop"]);
+        for k in 0..2 {
+            assert!(
+                (on_slave[k] + on_master[k]).abs() <= 1e-12 * normal,
+                "t = {}: the two sides' forces along {k}: {:e} and {:e}",
+                step.time,
+                on_slave[k],
+                on_master[k]
+            );
+        }
+        for (k, axis) in ["x", "y"].iter().enumerate() {
+            let top = common::reaction(&stats, "UpperTop", axis, step.time);
+            let bottom = common::reaction(&stats, "LowerBottom", axis, step.time);
+            assert!(
+                (top + on_slave[k]).abs() <= 1e-10 * normal,
+                "t = {}: the upper body's balance along {axis}: reaction {top:e}, contact {:e}",
+                step.time,
+                on_slave[k]
+            );
+            assert!(
+                (bottom - on_slave[k]).abs() <= 1e-10 * normal,
+                "t = {}: the lower body's balance along {axis}: reaction {bottom:e}, contact {:e}",
+                step.time,
+                -on_slave[k]
+            );
+        }
+    }
+}
+
+/// Two blocks with matching meshes tied to each other (`tied = true`: the slave surface glued to
+/// the master in every direction, docs/method.md §18.3) are the one merged block: the same
+/// displacement at every node to 1e-10 of the largest, under a load that shears and stretches
+/// the interface (the upper top moved by (0.01, 0.005) t, the lower bottom clamped) and a body
+/// force.
+#[test]
+fn tied_blocks_are_the_merged_block() {
+    let load = "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n\
+                [time]\nfinal_time = 1.0\nsteps = 2\n\
+                [body_force]\nvalue = [\"0.001*y\", \"-0.002\"]\n";
+    let tied = format!(
+        "{load}[[dirichlet]]\ngroup = \"LowerBottom\"\ncomponents = [\"x\", \"y\"]\n\
+         [[dirichlet]]\ngroup = \"UpperTop\"\ncomponents = [\"x\", \"y\"]\nvalue = [\"0.01*t\", \"0.005*t\"]\n\
+         [[contact]]\ngroup = \"UpperBottom\"\ntarget = \"LowerTop\"\ntied = true\n"
+    );
+    let merged = format!(
+        "{load}[[dirichlet]]\ngroup = \"Gamma3\"\ncomponents = [\"x\", \"y\"]\n\
+         [[dirichlet]]\ngroup = \"Gamma2_top\"\ncomponents = [\"x\", \"y\"]\nvalue = [\"0.01*t\", \"0.005*t\"]\n"
+    );
+    let scene = |text: &str| Scene::from_toml_str(text, "tied").unwrap_or_else(|e| panic!("{e}"));
+    let (a, _, sink_a) = solve_in_memory(
+        &scene(&tied),
+        stacked((8, 4, CellShape::Quad), (8, 4, CellShape::Quad), 1.0),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let one = hvi::mesh::structured::rectangle(2.0, 2.0, 8, 8, CellShape::Quad);
+    let (b, _, sink_b) = solve_in_memory(&scene(&merged), one).unwrap_or_else(|e| panic!("{e}"));
+    let ua = a.dofs.to_nodal(&sink_a.steps.last().unwrap().displacement);
+    let ub = b.dofs.to_nodal(&sink_b.steps.last().unwrap().displacement);
+    let largest = ub.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut worst = 0.0f64;
+    for (x, u) in a.mesh.points.iter().zip(&ua) {
+        let q = b
+            .mesh
+            .points
+            .iter()
+            .position(|y| (x[0] - y[0]).abs() + (x[1] - y[1]).abs() < 1e-12)
+            .expect("every node of the stack is a node of the merged block");
+        worst = worst.max((u[0] - ub[q][0]).abs().max((u[1] - ub[q][1]).abs()));
+    }
+    assert!(worst < 1e-10 * largest, "tied against merged: {worst:e} of {largest:e}");
+}
+
 /// `hvi check` lists the pair (slave nodes paired, off the target, the largest initial gap and
 /// penetration); a pair whose surfaces face the same way is refused naming both groups.
 #[test]
@@ -177,14 +287,37 @@ fn check_lists_the_pair_and_refuses_surfaces_facing_the_same_way() {
     );
 }
 
-/// What a target does not take yet is refused by name (docs/scenes.md): friction, an obstacle, a
-/// bound, bilateral contact beside it; and a target outside a [[contact]] section with a group.
+/// A bilateral pair (`bilateral = true` beside `target`) holds the bodies together in tension
+/// too: the upper top pulled up by δ, the non-matching stack is stretched uniformly (the patch
+/// test with the sign of δ turned), every node to 1e-10 of δ, every slave node pulled by the
+/// uniform traction.
+#[test]
+fn a_bilateral_pair_holds_in_tension() {
+    let text = SCENE.replace("-0.01*t", "0.01*t") + "bilateral = true\n";
+    let scene = Scene::from_toml_str(&text, "stacked blocks").unwrap_or_else(|e| panic!("{e}"));
+    let mesh = stacked((8, 4, CellShape::Quad), (7, 4, CellShape::Tri), 1.0);
+    let (sim, _, sink) = solve_in_memory(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
+    let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
+    let error = common::nodal_error(&sim.mesh.points, &u, |x| uniform(x).map(|v| -v));
+    assert!(error < 1e-10 * 0.01, "nodal error {error:e} of δ");
+    let c = sim.contact.as_ref().unwrap();
+    let state = sink.steps.last().unwrap().contact.as_ref().unwrap();
+    let p = 0.01 / (2.0 * (1.0 - 0.09));
+    for (k, &f) in state.force.iter().enumerate() {
+        assert!(
+            (f / c.nodes.weights[k] + p).abs() < 1e-9 * p,
+            "traction at slave row {k}"
+        );
+    }
+}
+
+/// What a target does not take yet is refused by name (docs/scenes.md): an obstacle or a bound
+/// beside it; a target outside a [[contact]] section with a group; `tied` without a target or
+/// with a law, friction or bilateral beside it.
 #[test]
 fn what_a_target_does_not_take_yet_is_refused() {
     for extra in [
-        "friction = { kind = \"coulomb\", coefficient = 0.3 }",
         "bound = 0.1",
-        "bilateral = true",
         "obstacle = { kind = \"plane\", point = [0.0, 1.0], normal = [0.0, 1.0] }",
     ] {
         let text = format!("{SCENE}{extra}\n");
@@ -200,4 +333,21 @@ fn what_a_target_does_not_take_yet_is_refused() {
         .expect_err("refused")
         .to_string();
     assert!(err.contains("group"), "{err}");
+    for (extra, needs) in [
+        (
+            "tied = true\nfriction = { kind = \"coulomb\", coefficient = 0.3 }",
+            "remove its law, friction",
+        ),
+        ("tied = true\nbilateral = true", "remove its law, friction"),
+    ] {
+        let err = Scene::from_toml_str(&format!("{SCENE}{extra}\n"), "tied")
+            .expect_err(extra)
+            .to_string();
+        assert!(err.contains("contact[0].tied") && err.contains(needs), "{extra}: {err}");
+    }
+    let untargeted = SCENE.replace("target = \"LowerTop\"\n", "tied = true\n");
+    let err = Scene::from_toml_str(&untargeted, "tied")
+        .expect_err("untargeted")
+        .to_string();
+    assert!(err.contains("contact[0].tied") && err.contains("`target`"), "{err}");
 }

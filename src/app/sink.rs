@@ -398,7 +398,7 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
         }
         if let (Some(csv), Some(values), Some(c)) = (&mut self.contact_forces, view.contact_forces, &sim.contact) {
             let mut rows = Vec::new();
-            for (group, f) in c.groups.iter().zip(values.chunks(D)) {
+            for (group, f) in c.force_names().iter().zip(values.chunks(D)) {
                 for (k, v) in f.iter().enumerate() {
                     rows.push(vec![
                         output::format_number(view.time),

@@ -603,6 +603,10 @@ pub struct ContactSpec {
     /// group is the slave surface, paired once with this one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub target: Option<GroupSelector>,
+    /// Tied contact with the target: the slave surface glued to the master as it lies, the
+    /// relative displacement zero in every direction (docs/method.md §18.3).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub tied: bool,
 }
 
 impl ContactSpec {

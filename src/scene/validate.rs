@@ -79,6 +79,7 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
             "friction",
             "bilateral",
             "target",
+            "tied",
         ],
         "contact.friction" => match kind {
             Some("tresca") => vec!["kind", "bound", "regularisation"],
@@ -378,6 +379,14 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
         if let Some(f) = &c.friction {
             check_friction(f, origin, &at)?;
         }
+        if c.tied && c.target.is_none() {
+            return Err(invalid(
+                origin,
+                &format!("{at}.tied"),
+                true,
+                "tied contact glues the group to another body's surface: give that surface as `target`",
+            ));
+        }
         if c.bilateral && (c.bound.is_some() || c.law.is_some()) {
             return Err(invalid(
                 origin,
@@ -427,13 +436,20 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
         if let Some(t) = &c.target {
             // contact with another deformable body (docs/method.md §18): what is there so far
             let refuse = |what: &str, why: &str| invalid(origin, &format!("{at}.{what}"), t, why);
-            if c.obstacle.is_some() || c.bilateral || c.friction.is_some() || c.bound.is_some() || c.direction.is_some()
-            {
+            if c.obstacle.is_some() || c.bound.is_some() || c.direction.is_some() {
                 return Err(refuse(
                     "target",
                     "contact with another body (target) takes the gap to the target surface as its bound; an \
-                     obstacle, a bound, a direction, bilateral contact or friction beside it are not supported yet \
-                     (issue 44): remove them",
+                     obstacle, a bound or a direction beside it are not supported yet (issue 44): remove them",
+                ));
+            }
+            if c.tied && (c.law.is_some() || c.friction.is_some() || c.bilateral) {
+                return Err(invalid(
+                    origin,
+                    &format!("{at}.tied"),
+                    true,
+                    "tied contact glues the group to the target in every direction: remove its law, friction and \
+                     bilateral, or remove tied",
                 ));
             }
             if c.group.is_none() {

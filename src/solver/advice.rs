@@ -104,12 +104,21 @@ pub fn warnings<const D: usize>(scene: &Scene, sim: &Simulation<D>) -> Vec<Strin
             .map(|&(n, _)| n)
             .collect();
         if let Some(&n) = never.first() {
-            out.push(format!(
-                "{} node(s) of contact group `{group}` never meet its obstacle along their normal (e.g. the node \
-                 at {:?}) and are left out of the contact problem; check the obstacle's position and `direction`",
-                never.len(),
-                sim.mesh.points[n]
-            ));
+            out.push(match &spec.target {
+                Some(target) => format!(
+                    "{} node(s) of contact group `{group}` project onto no facet of its target `{target}` (e.g. the \
+                     node at {:?}) and have no contact row; if they can touch the other body, extend the target \
+                     surface to lie under them (docs/method.md §18)",
+                    never.len(),
+                    sim.mesh.points[n]
+                ),
+                None => format!(
+                    "{} node(s) of contact group `{group}` never meet its obstacle along their normal (e.g. the node \
+                     at {:?}) and are left out of the contact problem; check the obstacle's position and `direction`",
+                    never.len(),
+                    sim.mesh.points[n]
+                ),
+            });
         }
         if let Some(gap) = &c.gap {
             let far: Vec<usize> = rows

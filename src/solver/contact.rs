@@ -61,6 +61,12 @@ pub struct ContactSetup<const D: usize> {
     /// The groups in contact with another body (`target`, docs/method.md §18), whose rows hold
     /// the master nodes' unknowns too: per pair, how messages name it and its pairing's numbers.
     pub pairs: Vec<(String, PairSummary)>,
+    /// The target surfaces, as (group index, target name): their bodies receive the opposite of
+    /// their group's contact force, written beside it (docs/method.md §18.4).
+    pub targets: Vec<(usize, String)>,
+    /// Per normal row, the master nodes' coefficients c_i of a row of contact between two bodies
+    /// (empty for the others); a tangential row has its normal row's.
+    pub master_terms: Vec<Vec<(usize, f64)>>,
 }
 
 impl<const D: usize> ContactSetup<D> {
@@ -105,7 +111,7 @@ impl<const D: usize> ContactSetup<D> {
 
     /// The total contact force on the body exerted by each group, Σ_p −λ_p d_p (the force of
     /// a row where groups meet split by their laws' shares, the rest to the stricter wall's
-    /// group); `offset` are the laws' origins of the step.
+    /// group), then on the body of each target; `offset` are the laws' origins of the step.
     pub fn group_forces(&self, state: &ContactState, offset: Option<&[f64]>) -> Vec<[f64; D]> {
         let mut out = vec![[0.0; D]; self.groups.len()];
         for p in 0..self.nodes.len() {
@@ -135,7 +141,36 @@ impl<const D: usize> ContactSetup<D> {
                 }
             }
         }
+        // the target's body: Σ_r λ_r d_r Σ_i c_ri over its pair's rows (docs/method.md §18.4)
+        for (g, _) in &self.targets {
+            let mut on_master = [0.0; D];
+            let rows = self.condensed_rows();
+            for r in 0..rows.len() {
+                let p = if r < self.nodes.len() {
+                    r
+                } else {
+                    self.friction.as_ref().expect("tangential rows").normal_row[r - self.nodes.len()]
+                };
+                if self.row_group[p] != *g {
+                    continue;
+                }
+                let share: f64 = self.master_terms[p].iter().map(|t| t.1).sum();
+                for c in 0..D {
+                    on_master[c] += state.force[r] * rows.normals[r][c] * share;
+                }
+            }
+            out.push(on_master);
+        }
         out
+    }
+
+    /// The names of [`ContactSetup::group_forces`]' entries: the groups, then the targets.
+    pub fn force_names(&self) -> Vec<String> {
+        self.groups
+            .iter()
+            .cloned()
+            .chain(self.targets.iter().map(|(_, name)| name.clone()))
+            .collect()
     }
 }
 
@@ -382,7 +417,11 @@ pub fn build<const D: usize>(
         rows::build(&inputs, &mesh.points, length).map_err(|e| SolveError::Setup(format!("{origin}: {e}")))?;
     // rows of contact with another body: along −n of the master surface, their gap g₀ and the
     // master nodes' terms; a slave node off the target has no row (docs/method.md §18)
-    let master_terms = paired_rows(&mut rows, &pairs, &mesh.points, revolved);
+    let mut master_terms = paired_rows(&mut rows, &pairs, &mesh.points, revolved);
+    let tied: Vec<bool> = used.iter().map(|&i| scene.contact[i].tied).collect();
+    if tied.contains(&true) {
+        tied_rows(&mut rows, &mut master_terms, &tied);
+    }
     let (mut nodes, kept) = ContactNodes::from_rows(&rows.nodes, &rows.weights, &rows.directions, dofs);
     let master_terms: Vec<Vec<(usize, f64)>> = kept.iter().map(|&r| master_terms[r].clone()).collect();
     for (k, terms) in master_terms.iter().enumerate() {
@@ -397,7 +436,10 @@ pub fn build<const D: usize>(
     let row_group: Vec<usize> = kept.iter().map(|&k| rows.group[k]).collect();
     let laws = NodalLaws::new(laws, &terms);
     let friction = friction_rows(scene, &used, (&nodes, &laws, &row_group), &master_terms, dofs, origin)?;
-    let bilateral: Vec<bool> = row_group.iter().map(|&g| scene.contact[used[g]].bilateral).collect();
+    let bilateral: Vec<bool> = row_group
+        .iter()
+        .map(|&g| scene.contact[used[g]].bilateral || tied[g])
+        .collect();
     Ok(Some(ContactSetup {
         pairs: used
             .iter()
@@ -416,6 +458,17 @@ pub fn build<const D: usize>(
             })
             .collect(),
         bilateral: bilateral.contains(&true).then_some(bilateral),
+        targets: used
+            .iter()
+            .enumerate()
+            .filter_map(|(g, &i)| {
+                scene.contact[i].target.as_ref().map(|t| match t {
+                    crate::mesh::GroupSelector::Name(n) => (g, n.clone()),
+                    crate::mesh::GroupSelector::Tag(t) => (g, t.to_string()),
+                })
+            })
+            .collect(),
+        master_terms,
         laws,
         bound: bound.iter().any(|g| g.is_finite()).then_some(bound),
         gap: any_obstacle.then_some(gap),
@@ -643,6 +696,30 @@ fn paired_rows<const D: usize>(
     retain(&mut rows.terms, &keep);
     retain(&mut terms, &keep);
     terms
+}
+
+/// The rows of tied pairs (docs/method.md §18.3): each normal row's gap set to zero (the slave
+/// surface glued as it lies) and D − 1 rows along its tangents added, with the same master
+/// coefficients; all of them are held bilaterally, so u_S = Σ c_i u_i in every direction.
+fn tied_rows<const D: usize>(rows: &mut rows::Rows<D>, master_terms: &mut Vec<Vec<(usize, f64)>>, tied: &[bool]) {
+    for r in 0..rows.nodes.len() {
+        let g = rows.group[r];
+        if !tied[g] {
+            continue;
+        }
+        rows.gap[r] = 0.0;
+        for t in Friction::<D>::tangents(rows.directions[r]) {
+            rows.nodes.push(rows.nodes[r]);
+            rows.weights.push(rows.weights[r]);
+            rows.directions.push(t);
+            rows.group.push(g);
+            rows.gap.push(0.0);
+            rows.layer.push(0.0);
+            rows.motion.push(None);
+            rows.terms.push(Vec::new());
+            master_terms.push(master_terms[r].clone());
+        }
+    }
 }
 
 /// Keeps the entries of `v` where `keep` is true.

@@ -360,11 +360,11 @@ impl<'s, const D: usize> Stepper<'s, D> {
             return Err(SolveError::NonFinite {
                 step: n,
                 time: t,
-                what: format!("contact force on group {}", setup.groups[g]),
+                what: format!("contact force on group {}", setup.force_names()[g]),
             });
         }
         self.contact_forces.clear();
-        for (group, f) in setup.groups.iter().zip(&forces) {
+        for (group, f) in setup.force_names().iter().zip(&forces) {
             self.contact_forces.extend_from_slice(f);
             for (c, &force) in f.iter().enumerate() {
                 self.stats.contact_forces.push(Reaction {
