@@ -113,7 +113,7 @@ fn stacked_boxes_with_non_matching_meshes_pass_the_patch_test_either_way() {
              [[contact]]\ngroup = \"{slave}\"\ntarget = \"{master}\"\n"
         );
         let scene = Scene::from_toml_str(&text, "stacked boxes").unwrap_or_else(|e| panic!("{e}"));
-        let mesh = common::stack(
+        let mesh = hvi::mesh::structured::stack(
             block([2.0, 1.0, 1.0], [4, 2, 3], SolidShape::Hex),
             block([2.0, 1.0, 1.0], [3, 2, 2], SolidShape::Tet),
             1.0,
@@ -308,6 +308,102 @@ fn a_bilateral_pair_holds_in_tension() {
             (f / c.nodes.weights[k] + p).abs() < 1e-9 * p,
             "traction at slave row {k}"
         );
+    }
+}
+
+/// A body held only by its contact with another, on the master side: the upper block has no
+/// prescribed component at all, only the pressure p on its top, and rests on the lower block
+/// (on rollers) through the pair LowerTop (slave) → UpperBottom (master). Its rigid motions are
+/// pinned among its contact nodes (docs/method.md §7.6, §18), its sideways one held by nothing
+/// but the pin (frictionless, balanced loads): the lower block takes the uniform compression
+/// exactly — every node to 1e-10 of its largest displacement — and every slave node the pressure
+/// p to 1e-9.
+#[test]
+fn a_master_body_held_only_by_its_contact_rests_on_the_other() {
+    let p = 0.005;
+    let text = format!(
+        "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n\
+         [time]\nfinal_time = 1.0\nsteps = 1\n\
+         [[dirichlet]]\ngroup = \"LowerBottom\"\ncomponents = [\"y\"]\n\
+         [[dirichlet]]\ngroup = \"LowerLeft\"\ncomponents = [\"x\"]\n\
+         [[traction]]\ngroup = \"UpperTop\"\npressure = \"{p}\"\n\
+         [[contact]]\ngroup = \"LowerTop\"\ntarget = \"UpperBottom\"\n"
+    );
+    let scene = Scene::from_toml_str(&text, "resting block").unwrap_or_else(|e| panic!("{e}"));
+    let mesh = stacked((8, 4, CellShape::Quad), (7, 4, CellShape::Tri), 1.0);
+    let (sim, _, sink) = solve_in_memory(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
+    let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
+    // the lower block under σ_yy = −p, rollers at x = 0 and y = 0, plane strain
+    let (exx, eyy) = (p * 0.3 * 1.3, -p * (1.0 - 0.09));
+    // the lower block's nodes come first in the stack: 9 × 5 of its 8 × 4 quadrilaterals
+    let mut worst = 0.0f64;
+    for (x, v) in sim.mesh.points.iter().zip(&u).take(9 * 5) {
+        worst = worst.max((v[0] - exx * x[0]).abs().max((v[1] - eyy * x[1]).abs()));
+    }
+    assert!(worst < 1e-10 * p, "the lower block's nodes: {worst:e}");
+    let c = sim.contact.as_ref().unwrap();
+    let state = sink.steps.last().unwrap().contact.as_ref().unwrap();
+    for (k, &f) in state.force.iter().enumerate() {
+        assert!(
+            (f / c.nodes.weights[k] - p).abs() < 1e-9 * p,
+            "pressure at slave row {k}"
+        );
+    }
+}
+
+/// What a run of two bodies writes (docs/method.md §18.4): contact_forces.csv has the slave
+/// group's force and the target's, equal and opposite to 1e-12 of their size; the contact
+/// dataset's `target_point` at every slave node is the displaced point of the target its row is
+/// measured against, which in the patch test (the bodies touching, the state uniform) is the
+/// displaced slave node itself, to 1e-12.
+#[test]
+fn a_run_writes_both_sides_forces_and_the_target_points() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = dir.path().join("stacked.msh");
+    std::fs::write(
+        &mesh,
+        common::msh22(&stacked((8, 4, CellShape::Quad), (7, 4, CellShape::Tri), 1.0)),
+    )
+    .unwrap();
+    let scene = dir.path().join("stacked.toml");
+    std::fs::write(&scene, SCENE).unwrap();
+    let out = dir.path().join("run");
+    common::hvi_ok(&[
+        "solve",
+        mesh.to_str().unwrap(),
+        "--scene",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let csv = std::fs::read_to_string(out.join("contact_forces.csv")).unwrap();
+    let force = |group: &str, axis: &str| -> f64 {
+        csv.lines()
+            .map(|l| l.split(',').collect::<Vec<_>>())
+            .find(|r| r[0] == "1" && r[1] == group && r[2] == axis)
+            .unwrap_or_else(|| panic!("no row {group} {axis} in {csv}"))[3]
+            .parse()
+            .unwrap()
+    };
+    let (slave, master) = (force("UpperBottom", "y"), force("LowerTop", "y"));
+    assert!(
+        slave > 0.0 && (slave + master).abs() <= 1e-12 * slave,
+        "{slave:e} and {master:e}"
+    );
+    let pvd = std::fs::read_to_string(out.join("contact.pvd")).unwrap();
+    let last = pvd.rsplit("file=\"").next().unwrap().split('"').next().unwrap();
+    let frame = hvi::output::read_vtu_arrays(&out.join(last)).unwrap();
+    let (_, target) = &frame.point_data["target_point"];
+    let (_, u) = &frame.point_data["displacement"];
+    for (i, x) in frame.points.iter().enumerate() {
+        for d in 0..2 {
+            let slave_at = x[d] + u[3 * i + d];
+            assert!(
+                (target[3 * i + d] - slave_at).abs() <= 1e-12,
+                "slave node {i}: target point {} against {slave_at}",
+                target[3 * i + d]
+            );
+        }
     }
 }
 

@@ -357,7 +357,7 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
             }
             if let Some(cs) = &mut self.contact {
                 self.manifest.add(&cs.series.frame_name(view.step))?;
-                write_contact_frame(cs, c, state, &normal, &nodal, view)?;
+                write_contact_frame(cs, (c, &sim.mesh.points), state, &normal, &nodal, view)?;
             }
         }
         if let (Some(csv), Some(values)) = (&mut self.reactions, view.reactions) {
@@ -496,10 +496,11 @@ pub(crate) fn cell_groups<const D: usize>(mesh: &Mesh<D>) -> Vec<i32> {
 /// Writes one frame of the contact dataset (docs/method.md §12): u_ν, gap, force, pressure and
 /// status at every Γ₃ node, the nodal normal, and the group ids. A Γ₃ node that is no contact
 /// unknown (its normal displacement is prescribed) has its u_ν = ν·u, force and pressure 0 and
-/// status −1.
+/// status −1. With contact between two bodies, `target_point` is the displaced point of the
+/// target each row is measured against, Σ c_i (x_i + u_i) (NaN off the pairs, docs/method.md §18.4).
 fn write_contact_frame<const D: usize>(
     cs: &mut ContactSeries<D>,
-    c: &crate::solver::ContactSetup<D>,
+    (c, points): (&crate::solver::ContactSetup<D>, &[[f64; D]]),
     state: &ContactState,
     normal: &[f64],
     nodal: &[[f64; D]],
@@ -577,6 +578,28 @@ fn write_contact_frame<const D: usize>(
             Field::f64("accumulated_slip", 1, accumulated),
             Field::i32("friction_status", 1, fstatus),
         ]);
+    }
+    let target_point = (!c.targets.is_empty()).then(|| {
+        let mut at = vec![f64::NAN; 3 * n];
+        for (k, &p) in c.nodes.nodes.iter().enumerate() {
+            let (Some(i), false) = (b.local(p), c.master_terms[k].is_empty()) else {
+                continue;
+            };
+            for d in 0..3 {
+                at[3 * i + d] = if d < D {
+                    c.master_terms[k]
+                        .iter()
+                        .map(|&(q, w)| w * (points[q][d] + nodal[q][d]))
+                        .sum()
+                } else {
+                    0.0
+                };
+            }
+        }
+        at
+    });
+    if let Some(at) = &target_point {
+        point_fields.push(Field::f64("target_point", 3, at));
     }
     let frame = SurfaceFrame {
         step: view.step,

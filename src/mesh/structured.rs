@@ -258,6 +258,67 @@ pub fn block(l: [f64; 3], n: [usize; 3], kind: SolidShape) -> Mesh<3> {
     }
 }
 
+/// Two bodies in one mesh (docs/method.md §18): `upper` lifted by `lift` along y onto `lower`
+/// (both from this module, sharing no nodes): their groups Gamma3, Gamma1, Gamma2_top (and in 3D
+/// Sides) become LowerBottom, LowerLeft, LowerTop, LowerSides, UpperBottom, …, each body's cells
+/// the group Lower (tag 21) or Upper (tag 22).
+pub fn stack<const D: usize>(lower: Mesh<D>, upper: Mesh<D>, lift: f64) -> Mesh<D> {
+    let offset = lower.points.len();
+    let renamed = |m: &Mesh<D>, shift: usize, prefix: &str, tag: i32| -> Vec<PhysicalGroup> {
+        [
+            ("Gamma3", "Bottom"),
+            ("Gamma1", "Left"),
+            ("Gamma2_top", "Top"),
+            ("Sides", "Sides"),
+        ]
+        .iter()
+        .enumerate()
+        .filter_map(|(k, (old, new))| {
+            let g = m.groups.iter().find(|g| g.name.as_deref() == Some(*old))?;
+            Some(PhysicalGroup {
+                dim: g.dim,
+                tag: tag + k as i32,
+                name: Some(format!("{prefix}{new}")),
+                facets: g
+                    .facets
+                    .iter()
+                    .map(|f| Facet::from_slice(&f.nodes().iter().map(|p| p + shift).collect::<Vec<_>>()))
+                    .collect(),
+                cells: vec![],
+                nodes: vec![],
+            })
+        })
+        .collect()
+    };
+    let mut points = lower.points.clone();
+    points.extend(upper.points.iter().map(|x| {
+        let mut y = *x;
+        y[1] += lift;
+        y
+    }));
+    let mut cells = lower.cells.clone();
+    cells.extend(upper.cells.iter().map(|c| c.renumbered(|p| p + offset)));
+    let body = |tag: i32, name: &str, cells: Vec<usize>| PhysicalGroup {
+        dim: D as u8,
+        tag,
+        name: Some(name.into()),
+        facets: vec![],
+        cells,
+        nodes: vec![],
+    };
+    let mut groups = renamed(&lower, 0, "Lower", 11);
+    groups.extend(renamed(&upper, offset, "Upper", 15));
+    groups.push(body(21, "Lower", (0..lower.cells.len()).collect()));
+    groups.push(body(22, "Upper", (lower.cells.len()..cells.len()).collect()));
+    Mesh {
+        path: PathBuf::from("<stacked blocks>"),
+        points,
+        cell_tags: (1..=cells.len()).collect(),
+        cells,
+        groups,
+    }
+}
+
 /// A named boundary group of dimension `dim` (tags as in the `.geo` files).
 fn boundary_group(dim: u8, tag: i32, name: &str, facets: Vec<Facet>) -> PhysicalGroup {
     PhysicalGroup {

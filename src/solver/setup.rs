@@ -143,11 +143,13 @@ impl<const D: usize> Simulation<D> {
             steps: scene.time.steps,
         };
         let times: Vec<f64> = time.sample().into_iter().map(|n| time.time(n)).collect();
-        // the nodes of the contact groups: the contact may hold what the prescribed components
-        // leave free (docs/method.md §7.7); a group that is not there is reported by the contact
+        // the nodes of the contact groups and their targets: the contact may hold what the
+        // prescribed components leave free (docs/method.md §7.7, §18), the body on either side of
+        // a pair; a group that is not there is reported by the contact
         let contact_nodes: Option<Vec<usize>> = super::contact::is_posed(scene).then(|| {
             (0..scene.contact.len())
-                .filter_map(|i| mesh.boundary(&scene.contact_group(i)).ok())
+                .flat_map(|i| std::iter::once(scene.contact_group(i)).chain(scene.contact[i].target.clone()))
+                .filter_map(|g| mesh.boundary(&g).ok())
                 .flat_map(|part| part.nodes)
                 .collect()
         });
