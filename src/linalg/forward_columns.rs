@@ -39,6 +39,12 @@ impl ForwardColumns {
     /// supernode, docs/method.md §9.9); below, one sparse sweep each.
     pub fn new(factor: &Factor, rows: &[Vec<(usize, f64)>], counters: &Counters) -> Self {
         counters.sparse_forward_sweeps.fetch_add(rows.len(), Ordering::Relaxed);
+        // a zero coefficient would start its column's path at its unknown for nothing
+        let rows: Vec<Vec<(usize, f64)>> = rows
+            .iter()
+            .map(|r| r.iter().copied().filter(|&(_, c)| c != 0.0).collect())
+            .collect();
+        let rows = &rows[..];
         let n = factor.n();
         let n_supernodes = factor.analysis().supernodes().len();
         let columns: Vec<(Vec<Segment>, Vec<f64>)> = if rows.len() >= BLOCKED_FROM_COLUMNS {
