@@ -259,8 +259,8 @@ impl<const D: usize> Simulation<D> {
     /// up to [`PAIR_LAST_UNKNOWNS`]: both surfaces' normal components last keep the columns of
     /// G = L⁻¹PCᵀ within the trailing block, where otherwise each slave and master unknown's
     /// path to the root ran through a different body's tree (benches/two_bodies.rs, 3D, m = 512,
-    /// 850 unknowns last: condensation 137 → 28 ms, the sweeps of 32 steps 0.51 → 0.35 s, the whole run 1.29 → 1.11 s, the
-    /// factor 9.6 M → 10.8 M entries).
+    /// 850 unknowns last: condensation 137 → 28 ms, the sweeps of 32 steps 0.51 → 0.35 s, the
+    /// whole run 1.29 → 1.11 s, the factor 9.6 M → 10.8 M entries).
     pub fn unknowns_ordered_last(&self) -> Vec<usize> {
         match &self.contact {
             Some(c) if self.trailing_block() => c.condensed_rows().unknowns(),
