@@ -18,6 +18,22 @@ pub fn hvi_ok(args: &[&str]) -> Output {
     out
 }
 
+/// `hvi solve` through files, as a user runs it: the mesh and the scene (paths from the
+/// repository's root), the series into `out` (panics with the error).
+pub fn solve_files(mesh: &str, scene: Option<&str>, out: &std::path::Path) -> hvi::solver::RunStats {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let opts = hvi::app::SolveOptions {
+        mesh: root.join(mesh),
+        scene: scene.map(|s| root.join(s)),
+        out: out.to_path_buf(),
+        overrides: vec![],
+        progress: false,
+        overwrite: false,
+        accept_mesh_defects: false,
+    };
+    hvi::app::solve(&opts, None).unwrap_or_else(|e| panic!("{e}"))
+}
+
 /// A scene from TOML text (panics with the error, which names the key).
 pub fn scene(toml: &str) -> Scene {
     Scene::from_toml_str(toml, "<test scene>").unwrap_or_else(|e| panic!("{e}"))
@@ -218,4 +234,37 @@ pub fn stacked(lower: (usize, usize, CellShape), upper: (usize, usize, CellShape
         rectangle(2.0, 1.0, upper.0, upper.1, upper.2),
         lift,
     )
+}
+
+/// Least squares of p² = p₀² (1 − r²/a²) over (r, p) of the nodes in contact: a straight line
+/// in r² whose intercept is p₀² and whose root is a² (Hertz in 2D and 3D); returns (a, p₀).
+pub fn hertz_fit(pressures: &[(f64, f64)]) -> (f64, f64) {
+    let n = pressures.len() as f64;
+    let xs: Vec<f64> = pressures.iter().map(|(r, _)| r * r).collect();
+    let ys: Vec<f64> = pressures.iter().map(|(_, p)| p * p).collect();
+    let (mx, my) = (xs.iter().sum::<f64>() / n, ys.iter().sum::<f64>() / n);
+    let sxy: f64 = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum();
+    let sxx: f64 = xs.iter().map(|x| (x - mx) * (x - mx)).sum();
+    let slope = sxy / sxx; // −p₀²/a²
+    let intercept = my - slope * mx; // p₀²
+    ((intercept / -slope).sqrt(), intercept.sqrt())
+}
+
+/// (r, pressure λ_p / w_p) of every contact row on its bound at the last step, r the distance of
+/// its node from the axis through the origin along the last coordinate (Hertz's r).
+pub fn bound_pressures<const D: usize>(
+    sim: &hvi::solver::Simulation<D>,
+    sink: &hvi::app::MemorySink,
+) -> Vec<(f64, f64)> {
+    let c = sim.contact.as_ref().unwrap();
+    let state = sink.steps.last().unwrap().contact.as_ref().unwrap();
+    let mut pressures = Vec::new();
+    for (k, &p) in c.nodes.nodes.iter().enumerate() {
+        if state.status[k] == hvi::contact::NodeStatus::OnBound {
+            let x = sim.mesh.points[p];
+            let r = x[..D - 1].iter().map(|v| v * v).sum::<f64>().sqrt();
+            pressures.push((r, state.force[k] / c.nodes.weights[k]));
+        }
+    }
+    pressures
 }

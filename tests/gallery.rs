@@ -2,7 +2,9 @@
 //! of what it shows. (The Hertz entries, examples/gallery/hertz_2d and hertz_3d, are run and
 //! checked against the closed forms by tests/hertz.rs.)
 
-use hvi::app::{solve, solve_in_memory, SolveOptions};
+mod common;
+
+use hvi::app::solve_in_memory;
 use hvi::mesh::read_mesh;
 use hvi::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -12,16 +14,7 @@ fn root() -> &'static Path {
 }
 
 fn run_files(mesh: &str, scene: Option<&str>, out: &Path) -> hvi::solver::RunStats {
-    let opts = SolveOptions {
-        mesh: root().join(mesh),
-        scene: scene.map(|s| root().join(s)),
-        out: out.to_path_buf(),
-        overrides: vec![],
-        progress: false,
-        overwrite: false,
-        accept_mesh_defects: false,
-    };
-    solve(&opts, None).unwrap_or_else(|e| panic!("{e}"))
+    common::solve_files(mesh, scene, out)
 }
 
 /// The paper's example on a mesh with only the paper's groups (Gamma1, Gamma2, Gamma3, Omega):

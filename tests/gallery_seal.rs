@@ -6,7 +6,9 @@
 //! its bulk modulus stays (κ = 100 MPa: K/G from 100 to 1000), so it takes mean dilatation
 //! (docs/method.md §8.4) and the sealing force relaxes.
 
-use hvi::app::{memory_fields, solve, solve_in_memory, MemorySink, SolveOptions};
+mod common;
+
+use hvi::app::{memory_fields, solve_in_memory, MemorySink};
 use hvi::fem::assembly::Volumetric;
 use hvi::fem::stress::cell_stresses;
 use hvi::mesh::read_mesh;
@@ -122,16 +124,7 @@ fn roughness(sim: &Simulation<2>, field: &[(usize, f64)]) -> f64 {
 fn seal_runs_as_the_gallery_says() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("seal");
-    let opts = SolveOptions {
-        mesh: root().join(MESH),
-        scene: Some(root().join(SCENE)),
-        out: out.clone(),
-        overrides: vec![],
-        progress: false,
-        overwrite: false,
-        accept_mesh_defects: false,
-    };
-    let stats = solve(&opts, None).unwrap_or_else(|e| panic!("{e}"));
+    let stats = common::solve_files(MESH, Some(SCENE), &out);
     assert!(out.join("solution.pvd").exists() && out.join("contact_forces.csv").exists());
     assert_eq!((stats.nodes, stats.steps, stats.frames_written), (4749, 80, 17));
 }

@@ -11,7 +11,9 @@
 //! ±(1, 0): the y component of the contact force on the punch is the total normal force N and its
 //! x component the total friction force T.
 
-use hvi::app::{solve, solve_in_memory, SolveOptions};
+mod common;
+
+use hvi::app::solve_in_memory;
 use hvi::mesh::read_mesh;
 use hvi::scene::Scene;
 use std::path::Path;
@@ -166,17 +168,8 @@ fn at(series: &[(f64, f64)], t: f64) -> f64 {
 fn two_bodies_run_as_the_gallery_says_and_balance() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("two_bodies");
-    let opts = SolveOptions {
-        mesh: root().join(MESH),
-        scene: Some(root().join(SCENE)),
-        out: out.clone(),
-        overrides: vec![],
-        progress: false,
-        overwrite: false,
-        accept_mesh_defects: false,
-    };
     let start = Instant::now();
-    let stats = solve(&opts, None).unwrap_or_else(|e| panic!("{e}"));
+    let stats = common::solve_files(MESH, Some(SCENE), &out);
     let seconds = start.elapsed().as_secs_f64();
     assert_eq!(
         (stats.nodes, stats.contact_nodes, stats.steps, stats.frames_written),

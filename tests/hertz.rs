@@ -7,7 +7,6 @@
 mod common;
 
 use hvi::app::solve_in_memory;
-use hvi::contact::NodeStatus;
 use hvi::mesh::structured::{block, SolidShape};
 use hvi::mesh::{read_mesh, Mesh, PhysicalGroup};
 use hvi::scene::Scene;
@@ -46,17 +45,9 @@ fn run_scene<const D: usize>(scene: &Scene, entry: &str, mesh: &str, symmetry_fa
 
 fn run_mesh<const D: usize>(scene: &Scene, mesh: Mesh<D>, symmetry_factor: f64) -> Contact {
     let (sim, stats, sink) = solve_in_memory(scene, mesh).unwrap_or_else(|e| panic!("{e}"));
-    let c = sim.contact.as_ref().unwrap();
     let last = sink.steps.last().unwrap();
     let state = last.contact.as_ref().unwrap();
-    let mut pressures = Vec::new();
-    for (k, &p) in c.nodes.nodes.iter().enumerate() {
-        if state.status[k] == NodeStatus::OnBound {
-            let x = sim.mesh.points[p];
-            let r = x[..D - 1].iter().map(|v| v * v).sum::<f64>().sqrt();
-            pressures.push((r, state.force[k] / c.nodes.weights[k]));
-        }
-    }
+    let pressures = common::bound_pressures(&sim, &sink);
     let axis = ["x", "y", "z"][D - 1];
     Contact {
         force: symmetry_factor * state.force.iter().sum::<f64>(),
@@ -86,15 +77,7 @@ fn hertz(dim: usize, p: f64, e_star: f64) -> (f64, f64) {
 /// one element) or an interpolated edge of the active set (which depends on the nodal pressure of
 /// the two nodes around the edge, the least accurate ones: the pressure is ∝ sqrt(a − r) there).
 fn fit(pressures: &[(f64, f64)]) -> (f64, f64) {
-    let n = pressures.len() as f64;
-    let xs: Vec<f64> = pressures.iter().map(|(r, _)| r * r).collect();
-    let ys: Vec<f64> = pressures.iter().map(|(_, p)| p * p).collect();
-    let (mx, my) = (xs.iter().sum::<f64>() / n, ys.iter().sum::<f64>() / n);
-    let sxy: f64 = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum();
-    let sxx: f64 = xs.iter().map(|x| (x - mx) * (x - mx)).sum();
-    let slope = sxy / sxx; // −p₀²/a²
-    let intercept = my - slope * mx; // p₀²
-    ((intercept / -slope).sqrt(), intercept.sqrt())
+    common::hertz_fit(pressures)
 }
 
 /// Plane strain, E = 1, ν = 0.3, R = 1: a² = 4PR/(πE*), p₀ = 2P/(πa), with P the force per unit

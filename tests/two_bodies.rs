@@ -28,6 +28,57 @@ fn uniform(x: &[f64; 2]) -> [f64; 2] {
     [exx * x[0], eyy * x[1]]
 }
 
+/// Every slave row of the last step carries the pressure `p` (negative: a traction) to 1e-9
+/// (`label` names the case in messages).
+fn assert_slave_pressures<const D: usize>(
+    sim: &hvi::solver::Simulation<D>,
+    sink: &hvi::app::MemorySink,
+    p: f64,
+    label: &str,
+) {
+    let c = sim.contact.as_ref().unwrap();
+    let state = sink.steps.last().unwrap().contact.as_ref().unwrap();
+    for (k, &f) in state.force.iter().enumerate() {
+        let pressure = f / c.nodes.weights[k];
+        assert!(
+            (pressure - p).abs() < 1e-9 * p.abs(),
+            "{label}: pressure {pressure} at slave row {k}"
+        );
+    }
+}
+
+/// The patch test's contact: every slave row carries the uniform pressure p = δE/(2(1 − ν²))
+/// (δ = 0.01, E = 1, ν = 0.3), and the total contact force is the lower base's reaction to 1e-12.
+fn assert_uniform_contact<const D: usize>(
+    sim: &hvi::solver::Simulation<D>,
+    stats: &hvi::solver::RunStats,
+    sink: &hvi::app::MemorySink,
+    label: &str,
+) {
+    assert_slave_pressures(sim, sink, 0.01 / (2.0 * (1.0 - 0.09)), label);
+    let state = sink.steps.last().unwrap().contact.as_ref().unwrap();
+    let total: f64 = state.force.iter().sum();
+    let reaction = common::reaction(stats, "LowerBottom", "y", 1.0);
+    assert!(
+        (total.abs() - reaction.abs()).abs() < 1e-12 * total.abs(),
+        "{label}: the lower body's balance"
+    );
+}
+
+/// Solves the stack of `text` on `mesh` and asserts the patch test: every node in the uniform
+/// state ([`uniform`], u_z = 0 in 3D) to 1e-10 of δ, and the uniform contact.
+fn patch_test<const D: usize>(text: &str, mesh: hvi::mesh::Mesh<D>, label: &str) {
+    let scene = Scene::from_toml_str(text, label).unwrap_or_else(|e| panic!("{e}"));
+    let (sim, stats, sink) = solve_in_memory(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
+    let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
+    let error = common::nodal_error(&sim.mesh.points, &u, |x| {
+        let [ux, uy] = uniform(&[x[0], x[1]]);
+        std::array::from_fn(|k| [ux, uy, 0.0][k])
+    });
+    assert!(error < 1e-10 * 0.01, "{label}: nodal error {error:e} of δ = 0.01");
+    assert_uniform_contact(&sim, &stats, &sink, label);
+}
+
 /// Matching meshes (the same grid on both sides of the interface): each slave node sits on a
 /// master node, the stack's uniform compression is the discrete solution, reproduced to 1e-10 of
 /// δ, and every slave node carries the uniform pressure p w_p.
@@ -39,15 +90,8 @@ fn stacked_blocks_with_matching_meshes_hold_the_uniform_state() {
     let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
     let error = common::nodal_error(&sim.mesh.points, &u, uniform);
     assert!(error < 1e-10 * 0.01, "nodal error {error:e}");
-    let c = sim.contact.as_ref().unwrap();
-    let state = sink.steps.last().unwrap().contact.as_ref().unwrap();
     let p = 0.01 / (2.0 * (1.0 - 0.09));
-    for (k, &f) in state.force.iter().enumerate() {
-        assert!(
-            (f / c.nodes.weights[k] - p).abs() < 1e-9 * p,
-            "pressure at slave node {k}"
-        );
-    }
+    assert_slave_pressures(&sim, &sink, p, "pressure");
 }
 
 /// The contact patch test (Taylor & Papadopoulos 1991) on non-matching meshes, 7 triangles'
@@ -63,33 +107,8 @@ fn stacked_blocks_with_non_matching_meshes_pass_the_patch_test_either_way() {
             "group = \"UpperBottom\"\ntarget = \"LowerTop\"",
             &format!("group = \"{slave}\"\ntarget = \"{master}\""),
         );
-        let scene = Scene::from_toml_str(&text, "stacked blocks").unwrap_or_else(|e| panic!("{e}"));
         let mesh = stacked((8, 4, CellShape::Quad), (7, 4, CellShape::Tri), 1.0);
-        let (sim, stats, sink) = solve_in_memory(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
-        let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
-        let error = common::nodal_error(&sim.mesh.points, &u, uniform);
-        assert!(
-            error < 1e-10 * 0.01,
-            "{slave} on {master}: nodal error {error:e} of δ = 0.01"
-        );
-        let c = sim.contact.as_ref().unwrap();
-        let state = sink.steps.last().unwrap().contact.as_ref().unwrap();
-        let p = 0.01 / (2.0 * (1.0 - 0.09));
-        for (k, &f) in state.force.iter().enumerate() {
-            let pressure = f / c.nodes.weights[k];
-            assert!(
-                (pressure - p).abs() < 1e-9 * p,
-                "{slave} on {master}: pressure {pressure} at slave row {k}"
-            );
-        }
-        let total: f64 = state.force.iter().sum();
-        for group in ["LowerBottom", "UpperTop"] {
-            let reaction = common::reaction(&stats, group, "y", 1.0).abs();
-            assert!(
-                (total - reaction).abs() < 1e-12 * total,
-                "{slave} on {master}: {group}'s balance"
-            );
-        }
+        patch_test(&text, mesh, &format!("{slave} on {master}"));
     }
 }
 
@@ -112,38 +131,12 @@ fn stacked_boxes_with_non_matching_meshes_pass_the_patch_test_either_way() {
              [[dirichlet]]\ngroup = \"UpperTop\"\ncomponents = [\"y\"]\nvalue = [\"-0.01*t\"]\n\
              [[contact]]\ngroup = \"{slave}\"\ntarget = \"{master}\"\n"
         );
-        let scene = Scene::from_toml_str(&text, "stacked boxes").unwrap_or_else(|e| panic!("{e}"));
         let mesh = hvi::mesh::structured::stack(
             block([2.0, 1.0, 1.0], [4, 2, 3], SolidShape::Hex),
             block([2.0, 1.0, 1.0], [3, 2, 2], SolidShape::Tet),
             1.0,
         );
-        let (sim, stats, sink) = solve_in_memory(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
-        let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
-        let error = common::nodal_error(&sim.mesh.points, &u, |x| {
-            let [ux, uy] = uniform(&[x[0], x[1]]);
-            [ux, uy, 0.0]
-        });
-        assert!(
-            error < 1e-10 * 0.01,
-            "{slave} on {master}: nodal error {error:e} of δ = 0.01"
-        );
-        let c = sim.contact.as_ref().unwrap();
-        let state = sink.steps.last().unwrap().contact.as_ref().unwrap();
-        let p = 0.01 / (2.0 * (1.0 - 0.09));
-        for (k, &f) in state.force.iter().enumerate() {
-            let pressure = f / c.nodes.weights[k];
-            assert!(
-                (pressure - p).abs() < 1e-9 * p,
-                "{slave} on {master}: pressure {pressure} at slave row {k}"
-            );
-        }
-        let total: f64 = state.force.iter().sum();
-        let reaction = common::reaction(&stats, "LowerBottom", "y", 1.0).abs();
-        assert!(
-            (total - reaction).abs() < 1e-12 * total,
-            "{slave} on {master}: the lower body's balance"
-        );
+        patch_test(&text, mesh, &format!("{slave} on {master} (3D)"));
     }
 }
 
@@ -257,19 +250,21 @@ fn tied_blocks_are_the_merged_block() {
     assert!(worst < 1e-10 * largest, "tied against merged: {worst:e} of {largest:e}");
 }
 
+/// The non-matching stack as an MSH 2.2 file and [`SCENE`] written into `dir`: (mesh, scene).
+fn stack_files(dir: &std::path::Path) -> (std::path::PathBuf, std::path::PathBuf) {
+    let (mesh, scene) = (dir.join("stacked.msh"), dir.join("stacked.toml"));
+    let stack = stacked((8, 4, CellShape::Quad), (7, 4, CellShape::Tri), 1.0);
+    std::fs::write(&mesh, common::msh22(&stack)).unwrap();
+    std::fs::write(&scene, SCENE).unwrap();
+    (mesh, scene)
+}
+
 /// `hvi check` lists the pair (slave nodes paired, off the target, the largest initial gap and
 /// penetration); a pair whose surfaces face the same way is refused naming both groups.
 #[test]
 fn check_lists_the_pair_and_refuses_surfaces_facing_the_same_way() {
     let dir = tempfile::tempdir().unwrap();
-    let mesh = dir.path().join("stacked.msh");
-    std::fs::write(
-        &mesh,
-        common::msh22(&stacked((8, 4, CellShape::Quad), (7, 4, CellShape::Tri), 1.0)),
-    )
-    .unwrap();
-    let scene = dir.path().join("stacked.toml");
-    std::fs::write(&scene, SCENE).unwrap();
+    let (mesh, scene) = stack_files(dir.path());
     let report = hvi::app::check(&mesh, Some(&scene), &[], false).unwrap_or_else(|e| panic!("{e}"));
     assert!(
         report
@@ -300,15 +295,8 @@ fn a_bilateral_pair_holds_in_tension() {
     let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
     let error = common::nodal_error(&sim.mesh.points, &u, |x| uniform(x).map(|v| -v));
     assert!(error < 1e-10 * 0.01, "nodal error {error:e} of δ");
-    let c = sim.contact.as_ref().unwrap();
-    let state = sink.steps.last().unwrap().contact.as_ref().unwrap();
     let p = 0.01 / (2.0 * (1.0 - 0.09));
-    for (k, &f) in state.force.iter().enumerate() {
-        assert!(
-            (f / c.nodes.weights[k] + p).abs() < 1e-9 * p,
-            "traction at slave row {k}"
-        );
-    }
+    assert_slave_pressures(&sim, &sink, -p, "traction");
 }
 
 /// A body held only by its contact with another, on the master side: the upper block has no
@@ -341,14 +329,7 @@ fn a_master_body_held_only_by_its_contact_rests_on_the_other() {
         worst = worst.max((v[0] - exx * x[0]).abs().max((v[1] - eyy * x[1]).abs()));
     }
     assert!(worst < 1e-10 * p, "the lower block's nodes: {worst:e}");
-    let c = sim.contact.as_ref().unwrap();
-    let state = sink.steps.last().unwrap().contact.as_ref().unwrap();
-    for (k, &f) in state.force.iter().enumerate() {
-        assert!(
-            (f / c.nodes.weights[k] - p).abs() < 1e-9 * p,
-            "pressure at slave row {k}"
-        );
-    }
+    assert_slave_pressures(&sim, &sink, p, "pressure");
 }
 
 /// What a run of two bodies writes (docs/method.md §18.4): contact_forces.csv has the slave
@@ -359,14 +340,7 @@ fn a_master_body_held_only_by_its_contact_rests_on_the_other() {
 #[test]
 fn a_run_writes_both_sides_forces_and_the_target_points() {
     let dir = tempfile::tempdir().unwrap();
-    let mesh = dir.path().join("stacked.msh");
-    std::fs::write(
-        &mesh,
-        common::msh22(&stacked((8, 4, CellShape::Quad), (7, 4, CellShape::Tri), 1.0)),
-    )
-    .unwrap();
-    let scene = dir.path().join("stacked.toml");
-    std::fs::write(&scene, SCENE).unwrap();
+    let (mesh, scene) = stack_files(dir.path());
     let out = dir.path().join("run");
     common::hvi_ok(&[
         "solve",

@@ -11,7 +11,6 @@
 mod common;
 
 use hvi::app::solve_in_memory;
-use hvi::contact::NodeStatus;
 use hvi::mesh::read_mesh;
 use hvi::scene::Scene;
 use std::f64::consts::PI;
@@ -50,14 +49,7 @@ fn run<const D: usize>(scene: &str, file: &str, symmetry_factor: f64) -> Contact
     let c = sim.contact.as_ref().unwrap();
     let last = sink.steps.last().unwrap();
     let state = last.contact.as_ref().unwrap();
-    let mut pressures = Vec::new();
-    for (k, &p) in c.nodes.nodes.iter().enumerate() {
-        if state.status[k] == NodeStatus::OnBound {
-            let x = sim.mesh.points[p];
-            let r = x[..D - 1].iter().map(|v| v * v).sum::<f64>().sqrt();
-            pressures.push((r, state.force[k] / c.nodes.weights[k]));
-        }
-    }
+    let pressures = common::bound_pressures(&sim, &sink);
     let resultant: f64 = state
         .force
         .iter()
@@ -80,15 +72,7 @@ fn run<const D: usize>(scene: &str, file: &str, symmetry_factor: f64) -> Contact
 /// straight line in r² whose intercept is p₀² and whose root is a², so that every node in contact
 /// locates a, not only the last one.
 fn fit(pressures: &[(f64, f64)]) -> (f64, f64) {
-    let n = pressures.len() as f64;
-    let xs: Vec<f64> = pressures.iter().map(|(r, _)| r * r).collect();
-    let ys: Vec<f64> = pressures.iter().map(|(_, p)| p * p).collect();
-    let (mx, my) = (xs.iter().sum::<f64>() / n, ys.iter().sum::<f64>() / n);
-    let sxy: f64 = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum();
-    let sxx: f64 = xs.iter().map(|x| (x - mx) * (x - mx)).sum();
-    let slope = sxy / sxx; // −p₀²/a²
-    let intercept = my - slope * mx; // p₀²
-    ((intercept / -slope).sqrt(), intercept.sqrt())
+    common::hertz_fit(pressures)
 }
 
 /// The scene of the bodies "Lower" and "Upper" with their materials (E, ν), `model` the lines of
