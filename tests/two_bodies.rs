@@ -260,7 +260,8 @@ fn stack_files(dir: &std::path::Path) -> (std::path::PathBuf, std::path::PathBuf
 }
 
 /// `hvi check` lists the pair (slave nodes paired, off the target, the largest initial gap and
-/// penetration); a pair whose surfaces face the same way is refused naming both groups.
+/// penetration), warns when the slave's facets are finer than the target's (swap them), and
+/// refuses a pair whose surfaces face the same way, naming both groups.
 #[test]
 fn check_lists_the_pair_and_refuses_surfaces_facing_the_same_way() {
     let dir = tempfile::tempdir().unwrap();
@@ -269,6 +270,15 @@ fn check_lists_the_pair_and_refuses_surfaces_facing_the_same_way() {
     assert!(
         report
             .contains("pair contact[0]: \"UpperBottom\" against \"LowerTop\": 8 slave nodes paired, 0 off the target"),
+        "{report}"
+    );
+    assert!(!report.contains("finer than the target"), "{report}");
+    // the slave's 13 edges on the target's 8: the warning to swap them
+    let fine = stacked((8, 4, CellShape::Quad), (13, 4, CellShape::Tri), 1.0);
+    std::fs::write(&mesh, common::msh22(&fine)).unwrap();
+    let report = hvi::app::check(&mesh, Some(&scene), &[], false).unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        report.contains("finer than the target's") && report.contains("swap group and target"),
         "{report}"
     );
     let same_way = format!("{SCENE}[[contact]]\ngroup = \"UpperTop\"\ntarget = \"LowerTop\"\n");

@@ -76,8 +76,8 @@ fn check_dim<const D: usize>(
             let _ = writeln!(
                 out,
                 "  pair {name}: {} slave nodes paired, {} off the target (no row); largest initial gap {:.3e}, deepest \
-                 initial penetration {:.3e}",
-                s.paired, s.unpaired, s.largest_gap, s.deepest_penetration
+                 initial penetration {:.3e}; facets {:.3e} on the target's {:.3e}",
+                s.paired, s.unpaired, s.largest_gap, s.deepest_penetration, s.slave_size, s.master_size
             );
         }
         if !c.laws.is_empty() {

@@ -65,6 +65,10 @@ pub struct PairSummary {
     /// Paired slave nodes whose own outward normal points along the master's (n_S·n_M > 0): the
     /// surfaces face the same way there.
     pub facing_away: usize,
+    /// The mean size (length, or the square root of the area) of the slave facets with a paired
+    /// node, and of the master facets the slave nodes project onto (0 without a paired node).
+    pub slave_size: f64,
+    pub master_size: f64,
 }
 
 /// Why two surfaces cannot be paired.
@@ -318,7 +322,10 @@ impl<const D: usize> SurfacePair<D> {
             largest_gap: 0.0,
             deepest_penetration: 0.0,
             facing_away: 0,
+            slave_size: 0.0,
+            master_size: 0.0,
         };
+        let mut onto = Vec::new();
         for (k, p) in self.projections.iter().enumerate() {
             match p {
                 Some(p) => {
@@ -328,10 +335,27 @@ impl<const D: usize> SurfacePair<D> {
                     if dot(&self.slave.normals[k], &p.normal) > 0.0 {
                         s.facing_away += 1;
                     }
+                    onto.push(p.facet);
                 }
                 None => s.unpaired += 1,
             }
         }
+        onto.sort_unstable();
+        onto.dedup();
+        let size = |measure: f64| if D == 2 { measure } else { measure.sqrt() };
+        let paired: Vec<usize> = (0..self.slave.facets.len())
+            .filter(|&f| {
+                self.slave.facets[f]
+                    .nodes()
+                    .iter()
+                    .any(|&q| self.slave.local(q).is_some_and(|k| self.projections[k].is_some()))
+            })
+            .collect();
+        let mean = |facets: &[usize], lengths: &[f64]| {
+            facets.iter().map(|&f| size(lengths[f])).sum::<f64>() / facets.len().max(1) as f64
+        };
+        s.slave_size = mean(&paired, &self.slave.facet_lengths);
+        s.master_size = mean(&onto, &self.master.facet_lengths);
         s
     }
 }

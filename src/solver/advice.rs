@@ -151,8 +151,26 @@ pub fn warnings<const D: usize>(scene: &Scene, sim: &Simulation<D>) -> Vec<Strin
             }
         }
     }
+    // a slave surface finer than its target: more multipliers than the target's displacements
+    // carry, and the pressure may oscillate (docs/method.md §18.2)
+    for (name, s) in &c.pairs {
+        if s.slave_size < FINER_SLAVE * s.master_size {
+            out.push(format!(
+                "pair {name}: the slave surface's facets ({:.3e}) are finer than the target's ({:.3e}) where they \
+                 meet: a multiplier per slave node is then more than the target's displacements can carry, and the \
+                 contact pressure may oscillate; make the coarser surface the slave (swap group and target), or \
+                 refine the target (docs/method.md §18.2)",
+                s.slave_size, s.master_size
+            ));
+        }
+    }
     out
 }
+
+/// A pair warns when its slave facets are smaller than this share of its master facets: the
+/// gallery's punch (examples/gallery/two_bodies) as the slave, at 0.0067 on the pad's 0.01, had
+/// neighbouring pressures 73 % of the peak apart, at 0.015 on 0.01 5.5 %.
+pub const FINER_SLAVE: f64 = 0.75;
 
 /// The diagonal of the points' bounding box.
 fn body_diameter<const D: usize>(points: &[[f64; D]]) -> f64 {
