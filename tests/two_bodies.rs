@@ -391,6 +391,36 @@ fn a_run_writes_both_sides_forces_and_the_target_points() {
     }
 }
 
+/// Where two bodies touch with matching meshes, each slave node shares its position with a master
+/// node: `hvi plot` places gamma3.csv's rows on the nodes of the row's own group (its `group`
+/// column), so that Γ₃'s curve is the slave surface — here the lower block's top, whose nodes come
+/// first in the mesh (by position alone the upper block's, the later ones, were taken).
+#[test]
+fn plot_places_the_slave_rows_on_the_slave_surface() {
+    let dir = tempfile::tempdir().unwrap();
+    let stack = stacked((8, 4, CellShape::Quad), (8, 4, CellShape::Quad), 1.0);
+    let (mesh, scene) = (dir.path().join("stacked.msh"), dir.path().join("stacked.toml"));
+    std::fs::write(&mesh, common::msh22(&stack)).unwrap();
+    let swapped = SCENE.replace(
+        "group = \"UpperBottom\"\ntarget = \"LowerTop\"",
+        "group = \"LowerTop\"\ntarget = \"UpperBottom\"",
+    );
+    std::fs::write(&scene, swapped).unwrap();
+    let out = dir.path().join("run");
+    let [m, s, o] = [&mesh, &scene, &out].map(|p| p.to_str().unwrap().to_string());
+    common::hvi_ok(&["solve", &m, "--scene", &s, "--out", &o]);
+    let read = hvi::mesh::read_mesh::<2>(&mesh).unwrap();
+    let csv = std::fs::read_to_string(out.join("gamma3.csv")).unwrap();
+    let gamma3 = hvi::plot::read_gamma3(&csv, &read).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(gamma3.nodes.len(), 9);
+    let lower = 9 * 5;
+    assert!(
+        gamma3.nodes.iter().all(|&p| p < lower),
+        "nodes {:?}: not all of the lower block's top",
+        gamma3.nodes
+    );
+}
+
 /// What a target does not take yet is refused by name (docs/scenes.md): an obstacle or a bound
 /// beside it; a target outside a [[contact]] section with a group; `tied` without a target or
 /// with a law, friction or bilateral beside it.

@@ -75,7 +75,8 @@ pub(super) fn read_numeric_csv(name: &str, text: &str) -> Result<(Vec<String>, V
     Ok((header, rows))
 }
 
-/// Reads `gamma3.csv` (`time,x,y,u_nu,force,pressure,status`) and places its nodes on the mesh;
+/// Reads `gamma3.csv` (`time,x,y,u_nu,force,pressure,status`) and places its nodes on the mesh
+/// (a row with a `group` on a node of that group: two bodies' nodes may share a position, §18);
 /// a row that does not parse is an error naming its line.
 pub fn read_gamma3(csv: &str, mesh: &Mesh<2>) -> Result<Gamma3, String> {
     let (header, rows) = read_numeric_csv("gamma3.csv", csv)?;
@@ -95,9 +96,11 @@ pub fn read_gamma3(csv: &str, mesh: &Mesh<2>) -> Result<Gamma3, String> {
         column("pressure")?,
     ];
     let status = header.iter().position(|c| c == "friction_status");
+    let group = header.iter().position(|c| c == "group");
     let mut times: Vec<(f64, Vec<(f64, f64)>)> = Vec::new();
     let mut friction: Vec<Vec<i32>> = Vec::new();
     let mut positions: Vec<[f64; 2]> = Vec::new();
+    let mut tags: Vec<Option<i32>> = Vec::new();
     for v in rows {
         let [t, x, y, un, p] = cols.map(|c| v[c]);
         if times.last().is_none_or(|(s, _)| *s != t) {
@@ -106,6 +109,7 @@ pub fn read_gamma3(csv: &str, mesh: &Mesh<2>) -> Result<Gamma3, String> {
         }
         if times.len() == 1 {
             positions.push([x, y]);
+            tags.push(group.map(|c| v[c]).filter(|g| g.is_finite()).map(|g| g as i32));
         }
         times.last_mut().expect("pushed above").1.push((un, p));
         if let Some(c) = status {
@@ -132,11 +136,21 @@ pub fn read_gamma3(csv: &str, mesh: &Mesh<2>) -> Result<Gamma3, String> {
     let tol = 1e-9 * ((hi[0] - lo[0]).abs() + (hi[1] - lo[1]).abs()).max(1e-300);
     let key = |p: [f64; 2]| ((p[0] / tol).round() as i64, (p[1] / tol).round() as i64);
     let by_position: HashMap<(i64, i64), usize> = mesh.points.iter().enumerate().map(|(i, &p)| (key(p), i)).collect();
+    // where two bodies touch, two nodes share a position: the row's own group's node first
+    let mut by_group: HashMap<(i32, (i64, i64)), usize> = HashMap::new();
+    for g in mesh.groups.iter().filter(|g| g.dim == 1) {
+        for f in &g.facets {
+            for &q in f.nodes() {
+                by_group.insert((g.tag, key(mesh.points[q])), q);
+            }
+        }
+    }
     let nodes: Vec<usize> = positions
         .iter()
-        .map(|&p| {
-            by_position
-                .get(&key(p))
+        .zip(&tags)
+        .map(|(&p, tag)| {
+            tag.and_then(|t| by_group.get(&(t, key(p))))
+                .or_else(|| by_position.get(&key(p)))
                 .copied()
                 .or_else(|| {
                     (0..mesh.points.len())
