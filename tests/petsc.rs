@@ -198,6 +198,25 @@ fn friction_matches_faer_on_1_and_2_ranks() {
     }
 }
 
+/// Two deformable bodies (docs/method.md §18) under PETSc: the gallery's steel punch pressed into
+/// a relaxing pad and slid with Coulomb friction, on 1 and 2 ranks, gives the serial Γ₃ to 1e-10.
+/// A pair's rows hold the slave's and the master's unknowns, which the partition may put on
+/// different ranks: each rank sets its own entries of the columns of Cᵀ and its share of W and of
+/// C u is summed over the ranks, as for any row.
+#[test]
+fn two_bodies_match_faer_on_1_and_2_ranks() {
+    for (np, (du, df)) in compare(
+        "examples/gallery/two_bodies/two_bodies.msh",
+        Some("examples/gallery/two_bodies/two_bodies.toml"),
+        "mumps",
+    ) {
+        assert!(
+            du <= 1e-10 && df <= 1e-10,
+            "np {np}: u_ν off by {du:.2e}, force by {df:.2e}"
+        );
+    }
+}
+
 /// 3D friction (docs/method.md §17.3) under PETSc: a hexahedral block (meshes/block_q1_h8.msh)
 /// pressed and dragged diagonally over a rigid paraboloid (so that u_ν varies: on a plane every
 /// node sits at u_ν = 0 and a relative difference is round-off over round-off) with Coulomb

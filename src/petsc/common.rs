@@ -121,13 +121,6 @@ pub(super) fn unsupported<const D: usize>(
             }
         ));
     }
-    if sim.contact.as_ref().is_some_and(|c| !c.pairs.is_empty()) {
-        return Err(format!(
-            "{origin}: contact between two deformable bodies (a [[contact]] section with `target`, docs/method.md \
-             §18) has rows over the slave and the master nodes, which the PETSc backend does not distribute yet: \
-             run this scene without --backend petsc"
-        ));
-    }
     if !sim.materials.patches().is_empty() {
         return Err(format!(
             "{origin}: the nearly incompressible material's triangles or tetrahedra take their volumetric strain \

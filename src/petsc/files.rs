@@ -150,11 +150,13 @@ impl<'a, const D: usize> PieceSink<'a, D> {
             let series = SeriesWriter::create_parallel(dir, "solution")?.with_compression(compression);
             let piece = Piece::new(sim, partition, rank, wants_stress(fields)).map_err(SolveError::Setup)?;
             // Rank 0's tables need the displacement on Γ₃ only: the nodes of the contact
-            // groups and of the contact rows.
+            // groups and of the contact rows, the target nodes of two-body rows included
+            // (their u_ν and target points, docs/method.md §18.4).
             let mut boundary_nodes = Vec::new();
             if let (0, Some(c)) = (rank, &sim.contact) {
                 boundary_nodes.extend_from_slice(&c.nodes.nodes);
                 boundary_nodes.extend_from_slice(&c.nodes.clamped_nodes);
+                boundary_nodes.extend(c.master_terms.iter().flatten().map(|&(q, _)| q));
                 for g in contact_groups {
                     boundary_nodes.extend_from_slice(&sim.mesh.boundary(g)?.nodes);
                 }
