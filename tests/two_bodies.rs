@@ -1,4 +1,4 @@
-//! Contact between two deformable bodies of one mesh (issue 44, in progress; docs/method.md §18):
+//! Contact between two deformable bodies of one mesh (docs/method.md §18):
 //! a `[[contact]]` section with `target` pairs its group (the slave surface) with the target (the
 //! master surface); each paired slave node carries the mortar row u_ν = (Σ c_i u_i − u_S)·n ≤ g
 //! (docs/method.md §18.2).
@@ -433,7 +433,7 @@ fn what_a_target_does_not_take_yet_is_refused() {
         let text = format!("{SCENE}{extra}\n");
         let err = Scene::from_toml_str(&text, "stacked").expect_err(extra).to_string();
         assert!(
-            err.contains("contact[0].target") && err.contains("issue 44"),
+            err.contains("contact[0].target") && err.contains("not supported"),
             "{extra}: {err}"
         );
     }

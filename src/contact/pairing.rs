@@ -1,16 +1,15 @@
-//! Pairing two surfaces of the mesh for contact between deformable bodies (issue 44; docs/method.md
-//! §18): each node of the slave surface S is projected onto the master surface M, in the
-//! reference configuration (small strain, small sliding: once per run). A projection is the
-//! closest point x_M(ξ) = Σ N_i(ξ) x_i on a facet of M whose reference coordinates ξ lie in the
-//! facet (within [`INSIDE`]); its gap is g₀ = (x_S − x_M)·n, n the master facet's outward unit
-//! normal there (positive: apart; negative: the slave node starts inside the master body), and the
-//! relative normal displacement of a later step is u_ν = (Σ N_i u_i − u_S)·n ≤ g₀ closing the gap.
+//! Pairing two surfaces of the mesh for contact between deformable bodies (docs/method.md §18.1):
+//! each node of the slave surface S is projected onto the master surface M, in the reference
+//! configuration (small strain, small sliding: once per run). A projection is the closest point
+//! x_M(ξ) = Σ N_i(ξ) x_i on a facet of M whose reference coordinates ξ lie in the facet (within
+//! [`INSIDE`], or [`RIM_CONE`]); its gap is g₀ = (x_S − x_M)·n, n the master facet's outward unit
+//! normal there (positive: apart; negative: the slave node starts inside the master body).
 //!
-//! This is the geometry only: `hvi check` lists a pair with [`PairSummary`] and refuses surfaces
-//! that face the same way or do not overlap; the contact rows that carry the master nodes'
-//! weights are the next step of issue 44. Written by hand: a brute-force search over the master
-//! facets' bounding boxes (O(slave nodes × master facets), 0.1 s at 10⁴ × 10⁴); a spatial index
-//! is the change to make when surfaces grow beyond that.
+//! This is the geometry: `hvi check` lists a pair with [`PairSummary`] and refuses surfaces that
+//! face the same way or do not overlap; the rows with their mortar weights are
+//! src/contact/mortar.rs's. Written by hand: a brute-force search over the master facets'
+//! bounding boxes (O(slave nodes × master facets), 0.1 s at 10⁴ × 10⁴); a spatial index is the
+//! change to make when surfaces grow beyond that.
 
 use crate::mesh::element::reference;
 use crate::mesh::{BoundaryPart, Cell, Facet};

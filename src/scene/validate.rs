@@ -440,7 +440,7 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
                 return Err(refuse(
                     "target",
                     "contact with another body (target) takes the gap to the target surface as its bound; an \
-                     obstacle, a bound or a direction beside it are not supported yet (issue 44): remove them",
+                     obstacle, a bound or a direction beside it are not supported (docs/method.md §18): remove them",
                 ));
             }
             if c.tied && (c.law.is_some() || c.friction.is_some() || c.bilateral) {
