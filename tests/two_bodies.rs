@@ -421,6 +421,55 @@ fn plot_places_the_slave_rows_on_the_slave_surface() {
     );
 }
 
+/// An interference fit: the upper block starts 0.002 inside the lower one (lifted by 1 − ε), and
+/// the pair pushes them apart at the first step. The stack then carries the uniform compression
+/// of δ + ε over its two heights, p = (δ + ε)E/(2(1 − ν²)), each block its own affine field
+/// (the lower from its base, the upper from its pushed top), on non-matching meshes to 1e-10 of
+/// δ: the mortar rows' weighted gap of a flat offset is −ε exactly. `hvi check`'s deepest initial
+/// penetration is ε.
+#[test]
+fn an_interference_fit_is_pushed_apart_exactly() {
+    let (delta, eps) = (0.01, 0.002);
+    let scene = Scene::from_toml_str(SCENE, "interference").unwrap_or_else(|e| panic!("{e}"));
+    let mesh = stacked((8, 4, CellShape::Quad), (7, 4, CellShape::Tri), 1.0 - eps);
+    let (sim, _, sink) = solve_in_memory(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
+    let pair = &sim.contact.as_ref().unwrap().pairs[0].1;
+    assert!((pair.deepest_penetration - eps).abs() < 1e-14, "{pair:?}");
+    let p = (delta + eps) / (2.0 * (1.0 - 0.09));
+    let (exx, eyy) = (p * 0.3 * 1.3, -p * (1.0 - 0.09));
+    let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
+    let mut worst = 0.0f64;
+    for (k, (x, v)) in sim.mesh.points.iter().zip(&u).enumerate() {
+        // the lower block's 9 × 5 nodes first, its base fixed; the upper's top at 2 − ε moved by −δ
+        let uy = if k < 9 * 5 {
+            eyy * x[1]
+        } else {
+            eyy * (x[1] - (2.0 - eps)) - delta
+        };
+        worst = worst.max((v[0] - exx * x[0]).abs().max((v[1] - uy).abs()));
+    }
+    assert!(worst < 1e-10 * delta, "nodal error {worst:e}");
+    assert_slave_pressures(&sim, &sink, p, "interference");
+}
+
+/// A target that is no group of the mesh is an error naming the key and the group; a group paired
+/// with itself faces its own way and is refused naming it.
+#[test]
+fn a_missing_target_or_the_group_itself_is_refused() {
+    let mesh = || stacked((8, 4, CellShape::Quad), (7, 4, CellShape::Tri), 1.0);
+    let missing = SCENE.replace("target = \"LowerTop\"", "target = \"LowerTopp\"");
+    let scene = Scene::from_toml_str(&missing, "missing").unwrap_or_else(|e| panic!("{e}"));
+    let err = solve_in_memory(&scene, mesh()).map(|_| ()).unwrap_err().to_string();
+    assert!(err.contains("contact[0].target") && err.contains("LowerTopp"), "{err}");
+    let itself = SCENE.replace("target = \"LowerTop\"", "target = \"UpperBottom\"");
+    let scene = Scene::from_toml_str(&itself, "itself").unwrap_or_else(|e| panic!("{e}"));
+    let err = solve_in_memory(&scene, mesh()).map(|_| ()).unwrap_err().to_string();
+    assert!(
+        err.contains("UpperBottom") && err.contains("face the same way"),
+        "{err}"
+    );
+}
+
 /// What a target does not take yet is refused by name (docs/scenes.md): an obstacle or a bound
 /// beside it; a target outside a [[contact]] section with a group; `tied` without a target or
 /// with a law, friction or bilateral beside it.
