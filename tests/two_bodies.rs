@@ -470,6 +470,83 @@ fn a_missing_target_or_the_group_itself_is_refused() {
     );
 }
 
+/// The contact patch test on a body of revolution (x = r, y = z): two stacked cylinders of radius
+/// 2, non-matching meshes, the upper top pushed down by δ, the lateral surface free: uniaxial
+/// stress σ_zz = −Eδ/2, u_r = νδr/2, u_z = −δz/2, exact on linear elements, to 1e-10 of δ; every
+/// slave row carries the pressure Eδ/2 to 1e-9 — the mortar integrals carry 2πr
+/// (docs/method.md §18.2).
+#[test]
+fn stacked_cylinders_of_revolution_pass_the_patch_test() {
+    let text = SCENE.replace("plane = \"strain\"", "plane = \"axisymmetric\"");
+    let scene = Scene::from_toml_str(&text, "stacked cylinders").unwrap_or_else(|e| panic!("{e}"));
+    let mesh = stacked((8, 4, CellShape::Quad), (7, 4, CellShape::Tri), 1.0);
+    let (sim, _, sink) = solve_in_memory(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
+    let delta = 0.01;
+    let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
+    let error = common::nodal_error(&sim.mesh.points, &u, |x| {
+        [0.3 * delta * x[0] / 2.0, -delta * x[1] / 2.0]
+    });
+    assert!(error < 1e-10 * delta, "nodal error {error:e} of δ");
+    assert_slave_pressures(&sim, &sink, delta / 2.0, "cylinders");
+}
+
+/// Coulomb friction between two bodies in 3D: the tetrahedral box dragged diagonally over the
+/// hexahedral one (non-matching faces), pressed by 0.002, moved by (0.01, ·, 0.006) t; each slave
+/// node has two tangential rows with the master's coefficients. Once the interface slides (the
+/// last two of 8 steps) the friction forces' magnitudes add up to μ times the normal force to
+/// 1e-10 (their vector sum falls short by 1.7e-7: the slip's direction varies a little across the
+/// interface), and the two sides' forces are equal and opposite to 1e-12 in every component.
+#[test]
+fn boxes_dragged_over_each_other_slide_with_coulomb_friction() {
+    use hvi::mesh::structured::{block, SolidShape};
+    const MU: f64 = 0.3;
+    let text = format!(
+        "[material]\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n\
+         [time]\nfinal_time = 1.0\nsteps = 8\n\
+         [[dirichlet]]\ngroup = \"LowerBottom\"\ncomponents = [\"x\", \"y\", \"z\"]\n\
+         [[dirichlet]]\ngroup = \"UpperTop\"\ncomponents = [\"x\", \"y\", \"z\"]\n\
+         value = [\"0.01*t\", \"-0.002\", \"0.006*t\"]\n\
+         [[contact]]\ngroup = \"UpperBottom\"\ntarget = \"LowerTop\"\n\
+         friction = {{ kind = \"coulomb\", coefficient = {MU} }}\n\
+         [solver]\ntolerance = 1e-13\n"
+    );
+    let scene = Scene::from_toml_str(&text, "dragged boxes").unwrap_or_else(|e| panic!("{e}"));
+    let mesh = hvi::mesh::structured::stack(
+        block([2.0, 1.0, 1.0], [6, 2, 3], SolidShape::Hex),
+        block([2.0, 1.0, 1.0], [5, 2, 2], SolidShape::Tet),
+        1.0,
+    );
+    let (sim, _, sink) = solve_in_memory(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
+    let c = sim.contact.as_ref().unwrap();
+    let m = c.nodes.len();
+    for step in &sink.steps[sink.steps.len() - 2..] {
+        let state = step.contact.as_ref().unwrap();
+        let normal: f64 = state.force[..m].iter().sum();
+        let forces = c.group_forces(state, None);
+        let (on_slave, on_master) = (forces[0], forces[1]);
+        // Σ_p |λ_τ,p|: each node's two tangential rows make its friction vector
+        let f = c.friction.as_ref().expect("friction rows");
+        let mut per_node = vec![0.0f64; m];
+        for (k, &p) in f.normal_row.iter().enumerate() {
+            per_node[p] += state.force[m + k].powi(2);
+        }
+        let friction: f64 = per_node.iter().map(|v| v.sqrt()).sum();
+        assert!(normal > 0.0, "t = {}: the boxes are pressed", step.time);
+        assert!(
+            (friction - MU * normal).abs() <= 1e-10 * MU * normal,
+            "t = {}: friction {friction:e} against μ × {normal:e}",
+            step.time
+        );
+        for k in 0..3 {
+            assert!(
+                (on_slave[k] + on_master[k]).abs() <= 1e-12 * normal,
+                "t = {}: the two sides along {k}",
+                step.time
+            );
+        }
+    }
+}
+
 /// What a target does not take yet is refused by name (docs/scenes.md): an obstacle or a bound
 /// beside it; a target outside a [[contact]] section with a group; `tied` without a target or
 /// with a law, friction or bilateral beside it.
