@@ -14,6 +14,7 @@ pub mod active_set;
 pub mod branch;
 pub mod condensed;
 pub mod direction;
+pub mod facet_grid;
 pub mod friction;
 pub mod hessian;
 pub mod law;

@@ -7,10 +7,10 @@
 //!
 //! This is the geometry: `hvi check` lists a pair with [`PairSummary`] and refuses surfaces that
 //! face the same way or do not overlap; the rows with their mortar weights are
-//! src/contact/mortar.rs's. Written by hand: a brute-force search over the master facets'
-//! bounding boxes (O(slave nodes × master facets), 0.1 s at 10⁴ × 10⁴); a spatial index is the
-//! change to make when surfaces grow beyond that.
+//! src/contact/mortar.rs's. The facets near a node come from a grid over the master facets'
+//! bounding boxes (src/contact/facet_grid.rs), nearest first.
 
+use super::facet_grid::FacetGrid;
 use crate::mesh::element::reference;
 use crate::mesh::{BoundaryPart, Cell, Facet};
 
@@ -86,8 +86,8 @@ fn dot<const D: usize>(a: &[f64; D], b: &[f64; D]) -> f64 {
 /// A facet's geometry at reference coordinates ξ (an edge: ξ₀ ∈ [0, 1] from its first node; a
 /// triangle: the unit triangle; a quadrilateral: [−1, 1]²).
 pub(crate) struct FacetAt<const D: usize> {
-    /// The facet's shape values N_i(ξ), in the order of its nodes.
-    pub shape: Vec<f64>,
+    /// The facet's shape values N_i(ξ), in the order of its nodes (the first `len` of 4).
+    pub shape: [f64; 4],
     /// x(ξ) = Σ N_i(ξ) x_i.
     pub point: [f64; D],
     /// ∂x/∂ξ₀ and ∂x/∂ξ₁ (zero on an edge).
@@ -133,7 +133,7 @@ pub(crate) fn facet_at<const D: usize>(points: &[[f64; D]], f: &Facet, xi: [f64;
     if nodes.len() == 2 {
         let (a, b) = (points[nodes[0]], points[nodes[1]]);
         return FacetAt {
-            shape: vec![1.0 - xi[0], xi[0]],
+            shape: [1.0 - xi[0], xi[0], 0.0, 0.0],
             point: std::array::from_fn(|k| (1.0 - xi[0]) * a[k] + xi[0] * b[k]),
             tangents: [std::array::from_fn(|k| b[k] - a[k]), [0.0; D]],
         };
@@ -145,7 +145,7 @@ pub(crate) fn facet_at<const D: usize>(points: &[[f64; D]], f: &Facet, xi: [f64;
     };
     let (n, value, grad) = reference(&cell, [xi[0], xi[1], 0.0]);
     let mut at = FacetAt {
-        shape: value[..n].to_vec(),
+        shape: std::array::from_fn(|i| if i < n { value[i] } else { 0.0 }),
         point: [0.0; D],
         tangents: [[0.0; D]; 2],
     };
@@ -162,7 +162,7 @@ pub(crate) fn facet_at<const D: usize>(points: &[[f64; D]], f: &Facet, xi: [f64;
 
 /// The reference coordinates of the closest point to `x` of the surface through facet `f`
 /// (extended beyond its edges), by Gauss–Newton: exact in one step on an edge or a triangle, a
-/// few on a warped quadrilateral.
+/// few on a warped quadrilateral (to 1e-12 in reference units).
 pub(crate) fn closest<const D: usize>(points: &[[f64; D]], f: &Facet, x: &[f64; D]) -> [f64; 2] {
     let mut xi = match f.len() {
         2 => [0.5, 0.0],
@@ -183,7 +183,10 @@ pub(crate) fn closest<const D: usize>(points: &[[f64; D]], f: &Facet, x: &[f64; 
         };
         xi[0] += step[0];
         xi[1] += step[1];
-        if step[0].abs().max(step[1].abs()) < 1e-14 {
+        // an edge or a triangle is affine: one step is exact; a quadrilateral's steps shrink
+        // quadratically to round-off, which in reference units is 1e-16 times the point's
+        // distance over the facet's size (so an absolute 1e-14 could never be met far away)
+        if f.len() < 4 || step[0].abs().max(step[1].abs()) < 1e-12 {
             break;
         }
     }
@@ -253,45 +256,42 @@ impl<const D: usize> SurfacePair<D> {
                 (lo, hi)
             })
             .collect();
+        let grid = FacetGrid::new(boxes);
         let projections: Vec<Option<Projection<D>>> = slave
             .nodes
             .iter()
             .map(|&s| {
                 let x = points[s];
-                let mut order: Vec<(f64, usize)> = boxes
-                    .iter()
-                    .enumerate()
-                    .map(|(i, (lo, hi))| {
-                        let d2: f64 = (0..D).map(|k| (lo[k] - x[k]).max(x[k] - hi[k]).max(0.0).powi(2)).sum();
-                        (d2, i)
-                    })
-                    .collect();
-                order.sort_by(|a, b| a.0.total_cmp(&b.0));
                 let mut best: Option<(f64, Projection<D>)> = None;
-                for (d2, i) in order {
-                    if best.as_ref().is_some_and(|(b, _)| d2 > b * b * (1.0 + 1e-12)) {
-                        break;
-                    }
-                    let f = &master.facets[i];
-                    if let Some(at) = project(points, f, &x) {
-                        let (point, normal) = (at.point, at.normal());
-                        let distance = (0..D).map(|k| (x[k] - point[k]).powi(2)).sum::<f64>().sqrt();
-                        if best.as_ref().is_none_or(|(b, _)| distance < *b) {
-                            let gap = (0..D).map(|k| (x[k] - point[k]) * normal[k]).sum();
-                            let shape = f.nodes().iter().copied().zip(at.shape).collect();
-                            best = Some((
-                                distance,
-                                Projection {
-                                    facet: i,
-                                    shape,
-                                    point,
-                                    normal,
-                                    gap,
-                                },
-                            ));
+                grid.visit(&x, |batch, bound| {
+                    for &(d2, i) in batch {
+                        // the batch is sorted: the rest of it is no nearer
+                        if best.as_ref().is_some_and(|(b, _)| d2 > b * b * (1.0 + 1e-12)) {
+                            break;
+                        }
+                        let f = &master.facets[i];
+                        if let Some(at) = project(points, f, &x) {
+                            let (point, normal) = (at.point, at.normal());
+                            let distance = (0..D).map(|k| (x[k] - point[k]).powi(2)).sum::<f64>().sqrt();
+                            if best.as_ref().is_none_or(|(b, _)| distance < *b) {
+                                let gap = (0..D).map(|k| (x[k] - point[k]) * normal[k]).sum();
+                                let shape = f.nodes().iter().copied().zip(at.shape).collect();
+                                best = Some((
+                                    distance,
+                                    Projection {
+                                        facet: i,
+                                        shape,
+                                        point,
+                                        normal,
+                                        gap,
+                                    },
+                                ));
+                            }
                         }
                     }
-                }
+                    // every facet still to come lies at least `bound` away
+                    !best.as_ref().is_some_and(|(b, _)| *b < bound)
+                });
                 best.map(|(_, p)| p)
             })
             .collect();
