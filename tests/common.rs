@@ -238,6 +238,10 @@ pub fn stacked(lower: (usize, usize, CellShape), upper: (usize, usize, CellShape
 
 /// Least squares of p² = p₀² (1 − r²/a²) over (r, p) of the nodes in contact: a straight line
 /// in r² whose intercept is p₀² and whose root is a² (Hertz in 2D and 3D); returns (a, p₀).
+/// Every node in contact contributes, so a is located to a fraction of the node spacing, unlike
+/// the last node in contact (which only brackets a within one element) or an interpolated edge
+/// of the active set (which depends on the nodal pressure of the two nodes around the edge, the
+/// least accurate ones: the pressure is ∝ sqrt(a − r) there).
 pub fn hertz_fit(pressures: &[(f64, f64)]) -> (f64, f64) {
     let n = pressures.len() as f64;
     let xs: Vec<f64> = pressures.iter().map(|(r, _)| r * r).collect();

@@ -71,15 +71,6 @@ fn hertz(dim: usize, p: f64, e_star: f64) -> (f64, f64) {
     }
 }
 
-/// Least squares of p² = p₀² (1 − r²/a²) over the nodes in contact: a straight line in r² whose
-/// intercept is p₀² and whose root is a². Every node in contact contributes, so a is located to a
-/// fraction of the node spacing, unlike the last node in contact (which only brackets a within
-/// one element) or an interpolated edge of the active set (which depends on the nodal pressure of
-/// the two nodes around the edge, the least accurate ones: the pressure is ∝ sqrt(a − r) there).
-fn fit(pressures: &[(f64, f64)]) -> (f64, f64) {
-    common::hertz_fit(pressures)
-}
-
 /// Plane strain, E = 1, ν = 0.3, R = 1: a² = 4PR/(πE*), p₀ = 2P/(πa), with P the force per unit
 /// length. Three meshes, element size on the contact a/8, a/16, a/33 (hf = 0.005, 0.0025,
 /// 0.00125; a ≈ 0.041).
@@ -105,7 +96,7 @@ fn hertz_2d_cylinder_half_width_and_peak_pressure_within_one_percent() {
         );
         let p = c.force;
         let (a_hertz, p0_hertz) = hertz(2, p, e_star);
-        let (a, p0) = fit(&c.pressures);
+        let (a, p0) = common::hertz_fit(&c.pressures);
         let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
         eprintln!(
             "| {mesh} | {} | {p:.5e} | {a:.5} | {a_hertz:.5} | {:+.2} % | {p0:.5} | {p0_hertz:.5} | {:+.2} % |",
@@ -150,11 +141,11 @@ fn hertz_2d_with_the_circle_obstacle_agrees_with_the_bound() {
     };
     let mesh = "hertz_2d_h3.msh";
     let bound = run::<2>("hertz_2d", mesh, 2.0);
-    let (a_b, p0_b) = fit(&bound.pressures);
+    let (a_b, p0_b) = common::hertz_fit(&bound.pressures);
     let e_star = 1.0 / (1.0 - 0.3f64 * 0.3);
     for (direction, tol) in [("body", 1e-9), ("obstacle", 1e-2)] {
         let c = run_scene::<2>(&with(direction), "hertz_2d", mesh, 2.0);
-        let (a, p0) = fit(&c.pressures);
+        let (a, p0) = common::hertz_fit(&c.pressures);
         let (a_hertz, p0_hertz) = hertz(2, c.force, e_star);
         eprintln!(
             "circle, direction {direction}: P = {:.6e} (bound {:.6e}), a = {a:.5} (bound {a_b:.5}, Hertz {a_hertz:.5}), p₀ = {p0:.5} (bound {p0_b:.5}, Hertz {p0_hertz:.5})",
@@ -191,7 +182,7 @@ fn hertz_3d_sphere_contact_radius_within_3_percent_and_peak_pressure_within_5() 
     );
     let p = c.force;
     let (a_hertz, p0_hertz) = hertz(3, p, e_star);
-    let (a, p0) = fit(&c.pressures);
+    let (a, p0) = common::hertz_fit(&c.pressures);
     let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
     eprintln!(
         "3D: {} nodes in contact, P = {p:.5e}, a = {a:.5} (Hertz {a_hertz:.5}, {:+.2} %), p₀ = {p0:.5} (Hertz {p0_hertz:.5}, {:+.2} %)",
@@ -261,7 +252,7 @@ fn hertz_under_force_control_matches_hertz_and_the_displacement_control() {
             forced.motion
         );
         let p = forced.force;
-        let (a, p0) = fit(&forced.pressures);
+        let (a, p0) = common::hertz_fit(&forced.pressures);
         let (dim, tol_a, tol_p) = if entry == "hertz_2d" {
             (2, 0.01, 0.01)
         } else {
@@ -343,7 +334,7 @@ fn nearly_incompressible(label: &str, entry: &str, extra: &[&str], dim: usize, r
             let scene = Scene::load(Some(&gallery(entry, &format!("{entry}.toml"))), &overrides).unwrap();
             let c = run(&scene);
             let (a_hertz, p0_hertz) = hertz(dim, c.force, e_star);
-            let (a, p0) = fit(&c.pressures);
+            let (a, p0) = common::hertz_fit(&c.pressures);
             let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
             eprintln!(
                 "{label} ν = 0.4999 {formulation}: {} nodes in contact, a {:+.2} %, p₀ {:+.2} %",
@@ -388,7 +379,7 @@ fn hertz_sphere_as_a_body_of_revolution_within_one_percent() {
             c.force
         );
         let (a_hertz, p0_hertz) = hertz(3, c.force, e_star);
-        let (a, p0) = fit(&c.pressures);
+        let (a, p0) = common::hertz_fit(&c.pressures);
         let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
         eprintln!(
             "axisymmetric {mesh}: {} nodes, P = {:.5e}, a {:+.2} %, p₀ {:+.2} %",
@@ -512,8 +503,8 @@ fn the_sphere_as_a_body_of_revolution_matches_the_3d_run() {
         revolved.reaction
     );
     let (a_hertz, p0_hertz) = hertz(3, p, e_star);
-    let (a3, p3) = fit(&solid.pressures);
-    let (a2, p2) = fit(&revolved.pressures);
+    let (a3, p3) = common::hertz_fit(&solid.pressures);
+    let (a2, p2) = common::hertz_fit(&revolved.pressures);
     eprintln!(
         "P = {p:.5e}: 3D hexahedra a = {a3:.5} ({:+.2} % of Hertz), p₀ = {p3:.5} ({:+.2} %); \
          axisymmetric a = {a2:.5} ({:+.2} %), p₀ = {p2:.5} ({:+.2} %); axisymmetric/3D a {:+.2} %, p₀ {:+.2} %",

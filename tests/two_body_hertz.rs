@@ -68,11 +68,21 @@ fn run<const D: usize>(scene: &str, file: &str, symmetry_factor: f64) -> Contact
     }
 }
 
-/// Least squares of p² = p₀² (1 − r²/a²) over the slave nodes in contact (as tests/hertz.rs): a
-/// straight line in r² whose intercept is p₀² and whose root is a², so that every node in contact
-/// locates a, not only the last one.
-fn fit(pressures: &[(f64, f64)]) -> (f64, f64) {
-    common::hertz_fit(pressures)
+/// Hertz's (a, p₀) fitted to a run's pressures (`common::hertz_fit`), printed beside Hertz's
+/// values: (a, p₀, a's relative error, p₀'s).
+fn against_hertz(label: &str, c: &Contact, f: f64, (a_hertz, p0_hertz): (f64, f64)) -> (f64, f64, f64, f64) {
+    let (a, p0) = common::hertz_fit(&c.pressures);
+    let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
+    eprintln!(
+        "{label}: {} unknowns, solve {:.2} s, {} slave nodes in contact, F = {f:.6e}, \
+         a = {a:.6} (Hertz {a_hertz:.6}, {:+.3} %), p₀ = {p0:.6e} (Hertz {p0_hertz:.6e}, {:+.3} %)",
+        c.unknowns,
+        c.seconds,
+        c.pressures.len(),
+        100.0 * ea,
+        100.0 * ep
+    );
+    (a, p0, ea, ep)
 }
 
 /// The scene of the bodies "Lower" and "Upper" with their materials (E, ν), `model` the lines of
@@ -161,17 +171,7 @@ fn hertz_two_cylinders_in_plane_strain_half_width_within_2_percent_and_peak_pres
     );
     let c = run::<2>(&text, "cylinders_p1.msh", 2.0);
     assert_balance("cylinders", &c, f);
-    let (a, p0) = fit(&c.pressures);
-    let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
-    eprintln!(
-        "cylinders: {} unknowns, solve {:.2} s, {} slave nodes in contact, F = {f:.6e}, \
-         a = {a:.6} (Hertz {a_hertz:.6}, {:+.3} %), p₀ = {p0:.6} (Hertz {p0_hertz:.6}, {:+.3} %)",
-        c.unknowns,
-        c.seconds,
-        c.pressures.len(),
-        100.0 * ea,
-        100.0 * ep
-    );
+    let (a, p0, ea, ep) = against_hertz("cylinders", &c, f, (a_hertz, p0_hertz));
     assert!(c.pressures.len() >= 20, "a is resolved by too few slave nodes");
     assert!(ea.abs() < 0.02, "a = {a} against Hertz {a_hertz}");
     assert!(ep.abs() < 0.03, "p₀ = {p0} against Hertz {p0_hertz}");
@@ -207,17 +207,7 @@ fn hertz_two_spheres_contact_radius_and_peak_pressure_within_5_percent() {
     let text = scene("", (e, nu), (e, nu), &[("SymX", "x"), ("SymY", "y")], "z", f / 4.0);
     let c = run::<3>(&text, "spheres_p1.msh", 4.0);
     assert_balance("spheres", &c, f);
-    let (a, p0) = fit(&c.pressures);
-    let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
-    eprintln!(
-        "spheres: {} unknowns, solve {:.2} s, {} slave nodes in contact, F = {f:.6e}, \
-         a = {a:.6} (Hertz {a_hertz:.6}, {:+.3} %), p₀ = {p0:.6e} (Hertz {p0_hertz:.6e}, {:+.3} %)",
-        c.unknowns,
-        c.seconds,
-        c.pressures.len(),
-        100.0 * ea,
-        100.0 * ep
-    );
+    let (a, p0, ea, ep) = against_hertz("spheres", &c, f, (a_hertz, p0_hertz));
     assert!(c.pressures.len() >= 30, "a is resolved by too few slave nodes");
     assert_eq!(c.unpaired, 0, "every slave node of the patch has a row");
     assert!(ea.abs() < 0.05, "a = {a} against Hertz {a_hertz}");

@@ -1,5 +1,8 @@
 //! The sinks that turn a run's steps into files (the VTK series, Γ₃'s CSV and series, the
 //! reactions) or keep them in memory (tests and studies); docs/method.md §12.
+//!
+//! About 600 lines because it is one idea, a step as the files a user opens: every output of a
+//! frame is written here, so that a field added to the series is added once.
 
 use crate::contact::{ContactOutcome, ContactState};
 use crate::fem::stress::{cell_measures, cell_stresses, nodal_stresses, CellStresses, MemoryField};

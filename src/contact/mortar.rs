@@ -16,7 +16,7 @@
 //! mortar integration.
 
 use super::pairing::{closest, facet_at, SurfacePair};
-use crate::mesh::quadrature::{EDGE_GAUSS_3, GAUSS_3, TRI6};
+use crate::mesh::quadrature::{tensor_gauss_3, EDGE_GAUSS_3, TRI6};
 use crate::mesh::Facet;
 use nalgebra::DMatrix;
 use std::collections::HashMap;
@@ -52,9 +52,9 @@ fn facet_rule(f: &Facet) -> Vec<([f64; 2], f64)> {
     match f.len() {
         2 => EDGE_GAUSS_3.iter().map(|&(s, w)| ([s, 0.0], w)).collect(),
         3 => TRI6.to_vec(),
-        _ => GAUSS_3
-            .iter()
-            .flat_map(|&(a, wa)| GAUSS_3.iter().map(move |&(b, wb)| ([a, b], wa * wb)))
+        _ => tensor_gauss_3(2)
+            .into_iter()
+            .map(|q| ([q.xi[0], q.xi[1]], q.weight))
             .collect(),
     }
 }

@@ -11,7 +11,7 @@
 //! the foot: gap(t) = gap₀ + (n·a(t)) / (n·d), exact for a plane.
 
 use crate::expr::Expr;
-use crate::mesh::vector::dot;
+use crate::mesh::vector::{distance, dot};
 
 /// A rigid obstacle in D dimensions.
 #[derive(Clone, Debug)]
@@ -45,9 +45,7 @@ impl<const D: usize> Obstacle<D> {
     pub fn phi(&self, x: &[f64; D]) -> f64 {
         match self {
             Obstacle::Plane { point, normal } => (0..D).map(|k| (x[k] - point[k]) * normal[k]).sum(),
-            Obstacle::Ball { centre, radius } => {
-                (0..D).map(|k| (x[k] - centre[k]).powi(2)).sum::<f64>().sqrt() - radius
-            }
+            Obstacle::Ball { centre, radius } => distance(x, centre) - radius,
             Obstacle::Level { phi, .. } => {
                 let mut v = [0.0; 3];
                 v[..D].copy_from_slice(x);

@@ -12,6 +12,7 @@
 
 use super::facet_grid::FacetGrid;
 use crate::mesh::element::reference;
+use crate::mesh::vector::{self, distance, dot, norm};
 use crate::mesh::{BoundaryPart, Cell, Facet};
 
 /// How far outside a facet's reference domain (in reference units) a projection still counts as
@@ -79,10 +80,6 @@ pub enum PairingError {
     SameWay { facing_away: usize, paired: usize },
 }
 
-fn dot<const D: usize>(a: &[f64; D], b: &[f64; D]) -> f64 {
-    (0..D).map(|k| a[k] * b[k]).sum()
-}
-
 /// A facet's geometry at reference coordinates ξ (an edge: ξ₀ ∈ [0, 1] from its first node; a
 /// triangle: the unit triangle; a quadrilateral: [−1, 1]²).
 pub(crate) struct FacetAt<const D: usize> {
@@ -99,11 +96,11 @@ impl<const D: usize> FacetAt<D> {
     pub fn normal(&self) -> [f64; D] {
         let t = &self.tangents;
         if D == 2 {
-            let l = dot(&t[0], &t[0]).sqrt();
+            let l = norm(&t[0]);
             std::array::from_fn(|k| if k == 0 { t[0][1] / l } else { -t[0][0] / l })
         } else {
             let c = cross(t);
-            let l = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+            let l = norm(&c);
             std::array::from_fn(|k| c[k] / l)
         }
     }
@@ -111,20 +108,16 @@ impl<const D: usize> FacetAt<D> {
     /// ds/dξ: the length or area element of the reference coordinates.
     pub fn measure(&self) -> f64 {
         if D == 2 {
-            dot(&self.tangents[0], &self.tangents[0]).sqrt()
+            norm(&self.tangents[0])
         } else {
-            let c = cross(&self.tangents);
-            (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+            norm(&cross(&self.tangents))
         }
     }
 }
 
+/// t₀ × t₁ of a face's tangents (D = 3 only).
 fn cross<const D: usize>(t: &[[f64; D]; 2]) -> [f64; 3] {
-    [
-        t[0][1] * t[1][2] - t[0][2] * t[1][1],
-        t[0][2] * t[1][0] - t[0][0] * t[1][2],
-        t[0][0] * t[1][1] - t[0][1] * t[1][0],
-    ]
+    vector::cross(std::array::from_fn(|k| t[0][k]), std::array::from_fn(|k| t[1][k]))
 }
 
 /// The geometry of facet `f` at ξ.
@@ -205,21 +198,13 @@ fn project<const D: usize>(points: &[[f64; D]], f: &Facet, x: &[f64; D]) -> Opti
         _ => ((xi[0].abs() - 1.0).max(xi[1].abs() - 1.0)) / 2.0,
     };
     if outside > INSIDE {
-        let at = facet_at(points, f, xi).point;
-        let distance = dot(
-            &std::array::from_fn::<f64, D, _>(|k| x[k] - at[k]),
-            &std::array::from_fn(|k| x[k] - at[k]),
-        )
-        .sqrt();
+        let away = distance(x, &facet_at(points, f, xi).point);
         let nodes = f.nodes();
         let size = (0..nodes.len())
             .flat_map(|i| (0..i).map(move |j| (i, j)))
-            .map(|(i, j)| {
-                let (a, b) = (points[nodes[i]], points[nodes[j]]);
-                (0..D).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
-            })
+            .map(|(i, j)| distance(&points[nodes[i]], &points[nodes[j]]))
             .fold(0.0, f64::max);
-        if outside * size > INSIDE * size + RIM_CONE * distance {
+        if outside * size > INSIDE * size + RIM_CONE * away {
             return None;
         }
     }
@@ -272,7 +257,7 @@ impl<const D: usize> SurfacePair<D> {
                         let f = &master.facets[i];
                         if let Some(at) = project(points, f, &x) {
                             let (point, normal) = (at.point, at.normal());
-                            let distance = (0..D).map(|k| (x[k] - point[k]).powi(2)).sum::<f64>().sqrt();
+                            let distance = distance(&x, &point);
                             if best.as_ref().is_none_or(|(b, _)| distance < *b) {
                                 let gap = (0..D).map(|k| (x[k] - point[k]) * normal[k]).sum();
                                 let shape = f.nodes().iter().copied().zip(at.shape).collect();

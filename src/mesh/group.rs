@@ -13,6 +13,16 @@ pub enum GroupSelector {
     Name(String),
 }
 
+impl GroupSelector {
+    /// The group as tables and output columns print it: its name bare, or its tag.
+    pub fn label(&self) -> String {
+        match self {
+            GroupSelector::Name(n) => n.clone(),
+            GroupSelector::Tag(t) => t.to_string(),
+        }
+    }
+}
+
 impl fmt::Display for GroupSelector {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {

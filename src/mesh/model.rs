@@ -1,6 +1,7 @@
 //! The mesh as hvi computes with it: points, positively oriented cells, physical groups, and
 //! what is asked of them (a group by name or tag, its nodes, measures, the longest edge).
 
+use crate::mesh::vector::distance;
 use crate::mesh::Cell;
 use crate::mesh::Facet;
 use crate::mesh::GroupSelector;
@@ -205,10 +206,6 @@ impl<const D: usize> Mesh<D> {
             (lo, hi)
         }
     }
-}
-
-pub(super) fn distance<const D: usize>(p: &[f64; D], q: &[f64; D]) -> f64 {
-    (0..D).map(|k| (q[k] - p[k]).powi(2)).sum::<f64>().sqrt()
 }
 
 /// The longest edge of cell `c`.

@@ -3,8 +3,8 @@
 //! one active-set solve.
 
 use super::error::SolveError;
+use super::pairs::{paired_rows, tied_rows};
 use crate::contact::friction::{Coefficient, Friction, FrictionLaw};
-use crate::contact::mortar::{self, MortarRow};
 use crate::contact::pairing::{PairSummary, PairingError, SurfacePair};
 use crate::contact::rows::{self, GroupRows};
 use crate::contact::ContactState;
@@ -141,25 +141,23 @@ impl<const D: usize> ContactSetup<D> {
                 }
             }
         }
-        // the target's body: Σ_r λ_r d_r Σ_i c_ri over its pair's rows (docs/method.md §18.4)
-        for (g, _) in &self.targets {
-            let mut on_master = [0.0; D];
+        // the target's body: Σ_r λ_r d_r Σ_i c_ri over its pair's rows, a tangential row with its
+        // normal row's coefficients (docs/method.md §18.4)
+        if !self.targets.is_empty() {
             let rows = self.condensed_rows();
+            let m = self.nodes.len();
+            let mut on_master = vec![[0.0; D]; self.groups.len()];
             for r in 0..rows.len() {
-                let p = if r < self.nodes.len() {
-                    r
-                } else {
-                    self.friction.as_ref().expect("tangential rows").normal_row[r - self.nodes.len()]
+                let p = match &self.friction {
+                    Some(f) if r >= m => f.normal_row[r - m],
+                    _ => r,
                 };
-                if self.row_group[p] != *g {
-                    continue;
-                }
                 let share: f64 = self.master_terms[p].iter().map(|t| t.1).sum();
                 for c in 0..D {
-                    on_master[c] += state.force[r] * rows.normals[r][c] * share;
+                    on_master[self.row_group[p]][c] += state.force[r] * rows.normals[r][c] * share;
                 }
             }
-            out.push(on_master);
+            out.extend(self.targets.iter().map(|&(g, _)| on_master[g]));
         }
         out
     }
@@ -299,7 +297,7 @@ pub fn build<const D: usize>(
         let keyed = super::error::group_error(&scene.origin, &group_key);
         let mut part = mesh.boundary(&scene.contact_group(i)).map_err(&keyed)?;
         // a body of revolution: the weights of the swept surface (docs/method.md §8.6)
-        if scene.material.plane == Some(crate::scene::Plane::Axisymmetric) {
+        if revolved {
             part.revolve(&mesh.points);
         }
         pairs.push(match &c.target {
@@ -307,7 +305,7 @@ pub fn build<const D: usize>(
                 let mut master = mesh
                     .boundary(target)
                     .map_err(super::error::group_error(&scene.origin, &format!("{key}.target")))?;
-                if scene.material.plane == Some(crate::scene::Plane::Axisymmetric) {
+                if revolved {
                     master.revolve(&mesh.points);
                 }
                 let names = format!(
@@ -419,9 +417,7 @@ pub fn build<const D: usize>(
     // master nodes' terms; a slave node off the target has no row (docs/method.md §18)
     let mut master_terms = paired_rows(&mut rows, &pairs, &mesh.points, revolved);
     let tied: Vec<bool> = used.iter().map(|&i| scene.contact[i].tied).collect();
-    if tied.contains(&true) {
-        tied_rows(&mut rows, &mut master_terms, &tied);
-    }
+    tied_rows(&mut rows, &mut master_terms, &tied);
     let (mut nodes, kept) = ContactNodes::from_rows(&rows.nodes, &rows.weights, &rows.directions, dofs);
     let master_terms: Vec<Vec<(usize, f64)>> = kept.iter().map(|&r| master_terms[r].clone()).collect();
     for (k, terms) in master_terms.iter().enumerate() {
@@ -461,12 +457,7 @@ pub fn build<const D: usize>(
         targets: used
             .iter()
             .enumerate()
-            .filter_map(|(g, &i)| {
-                scene.contact[i].target.as_ref().map(|t| match t {
-                    crate::mesh::GroupSelector::Name(n) => (g, n.clone()),
-                    crate::mesh::GroupSelector::Tag(t) => (g, t.to_string()),
-                })
-            })
+            .filter_map(|(g, &i)| scene.contact[i].target.as_ref().map(|t| (g, t.label())))
             .collect(),
         master_terms,
         laws,
@@ -478,13 +469,7 @@ pub fn build<const D: usize>(
             keys: motion_keys,
             rows: kept.iter().map(|&k| rows.motion[k]).collect(),
         }),
-        groups: used
-            .iter()
-            .map(|&i| match scene.contact_group(i) {
-                crate::mesh::GroupSelector::Name(n) => n,
-                crate::mesh::GroupSelector::Tag(t) => t.to_string(),
-            })
-            .collect(),
+        groups: used.iter().map(|&i| scene.contact_group(i).label()).collect(),
         group_tags,
         row_group,
         never_touching: rows.never_touching,
@@ -647,86 +632,4 @@ fn friction_rows<const D: usize>(
         laws,
         laws_of_rows: NodalLaws::new(all_laws, &terms),
     }))
-}
-
-/// Turns the rows of the sections with a target into rows of contact between two bodies
-/// (docs/method.md §18): direction −n (n the master's outward normal at the slave node's
-/// projection), the mortar rows' weighted gap and master coefficients c_i (src/contact/mortar.rs),
-/// or at the rim of the overlap the node-to-segment ones (g₀, N_i(ξ)); rows of slave nodes off
-/// the target are removed (as never touching). Returns each remaining row's master coefficients.
-fn paired_rows<const D: usize>(
-    rows: &mut rows::Rows<D>,
-    pairs: &[Option<SurfacePair<D>>],
-    points: &[[f64; D]],
-    revolved: bool,
-) -> Vec<Vec<(usize, f64)>> {
-    let mortar: Vec<Option<Vec<Option<MortarRow>>>> = pairs
-        .iter()
-        .map(|p| p.as_ref().map(|p| mortar::rows(points, p, revolved)))
-        .collect();
-    let mut keep = vec![true; rows.nodes.len()];
-    let mut terms = vec![Vec::new(); rows.nodes.len()];
-    for r in 0..rows.nodes.len() {
-        let (Some(pair), Some(mortar)) = (&pairs[rows.group[r]], &mortar[rows.group[r]]) else {
-            continue;
-        };
-        let p = rows.nodes[r];
-        let local = pair.slave.local(p);
-        match local.and_then(|k| pair.projections[k].as_ref()) {
-            Some(proj) => {
-                rows.directions[r] = std::array::from_fn(|k| -proj.normal[k]);
-                (rows.gap[r], terms[r]) = match local.and_then(|k| mortar[k].as_ref()) {
-                    Some(row) => (row.gap, row.terms.clone()),
-                    None => (proj.gap, proj.shape.clone()),
-                };
-            }
-            None => {
-                keep[r] = false;
-                rows.never_touching.push((p, rows.group[r]));
-            }
-        }
-    }
-    retain(&mut rows.nodes, &keep);
-    retain(&mut rows.weights, &keep);
-    retain(&mut rows.directions, &keep);
-    retain(&mut rows.group, &keep);
-    retain(&mut rows.gap, &keep);
-    retain(&mut rows.layer, &keep);
-    retain(&mut rows.motion, &keep);
-    retain(&mut rows.terms, &keep);
-    retain(&mut terms, &keep);
-    terms
-}
-
-/// The rows of tied pairs (docs/method.md §18.3): each normal row's gap set to zero (the slave
-/// surface glued as it lies) and D − 1 rows along its tangents added, with the same master
-/// coefficients; all of them are held bilaterally, so u_S = Σ c_i u_i in every direction.
-fn tied_rows<const D: usize>(rows: &mut rows::Rows<D>, master_terms: &mut Vec<Vec<(usize, f64)>>, tied: &[bool]) {
-    for r in 0..rows.nodes.len() {
-        let g = rows.group[r];
-        if !tied[g] {
-            continue;
-        }
-        rows.gap[r] = 0.0;
-        for t in Friction::<D>::tangents(rows.directions[r]) {
-            rows.nodes.push(rows.nodes[r]);
-            rows.weights.push(rows.weights[r]);
-            rows.directions.push(t);
-            rows.group.push(g);
-            rows.gap.push(0.0);
-            rows.layer.push(0.0);
-            rows.motion.push(None);
-            rows.terms.push(Vec::new());
-            master_terms.push(master_terms[r].clone());
-        }
-    }
-}
-
-/// Keeps the entries of `v` where `keep` is true.
-fn retain<T>(v: &mut Vec<T>, keep: &[bool]) {
-    let mut i = 0;
-    v.retain(|_| {
-        i += 1;
-        keep[i - 1]
-    });
 }

@@ -154,7 +154,7 @@ impl<const D: usize> Dirichlet<D> {
                     unknowns.push(dofs.index(p, c));
                 }
                 out.reaction_groups.push(ReactionGroup {
-                    group: group_name(sel),
+                    group: sel.label(),
                     component: c,
                     unknowns,
                     weight: 1.0,
@@ -200,7 +200,7 @@ impl<const D: usize> Dirichlet<D> {
                     unknowns.push(dofs.index(p, c));
                 }
                 out.reaction_groups.push(ReactionGroup {
-                    group: group_name(&section.group),
+                    group: section.group.label(),
                     component: c,
                     unknowns,
                     weight: 1.0,
@@ -246,20 +246,16 @@ impl<const D: usize> Dirichlet<D> {
                 unknowns.push(d);
             }
             out.reaction_groups.push(ReactionGroup {
-                group: group_name(&fc.group),
+                group: fc.group.label(),
                 component: c,
                 unknowns: unknowns.clone(),
                 weight: 1.0,
             });
             out.rigid.push(RigidParameter {
-                name: format!(
-                    "force_control[{i}] (group {}, {})",
-                    group_name(&fc.group),
-                    COMPONENTS[c]
-                ),
+                name: format!("force_control[{i}] (group {}, {})", fc.group.label(), COMPONENTS[c]),
                 unknowns,
                 force: Some(force),
-                group: Some((group_name(&fc.group), c)),
+                group: Some((fc.group.label(), c)),
             });
         }
         out.add_overlap_rows();
@@ -603,12 +599,5 @@ impl<const D: usize> FreeMotions<D> {
                 if self.modes.len() == 1 { "is" } else { "are" },
             ),
         }
-    }
-}
-
-fn group_name(sel: &GroupSelector) -> String {
-    match sel {
-        GroupSelector::Name(n) => n.clone(),
-        GroupSelector::Tag(t) => t.to_string(),
     }
 }

@@ -13,6 +13,7 @@ pub mod faer;
 pub mod materials;
 pub mod memory;
 pub mod operator;
+mod pairs;
 pub mod plan;
 pub mod reactions;
 pub mod rigid;

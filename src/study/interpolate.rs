@@ -11,6 +11,7 @@
 //! in the fine space) and for linear fields on any meshes.
 
 use crate::mesh::element::{invert, map_at, reference, shape_at, MAX_NODES};
+use crate::mesh::vector::distance;
 use crate::mesh::{Cell, Mesh};
 
 /// Relative tolerance (of the mesh diameter) for points on or just outside the boundary.
@@ -425,7 +426,7 @@ pub fn reference_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x
         return ([0.0; 3], f64::INFINITY);
     };
     let (y, _) = map(xi);
-    let residual = (0..D).map(|k| (x[k] - y[k]).powi(2)).sum::<f64>().sqrt();
+    let residual = distance(&x, &y);
     if residual > 1e-10 * size {
         // Newton failed (a degenerate cell): unusable
         return (xi, f64::INFINITY);
@@ -464,7 +465,7 @@ pub fn reference_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x
                 }
             }
             let (y, _) = map([a, b, xi[2].clamp(-1.0, 1.0)]);
-            (0..D).map(|k| (x[k] - y[k]).powi(2)).sum::<f64>().sqrt()
+            distance(&x, &y)
         }
     } else if let Cell::Pyr5(_) = cell {
         // inside when 0 ≤ ζ ≤ 1 and |ξ|, |η| ≤ 1 − ζ; else the distance to the map of the point
@@ -475,13 +476,13 @@ pub fn reference_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x
         } else {
             let z = xi[2].clamp(0.0, 1.0);
             let (y, _) = map([xi[0].clamp(z - 1.0, 1.0 - z), xi[1].clamp(z - 1.0, 1.0 - z), z]);
-            (0..D).map(|k| (x[k] - y[k]).powi(2)).sum::<f64>().sqrt()
+            distance(&x, &y)
         }
     } else if xi.iter().all(|v| v.abs() <= 1.0) {
         0.0
     } else {
         let (y, _) = map(xi.map(|v| v.clamp(-1.0, 1.0)));
-        (0..D).map(|k| (x[k] - y[k]).powi(2)).sum::<f64>().sqrt()
+        distance(&x, &y)
     };
     (xi, dist)
 }
