@@ -121,6 +121,16 @@ pub fn build<const D: usize>(groups: &[GroupRows<D>], points: &[[f64; D]], lengt
         motion: Option<(usize, [f64; D])>,
         terms: Vec<LawTerm>,
     }
+    if let Some(g) = groups
+        .iter()
+        .find(|g| g.part.facets.iter().any(|f| f.is_second_order()))
+    {
+        return Err(format!(
+            "contact zone {} is made of second-order faces: hvi does not yet pose contact on them (their lumped \
+             weights are zero or negative, docs/method.md §19.3); mesh the body with -order 1",
+            g.part.label
+        ));
+    }
     let mut rows: Vec<Row<D>> = Vec::new();
     let mut never = Vec::new();
     for (gi, g) in groups.iter().enumerate() {

@@ -8,8 +8,7 @@
 use super::dofs::DofMap;
 use crate::expr::Expr;
 use crate::mesh::element::{load_rule, shape_at};
-use crate::mesh::quadrature::{EDGE_GAUSS_3, QUAD_GAUSS_2X2, TRI_3POINT};
-use crate::mesh::topology::{edge_area_vector, face_area_vector};
+use crate::mesh::topology::{facet_map, facet_rule};
 use crate::mesh::vector::norm;
 use crate::mesh::{BoundaryPart, Cell, Facet};
 
@@ -70,51 +69,21 @@ impl<const D: usize> Default for Loads<D> {
 /// Quadrature points of one facet: (position, outward unit normal, weight, shape values).
 type FacetPoint<const D: usize> = ([f64; D], [f64; D], f64, Vec<(usize, f64)>);
 
-/// Quadrature on a facet: 3-point Gauss on an edge, the 3-point rule on a triangle, 2×2 Gauss
-/// on a quadrilateral (exact for the products of shape functions with smooth loads to the order
-/// the elements need).
+/// Quadrature on a facet ([`facet_rule`]: 3-point Gauss on an edge, the 3-point rule on a
+/// triangle, 2×2 Gauss on a quadrilateral, richer rules on second-order facets; exact for the
+/// products of shape functions with smooth loads to the order the elements need).
 fn facet_points<const D: usize>(points: &[[f64; D]], f: &Facet) -> Vec<FacetPoint<D>> {
     let nodes = f.nodes();
-    let x = |i: usize| points[nodes[i]];
-    // x₀ + Σ_a N_a (x_a − x₀): a point of a facet in a plane x_k = c gets exactly c (Σ N_a x_a
-    // may miss it by a rounding, and `floor(y)` on the face y = 1 would vanish there)
-    let combine = |values: &[f64]| -> [f64; D] {
-        std::array::from_fn(|k| {
-            let x0 = x(0)[k];
-            x0 + values
-                .iter()
-                .enumerate()
-                .skip(1)
-                .map(|(a, v)| v * (x(a)[k] - x0))
-                .sum::<f64>()
+    facet_rule(f)
+        .iter()
+        .map(|q| {
+            let (value, c, x) = facet_map(points, f, q.xi);
+            let da = norm(&c);
+            let normal = std::array::from_fn(|k| c[k] / da);
+            let shape = (0..nodes.len()).map(|a| (nodes[a], value[a])).collect();
+            (x, normal, q.weight * da, shape)
         })
-    };
-    let mut out = Vec::new();
-    match f.len() {
-        2 => {
-            // the facet is oriented with the body on its left: outward normal (dy, −dx)/len
-            let (d, len) = edge_area_vector(&x(0), &x(1));
-            let mut normal = [0.0; D];
-            normal[0] = d[0] / len;
-            normal[1] = d[1] / len;
-            for &(s, w) in &EDGE_GAUSS_3 {
-                let v = [1.0 - s, s];
-                out.push((combine(&v), normal, w * len, vec![(nodes[0], v[0]), (nodes[1], v[1])]));
-            }
-        }
-        n => {
-            // a face: its reference cell's map (mesh/topology.rs)
-            let rule = if n == 3 { &TRI_3POINT[..] } else { &QUAD_GAUSS_2X2[..] };
-            for q in rule {
-                let (value, c) = face_area_vector(points, f, q.xi);
-                let da = norm(&c);
-                let normal = std::array::from_fn(|k| c[k] / da);
-                let shape = (0..n).map(|a| (nodes[a], value[a])).collect();
-                out.push((combine(&value[..n]), normal, q.weight * da, shape));
-            }
-        }
-    }
-    out
+        .collect()
 }
 
 impl<const D: usize> Loads<D> {

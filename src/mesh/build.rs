@@ -6,13 +6,13 @@ use super::model::longest_edge;
 use crate::mesh::element_type_info;
 use crate::mesh::fmt_point;
 use crate::mesh::physical_names;
-use crate::mesh::Cell;
 use crate::mesh::Facet;
 use crate::mesh::Mesh;
 use crate::mesh::MeshError;
 use crate::mesh::Origin;
 use crate::mesh::PhysicalGroup;
 use crate::mesh::Places;
+use crate::mesh::{Cell, CellKind};
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
@@ -100,31 +100,18 @@ fn signed_area(points: &[[f64; 2]], nodes: &[usize]) -> f64 {
     0.5 * a
 }
 
-/// The smallest det J of a 3D cell over its stiffness quadrature points and its corners, and
-/// where it is (reference coordinates).
-fn min_det_3d(points: &[[f64; 3]], cell: &Cell) -> (f64, [f64; 3]) {
+/// The smallest det J of a cell over its stiffness quadrature points and its nodes (a
+/// pyramid's base corners instead of its apex), and where it is (reference coordinates).
+fn min_det<const D: usize>(points: &[[f64; D]], cell: &Cell) -> (f64, [f64; 3]) {
     let mut at: Vec<[f64; 3]> = crate::mesh::element::stiffness_rule(cell)
         .iter()
         .map(|q| q.xi)
         .collect();
-    if let Cell::Hex8(_) = cell {
-        for &x in &[-1.0, 1.0] {
-            for &y in &[-1.0, 1.0] {
-                for &z in &[-1.0, 1.0] {
-                    at.push([x, y, z]);
-                }
-            }
-        }
-    }
-    if let Cell::Prism6(_) = cell {
-        for &z in &[-1.0, 1.0] {
-            at.extend([[0.0, 0.0, z], [1.0, 0.0, z], [0.0, 1.0, z]]);
-        }
-    }
-    if let Cell::Pyr5(_) = cell {
+    match cell.kind() {
         // det J of a pyramid depends on (ξ, η)/(1 − ζ) only (docs/method.md §8.1): its values
         // at the base corners are also its limits at the apex along the four edges
-        at.extend([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]]);
+        CellKind::Pyr5 => at.extend([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]]),
+        kind => at.extend(super::second_order::reference_nodes(kind)),
     }
     at.iter()
         .map(|&xi| (crate::mesh::element::shape_at(cell, points, xi).det_j, xi))
@@ -234,12 +221,12 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
     let mut cells = Vec::new();
     let mut cell_tags = Vec::new();
     let mut cell_element = Vec::new();
-    let mut nodes = [0usize; 8];
+    let mut nodes = [0usize; crate::mesh::element::MAX_NODES];
     for e in 0..raw.element_tags.len() {
         let ty = raw.element_types[e];
         let origin = &raw.origins[raw.element_origin[e] as usize];
         let info = element_type_info(ty);
-        if !matches!(ty, 1 | 2 | 3 | 4 | 5 | 6 | 7 | 15) {
+        if !matches!(ty, 1 | 8 | 15) && CellKind::from_gmsh(ty).is_none() {
             let dim = info.map_or(2, |i| i.2);
             let group_text = if origin.physical.is_empty() {
                 match origin.entity {
@@ -260,16 +247,22 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
                 format!("in physical group {}", names.join(", "))
             };
             let (name, fix) = match info {
+                Some((name, _, _)) if matches!(ty, 14 | 19) => (
+                    name,
+                    "hvi has no second-order pyramids (docs/method.md §19): mesh the volume with tetrahedra only, or \
+                     with hexahedra and prisms only (no pyramids between them), or with -order 1",
+                ),
                 Some((name, _, _)) => (
                     name,
-                    "hvi computes with first-order elements only: mesh with gmsh -order 1 (Mesh.ElementOrder = 1), \
-                     without Mesh.SecondOrderIncomplete",
+                    "hvi computes with first- and second-order elements: mesh with gmsh -order 1 or -order 2 \
+                     (Mesh.ElementOrder = 1 or 2)",
                 ),
                 None => (
                     "an element type hvi does not know",
                     "hvi reads only points (15), 2-node lines (1), 3-node triangles (2), 4-node quadrangles (3), \
-                     4-node tetrahedra (4), 8-node hexahedra (5), 6-node prisms (6) and 5-node pyramids (7): mesh \
-                     with gmsh -2 -order 1 (-3 for a volume)",
+                     4-node tetrahedra (4), 8-node hexahedra (5), 6-node prisms (6), 5-node pyramids (7) and their \
+                     second-order companions (8, 9, 10, 11, 12, 13, 16, 17, 18): mesh with gmsh -2 -order 1 or 2 (-3 \
+                     for a volume)",
                 ),
             };
             return Err(MeshError::UnsupportedElement {
@@ -327,22 +320,22 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
                 }
             }
             _ if element_dim < D => {
+                // lines (1, 8), triangles (2, 9) and quadrangles (3, 16, 10) by their corners
+                let corners = match ty {
+                    1 | 8 => 2,
+                    2 | 9 => 3,
+                    _ => 4,
+                };
                 for &p in &origin.physical {
                     group(&mut groups, element_dim as u8, p)
                         .facets
-                        .push(Facet::from_slice(nodes));
+                        .push(Facet::with_corners(nodes, corners));
                 }
             }
             _ => {
                 let c = cells.len();
-                cells.push(match ty {
-                    2 => Cell::Tri3([nodes[0], nodes[1], nodes[2]]),
-                    3 => Cell::Quad4([nodes[0], nodes[1], nodes[2], nodes[3]]),
-                    4 => Cell::Tet4([nodes[0], nodes[1], nodes[2], nodes[3]]),
-                    6 => Cell::Prism6(std::array::from_fn(|k| nodes[k])),
-                    7 => Cell::Pyr5(std::array::from_fn(|k| nodes[k])),
-                    _ => Cell::Hex8(std::array::from_fn(|k| nodes[k])),
-                });
+                let kind = CellKind::from_gmsh(ty).expect("the element types are checked above");
+                cells.push(Cell::new(kind, nodes));
                 cell_tags.push(raw.element_tags[e] as usize);
                 cell_element.push(e);
                 for &p in &origin.physical {
@@ -365,6 +358,7 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
         tags: &cell_tags,
         elements: &cell_element,
     };
+    one_order(&places, &cells, &groups)?;
     if D == 2 {
         let points2: Vec<[f64; 2]> = points.iter().map(|p| [p[0], p[1]]).collect();
         orient_2d(&places, &points2, &mut cells)?;
@@ -405,6 +399,46 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
     })
 }
 
+/// All cells of one order and the boundary groups' elements of the same: a mesh of first- and
+/// second-order cells together does not conform (a midside node of one cell's edge is no node of
+/// its neighbour), and a first-order line on a second-order body misses the midside nodes.
+fn one_order(
+    at: &CellPlaces<'_, '_>,
+    cells: &[Cell],
+    groups: &BTreeMap<(u8, i32), PhysicalGroup>,
+) -> Result<(), MeshError> {
+    let order = cells[0].kind().order();
+    if let Some(c) = cells.iter().position(|c| c.kind().order() != order) {
+        return Err(at.invalid(
+            c,
+            format!(
+                "element {} is a {} (order {}) while element {} is a {} (order {order}): hvi does not mix first- and \
+                 second-order cells in one mesh (they do not conform); mesh the whole model with one -order",
+                at.tags[c],
+                cells[c].name(),
+                cells[c].kind().order(),
+                at.tags[0],
+                cells[0].name()
+            ),
+        ));
+    }
+    for g in groups.values() {
+        if let Some(f) = g.facets.iter().find(|f| f.is_second_order() != (order == 2)) {
+            return Err(MeshError::Invalid {
+                path: at.path.to_path_buf(),
+                place: "$Elements".into(),
+                detail: format!(
+                    "physical group {} holds a {}-node boundary element on a mesh of order-{order} cells: its nodes do \
+                     not match the cells' faces; mesh the whole model with one -order (gmsh -order {order})",
+                    g.label(),
+                    f.len()
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Where the cells of a file are, for the orientation checks' messages.
 struct CellPlaces<'a, 'b> {
     pub(super) path: &'a Path,
@@ -429,7 +463,7 @@ impl CellPlaces<'_, '_> {
 /// zero-area cells; convex quadrangles.
 fn orient_2d(at: &CellPlaces<'_, '_>, points: &[[f64; 2]], cells: &mut [Cell]) -> Result<(), MeshError> {
     let cell_tags = at.tags;
-    let areas: Vec<f64> = cells.iter().map(|c| signed_area(points, c.nodes())).collect();
+    let areas: Vec<f64> = cells.iter().map(|c| signed_area(points, c.corners())).collect();
     for (c, &a) in areas.iter().enumerate() {
         let longest = longest_edge(points, &cells[c]);
         if a.abs() <= 1e-14 * longest * longest {
@@ -459,7 +493,8 @@ fn orient_2d(at: &CellPlaces<'_, '_>, points: &[[f64; 2]], cells: &mut [Cell]) -
         ));
     }
     for (c, cell) in cells.iter().enumerate() {
-        if let Cell::Quad4(q) = cell {
+        if cell.kind().linear() == CellKind::Quad4 {
+            let q = cell.corners();
             for i in 0..4 {
                 let (p0, p1, p2) = (points[q[i]], points[q[(i + 1) % 4]], points[q[(i + 2) % 4]]);
                 let cross = (p1[0] - p0[0]) * (p2[1] - p1[1]) - (p1[1] - p0[1]) * (p2[0] - p1[0]);
@@ -476,6 +511,24 @@ fn orient_2d(at: &CellPlaces<'_, '_>, points: &[[f64; 2]], cells: &mut [Cell]) -
                 }
             }
         }
+        if cell.kind().order() == 2 {
+            // a curved cell can fold where its corners do not: det J at its nodes and points
+            let (det, xi) = min_det(points, cell);
+            let h = longest_edge(points, cell);
+            if det <= 1e-12 * h * h {
+                let s = crate::mesh::element::shape_at(cell, points, xi);
+                return Err(at.invalid(
+                    c,
+                    format!(
+                        "{} {} folds over itself (det J = {det:e} at {}): a midside node is too far off its edge's \
+                         middle; re-mesh (finer near curved boundaries, or Mesh.HighOrderOptimize = 2)",
+                        cell.name(),
+                        cell_tags[c],
+                        fmt_point(s.x)
+                    ),
+                ));
+            }
+        }
     }
     Ok(())
 }
@@ -489,7 +542,7 @@ fn orient_3d(at: &CellPlaces<'_, '_>, points: &[[f64; 3]], cells: &mut [Cell]) -
         cells
             .iter()
             .map(|c| {
-                let (det, xi) = min_det_3d(points, c);
+                let (det, xi) = min_det(points, c);
                 let h = longest_edge(points, c);
                 (det, xi, h)
             })

@@ -1,13 +1,18 @@
-//! The cells hvi computes on and their reference tables (docs/method.md §2, §8): 3-node
+//! The cells hvi computes on and their reference tables (docs/method.md §2, §8, §19): 3-node
 //! triangles (P1) and 4-node quadrilaterals (Q1) in 2D, 4-node tetrahedra (P1), 8-node
-//! hexahedra (Q1), 6-node prisms and 5-node pyramids in 3D, with gmsh's node order.
+//! hexahedra (Q1), 6-node prisms and 5-node pyramids in 3D, and their second-order
+//! (isoparametric) companions — 6-node triangles, 8- and 9-node quadrilaterals, 10-node
+//! tetrahedra, 20- and 27-node hexahedra, 15- and 18-node prisms — with gmsh's node order.
 //!
 //! Node indices are dense, 0-based indices into [`super::Mesh::points`]. Cells are stored with
 //! positive orientation (det J > 0); the reader rejects inverted cells. Each cell type lists its
 //! facets (edges in 2D, faces in 3D) in the reference element's table, oriented so that the
-//! outward normal follows from the node order: for an edge `[a, b]` it is `(dy, −dx)`, for a face
-//! the right-hand rule (counter-clockwise seen from outside).
+//! outward normal follows from the order of the facet's corners: for an edge `[a, b]` it is
+//! `(dy, −dx)`, for a face the right-hand rule (counter-clockwise seen from outside). A facet of
+//! a second-order cell lists its corners first, then its own second-order nodes in gmsh's order
+//! for the facet's type (mesh/second_order.rs derives these tables from the reference nodes).
 
+use super::second_order::{derived, Derived};
 use std::fmt;
 use std::ops::Index;
 
@@ -30,6 +35,217 @@ pub enum Cell {
     /// apex ζ = 1; the rational basis of docs/method.md §8.1 (Q1 on the base, P1 on the
     /// triangles).
     Pyr5([usize; 5]),
+    /// Quadratic triangle (gmsh type 9): the corners, then the midpoints of 01, 12, 20.
+    Tri6([usize; 6]),
+    /// Serendipity quadrilateral (gmsh type 16): the corners, then the midpoints of 01, 12, 23, 30.
+    Quad8([usize; 8]),
+    /// Biquadratic quadrilateral (gmsh type 10): Quad8's nodes and the centre.
+    Quad9([usize; 9]),
+    /// Quadratic tetrahedron (gmsh type 11): the corners, then the midpoints of 01, 12, 20, 30,
+    /// 32, 31.
+    Tet10([usize; 10]),
+    /// Serendipity hexahedron (gmsh type 17): the corners, then twelve edge midpoints.
+    Hex20([usize; 20]),
+    /// Triquadratic hexahedron (gmsh type 12): Hex20's nodes, six face centres and the centre.
+    Hex27([usize; 27]),
+    /// Quadratic (serendipity) prism (gmsh type 18): the corners, then nine edge midpoints.
+    Prism15([usize; 15]),
+    /// Biquadratic–quadratic prism (gmsh type 13): Prism15's nodes and the three quadrangular
+    /// faces' centres.
+    Prism18([usize; 18]),
+}
+
+/// The kind of a cell without its nodes: what the per-kind tables are indexed by.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum CellKind {
+    Tri3,
+    Quad4,
+    Tet4,
+    Hex8,
+    Prism6,
+    Pyr5,
+    Tri6,
+    Quad8,
+    Quad9,
+    Tet10,
+    Hex20,
+    Hex27,
+    Prism15,
+    Prism18,
+}
+
+impl CellKind {
+    /// Every kind, in the order of [`CellKind::index`].
+    pub const ALL: [CellKind; 14] = [
+        CellKind::Tri3,
+        CellKind::Quad4,
+        CellKind::Tet4,
+        CellKind::Hex8,
+        CellKind::Prism6,
+        CellKind::Pyr5,
+        CellKind::Tri6,
+        CellKind::Quad8,
+        CellKind::Quad9,
+        CellKind::Tet10,
+        CellKind::Hex20,
+        CellKind::Hex27,
+        CellKind::Prism15,
+        CellKind::Prism18,
+    ];
+
+    /// Position in [`CellKind::ALL`].
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    /// The gmsh element type (2, 3, 4, 5, 6, 7, 9, 16, 10, 11, 17, 12, 18, 13).
+    pub fn gmsh_type(self) -> i32 {
+        [2, 3, 4, 5, 6, 7, 9, 16, 10, 11, 17, 12, 18, 13][self.index()]
+    }
+
+    /// The kind of a gmsh element type of dimension ≥ 2, if hvi computes on it.
+    pub fn from_gmsh(t: i32) -> Option<CellKind> {
+        CellKind::ALL.into_iter().find(|k| k.gmsh_type() == t)
+    }
+
+    /// The number of nodes.
+    pub fn nodes(self) -> usize {
+        [3, 4, 4, 8, 6, 5, 6, 8, 9, 10, 20, 27, 15, 18][self.index()]
+    }
+
+    /// The spatial dimension (2 or 3).
+    pub fn dim(self) -> usize {
+        match self.linear() {
+            CellKind::Tri3 | CellKind::Quad4 => 2,
+            _ => 3,
+        }
+    }
+
+    /// The polynomial order of the geometry and the displacement (1 or 2).
+    pub fn order(self) -> u8 {
+        if self.linear() == self {
+            1
+        } else {
+            2
+        }
+    }
+
+    /// The first-order kind with the same corners (itself for a first-order kind).
+    pub fn linear(self) -> CellKind {
+        match self {
+            CellKind::Tri6 => CellKind::Tri3,
+            CellKind::Quad8 | CellKind::Quad9 => CellKind::Quad4,
+            CellKind::Tet10 => CellKind::Tet4,
+            CellKind::Hex20 | CellKind::Hex27 => CellKind::Hex8,
+            CellKind::Prism15 | CellKind::Prism18 => CellKind::Prism6,
+            k => k,
+        }
+    }
+
+    /// The second-order kind on the same corners: the complete (Lagrange) one, or the
+    /// serendipity one (`complete = false`: 8-node quadrangle, 20-node hexahedron, 15-node
+    /// prism; a triangle and a tetrahedron have only one). None for a pyramid.
+    pub fn second_order(self, complete: bool) -> Option<CellKind> {
+        Some(match (self.linear(), complete) {
+            (CellKind::Tri3, _) => CellKind::Tri6,
+            (CellKind::Quad4, true) => CellKind::Quad9,
+            (CellKind::Quad4, false) => CellKind::Quad8,
+            (CellKind::Tet4, _) => CellKind::Tet10,
+            (CellKind::Hex8, true) => CellKind::Hex27,
+            (CellKind::Hex8, false) => CellKind::Hex20,
+            (CellKind::Prism6, true) => CellKind::Prism18,
+            (CellKind::Prism6, false) => CellKind::Prism15,
+            _ => return None,
+        })
+    }
+
+    /// The number of corners (the first nodes).
+    pub fn corners(self) -> usize {
+        self.linear().nodes()
+    }
+
+    /// A triangle or a tetrahedron, of either order.
+    pub fn is_simplex(self) -> bool {
+        matches!(self.linear(), CellKind::Tri3 | CellKind::Tet4)
+    }
+
+    /// A short name for messages.
+    pub fn name(self) -> &'static str {
+        [
+            "triangle",
+            "quadrangle",
+            "tetrahedron",
+            "hexahedron",
+            "prism",
+            "pyramid",
+            "6-node triangle",
+            "8-node quadrangle",
+            "9-node quadrangle",
+            "10-node tetrahedron",
+            "20-node hexahedron",
+            "27-node hexahedron",
+            "15-node prism",
+            "18-node prism",
+        ][self.index()]
+    }
+
+    /// VTK cell type id (5 triangle, 9 quad, 10 tetra, 12 hexahedron, 13 wedge, 14 pyramid; 22
+    /// quadratic triangle, 23 quadratic quad, 28 biquadratic quad, 24 quadratic tetra, 25
+    /// quadratic hexahedron, 29 triquadratic hexahedron, 26 quadratic wedge, 32 biquadratic
+    /// quadratic wedge).
+    pub fn vtk_type(self) -> u8 {
+        [5, 9, 10, 12, 13, 14, 22, 23, 28, 24, 25, 29, 26, 32][self.index()]
+    }
+
+    /// The corners' facets of the first-order kind (local corner indices), oriented outward.
+    pub(super) fn linear_facets(self) -> &'static [&'static [usize]] {
+        match self.linear() {
+            CellKind::Tri3 => &[&TRI_EDGES[0], &TRI_EDGES[1], &TRI_EDGES[2]],
+            CellKind::Quad4 => &[&QUAD_EDGES[0], &QUAD_EDGES[1], &QUAD_EDGES[2], &QUAD_EDGES[3]],
+            CellKind::Tet4 => &[&TET_FACES[0], &TET_FACES[1], &TET_FACES[2], &TET_FACES[3]],
+            CellKind::Hex8 => &[
+                &HEX_FACES[0],
+                &HEX_FACES[1],
+                &HEX_FACES[2],
+                &HEX_FACES[3],
+                &HEX_FACES[4],
+                &HEX_FACES[5],
+            ],
+            CellKind::Prism6 => &PRISM_FACES,
+            _ => &PYRAMID_FACES,
+        }
+    }
+
+    /// The corners' edges (local corner indices): the 1D skeleton.
+    pub(super) fn linear_edges(self) -> &'static [[usize; 2]] {
+        match self.linear() {
+            CellKind::Tri3 => &TRI_EDGES,
+            CellKind::Quad4 => &QUAD_EDGES,
+            CellKind::Tet4 => &[[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]],
+            CellKind::Hex8 => &[
+                [0, 1],
+                [1, 2],
+                [2, 3],
+                [3, 0],
+                [4, 5],
+                [5, 6],
+                [6, 7],
+                [7, 4],
+                [0, 4],
+                [1, 5],
+                [2, 6],
+                [3, 7],
+            ],
+            CellKind::Prism6 => &[[0, 1], [1, 2], [2, 0], [3, 4], [4, 5], [5, 3], [0, 3], [1, 4], [2, 5]],
+            _ => &[[0, 1], [1, 2], [2, 3], [3, 0], [0, 4], [1, 4], [2, 4], [3, 4]],
+        }
+    }
+
+    /// The tables derived from the reference nodes (facets with their second-order nodes, VTK's
+    /// order, the mirror): mesh/second_order.rs.
+    fn derived(self) -> &'static Derived {
+        derived(self)
+    }
 }
 
 /// Edges of a triangle and a quadrilateral (counter-clockwise cells: outward = (dy, −dx)).
@@ -66,169 +282,221 @@ impl AsRef<[usize]> for Cell {
     }
 }
 
+/// Applies `$body` to the node array of whichever variant `$cell` is.
+macro_rules! each_variant {
+    ($cell:expr, $n:ident => $body:expr) => {
+        match $cell {
+            Cell::Tri3($n) => $body,
+            Cell::Quad4($n) => $body,
+            Cell::Tet4($n) => $body,
+            Cell::Hex8($n) => $body,
+            Cell::Prism6($n) => $body,
+            Cell::Pyr5($n) => $body,
+            Cell::Tri6($n) => $body,
+            Cell::Quad8($n) => $body,
+            Cell::Quad9($n) => $body,
+            Cell::Tet10($n) => $body,
+            Cell::Hex20($n) => $body,
+            Cell::Hex27($n) => $body,
+            Cell::Prism15($n) => $body,
+            Cell::Prism18($n) => $body,
+        }
+    };
+}
+
 impl Cell {
+    /// A cell of `kind` on `nodes` (in gmsh's order).
+    ///
+    /// # Panics
+    /// If `nodes` does not hold [`CellKind::nodes`] indices (a programming error).
+    pub fn new(kind: CellKind, nodes: &[usize]) -> Cell {
+        assert_eq!(
+            nodes.len(),
+            kind.nodes(),
+            "a {} has {} nodes",
+            kind.name(),
+            kind.nodes()
+        );
+        fn take<const N: usize>(nodes: &[usize]) -> [usize; N] {
+            std::array::from_fn(|k| nodes[k])
+        }
+        match kind {
+            CellKind::Tri3 => Cell::Tri3(take(nodes)),
+            CellKind::Quad4 => Cell::Quad4(take(nodes)),
+            CellKind::Tet4 => Cell::Tet4(take(nodes)),
+            CellKind::Hex8 => Cell::Hex8(take(nodes)),
+            CellKind::Prism6 => Cell::Prism6(take(nodes)),
+            CellKind::Pyr5 => Cell::Pyr5(take(nodes)),
+            CellKind::Tri6 => Cell::Tri6(take(nodes)),
+            CellKind::Quad8 => Cell::Quad8(take(nodes)),
+            CellKind::Quad9 => Cell::Quad9(take(nodes)),
+            CellKind::Tet10 => Cell::Tet10(take(nodes)),
+            CellKind::Hex20 => Cell::Hex20(take(nodes)),
+            CellKind::Hex27 => Cell::Hex27(take(nodes)),
+            CellKind::Prism15 => Cell::Prism15(take(nodes)),
+            CellKind::Prism18 => Cell::Prism18(take(nodes)),
+        }
+    }
+
+    /// The cell's kind.
+    pub fn kind(&self) -> CellKind {
+        match self {
+            Cell::Tri3(_) => CellKind::Tri3,
+            Cell::Quad4(_) => CellKind::Quad4,
+            Cell::Tet4(_) => CellKind::Tet4,
+            Cell::Hex8(_) => CellKind::Hex8,
+            Cell::Prism6(_) => CellKind::Prism6,
+            Cell::Pyr5(_) => CellKind::Pyr5,
+            Cell::Tri6(_) => CellKind::Tri6,
+            Cell::Quad8(_) => CellKind::Quad8,
+            Cell::Quad9(_) => CellKind::Quad9,
+            Cell::Tet10(_) => CellKind::Tet10,
+            Cell::Hex20(_) => CellKind::Hex20,
+            Cell::Hex27(_) => CellKind::Hex27,
+            Cell::Prism15(_) => CellKind::Prism15,
+            Cell::Prism18(_) => CellKind::Prism18,
+        }
+    }
+
     /// The cell's node indices, in gmsh's order.
     pub fn nodes(&self) -> &[usize] {
-        match self {
-            Cell::Tri3(n) => n,
-            Cell::Quad4(n) => n,
-            Cell::Tet4(n) => n,
-            Cell::Hex8(n) => n,
-            Cell::Prism6(n) => n,
-            Cell::Pyr5(n) => n,
-        }
+        each_variant!(self, n => &n[..])
+    }
+
+    /// The cell's corners: its first [`CellKind::corners`] nodes.
+    pub fn corners(&self) -> &[usize] {
+        &self.nodes()[..self.kind().corners()]
     }
 
     /// The spatial dimension of the cell (2 or 3).
     pub fn dim(&self) -> usize {
-        match self {
-            Cell::Tri3(_) | Cell::Quad4(_) => 2,
-            Cell::Tet4(_) | Cell::Hex8(_) | Cell::Prism6(_) | Cell::Pyr5(_) => 3,
-        }
+        self.kind().dim()
     }
 
     /// The same cell on renumbered nodes: node p becomes `number(p)` (e.g. a mesh piece's own
     /// numbering).
     pub fn renumbered(&self, number: impl Fn(usize) -> usize) -> Cell {
-        match *self {
-            Cell::Tri3(n) => Cell::Tri3(n.map(number)),
-            Cell::Quad4(n) => Cell::Quad4(n.map(number)),
-            Cell::Tet4(n) => Cell::Tet4(n.map(number)),
-            Cell::Hex8(n) => Cell::Hex8(n.map(number)),
-            Cell::Prism6(n) => Cell::Prism6(n.map(number)),
-            Cell::Pyr5(n) => Cell::Pyr5(n.map(number)),
-        }
+        let mut c = *self;
+        each_variant!(&mut c, n => n.iter_mut().for_each(|p| *p = number(*p)));
+        c
     }
 
-    /// The cell with the opposite orientation (a mirror of its node order).
+    /// The cell with the opposite orientation (a mirror of its node order: ξ ↔ η).
     pub fn flipped(&self) -> Cell {
-        match *self {
-            Cell::Tri3([a, b, c]) => Cell::Tri3([a, c, b]),
-            Cell::Quad4([a, b, c, d]) => Cell::Quad4([a, d, c, b]),
-            Cell::Tet4([a, b, c, d]) => Cell::Tet4([a, c, b, d]),
-            Cell::Hex8([a, b, c, d, e, f, g, h]) => Cell::Hex8([a, d, c, b, e, h, g, f]),
-            Cell::Prism6([a, b, c, d, e, f]) => Cell::Prism6([a, c, b, d, f, e]),
-            Cell::Pyr5([a, b, c, d, e]) => Cell::Pyr5([a, d, c, b, e]),
-        }
+        let (nodes, mirror) = (self.nodes(), &self.kind().derived().mirror);
+        let mut c = *self;
+        each_variant!(&mut c, n => n.iter_mut().zip(mirror).for_each(|(p, &m)| *p = nodes[m]));
+        c
     }
 
-    /// The boundary facets of the cell (edges in 2D, faces in 3D), oriented outward.
+    /// The boundary facets of the cell (edges in 2D, faces in 3D), oriented outward, with their
+    /// second-order nodes on a second-order cell.
     pub fn facets(&self) -> impl Iterator<Item = Facet> + '_ {
         let n = self.nodes();
-        let table: &[&[usize]] = match self {
-            Cell::Tri3(_) => &[&TRI_EDGES[0], &TRI_EDGES[1], &TRI_EDGES[2]],
-            Cell::Quad4(_) => &[&QUAD_EDGES[0], &QUAD_EDGES[1], &QUAD_EDGES[2], &QUAD_EDGES[3]],
-            Cell::Tet4(_) => &[&TET_FACES[0], &TET_FACES[1], &TET_FACES[2], &TET_FACES[3]],
-            Cell::Hex8(_) => &[
-                &HEX_FACES[0],
-                &HEX_FACES[1],
-                &HEX_FACES[2],
-                &HEX_FACES[3],
-                &HEX_FACES[4],
-                &HEX_FACES[5],
-            ],
-            Cell::Prism6(_) => &PRISM_FACES,
-            Cell::Pyr5(_) => &PYRAMID_FACES,
-        };
-        table
+        let kind = self.kind();
+        kind.derived()
+            .facets
             .iter()
-            .map(move |local| Facet::from_slice(&local.iter().map(|&i| n[i]).collect::<Vec<_>>()))
+            .zip(kind.linear_facets())
+            .map(move |(local, corners)| {
+                let mut f = Facet {
+                    nodes: [0; MAX_FACET_NODES],
+                    len: local.len() as u8,
+                    corners: corners.len() as u8,
+                };
+                for (slot, &i) in f.nodes.iter_mut().zip(local) {
+                    *slot = n[i];
+                }
+                f
+            })
     }
 
-    /// The edges of the cell (the 1D skeleton), for the cell size h.
+    /// The edges between the cell's corners (the 1D skeleton), for the cell size h.
     pub fn edges(&self) -> Vec<[usize; 2]> {
         let n = self.nodes();
-        let local: &[[usize; 2]] = match self {
-            Cell::Tri3(_) => &TRI_EDGES,
-            Cell::Quad4(_) => &QUAD_EDGES,
-            Cell::Tet4(_) => &[[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]],
-            Cell::Hex8(_) => &[
-                [0, 1],
-                [1, 2],
-                [2, 3],
-                [3, 0],
-                [4, 5],
-                [5, 6],
-                [6, 7],
-                [7, 4],
-                [0, 4],
-                [1, 5],
-                [2, 6],
-                [3, 7],
-            ],
-            Cell::Prism6(_) => &[[0, 1], [1, 2], [2, 0], [3, 4], [4, 5], [5, 3], [0, 3], [1, 4], [2, 5]],
-            Cell::Pyr5(_) => &[[0, 1], [1, 2], [2, 3], [3, 0], [0, 4], [1, 4], [2, 4], [3, 4]],
-        };
-        local.iter().map(|&[a, b]| [n[a], n[b]]).collect()
+        self.kind().linear_edges().iter().map(|&[a, b]| [n[a], n[b]]).collect()
     }
 
-    /// VTK cell type id (5 triangle, 9 quad, 10 tetra, 12 hexahedron, 13 wedge, 14 pyramid).
+    /// VTK cell type id ([`CellKind::vtk_type`]).
     pub fn vtk_type(&self) -> u8 {
-        match self {
-            Cell::Tri3(_) => 5,
-            Cell::Quad4(_) => 9,
-            Cell::Tet4(_) => 10,
-            Cell::Hex8(_) => 12,
-            Cell::Prism6(_) => 13,
-            Cell::Pyr5(_) => 14,
-        }
+        self.kind().vtk_type()
     }
 
-    /// The positions of [`Cell::nodes`] in VTK's order: gmsh's, except for the prism, whose base
-    /// triangle VTK orients with its normal away from the other triangle (gmsh: towards it). A
-    /// pyramid is the same in both: the base, its right-hand normal towards the apex, then the
-    /// apex.
+    /// The positions of [`Cell::nodes`] in VTK's order: gmsh's corners, except the prism's, whose
+    /// base triangle VTK orients with its normal away from the other triangle (gmsh: towards
+    /// it), then VTK's own order of the second-order nodes (mesh/second_order). A pyramid is the
+    /// same in both: the base, its right-hand normal towards the apex, then the apex.
     pub fn vtk_order(&self) -> &'static [usize] {
-        match self {
-            Cell::Prism6(_) => &[0, 2, 1, 3, 5, 4],
-            c => &[0, 1, 2, 3, 4, 5, 6, 7][..c.nodes().len()],
-        }
+        &self.kind().derived().vtk_order
     }
 
     /// A short name for messages.
     pub fn name(&self) -> &'static str {
-        match self {
-            Cell::Tri3(_) => "triangle",
-            Cell::Quad4(_) => "quadrangle",
-            Cell::Tet4(_) => "tetrahedron",
-            Cell::Hex8(_) => "hexahedron",
-            Cell::Prism6(_) => "prism",
-            Cell::Pyr5(_) => "pyramid",
-        }
+        self.kind().name()
     }
 }
 
-/// A facet of the boundary: a 2-node edge (2D), a 3-node triangle or a 4-node quadrilateral
-/// face (3D), with its nodes in order.
+/// The most nodes of a facet (the 9-node quadrangle face of a 27-node hexahedron).
+const MAX_FACET_NODES: usize = 9;
+
+/// A facet of the boundary: an edge (2D) or a triangle or quadrilateral face (3D), with its
+/// corners first, then (on a second-order facet: a 3-node line, a 6-node triangle, an 8- or
+/// 9-node quadrangle) its second-order nodes in gmsh's order.
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Facet {
-    nodes: [usize; 4],
+    nodes: [usize; MAX_FACET_NODES],
     len: u8,
+    corners: u8,
 }
 
 impl Facet {
-    /// A facet from 2, 3 or 4 node indices.
+    /// A first-order facet from 2, 3 or 4 node indices.
     ///
     /// # Panics
     /// If `nodes` has another length (a programming error).
     pub fn from_slice(nodes: &[usize]) -> Facet {
         assert!((2..=4).contains(&nodes.len()), "a facet has 2, 3 or 4 nodes");
-        let mut n = [0; 4];
+        Facet::with_corners(nodes, nodes.len())
+    }
+
+    /// A facet with `corners` corners (2, 3 or 4) and, after them, its second-order nodes (none,
+    /// or 1 on a line, 3 on a triangle, 4 or 5 on a quadrangle).
+    ///
+    /// # Panics
+    /// If the counts do not fit one of those (a programming error).
+    pub fn with_corners(nodes: &[usize], corners: usize) -> Facet {
+        let extra = nodes.len() - corners;
+        assert!(
+            matches!((corners, extra), (2, 0 | 1) | (3, 0 | 3) | (4, 0 | 4 | 5)),
+            "a facet of {corners} corners with {extra} more nodes"
+        );
+        let mut n = [0; MAX_FACET_NODES];
         n[..nodes.len()].copy_from_slice(nodes);
         Facet {
             nodes: n,
             len: nodes.len() as u8,
+            corners: corners as u8,
         }
     }
 
-    /// The facet's nodes in order.
+    /// The facet's nodes: its corners, then its second-order nodes.
     pub fn nodes(&self) -> &[usize] {
         &self.nodes[..self.len as usize]
+    }
+
+    /// The facet's corners, in order.
+    pub fn corners(&self) -> &[usize] {
+        &self.nodes[..self.corners as usize]
     }
 
     /// Number of nodes.
     pub fn len(&self) -> usize {
         self.len as usize
+    }
+
+    /// True on a second-order facet (nodes beyond its corners).
+    pub fn is_second_order(&self) -> bool {
+        self.len > self.corners
     }
 
     /// Never true: a facet has at least two nodes.
@@ -238,17 +506,17 @@ impl Facet {
 
     /// The dimension of the facet (1 for an edge, 2 for a face).
     pub fn dim(&self) -> usize {
-        if self.len == 2 {
+        if self.corners == 2 {
             1
         } else {
             2
         }
     }
 
-    /// The nodes sorted: the same key for a facet and its reverse.
+    /// The corners sorted: the same key for a facet and its reverse, of either order.
     pub fn key(&self) -> [usize; 4] {
         let mut k = [usize::MAX; 4];
-        k[..self.len()].copy_from_slice(self.nodes());
+        k[..self.corners().len()].copy_from_slice(self.corners());
         k.sort_unstable();
         k
     }

@@ -2,13 +2,15 @@
 //! functions, their physical gradients and the Jacobian determinant at a quadrature point.
 
 use super::quadrature::{
-    pyramid_collapsed_27, tensor_gauss_3, tet_duffy_27, QuadPoint, HEX_GAUSS_2X2X2, PRISM_6POINT, PYRAMID_8POINT,
-    QUAD_GAUSS_2X2, TET_4POINT, TET_CENTROID, TRI6, TRI_3POINT, TRI_CENTROID,
+    kept, prism_rule, pyramid_collapsed_27, tensor_gauss, tensor_gauss_3, tet_duffy, tet_duffy_27, triangle_duffy,
+    QuadPoint, HEX_GAUSS_2X2X2, PRISM_6POINT, PYRAMID_8POINT, QUAD_GAUSS_2X2, TET_4POINT, TET_CENTROID, TRI_3POINT,
+    TRI_6POINT, TRI_CENTROID,
 };
-use crate::mesh::Cell;
+use crate::mesh::{Cell, CellKind};
+use std::sync::OnceLock;
 
-/// Largest number of nodes of a supported cell (the hexahedron).
-pub const MAX_NODES: usize = 8;
+/// Largest number of nodes of a supported cell (the 27-node hexahedron).
+pub const MAX_NODES: usize = 27;
 
 /// Shape function values and physical gradients at one point of one cell.
 #[derive(Clone, Copy, Debug)]
@@ -31,6 +33,10 @@ pub fn reference(cell: &Cell, xi: [f64; 3]) -> (usize, [f64; MAX_NODES], [[f64; 
     let mut g = [[0.0; 3]; MAX_NODES];
     let [x, y, z] = xi;
     match cell {
+        c if c.kind().order() == 2 => {
+            super::second_order::shape_functions(c.kind(), xi, &mut v, &mut g);
+            (c.nodes().len(), v, g)
+        }
         Cell::Tri3(_) => {
             v[..3].copy_from_slice(&[1.0 - x - y, x, y]);
             g[..3].copy_from_slice(&[[-1.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
@@ -101,6 +107,7 @@ pub fn reference(cell: &Cell, xi: [f64; 3]) -> (usize, [f64; MAX_NODES], [[f64; 
             g[4] = [0.0, 0.0, 1.0];
             (5, v, g)
         }
+        _ => unreachable!("the second-order kinds are the first arm"),
     }
 }
 
@@ -175,71 +182,69 @@ pub fn shape_at<const D: usize>(cell: &Cell, points: &[[f64; D]], xi: [f64; 3]) 
     }
 }
 
-/// The quadrature rule for the stiffness of a cell (exact for P1; 2^D Gauss for Q1).
+/// The quadrature rule for the stiffness of a cell (docs/method.md §19.2): exact for P1; 2^D
+/// Gauss for Q1; on the second-order cells exact for their stiffness on straight-sided
+/// (affine) cells — the 6-point rule on 6-node triangles (quartics: curved cells' non-constant
+/// J too), the 4-point rule on 10-node tetrahedra (quadratics, what straight tetrahedra need),
+/// 3 Gauss points per direction on quadrangles, hexahedra and in ζ on prisms.
 pub fn stiffness_rule(cell: &Cell) -> &'static [QuadPoint] {
-    match cell {
-        Cell::Tri3(_) => &TRI_CENTROID,
-        Cell::Quad4(_) => &QUAD_GAUSS_2X2,
-        Cell::Tet4(_) => &TET_CENTROID,
-        Cell::Hex8(_) => &HEX_GAUSS_2X2X2,
-        Cell::Prism6(_) => &PRISM_6POINT,
-        Cell::Pyr5(_) => &PYRAMID_8POINT,
+    static GAUSS_3X3: OnceLock<Vec<QuadPoint>> = OnceLock::new();
+    static GAUSS_3X3X3: OnceLock<Vec<QuadPoint>> = OnceLock::new();
+    static PRISM_18: OnceLock<Vec<QuadPoint>> = OnceLock::new();
+    match cell.kind() {
+        CellKind::Tri3 => &TRI_CENTROID,
+        CellKind::Quad4 => &QUAD_GAUSS_2X2,
+        CellKind::Tet4 => &TET_CENTROID,
+        CellKind::Hex8 => &HEX_GAUSS_2X2X2,
+        CellKind::Prism6 => &PRISM_6POINT,
+        CellKind::Pyr5 => &PYRAMID_8POINT,
+        CellKind::Tri6 => &TRI_6POINT,
+        CellKind::Quad8 | CellKind::Quad9 => kept(&GAUSS_3X3, || tensor_gauss(3, 2)),
+        CellKind::Tet10 => &TET_4POINT,
+        CellKind::Hex20 | CellKind::Hex27 => kept(&GAUSS_3X3X3, || tensor_gauss(3, 3)),
+        CellKind::Prism15 | CellKind::Prism18 => kept(&PRISM_18, || prism_rule(&TRI_6POINT, 3)),
     }
 }
 
-/// The quadrature rule for loads on a cell.
+/// The quadrature rule for loads on a cell (on second-order cells: the stiffness rule, but the
+/// 27-point collapsed rule on 10-node tetrahedra, so that N_a f is integrated to degree 3).
 pub fn load_rule(cell: &Cell) -> &'static [QuadPoint] {
-    match cell {
-        Cell::Tri3(_) => &TRI_3POINT,
-        Cell::Quad4(_) => &QUAD_GAUSS_2X2,
-        Cell::Tet4(_) => &TET_4POINT,
-        Cell::Hex8(_) => &HEX_GAUSS_2X2X2,
-        Cell::Prism6(_) => &PRISM_6POINT,
-        Cell::Pyr5(_) => &PYRAMID_8POINT,
+    static TET_27: OnceLock<Vec<QuadPoint>> = OnceLock::new();
+    match cell.kind() {
+        CellKind::Tri3 => &TRI_3POINT,
+        CellKind::Tet4 => &TET_4POINT,
+        CellKind::Tet10 => kept(&TET_27, tet_duffy_27),
+        _ => stiffness_rule(cell),
     }
 }
 
-/// The rule for error integrals (exact beyond the degree the error norms need).
+/// The rule for error integrals (exact beyond the degree the error norms need: 4 Gauss points
+/// per direction on the second-order cells, whose errors fall at order 3 in L²).
 pub fn error_rule(cell: &Cell) -> Vec<QuadPoint> {
-    match cell {
-        Cell::Tri3(_) => TRI6
-            .iter()
-            .map(|&(xi, w)| QuadPoint {
-                xi: [xi[0], xi[1], 0.0],
-                weight: w,
-            })
-            .collect(),
-        Cell::Quad4(_) => tensor_gauss_3(2),
-        Cell::Tet4(_) => tet_duffy_27(),
-        Cell::Hex8(_) => tensor_gauss_3(3),
-        Cell::Prism6(_) => {
-            // the triangle's 6-point rule times 3-point Gauss in ζ
-            let gauss = [
-                (-(0.6f64).sqrt(), 5.0 / 9.0),
-                (0.0, 8.0 / 9.0),
-                ((0.6f64).sqrt(), 5.0 / 9.0),
-            ];
-            TRI6.iter()
-                .flat_map(|&(xi, w)| {
-                    gauss.iter().map(move |&(z, wz)| QuadPoint {
-                        xi: [xi[0], xi[1], z],
-                        weight: w * wz,
-                    })
-                })
-                .collect()
-        }
-        Cell::Pyr5(_) => pyramid_collapsed_27(),
+    match cell.kind() {
+        CellKind::Tri3 => TRI_6POINT.to_vec(),
+        CellKind::Quad4 => tensor_gauss_3(2),
+        CellKind::Tet4 => tet_duffy_27(),
+        CellKind::Hex8 => tensor_gauss_3(3),
+        // the triangle's 6-point rule times 3-point Gauss in ζ
+        CellKind::Prism6 => prism_rule(&TRI_6POINT, 3),
+        CellKind::Pyr5 => pyramid_collapsed_27(),
+        CellKind::Tri6 => triangle_duffy(4),
+        CellKind::Quad8 | CellKind::Quad9 => tensor_gauss(4, 2),
+        CellKind::Tet10 => tet_duffy(4),
+        CellKind::Hex20 | CellKind::Hex27 => tensor_gauss(4, 3),
+        CellKind::Prism15 | CellKind::Prism18 => prism_rule(&triangle_duffy(4), 4),
     }
 }
 
-/// The cell's centroid in reference coordinates.
+/// The cell's centroid in reference coordinates (its first-order kind's).
 pub fn reference_centroid(cell: &Cell) -> [f64; 3] {
-    match cell {
-        Cell::Tri3(_) | Cell::Prism6(_) => [1.0 / 3.0, 1.0 / 3.0, 0.0],
-        Cell::Quad4(_) | Cell::Hex8(_) => [0.0, 0.0, 0.0],
-        Cell::Tet4(_) => [0.25, 0.25, 0.25],
+    match cell.kind().linear() {
+        CellKind::Tri3 | CellKind::Prism6 => [1.0 / 3.0, 1.0 / 3.0, 0.0],
+        CellKind::Tet4 => [0.25, 0.25, 0.25],
         // the centroid of the reference pyramid (ζ̄ = ∫ζ(1 − ζ)²/∫(1 − ζ)² = 1/4)
-        Cell::Pyr5(_) => [0.0, 0.0, 0.25],
+        CellKind::Pyr5 => [0.0, 0.0, 0.25],
+        _ => [0.0, 0.0, 0.0],
     }
 }
 

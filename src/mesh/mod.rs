@@ -47,12 +47,14 @@ pub mod quadrature;
 
 mod read;
 
+mod second_order;
+
 pub mod structured;
 
 pub mod topology;
 pub mod vector;
 
-pub use cell::{Cell, Facet};
+pub use cell::{Cell, CellKind, Facet};
 
 pub use conformity::MeshDefect;
 

@@ -141,14 +141,82 @@ pub const GAUSS_3: [(f64, f64); 3] = [
     (0.774_596_669_241_483_4, 5.0 / 9.0),
 ];
 
+/// 4-point Gauss rule on [−1, 1]: exact for degree 7.
+pub const GAUSS_4: [(f64, f64); 4] = [
+    (-0.861_136_311_594_052_6, 0.347_854_845_137_453_9),
+    (-0.339_981_043_584_856_3, 0.652_145_154_862_546_1),
+    (0.339_981_043_584_856_3, 0.652_145_154_862_546_1),
+    (0.861_136_311_594_052_6, 0.347_854_845_137_453_9),
+];
+
+/// The n-point Gauss rule on [−1, 1] (n = 2, 3 or 4).
+pub fn gauss(n: usize) -> &'static [(f64, f64)] {
+    const GAUSS_2: [(f64, f64); 2] = [(-G, 1.0), (G, 1.0)];
+    match n {
+        2 => &GAUSS_2,
+        3 => &GAUSS_3,
+        _ => &GAUSS_4,
+    }
+}
+
+/// A rule made once and kept for the run (the second-order cells' tensor and collapsed rules).
+pub fn kept(
+    slot: &'static std::sync::OnceLock<Vec<QuadPoint>>,
+    make: impl FnOnce() -> Vec<QuadPoint>,
+) -> &'static [QuadPoint] {
+    slot.get_or_init(make)
+}
+
+/// The 6-point rule on the reference triangle ([`TRI6`], exact for quartics) as quadrature points.
+pub const TRI_6POINT: [QuadPoint; 6] = [
+    qp(TRI6[0].0[0], TRI6[0].0[1], 0.0, TRI6[0].1),
+    qp(TRI6[1].0[0], TRI6[1].0[1], 0.0, TRI6[1].1),
+    qp(TRI6[2].0[0], TRI6[2].0[1], 0.0, TRI6[2].1),
+    qp(TRI6[3].0[0], TRI6[3].0[1], 0.0, TRI6[3].1),
+    qp(TRI6[4].0[0], TRI6[4].0[1], 0.0, TRI6[4].1),
+    qp(TRI6[5].0[0], TRI6[5].0[1], 0.0, TRI6[5].1),
+];
+
+/// A triangle rule times the n-point Gauss rule in ζ: a rule on the reference prism.
+pub fn prism_rule(triangle: &[QuadPoint], n: usize) -> Vec<QuadPoint> {
+    triangle
+        .iter()
+        .flat_map(|t| {
+            gauss(n)
+                .iter()
+                .map(move |&(z, wz)| qp(t.xi[0], t.xi[1], z, t.weight * wz))
+        })
+        .collect()
+}
+
+/// A collapsed (Duffy) rule on the reference triangle from n Gauss points per direction (n²
+/// points, positive weights, exact for degree 2n − 2): error integrals on 6-node triangles.
+pub fn triangle_duffy(n: usize) -> Vec<QuadPoint> {
+    let mut out = Vec::with_capacity(n * n);
+    for &(a, wa) in gauss(n) {
+        for &(b, wb) in gauss(n) {
+            // (u, v) ∈ [0, 1]² → ξ = u, η = (1 − u) v
+            let (u, v) = (0.5 * (a + 1.0), 0.5 * (b + 1.0));
+            out.push(qp(u, (1.0 - u) * v, 0.0, wa * wb / 4.0 * (1.0 - u)));
+        }
+    }
+    out
+}
+
 /// A collapsed (Duffy) tensor rule on the reference tetrahedron from 3 Gauss points per
 /// direction: 27 points, positive weights, exact for polynomials of degree 3 (used for error
 /// integrals, where its cost does not matter).
 pub fn tet_duffy_27() -> Vec<QuadPoint> {
-    let mut out = Vec::with_capacity(27);
-    for &(a, wa) in &GAUSS_3 {
-        for &(b, wb) in &GAUSS_3 {
-            for &(c, wc) in &GAUSS_3 {
+    tet_duffy(3)
+}
+
+/// The collapsed rule on the reference tetrahedron from n Gauss points per direction (n³
+/// points, exact for degree 2n − 3).
+pub fn tet_duffy(n: usize) -> Vec<QuadPoint> {
+    let mut out = Vec::with_capacity(n * n * n);
+    for &(a, wa) in gauss(n) {
+        for &(b, wb) in gauss(n) {
+            for &(c, wc) in gauss(n) {
                 // (u, v, w) ∈ [0, 1]³ → ξ = u, η = (1 − u) v, ζ = (1 − u)(1 − v) w
                 let (u, v, w) = (0.5 * (a + 1.0), 0.5 * (b + 1.0), 0.5 * (c + 1.0));
                 let jac = (1.0 - u) * (1.0 - u) * (1.0 - v);
@@ -166,13 +234,18 @@ pub fn tet_duffy_27() -> Vec<QuadPoint> {
 
 /// 3×3 (×3) Gauss on [−1, 1]^d (error integrals on quadrilaterals and hexahedra).
 pub fn tensor_gauss_3(dim: usize) -> Vec<QuadPoint> {
+    tensor_gauss(3, dim)
+}
+
+/// n × n (× n) Gauss on [−1, 1]^d.
+pub fn tensor_gauss(n: usize, dim: usize) -> Vec<QuadPoint> {
     let mut out = Vec::new();
-    for &(a, wa) in &GAUSS_3 {
-        for &(b, wb) in &GAUSS_3 {
+    for &(a, wa) in gauss(n) {
+        for &(b, wb) in gauss(n) {
             if dim == 2 {
                 out.push(qp(a, b, 0.0, wa * wb));
             } else {
-                for &(c, wc) in &GAUSS_3 {
+                for &(c, wc) in gauss(n) {
                     out.push(qp(a, b, c, wa * wb * wc));
                 }
             }

@@ -5,7 +5,9 @@
 //! `Gamma3` (dim 1, tag 3, y = 0), `Gamma2_top` (dim 1, tag 4, y = ly only; its facets are also
 //! in Gamma2) and `Omega` (dim 2, tag 5, every cell).
 
+use super::second_order::corner_support;
 use super::{Cell, Facet, Mesh, PhysicalGroup};
+use std::collections::HashMap;
 use std::path::PathBuf;
 
 /// The cell shape of [`rectangle`].
@@ -315,6 +317,77 @@ pub fn stack<const D: usize>(lower: Mesh<D>, upper: Mesh<D>, lift: f64) -> Mesh<
         points,
         cell_tags: (1..=cells.len()).collect(),
         cells,
+        groups,
+    }
+}
+
+/// The second-order mesh on the cells of a first-order `mesh` (docs/method.md §19): a node at
+/// the midpoint of every edge, and with `complete` at the centre of every quadrangular face and
+/// hexahedron (9-node quadrangles, 27-node hexahedra, 18-node prisms; else 8, 20 and 15 nodes).
+/// The geometry stays the first-order one (straight edges); a curved map can move the points
+/// afterwards. Boundary groups get their facets' second-order nodes.
+///
+/// # Panics
+/// If the mesh is already of second order or has pyramids (a programming error).
+pub fn elevate<const D: usize>(mesh: &Mesh<D>, complete: bool) -> Mesh<D> {
+    let mut points = mesh.points.clone();
+    let mut added: HashMap<Vec<usize>, usize> = HashMap::new();
+    let mut node_at = |corners: &[usize]| -> usize {
+        if let [p] = corners {
+            return *p;
+        }
+        let mut key = corners.to_vec();
+        key.sort_unstable();
+        *added.entry(key).or_insert_with(|| {
+            points.push(std::array::from_fn(|k| {
+                corners.iter().map(|&p| points[p][k]).sum::<f64>() / corners.len() as f64
+            }));
+            points.len() - 1
+        })
+    };
+    let cells: Vec<Cell> = mesh
+        .cells
+        .iter()
+        .map(|c| {
+            let kind = c
+                .kind()
+                .second_order(complete)
+                .expect("a first-order cell other than a pyramid");
+            let n = c.nodes();
+            let nodes: Vec<usize> = (0..kind.nodes())
+                .map(|a| node_at(&corner_support(kind, a).iter().map(|&i| n[i]).collect::<Vec<_>>()))
+                .collect();
+            Cell::new(kind, &nodes)
+        })
+        .collect();
+    let groups = mesh
+        .groups
+        .iter()
+        .map(|g| {
+            let facets = g
+                .facets
+                .iter()
+                .map(|f| {
+                    let c = f.nodes();
+                    let m = c.len();
+                    let mut nodes = c.to_vec();
+                    for i in 0..if m == 2 { 1 } else { m } {
+                        nodes.push(node_at(&[c[i], c[(i + 1) % m]]));
+                    }
+                    if m == 4 && complete {
+                        nodes.push(node_at(c));
+                    }
+                    Facet::with_corners(&nodes, m)
+                })
+                .collect();
+            PhysicalGroup { facets, ..g.clone() }
+        })
+        .collect();
+    Mesh {
+        path: PathBuf::from(format!("{} (second order)", mesh.path.display())),
+        points,
+        cells,
+        cell_tags: mesh.cell_tags.clone(),
         groups,
     }
 }

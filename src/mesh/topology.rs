@@ -2,9 +2,10 @@
 //! facets with outward normals and nodal quadrature weights (docs/method.md §2, §8).
 
 use super::element::{reference, MAX_NODES};
+use super::quadrature::{QuadPoint, EDGE_GAUSS_3, TRI_3POINT};
 use super::vector::{cross, norm};
-use super::Cell;
 use super::{fmt_point, Facet, GroupSelector, Mesh, MeshError, PhysicalGroup};
+use super::{Cell, CellKind};
 use crate::mesh::quadrature::QUAD_GAUSS_2X2;
 use rustc_hash::FxHashMap as HashMap;
 
@@ -41,6 +42,18 @@ impl<const D: usize> BoundaryPart<D> {
         let two_pi = 2.0 * std::f64::consts::PI;
         self.weights.iter_mut().for_each(|w| *w = 0.0);
         for (f, &length) in self.facets.iter().zip(&self.facet_lengths) {
+            if f.is_second_order() {
+                // ∫ N_a 2πr ds by the edge's rule
+                for q in facet_rule(f) {
+                    let (value, dn, x) = facet_map(points, f, q.xi);
+                    let da = two_pi * x[0] * norm(&dn) * q.weight;
+                    for (a, &p) in f.nodes().iter().enumerate() {
+                        let k = self.nodes.binary_search(&p).expect("a facet's node is on its part");
+                        self.weights[k] += value[a] * da;
+                    }
+                }
+                continue;
+            }
             let [a, b] = [f.nodes()[0], f.nodes()[1]];
             let (ra, rb) = (points[a][0], points[b][0]);
             for (p, (r1, r2)) in [(a, (ra, rb)), (b, (rb, ra))] {
@@ -108,10 +121,112 @@ pub fn face_area_vector<const D: usize>(
     (value, cross(t1, t2))
 }
 
+/// The reference cell of a face: a triangle or a quadrangle of the face's nodes' count.
+fn face_reference(face: &Facet) -> Cell {
+    let kind = match (face.corners().len(), face.len()) {
+        (3, 3) => CellKind::Tri3,
+        (3, _) => CellKind::Tri6,
+        (4, 4) => CellKind::Quad4,
+        (4, 8) => CellKind::Quad8,
+        _ => CellKind::Quad9,
+    };
+    let local: Vec<usize> = (0..face.len()).collect();
+    Cell::new(kind, &local)
+}
+
+/// A quadrature rule on a facet's reference: on an edge, s ∈ [0, 1] with weights summing to 1
+/// (3-point Gauss: quintics); on a face, its reference cell's (the 3-point rule or 2 × 2 Gauss
+/// on first-order faces, the 6-point rule or 3 × 3 Gauss on second-order ones, docs/method.md §19.2).
+pub(crate) fn facet_rule(f: &Facet) -> &'static [QuadPoint] {
+    const EDGE: [QuadPoint; 3] = [
+        QuadPoint {
+            xi: [EDGE_GAUSS_3[0].0, 0.0, 0.0],
+            weight: EDGE_GAUSS_3[0].1,
+        },
+        QuadPoint {
+            xi: [EDGE_GAUSS_3[1].0, 0.0, 0.0],
+            weight: EDGE_GAUSS_3[1].1,
+        },
+        QuadPoint {
+            xi: [EDGE_GAUSS_3[2].0, 0.0, 0.0],
+            weight: EDGE_GAUSS_3[2].1,
+        },
+    ];
+    match (f.dim(), f.len()) {
+        (1, _) => &EDGE,
+        (_, 3) => &TRI_3POINT,
+        (_, 4) => &QUAD_GAUSS_2X2,
+        _ => crate::mesh::element::stiffness_rule(&face_reference(f)),
+    }
+}
+
+/// A facet's map at the reference point `xi` (an edge: s = ξ ∈ [0, 1] from its first corner to
+/// its second; a face: its reference cell's ξ, η): the shape values, the area vector (the
+/// outward normal times ds/ds_ref: (dy, −dx)/ds on an edge, ∂x/∂ξ × ∂x/∂η on a face) and the
+/// point, as x₀ + Σ_a N_a (x_a − x₀) (a point of a facet in a plane x_k = c gets exactly c).
+pub(crate) fn facet_map<const D: usize>(
+    points: &[[f64; D]],
+    f: &Facet,
+    xi: [f64; 3],
+) -> ([f64; MAX_NODES], [f64; 3], [f64; D]) {
+    let (n, value, grad) = if f.dim() == 1 {
+        let s = xi[0];
+        let (mut v, mut g) = ([0.0; MAX_NODES], [[0.0; 3]; MAX_NODES]);
+        if f.len() == 2 {
+            v[..2].copy_from_slice(&[1.0 - s, s]);
+            (g[0][0], g[1][0]) = (-1.0, 1.0);
+        } else {
+            // the 3-node line: its ends, then its midpoint
+            v[..3].copy_from_slice(&[(1.0 - s) * (1.0 - 2.0 * s), s * (2.0 * s - 1.0), 4.0 * s * (1.0 - s)]);
+            (g[0][0], g[1][0], g[2][0]) = (4.0 * s - 3.0, 4.0 * s - 1.0, 4.0 - 8.0 * s);
+        }
+        (f.len(), v, g)
+    } else {
+        reference(&face_reference(f), xi)
+    };
+    let nodes = f.nodes();
+    let x0 = points[nodes[0]];
+    let (mut t1, mut t2, mut x) = ([0.0; 3], [0.0; 3], x0);
+    for a in 0..n {
+        let p = points[nodes[a]];
+        for k in 0..D {
+            t1[k] += grad[a][0] * p[k];
+            t2[k] += grad[a][1] * p[k];
+            if a > 0 {
+                x[k] += value[a] * (p[k] - x0[k]);
+            }
+        }
+    }
+    let area = if f.dim() == 1 {
+        [t1[1], -t1[0], 0.0]
+    } else {
+        cross(t1, t2)
+    };
+    (value, area, x)
+}
+
 /// Quadrature of one facet: for each node, ∫ N_a ds and ∫ N_a n ds (n the outward unit normal,
-/// so the second is an area vector), and the facet's measure.
+/// so the second is an area vector), and the facet's measure. On a second-order facet these are
+/// the integrals of its own shape functions over the curved facet (a 6-node triangle's corners
+/// get 0, an 8-node quadrangle's corners a negative share: docs/method.md §19.3).
 pub(crate) fn facet_integrals<const D: usize>(points: &[[f64; D]], f: &Facet) -> (Vec<f64>, Vec<[f64; 3]>, f64) {
     let x = |i: usize| points[f.nodes()[i]];
+    if f.is_second_order() {
+        let n = f.len();
+        let (mut w, mut nv, mut measure) = (vec![0.0; n], vec![[0.0; 3]; n], 0.0);
+        for q in facet_rule(f) {
+            let (value, dn, _) = facet_map(points, f, q.xi);
+            let da = norm(&dn) * q.weight;
+            measure += da;
+            for a in 0..n {
+                w[a] += value[a] * da;
+                for k in 0..3 {
+                    nv[a][k] += value[a] * dn[k] * q.weight;
+                }
+            }
+        }
+        return (w, nv, measure);
+    }
     match f.len() {
         2 => {
             let (d, len) = edge_area_vector(&x(0), &x(1));

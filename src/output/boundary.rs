@@ -47,7 +47,7 @@ impl<const D: usize> ContactBoundary<D> {
             }
             for f in &part.facets {
                 let l: Vec<usize> = f.nodes().iter().map(|&p| local(p)).collect();
-                facets.push(Facet::from_slice(&l));
+                facets.push(Facet::with_corners(&l, f.corners().len()));
                 facet_groups.push(*tag);
             }
         }

@@ -10,9 +10,9 @@
 //! Carrying is nodal interpolation: exact for nested meshes (a coarse Q1/P1 field is itself
 //! in the fine space) and for linear fields on any meshes.
 
-use crate::mesh::element::{invert, map_at, reference, shape_at, MAX_NODES};
+use crate::mesh::element::{invert, map_at, reference, reference_centroid, shape_at, MAX_NODES};
 use crate::mesh::vector::distance;
-use crate::mesh::{Cell, Mesh};
+use crate::mesh::{Cell, CellKind, Mesh};
 
 /// Relative tolerance (of the mesh diameter) for points on or just outside the boundary.
 pub const OUTSIDE_TOLERANCE: f64 = 1e-10;
@@ -416,12 +416,7 @@ pub fn reference_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x
         map_at(cell, points, n, &v, &g)
     };
     let simplex = matches!(cell, Cell::Tri3(_) | Cell::Tet4(_));
-    let start = match cell {
-        Cell::Tri3(_) | Cell::Prism6(_) => [1.0 / 3.0, 1.0 / 3.0, 0.0],
-        Cell::Tet4(_) => [0.25; 3],
-        Cell::Quad4(_) | Cell::Hex8(_) => [0.0; 3],
-        Cell::Pyr5(_) => [0.0, 0.0, 0.25],
-    };
+    let start = reference_centroid(cell);
     let Some(xi) = newton(map, x, start, size) else {
         return ([0.0; 3], f64::INFINITY);
     };
@@ -439,7 +434,25 @@ pub fn reference_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x
                 -s.value[a] / g
             })
             .fold(0.0, f64::max)
-    } else if D == 2 {
+    } else if cell.kind().is_simplex() {
+        // a second-order (curved) simplex: inside when every barycentric coordinate is ≥ 0; else
+        // the distance to the map of the reference point clamped into the simplex (an upper
+        // bound, exact across one face)
+        let dim = cell.dim();
+        let sum: f64 = xi[..dim].iter().sum();
+        if xi[..dim].iter().all(|&v| v >= 0.0) && sum <= 1.0 {
+            0.0
+        } else {
+            let mut c = xi.map(|v| v.max(0.0));
+            c[dim..].iter_mut().for_each(|v| *v = 0.0);
+            let s: f64 = c.iter().sum();
+            if s > 1.0 {
+                c.iter_mut().for_each(|v| *v /= s);
+            }
+            let (y, _) = map(c);
+            distance(&x, &y)
+        }
+    } else if let Cell::Quad4(_) = cell {
         // the edges of a Q1 quadrilateral are straight: the distance to the polygon
         let corner: Vec<[f64; 2]> = nodes.iter().map(|&p| [points[p][0], points[p][1]]).collect();
         let at = [x[0], x[1]];
@@ -448,7 +461,7 @@ pub fn reference_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x
         } else {
             polygon_distance(&corner, at)
         }
-    } else if let Cell::Prism6(_) = cell {
+    } else if cell.kind().linear() == CellKind::Prism6 {
         // triangle × segment: inside when ξ, η ≥ 0, ξ + η ≤ 1, |ζ| ≤ 1; else the distance to the
         // map of the nearest such point (clamped: an upper bound, exact across one face)
         let inside = xi[0] >= 0.0 && xi[1] >= 0.0 && xi[0] + xi[1] <= 1.0 && xi[2].abs() <= 1.0;

@@ -24,7 +24,8 @@ impl Topology<'_> {
     pub(crate) fn nodes(&self, i: usize) -> &[usize] {
         match self {
             Topology::Cells(c) => c[i].nodes(),
-            Topology::Facets(f) => f[i].nodes(),
+            // a second-order facet is drawn by its corners (polygons have no midside nodes)
+            Topology::Facets(f) => f[i].corners(),
         }
     }
 
