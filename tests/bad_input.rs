@@ -318,6 +318,7 @@ fn unknown_and_unsupported_element_types() {
             "gmsh -2 -order 1",
         ],
     );
+    // a second-order line on first-order cells: the orders must match
     let quadratic = base.replacen("\n1 1 2 1 1 11 6\n", "\n1 8 2 1 1 11 6 3\n", 1);
     assert_ne!(quadratic, base);
     let case = Case::new("type8.msh", quadratic.as_bytes());

@@ -171,3 +171,213 @@ fn serendipity_quadrangles_lose_quadratics_on_distorted_cells() {
     let err = patch_error(&q2, &["Gamma1", "Gamma2", "Gamma3"], elevate(&linear, false));
     assert!(err > 1e-6, "nodal error {err:e}");
 }
+
+/// Observed order between two levels.
+fn order(h: [f64; 2], e: [f64; 2]) -> f64 {
+    (e[0] / e[1]).ln() / (h[0] / h[1]).ln()
+}
+
+/// The manufactured solution of tests/elasticity.rs (u = (sin x cos y, x² sin y), clamped at
+/// x = 0, its tractions elsewhere) on second-order meshes of (0, 2) × (0, 1), interior corners
+/// moved by 20 % of h (the Lagrange kinds; the 8-node quadrangles on the unmoved grid): H¹
+/// order 2 and L² order 3 (docs/method.md §19.4), fitted over n = 4, 8, 16 within 0.15.
+#[test]
+fn manufactured_solution_converges_at_orders_two_and_three_in_2d() {
+    let scene = manufactured_scene();
+    for (shape, complete) in [
+        (CellShape::Tri, true),
+        (CellShape::Quad, true),
+        (CellShape::Quad, false),
+    ] {
+        let (mut hs, mut h1, mut l2) = (vec![], vec![], vec![]);
+        let mut label = String::new();
+        for n in [4, 8, 16] {
+            let mut linear = rectangle_with_sides(2.0, 1.0, 2 * n, n, shape);
+            if complete {
+                distort_off_groups(&mut linear, 0.2);
+            }
+            let mesh = elevate(&linear, complete);
+            label = format!("{:?}", mesh.cells[0].kind());
+            let (sim, _, sink) = solve_in_memory(&scene, mesh).unwrap();
+            let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
+            let e = errors(&sim.mesh.cells, &sim.mesh.points, &u, manufactured_exact);
+            hs.push(1.0 / n as f64);
+            h1.push(e.h1_seminorm);
+            l2.push(e.l2);
+        }
+        let (p1, p2) = (fitted_order(&hs, &h1), fitted_order(&hs, &l2));
+        eprintln!("{label}: H¹ {h1:?} (order {p1:.3}), L² {l2:?} (order {p2:.3})");
+        assert!((p1 - 2.0).abs() <= 0.15, "{label}: H¹ order {p1} (errors {h1:?})");
+        assert!((p2 - 3.0).abs() <= 0.15, "{label}: L² order {p2} (errors {l2:?})");
+    }
+}
+
+fn read<const D: usize>(name: &str) -> Mesh<D> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes").join(name);
+    read_mesh::<D>(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Lamé: the cylinder 1 ≤ r ≤ 2 under internal pressure p, plane strain: u = (A + B/r²) x with
+/// A = p(1 + ν)(1 − 2ν)/(3E), B = 4p(1 + ν)/(3E) (a = 1, b = 2), and its gradient.
+fn lame(x: [f64; 2], p: f64) -> ([f64; 2], [[f64; 2]; 2]) {
+    let (a, b) = (
+        p * (1.0 + NU) * (1.0 - 2.0 * NU) / (3.0 * E),
+        4.0 * p * (1.0 + NU) / (3.0 * E),
+    );
+    let r2 = x[0] * x[0] + x[1] * x[1];
+    let f = a + b / r2;
+    let g = std::array::from_fn(|i| {
+        std::array::from_fn(|j| if i == j { f } else { 0.0 } - 2.0 * b * x[i] * x[j] / (r2 * r2))
+    });
+    ([f * x[0], f * x[1]], g)
+}
+
+/// The quarter ring (meshes/ring.geo) under internal pressure on gmsh's meshes of order 1 and
+/// 2 of the same curved boundary (n = 2, 4, 8, 16 cells across the wall): the second-order
+/// meshes' arcs are parabolas through nodes on the circles, and their H¹ error falls at order
+/// 2 (measured ≥ 1.9 from n = 4), while the linear meshes' falls at order 1 (their polygons and
+/// their elements both). Asserted: the fitted order over n = 4, 8, 16 within 0.15 of 2 and 1.
+#[test]
+fn curved_boundaries_keep_order_two_where_linear_meshes_give_one() {
+    let p = 0.01;
+    let toml = format!(
+        "[[dirichlet]]\ngroup = \"SymX\"\ncomponents = [\"x\"]\n[[dirichlet]]\ngroup = \"SymY\"\ncomponents = [\"y\"]\n\
+         [material]\nplane = \"strain\"\nyoungs_modulus = {E}\npoisson_ratio = {NU}\n[time]\nfinal_time = 1.0\nsteps = 1\n\
+         [[traction]]\ngroup = \"Inner\"\npressure = \"{p}\"\n"
+    );
+    let scene = scene(&toml);
+    for (files, want) in [
+        ("second_order/ring_p2_n{}.msh", 2.0),
+        ("second_order/ring_q9_n{}.msh", 2.0),
+        ("second_order/ring_q8_n{}.msh", 2.0),
+        ("ring_p1_n{}.msh", 1.0),
+        ("ring_q1_n{}.msh", 1.0),
+    ] {
+        let (mut hs, mut h1) = (vec![], vec![]);
+        for n in [4, 8, 16] {
+            let mesh = read::<2>(&files.replace("{}", &n.to_string()));
+            let (sim, _, sink) = solve_in_memory(&scene, mesh).unwrap();
+            let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
+            let e = errors(&sim.mesh.cells, &sim.mesh.points, &u, |x| lame(x, p));
+            hs.push(1.0 / n as f64);
+            h1.push(e.h1_seminorm);
+        }
+        let fitted = fitted_order(&hs, &h1);
+        let pairs: Vec<f64> = (1..hs.len())
+            .map(|i| order([hs[i - 1], hs[i]], [h1[i - 1], h1[i]]))
+            .collect();
+        eprintln!("{files}: H¹ errors {h1:?}, orders {pairs:.3?}, fitted {fitted:.3}");
+        assert!(
+            (fitted - want).abs() <= 0.15,
+            "{files}: H¹ order {fitted} (errors {h1:?})"
+        );
+    }
+}
+
+/// gmsh's second-order files of every 3D kind (meshes/second_order/cylinder.geo: the quarter
+/// ring extruded to 0.5, its faces z = 0 and z = 0.5 on rollers, so plane strain holds): read,
+/// solved, and the H¹ error against Lamé falls at order 2 from n = 2 to n = 4 (within 0.3: the
+/// coarsest level is pre-asymptotic; measured in the comment of docs/method.md §19.4).
+#[test]
+fn gmsh_second_order_volumes_solve_the_lame_cylinder_at_order_two() {
+    let p = 0.01;
+    let toml = format!(
+        "[[dirichlet]]\ngroup = \"SymX\"\ncomponents = [\"x\"]\n[[dirichlet]]\ngroup = \"SymY\"\ncomponents = [\"y\"]\n\
+         [[dirichlet]]\ngroup = \"Bottom\"\ncomponents = [\"z\"]\n[[dirichlet]]\ngroup = \"Top\"\ncomponents = [\"z\"]\n\
+         [material]\nyoungs_modulus = {E}\npoisson_ratio = {NU}\n[time]\nfinal_time = 1.0\nsteps = 1\n\
+         [[traction]]\ngroup = \"Inner\"\npressure = \"{p}\"\n"
+    );
+    let scene = scene(&toml);
+    let exact = |x: [f64; 3]| {
+        let (u, g) = lame([x[0], x[1]], p);
+        (
+            [u[0], u[1], 0.0],
+            [[g[0][0], g[0][1], 0.0], [g[1][0], g[1][1], 0.0], [0.0; 3]],
+        )
+    };
+    for (name, kind) in [
+        ("tet10", CellKind::Tet10),
+        ("hex27", CellKind::Hex27),
+        ("hex20", CellKind::Hex20),
+        ("prism18", CellKind::Prism18),
+        ("prism15", CellKind::Prism15),
+    ] {
+        let mut h1 = vec![];
+        for n in [2, 4] {
+            let mesh = read::<3>(&format!("second_order/cylinder_{name}_n{n}.msh"));
+            assert!(mesh.cells.iter().all(|c| c.kind() == kind), "{name}");
+            let (sim, _, sink) = solve_in_memory(&scene, mesh).unwrap();
+            let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
+            h1.push(errors(&sim.mesh.cells, &sim.mesh.points, &u, exact).h1_seminorm);
+        }
+        let o = (h1[0] / h1[1]).log2();
+        eprintln!("{name}: H¹ errors {h1:?}, order {o:.3}");
+        assert!((o - 2.0).abs() <= 0.3, "{name}: H¹ order {o} (errors {h1:?})");
+    }
+}
+
+/// What hvi refuses, by name: first- and second-order cells in one mesh, second-order pyramids
+/// (gmsh types 14 and 19), and contact on second-order faces (for now).
+#[test]
+fn mixed_orders_pyramids_and_second_order_contact_are_refused_by_name() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/second_order");
+    let err = read_mesh::<2>(&root.join("mixed_order.msh")).unwrap_err().to_string();
+    assert!(
+        err.contains("mixed_order.msh") && err.contains("does not mix first- and second-order"),
+        "{err}"
+    );
+    for file in ["pyramid13.msh", "pyramid14.msh"] {
+        let err = read_mesh::<3>(&root.join(file)).unwrap_err().to_string();
+        assert!(err.contains(file) && err.contains("no second-order pyramids"), "{err}");
+    }
+    let mesh = elevate(&rectangle(2.0, 1.0, 4, 2, CellShape::Quad), true);
+    let toml = "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n[time]\nfinal_time = 1.0\nsteps = 1\n\
+                [[contact]]\ngroup = \"Gamma3\"\nbound = 0.2\n";
+    match solve_in_memory(&scene(toml), mesh) {
+        Err(e) => assert!(e.to_string().contains("second-order faces"), "{e}"),
+        Ok(_) => panic!("contact on 9-node quadrangles was posed"),
+    }
+}
+
+/// A run on gmsh's 9-node quadrangles writes VTK's biquadratic quadrangles (type 28) with their
+/// nodes in VTK's order, the displacement at every node (midside and centre nodes too), and
+/// `hvi plot` draws it.
+#[test]
+fn runs_write_vtk_quadratic_cells_and_plot() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene_path = dir.path().join("ring.toml");
+    std::fs::write(
+        &scene_path,
+        "[[dirichlet]]\ngroup = \"SymX\"\ncomponents = [\"x\"]\n[[dirichlet]]\ngroup = \"SymY\"\ncomponents = [\"y\"]\n\
+         [material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n[time]\nfinal_time = 1.0\nsteps = 2\n\
+         [[traction]]\ngroup = \"Inner\"\npressure = \"0.01*t\"\n",
+    )
+    .unwrap();
+    let out = dir.path().join("run");
+    common::solve_files(
+        "meshes/second_order/ring_q9_n2.msh",
+        Some(scene_path.to_str().unwrap()),
+        &out,
+    );
+    let mesh = read::<2>("second_order/ring_q9_n2.msh");
+    let vtu = hvi::output::read_vtu_arrays(&out.join("solution_00002.vtu")).unwrap();
+    assert!(vtu.cell_types.iter().all(|&t| t == 28), "{:?}", vtu.cell_types);
+    assert_eq!(vtu.connectivity.len(), mesh.cells.len());
+    for (c, written) in mesh.cells.iter().zip(&vtu.connectivity) {
+        let want: Vec<usize> = c.vtk_order().iter().map(|&k| c.nodes()[k]).collect();
+        assert_eq!(written, &want);
+    }
+    // the displacement at every node, midside and centre nodes included, against Lamé to 1 %
+    let Some((3, u)) = vtu.point_data.get("displacement") else {
+        panic!("no displacement")
+    };
+    let scale = lame([1.0, 0.0], 0.01).0[0];
+    for (k, x) in mesh.points.iter().enumerate() {
+        let exact = lame(*x, 0.01).0;
+        for c in 0..2 {
+            assert!((u[3 * k + c] - exact[c]).abs() < 0.01 * scale, "node {k} at {x:?}");
+        }
+    }
+    common::hvi_ok(&["plot", out.to_str().unwrap()]);
+    assert!(out.join("deformed.svg").metadata().unwrap().len() > 1000);
+}

@@ -221,6 +221,7 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
     let mut cells = Vec::new();
     let mut cell_tags = Vec::new();
     let mut cell_element = Vec::new();
+    let mut facet_elements = Vec::new();
     let mut nodes = [0usize; crate::mesh::element::MAX_NODES];
     for e in 0..raw.element_tags.len() {
         let ty = raw.element_types[e];
@@ -326,6 +327,7 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
                     2 | 9 => 3,
                     _ => 4,
                 };
+                facet_elements.push(e);
                 for &p in &origin.physical {
                     group(&mut groups, element_dim as u8, p)
                         .facets
@@ -358,7 +360,7 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
         tags: &cell_tags,
         elements: &cell_element,
     };
-    one_order(&places, &cells, &groups)?;
+    one_order(&places, &cells, &facet_elements)?;
     if D == 2 {
         let points2: Vec<[f64; 2]> = points.iter().map(|p| [p[0], p[1]]).collect();
         orient_2d(&places, &points2, &mut cells)?;
@@ -399,14 +401,11 @@ pub(super) fn build_mesh<const D: usize>(path: &Path, raw: RawMesh<'_>) -> Resul
     })
 }
 
-/// All cells of one order and the boundary groups' elements of the same: a mesh of first- and
+/// All cells of one order and the boundary elements of the same: a mesh of first- and
 /// second-order cells together does not conform (a midside node of one cell's edge is no node of
-/// its neighbour), and a first-order line on a second-order body misses the midside nodes.
-fn one_order(
-    at: &CellPlaces<'_, '_>,
-    cells: &[Cell],
-    groups: &BTreeMap<(u8, i32), PhysicalGroup>,
-) -> Result<(), MeshError> {
+/// its neighbour), and a first-order line on a second-order body misses the midside nodes
+/// (`facet_elements`: the file indices of the boundary elements).
+fn one_order(at: &CellPlaces<'_, '_>, cells: &[Cell], facet_elements: &[usize]) -> Result<(), MeshError> {
     let order = cells[0].kind().order();
     if let Some(c) = cells.iter().position(|c| c.kind().order() != order) {
         return Err(at.invalid(
@@ -422,16 +421,30 @@ fn one_order(
             ),
         ));
     }
-    for g in groups.values() {
-        if let Some(f) = g.facets.iter().find(|f| f.is_second_order() != (order == 2)) {
+    let raw = at.raw;
+    for &e in facet_elements {
+        let ty = raw.element_types[e];
+        if matches!(ty, 8 | 9 | 10 | 16) != (order == 2) {
+            let origin = &raw.origins[raw.element_origin[e] as usize];
+            let dim = element_type_info(ty).map_or(0, |i| i.2);
+            let groups: Vec<String> = origin
+                .physical
+                .iter()
+                .map(|&t| match raw.names.iter().find(|p| p.tag == t && p.dim == dim) {
+                    Some(p) => format!("\"{}\" (tag {t})", p.name),
+                    None => format!("tag {t}"),
+                })
+                .collect();
             return Err(MeshError::Invalid {
                 path: at.path.to_path_buf(),
-                place: "$Elements".into(),
+                place: raw.element_place(e),
                 detail: format!(
-                    "physical group {} holds a {}-node boundary element on a mesh of order-{order} cells: its nodes do \
-                     not match the cells' faces; mesh the whole model with one -order (gmsh -order {order})",
-                    g.label(),
-                    f.len()
+                    "element {} is of type {ty} ({}), in physical group {}, on a mesh of order-{order} cells ({}s): its \
+                     nodes do not match the cells' faces; mesh the whole model with one order (gmsh -order {order})",
+                    raw.element_tags[e],
+                    element_type_info(ty).map_or("?", |i| i.0),
+                    groups.join(", "),
+                    cells[0].name()
                 ),
             });
         }

@@ -35,6 +35,8 @@ mod gmsh;
 
 mod group;
 
+mod kind;
+
 mod model;
 
 mod msh22;
@@ -54,7 +56,9 @@ pub mod structured;
 pub mod topology;
 pub mod vector;
 
-pub use cell::{Cell, CellKind, Facet};
+pub use cell::{Cell, Facet};
+
+pub use kind::CellKind;
 
 pub use conformity::MeshDefect;
 

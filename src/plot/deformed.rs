@@ -170,7 +170,8 @@ pub(super) fn draw_deformed<DB: DrawingBackend>(
     });
     let edge_colour = RGBColor(30, 30, 30).mix(0.35);
     for (c, v) in mesh.cells.iter().zip(picture.cell_values) {
-        let poly: Vec<(i32, i32)> = c.nodes().iter().map(|&p| to_px(moved[p])).collect();
+        // a second-order cell is drawn by its corners (straight edges)
+        let poly: Vec<(i32, i32)> = c.corners().iter().map(|&p| to_px(moved[p])).collect();
         let colour = colour_map((v - vmin) / range);
         root.draw(&Polygon::new(poly.clone(), colour.filled())).map_err(err)?;
         let mut closed = poly;

@@ -2,7 +2,7 @@
 //! times and their magnification.
 
 use super::error::PlotError;
-use crate::mesh::{Cell, Mesh};
+use crate::mesh::{Cell, CellKind, Mesh};
 use crate::output;
 use crate::plot::deformed::cell_colours;
 use crate::plot::deformed::render_deformed;
@@ -101,6 +101,10 @@ pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, P
         .map(|c| match c.len() {
             3 => Ok(Cell::Tri3([c[0], c[1], c[2]])),
             4 => Ok(Cell::Quad4([c[0], c[1], c[2], c[3]])),
+            // VTK's quadratic triangle and quadrangles list their nodes in gmsh's order
+            6 => Ok(Cell::new(CellKind::Tri6, c)),
+            8 => Ok(Cell::new(CellKind::Quad8, c)),
+            9 => Ok(Cell::new(CellKind::Quad9, c)),
             n => Err(fail(format!("{last}: a cell with {n} nodes"))),
         })
         .collect::<Result<_, _>>()?;

@@ -10,7 +10,7 @@ mod shapes;
 
 pub(crate) use shapes::second_order as shape_functions;
 
-use super::cell::CellKind;
+use super::kind::CellKind;
 use std::sync::OnceLock;
 
 const TRI3: [[f64; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];

@@ -7,7 +7,7 @@
 //! follow the product rule, so each function is written once, as its formula.
 
 use super::reference_nodes;
-use crate::mesh::cell::CellKind;
+use crate::mesh::kind::CellKind;
 use std::ops::{Add, Mul, Sub};
 
 /// A function's value and its gradient in (ξ, η, ζ) at one point.
