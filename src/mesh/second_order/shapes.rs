@@ -49,6 +49,8 @@ impl Sub for Vg {
 
 impl Mul for Vg {
     type Output = Vg;
+    // the product rule: (fg)' = f'g + fg'
+    #[allow(clippy::suspicious_arithmetic_impl)]
     fn mul(self, o: Vg) -> Vg {
         Vg {
             v: self.v * o.v,
