@@ -103,6 +103,24 @@ impl<const D: usize> ContactNodes<D> {
         }
     }
 
+    /// Makes row k (direction d) the row Σ_q c_q d·u_q over `terms` ((q, c_q), its own node among
+    /// them) instead of d·u of its node: a row of second-order faces (docs/method.md §19.3).
+    pub fn spread(&mut self, k: usize, terms: &[(usize, f64)], dofs: &DofMap<D>) {
+        let d = self.normals[k];
+        self.rows[k].clear();
+        self.prescribed[k].clear();
+        for &(q, c) in terms {
+            for (i, &v) in d.iter().enumerate() {
+                let v = c * v;
+                match dofs.get(q, i) {
+                    Some(dof) => self.rows[k].push((dof, v)),
+                    None if v != 0.0 => self.prescribed[k].push((dofs.index(q, i), v)),
+                    None => {}
+                }
+            }
+        }
+    }
+
     /// m, the number of contact nodes.
     pub fn len(&self) -> usize {
         self.nodes.len()

@@ -433,6 +433,7 @@ mod tests {
             weights: vec![0.0; n + 1],
             normals: vec![[0.0, 0.0]; n + 1],
             facets,
+            revolved: false,
         };
         let slave = BoundaryPart {
             label: "point".into(),
@@ -441,6 +442,7 @@ mod tests {
             nodes: vec![n + 1],
             weights: vec![1.0],
             normals: vec![[-0.6, -0.8]],
+            revolved: false,
         };
         let pair = SurfacePair::new(&points, slave, master).unwrap();
         let p = pair.projections[0].as_ref().unwrap();

@@ -45,6 +45,9 @@ pub struct Rows<const D: usize> {
     /// (motion index, ∂gap/∂a) of a moving obstacle.
     pub motion: Vec<Option<(usize, [f64; D])>>,
     pub terms: Vec<Vec<LawTerm>>,
+    /// A row of second-order faces (docs/method.md §19.3): u_ν = Σ_i c_i d·u_i over the nodes of
+    /// its vertex's faces, as (node, c_i) with Σ c_i = 1; empty for a row u_ν = d·u of its node.
+    pub spread: Vec<Vec<(usize, f64)>>,
     /// Rows dropped because their normal never meets the obstacle: (node, group).
     pub never_touching: Vec<(usize, usize)>,
 }
@@ -53,6 +56,7 @@ struct Candidate<const D: usize> {
     node: usize,
     weight: f64,
     normal: [f64; D],
+    spread: Vec<(usize, f64)>,
 }
 
 fn unit<const D: usize>(v: [f64; 3]) -> [f64; D] {
@@ -94,6 +98,7 @@ fn clusters<const D: usize>(part: &BoundaryPart<D>, points: &[[f64; D]]) -> Vec<
                 node: part.nodes[k],
                 weight: part.weights[k],
                 normal: part.normals[k],
+                spread: Vec::new(),
             });
         } else {
             for (w, s) in groups {
@@ -101,10 +106,93 @@ fn clusters<const D: usize>(part: &BoundaryPart<D>, points: &[[f64; D]]) -> Vec<
                     node: part.nodes[k],
                     weight: w,
                     normal: unit(s),
+                    spread: Vec::new(),
                 });
             }
         }
     }
+    out
+}
+
+/// The rows of a part made of second-order faces (docs/method.md §19.3): one at each vertex p,
+/// its multiplier in the span of the corners' first-order functions ψ_p (positive, summing to
+/// 1): the weight D_p = ∫ψ_p ds, the direction the mean of n weighted by ψ_p, and the row
+/// u_ν = Σ_i c_pi d·u_i with c_pi = ∫ψ_p N_i ds / D_p over the nodes i of p's faces (N_i their own
+/// functions) — a uniform pressure then loads node i with ∫N_i p ds, the patch test. On a body
+/// of revolution the measure is 2πr ds.
+fn vertex_rows<const D: usize>(part: &BoundaryPart<D>, points: &[[f64; D]]) -> Vec<Candidate<D>> {
+    use crate::mesh::topology::{corner_basis, facet_map, facet_rule};
+    // per vertex: D_p, ∫ψ_p n ds and the (node, ∫ψ_p N_i ds) of its faces' nodes
+    type Sums = (f64, [f64; 3], Vec<(usize, f64)>);
+    let mut at: std::collections::BTreeMap<usize, Sums> = Default::default();
+    for f in &part.facets {
+        let nodes = f.nodes();
+        for q in facet_rule(f) {
+            let (value, dn, x) = facet_map(points, f, q.xi);
+            let psi = corner_basis(f, q.xi);
+            let revolved = if part.revolved {
+                2.0 * std::f64::consts::PI * x[0]
+            } else {
+                1.0
+            };
+            let (da, scale) = (
+                crate::mesh::vector::norm(&dn) * q.weight * revolved,
+                q.weight * revolved,
+            );
+            for (a, &p) in f.corners().iter().enumerate() {
+                let (w, nv, terms) = at.entry(p).or_default();
+                *w += psi[a] * da;
+                for k in 0..3 {
+                    nv[k] += psi[a] * dn[k] * scale;
+                }
+                for (i, &node) in nodes.iter().enumerate() {
+                    match terms.iter_mut().find(|t| t.0 == node) {
+                        Some(t) => t.1 += psi[a] * value[i] * da,
+                        None => terms.push((node, psi[a] * value[i] * da)),
+                    }
+                }
+            }
+        }
+    }
+    at.into_iter()
+        .map(|(node, (weight, nv, mut terms))| {
+            terms.sort_unstable_by_key(|t| t.0);
+            terms.iter_mut().for_each(|t| t.1 /= weight);
+            Candidate {
+                node,
+                weight,
+                normal: unit(nv),
+                spread: terms,
+            }
+        })
+        .collect()
+}
+
+/// The coefficients of a row over its nodes: its spread, or its own node with 1.
+fn spread_of(node: usize, spread: &[(usize, f64)]) -> Vec<(usize, f64)> {
+    if spread.is_empty() {
+        vec![(node, 1.0)]
+    } else {
+        spread.to_vec()
+    }
+}
+
+/// Two rows of one node merged into one wall: their coefficients weighted by their weights.
+fn merged_spread(a: (&[(usize, f64)], f64), b: (&[(usize, f64)], f64), node: usize) -> Vec<(usize, f64)> {
+    if a.0.is_empty() && b.0.is_empty() {
+        return Vec::new();
+    }
+    let mut out: Vec<(usize, f64)> = Vec::new();
+    for (terms, w) in [a, b] {
+        for (q, c) in spread_of(node, terms) {
+            let share = c * w / (a.1 + b.1);
+            match out.iter_mut().find(|t| t.0 == q) {
+                Some(t) => t.1 += share,
+                None => out.push((q, share)),
+            }
+        }
+    }
+    out.sort_unstable_by_key(|t| t.0);
     out
 }
 
@@ -120,21 +208,17 @@ pub fn build<const D: usize>(groups: &[GroupRows<D>], points: &[[f64; D]], lengt
         layer: f64,
         motion: Option<(usize, [f64; D])>,
         terms: Vec<LawTerm>,
-    }
-    if let Some(g) = groups
-        .iter()
-        .find(|g| g.part.facets.iter().any(|f| f.is_second_order()))
-    {
-        return Err(format!(
-            "contact zone {} is made of second-order faces: hvi does not yet pose contact on them (their lumped \
-             weights are zero or negative, docs/method.md §19.3); mesh the body with -order 1",
-            g.part.label
-        ));
+        spread: Vec<(usize, f64)>,
     }
     let mut rows: Vec<Row<D>> = Vec::new();
     let mut never = Vec::new();
     for (gi, g) in groups.iter().enumerate() {
-        for c in clusters(g.part, points) {
+        let candidates = if g.part.facets.iter().any(|f| f.is_second_order()) {
+            vertex_rows(g.part, points)
+        } else {
+            clusters(g.part, points)
+        };
+        for c in candidates {
             let x = &points[c.node];
             let (direction, gap, motion) = match g.obstacle {
                 None => (c.normal, 0.0, None),
@@ -168,6 +252,7 @@ pub fn build<const D: usize>(groups: &[GroupRows<D>], points: &[[f64; D]], lengt
                 layer: g.layer[k],
                 motion,
                 terms,
+                spread: c.spread,
             });
         }
     }
@@ -194,12 +279,14 @@ pub fn build<const D: usize>(groups: &[GroupRows<D>], points: &[[f64; D]], lengt
                     let mut terms = std::mem::take(&mut m.terms);
                     terms.extend(r.terms.iter().copied());
                     let weight = m.weight + r.weight;
+                    let spread = merged_spread((&m.spread, m.weight), (&r.spread, r.weight), node);
                     if r.gap < m.gap {
                         *m = r;
                     }
                     m.layer = limit - m.gap;
                     m.terms = terms;
                     m.weight = weight;
+                    m.spread = spread;
                 }
             }
         }
@@ -220,6 +307,7 @@ pub fn build<const D: usize>(groups: &[GroupRows<D>], points: &[[f64; D]], lengt
             out.layer.push(r.layer);
             out.motion.push(r.motion);
             out.terms.push(r.terms);
+            out.spread.push(r.spread);
         }
     }
     Ok(out)

@@ -31,6 +31,8 @@ pub struct BoundaryPart<const D: usize> {
     /// with smoothly varying facets this is the boundary's normal to O(h²); at an edge or a
     /// corner of the part it bisects.
     pub normals: Vec<[f64; D]>,
+    /// True once [`BoundaryPart::revolve`] made the weights those of the swept surface.
+    pub revolved: bool,
 }
 
 impl<const D: usize> BoundaryPart<D> {
@@ -40,6 +42,7 @@ impl<const D: usize> BoundaryPart<D> {
     pub fn revolve(&mut self, points: &[[f64; D]]) {
         assert_eq!(D, 2, "a body of revolution is a 2D mesh");
         let two_pi = 2.0 * std::f64::consts::PI;
+        self.revolved = true;
         self.weights.iter_mut().for_each(|w| *w = 0.0);
         for (f, &length) in self.facets.iter().zip(&self.facet_lengths) {
             if f.is_second_order() {
@@ -205,23 +208,40 @@ pub(crate) fn facet_map<const D: usize>(
     (value, area, x)
 }
 
+/// The first-order functions of a facet's corners at its reference point `xi` (an edge's
+/// (1 − s, s), a triangle's barycentric coordinates, a quadrangle's bilinear functions): the
+/// vertex basis of contact on second-order faces (docs/method.md §19.3).
+pub(crate) fn corner_basis(f: &Facet, xi: [f64; 3]) -> [f64; 4] {
+    let mut out = [0.0; 4];
+    match f.corners().len() {
+        2 => out[..2].copy_from_slice(&[1.0 - xi[0], xi[0]]),
+        3 => out[..3].copy_from_slice(&reference(&Cell::Tri3([0, 1, 2]), xi).1[..3]),
+        _ => out.copy_from_slice(&reference(&Cell::Quad4([0, 1, 2, 3]), xi).1[..4]),
+    }
+    out
+}
+
 /// Quadrature of one facet: for each node, ∫ N_a ds and ∫ N_a n ds (n the outward unit normal,
-/// so the second is an area vector), and the facet's measure. On a second-order facet these are
-/// the integrals of its own shape functions over the curved facet (a 6-node triangle's corners
-/// get 0, an 8-node quadrangle's corners a negative share: docs/method.md §19.3).
+/// so the second is an area vector), and the facet's measure. On a second-order facet the first
+/// are the integrals of its own shape functions over the curved facet (a 6-node triangle's
+/// corners get 0, an 8-node quadrangle's corners a negative share: docs/method.md §19.3), the
+/// second weigh n with non-negative functions — the corners' first-order ones, the other nodes'
+/// own — so that every node's normal is a mean of its facets' normals.
 pub(crate) fn facet_integrals<const D: usize>(points: &[[f64; D]], f: &Facet) -> (Vec<f64>, Vec<[f64; 3]>, f64) {
     let x = |i: usize| points[f.nodes()[i]];
     if f.is_second_order() {
-        let n = f.len();
+        let (n, m) = (f.len(), f.corners().len());
         let (mut w, mut nv, mut measure) = (vec![0.0; n], vec![[0.0; 3]; n], 0.0);
         for q in facet_rule(f) {
             let (value, dn, _) = facet_map(points, f, q.xi);
+            let psi = corner_basis(f, q.xi);
             let da = norm(&dn) * q.weight;
             measure += da;
             for a in 0..n {
                 w[a] += value[a] * da;
+                let positive = if a < m { psi[a] } else { value[a] };
                 for k in 0..3 {
-                    nv[a][k] += value[a] * dn[k] * q.weight;
+                    nv[a][k] += positive * dn[k] * q.weight;
                 }
             }
         }
@@ -379,7 +399,7 @@ pub(crate) fn boundary_part<const D: usize>(
     let mut normals = Vec::with_capacity(nodes.len());
     for (i, s) in sums.iter().enumerate() {
         let len = norm(s);
-        if len.is_nan() || len <= 1e-12 * weights[i] {
+        if len.is_nan() || len <= 1e-12 * weights[i].abs() || len == 0.0 {
             return Err(not_boundary(format!(
                 "at node {} the outward normals of its facets cancel: the part folds back on itself",
                 fmt_point(pts[nodes[i]])
@@ -394,5 +414,6 @@ pub(crate) fn boundary_part<const D: usize>(
         nodes,
         weights,
         normals,
+        revolved: false,
     })
 }

@@ -172,6 +172,25 @@ impl<const D: usize> ContactSetup<D> {
     }
 }
 
+/// A row's coefficients over other nodes: (node, c).
+type Terms = Vec<(usize, f64)>;
+
+/// Rows of second-order faces (docs/method.md §19.3): row k takes the coefficients of normal
+/// row `normal(k)` over its faces' nodes (none: a row of its own node).
+fn spread_rows<const D: usize>(
+    rows: &mut ContactNodes<D>,
+    spread: &[Vec<(usize, f64)>],
+    normal: impl Fn(usize) -> usize,
+    dofs: &DofMap<D>,
+) {
+    for k in 0..rows.len() {
+        let terms = &spread[normal(k)];
+        if !terms.is_empty() {
+            rows.spread(k, terms, dofs);
+        }
+    }
+}
+
 fn law_of(l: &scene::ContactLawSpec, key: &str) -> Result<ContactLaw, SolveError> {
     let (scale, profile) = match &l.kind {
         scene::LawKind::Paper { scale, a, b, alpha } => (
@@ -312,6 +331,12 @@ pub fn build<const D: usize>(
                     "{key}: the surfaces {} (group) and {} (target)",
                     part.label, master.label
                 );
+                if part.facets.iter().chain(&master.facets).any(|f| f.is_second_order()) {
+                    return Err(SolveError::Setup(format!(
+                        "{origin}: {names} are made of second-order faces: contact between two bodies is posed on \
+                         first-order faces only for now (docs/method.md §19.3); mesh the bodies with -order 1"
+                    )));
+                }
                 Some(SurfacePair::new(&mesh.points, part.clone(), master).map_err(|e| {
                     SolveError::Setup(format!(
                         "{origin}: {names} {}",
@@ -420,9 +445,11 @@ pub fn build<const D: usize>(
     tied_rows(&mut rows, &mut master_terms, &tied);
     let (mut nodes, kept) = ContactNodes::from_rows(&rows.nodes, &rows.weights, &rows.directions, dofs);
     let master_terms: Vec<Vec<(usize, f64)>> = kept.iter().map(|&r| master_terms[r].clone()).collect();
+    let spread: Vec<Vec<(usize, f64)>> = kept.iter().map(|&r| rows.spread[r].clone()).collect();
     for (k, terms) in master_terms.iter().enumerate() {
         nodes.add_master_terms(k, terms, dofs);
     }
+    spread_rows(&mut nodes, &spread, |k| k, dofs);
     let pick = |v: &[f64]| -> Vec<f64> { kept.iter().map(|&k| v[k]).collect() };
     let gap = pick(&rows.gap);
     let layer = pick(&rows.layer);
@@ -431,7 +458,14 @@ pub fn build<const D: usize>(
     let terms: Vec<_> = kept.iter().map(|&k| rows.terms[k].clone()).collect();
     let row_group: Vec<usize> = kept.iter().map(|&k| rows.group[k]).collect();
     let laws = NodalLaws::new(laws, &terms);
-    let friction = friction_rows(scene, &used, (&nodes, &laws, &row_group), &master_terms, dofs, origin)?;
+    let friction = friction_rows(
+        scene,
+        &used,
+        (&nodes, &laws, &row_group),
+        (&master_terms, &spread),
+        dofs,
+        origin,
+    )?;
     let bilateral: Vec<bool> = row_group
         .iter()
         .map(|&g| scene.contact[used[g]].bilateral || tied[g])
@@ -500,7 +534,7 @@ fn friction_rows<const D: usize>(
     scene: &Scene,
     used: &[usize],
     (nodes, normal_laws, row_group): (&ContactNodes<D>, &NodalLaws, &[usize]),
-    master_terms: &[Vec<(usize, f64)>],
+    (master_terms, spread): (&[Terms], &[Terms]),
     dofs: &DofMap<D>,
     origin: &str,
 ) -> Result<Option<Friction<D>>, SolveError> {
@@ -577,10 +611,11 @@ fn friction_rows<const D: usize>(
         .collect();
     let (mut rows, kept) = ContactNodes::from_rows(&all_nodes, &weights, &directions, dofs);
     // the rows of contact with another body: the master nodes' share of each direction
+    let normal_row = |r: usize| if r < m { r } else { with[r - m].0 };
     for (k, &r) in kept.iter().enumerate() {
-        let p = if r < m { r } else { with[r - m].0 };
-        rows.add_master_terms(k, &master_terms[p], dofs);
+        rows.add_master_terms(k, &master_terms[normal_row(r)], dofs);
     }
+    spread_rows(&mut rows, spread, |k| normal_row(kept[k]), dofs);
     if kept[..m.min(kept.len())] != (0..m).collect::<Vec<_>>()[..] {
         return Err(SolveError::Setup(format!(
             "{origin}: the contact rows changed when their tangential rows were added (a bug: please report it)"

@@ -52,6 +52,7 @@ pub(super) fn paired_rows<const D: usize>(
     retain(&mut rows.layer, &keep);
     retain(&mut rows.motion, &keep);
     retain(&mut rows.terms, &keep);
+    retain(&mut rows.spread, &keep);
     retain(&mut terms, &keep);
     terms
 }
@@ -79,6 +80,7 @@ pub(super) fn tied_rows<const D: usize>(
             rows.layer.push(0.0);
             rows.motion.push(None);
             rows.terms.push(Vec::new());
+            rows.spread.push(rows.spread[r].clone());
             master_terms.push(master_terms[r].clone());
         }
     }
