@@ -15,6 +15,23 @@ use hvi::mesh::structured::{block, elevate, rectangle, CellShape, SolidShape};
 use hvi::mesh::{read_mesh, CellKind, Mesh};
 use std::path::Path;
 
+/// The 2D second-order kinds through mesh::structured::elevate: (cells, complete) gives 6-node
+/// triangles, 9-node and 8-node quadrangles.
+const KINDS_2D: [(CellShape, bool); 3] = [
+    (CellShape::Tri, true),
+    (CellShape::Quad, true),
+    (CellShape::Quad, false),
+];
+
+/// The 3D ones: 10-node tetrahedra, 27- and 18-node (complete), 20- and 15-node (serendipity).
+const KINDS_3D: [(SolidShape, bool); 5] = [
+    (SolidShape::Tet, true),
+    (SolidShape::Hex, true),
+    (SolidShape::Prism, true),
+    (SolidShape::Hex, false),
+    (SolidShape::Prism, false),
+];
+
 const E: f64 = 1.0;
 const NU: f64 = 0.3;
 
@@ -121,11 +138,7 @@ fn skew<const D: usize>(m: &mut Mesh<D>) {
 #[test]
 fn quadratic_fields_are_exact_on_every_second_order_kind() {
     let q2 = Quadratic::<2>::new();
-    for (shape, complete) in [
-        (CellShape::Tri, true),
-        (CellShape::Quad, true),
-        (CellShape::Quad, false),
-    ] {
+    for (shape, complete) in KINDS_2D {
         let mut linear = rectangle(2.0, 1.0, 6, 4, shape);
         if complete {
             distort_off_groups(&mut linear, 0.3);
@@ -139,13 +152,7 @@ fn quadratic_fields_are_exact_on_every_second_order_kind() {
         assert!(err < 1e-11, "{kind:?}: nodal error {err:e}");
     }
     let q3 = Quadratic::<3>::new();
-    for (shape, complete) in [
-        (SolidShape::Tet, true),
-        (SolidShape::Hex, true),
-        (SolidShape::Prism, true),
-        (SolidShape::Hex, false),
-        (SolidShape::Prism, false),
-    ] {
+    for (shape, complete) in KINDS_3D {
         let mut linear = block([1.0, 1.0, 1.0], [3, 3, 3], shape);
         if complete {
             distort_off_groups(&mut linear, 0.3);
@@ -184,11 +191,7 @@ fn order(h: [f64; 2], e: [f64; 2]) -> f64 {
 #[test]
 fn manufactured_solution_converges_at_orders_two_and_three_in_2d() {
     let scene = manufactured_scene();
-    for (shape, complete) in [
-        (CellShape::Tri, true),
-        (CellShape::Quad, true),
-        (CellShape::Quad, false),
-    ] {
+    for (shape, complete) in KINDS_2D {
         let (mut hs, mut h1, mut l2) = (vec![], vec![], vec![]);
         let mut label = String::new();
         for n in [4, 8, 16] {
@@ -424,11 +427,7 @@ fn uniform_pressure_is_transmitted_exactly_through_second_order_faces() {
         eprintln!("{label}: {rows} rows, nodal error {err:.1e}");
         assert!(err < 1e-12, "{label}: nodal error {err:e}");
     }
-    for (shape, complete) in [
-        (CellShape::Tri, true),
-        (CellShape::Quad, true),
-        (CellShape::Quad, false),
-    ] {
+    for (shape, complete) in KINDS_2D {
         let mut linear = rectangle(2.0, 1.0, 6, 4, shape);
         if complete {
             distort_off_groups(&mut linear, 0.3);
@@ -438,13 +437,7 @@ fn uniform_pressure_is_transmitted_exactly_through_second_order_faces() {
         check(&label, &toml(2), mesh, p, |x| [exx * x[0], eyy * x[1]]);
     }
     let (exx, eyy) = (p * NU / E * (1.0 + NU), -p * (1.0 - NU * NU) / E);
-    for (shape, complete) in [
-        (SolidShape::Tet, true),
-        (SolidShape::Hex, true),
-        (SolidShape::Hex, false),
-        (SolidShape::Prism, true),
-        (SolidShape::Prism, false),
-    ] {
+    for (shape, complete) in KINDS_3D {
         let mut linear = block([1.0, 1.0, 1.0], [3, 3, 3], shape);
         if complete {
             distort_off_groups(&mut linear, 0.3);
