@@ -217,6 +217,27 @@ fn two_bodies_match_faer_on_1_and_2_ranks() {
     }
 }
 
+/// Second-order cells under PETSc (docs/method.md §19): the paper's example on gmsh's 9-node
+/// quadrangles and the gallery's Hertz on 6-node triangles — contact rows over their faces' nodes
+/// (§19.3) — on 1 and 2 ranks give the serial Γ₃ to 1e-10.
+#[test]
+fn second_order_meshes_match_faer_on_1_and_2_ranks() {
+    for (mesh, scene) in [
+        ("meshes/second_order/rect_q9_h16.msh", None),
+        (
+            "meshes/second_order/hertz_2d_p2_a8.msh",
+            Some("examples/gallery/hertz_2d/hertz_2d.toml"),
+        ),
+    ] {
+        for (np, (du, df)) in compare(mesh, scene, "mumps") {
+            assert!(
+                du <= 1e-10 && df <= 1e-10,
+                "{mesh}, np {np}: u_ν off by {du:.2e}, force by {df:.2e}"
+            );
+        }
+    }
+}
+
 /// 3D friction (docs/method.md §17.3) under PETSc: a hexahedral block (meshes/block_q1_h8.msh)
 /// pressed and dragged diagonally over a rigid paraboloid (so that u_ν varies: on a plane every
 /// node sits at u_ν = 0 and a relative difference is round-off over round-off) with Coulomb
