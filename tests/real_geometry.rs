@@ -745,7 +745,7 @@ fn loads_reactions_and_normals_on_pyramid_faces() {
 #[test]
 fn a_pyramid_stiffness_is_exact_on_linear_fields() {
     use hvi::mesh::quadrature::QUAD_GAUSS_2X2;
-    use hvi::mesh::topology::face_area_vector;
+    use hvi::mesh::topology::facet_map;
     use hvi::mesh::Cell;
     let pts = [
         [0.0, 0.0, 0.05],
@@ -765,7 +765,7 @@ fn a_pyramid_stiffness_is_exact_on_linear_fields() {
             }
         } else {
             for g in &QUAD_GAUSS_2X2 {
-                let (value, area) = face_area_vector(&pts, &f, g.xi);
+                let (value, area, _) = facet_map(&pts, &f, g.xi);
                 for (k, &q) in f.nodes().iter().enumerate() {
                     (0..3).for_each(|d| nv[q][d] += g.weight * value[k] * area[d]);
                 }

@@ -90,10 +90,16 @@ impl<const D: usize> ContactNodes<D> {
     /// row (d = −n) u_ν = (Σ c_i u_i − u_S)·n, for a tangential one the slip relative to the master
     /// (docs/method.md §18).
     pub fn add_master_terms(&mut self, k: usize, terms: &[(usize, f64)], dofs: &DofMap<D>) {
+        self.push_terms(k, terms, -1.0, dofs);
+    }
+
+    /// Appends sign · c_q d·u_q of each (q, c_q) in `terms` to row k (direction d): its free
+    /// components to the row, its prescribed ones to the row's prescribed part.
+    fn push_terms(&mut self, k: usize, terms: &[(usize, f64)], sign: f64, dofs: &DofMap<D>) {
         let d = self.normals[k];
         for &(q, c) in terms {
             for (i, &v) in d.iter().enumerate() {
-                let v = -c * v;
+                let v = sign * c * v;
                 match dofs.get(q, i) {
                     Some(dof) => self.rows[k].push((dof, v)),
                     None if v != 0.0 => self.prescribed[k].push((dofs.index(q, i), v)),
@@ -106,19 +112,9 @@ impl<const D: usize> ContactNodes<D> {
     /// Makes row k (direction d) the row Σ_q c_q d·u_q over `terms` ((q, c_q), its own node among
     /// them) instead of d·u of its node: a row of second-order faces (docs/method.md §19.3).
     pub fn spread(&mut self, k: usize, terms: &[(usize, f64)], dofs: &DofMap<D>) {
-        let d = self.normals[k];
         self.rows[k].clear();
         self.prescribed[k].clear();
-        for &(q, c) in terms {
-            for (i, &v) in d.iter().enumerate() {
-                let v = c * v;
-                match dofs.get(q, i) {
-                    Some(dof) => self.rows[k].push((dof, v)),
-                    None if v != 0.0 => self.prescribed[k].push((dofs.index(q, i), v)),
-                    None => {}
-                }
-            }
-        }
+        self.push_terms(k, terms, 1.0, dofs);
     }
 
     /// m, the number of contact nodes.

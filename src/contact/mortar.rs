@@ -16,7 +16,7 @@
 //! mortar integration.
 
 use super::pairing::{closest, facet_at, SurfacePair};
-use crate::mesh::quadrature::{tensor_gauss_3, EDGE_GAUSS_3, TRI6};
+use crate::mesh::quadrature::{tensor_gauss, EDGE_GAUSS_3, TRI6};
 use crate::mesh::Facet;
 use nalgebra::DMatrix;
 use std::collections::HashMap;
@@ -52,7 +52,7 @@ fn facet_rule(f: &Facet) -> Vec<([f64; 2], f64)> {
     match f.len() {
         2 => EDGE_GAUSS_3.iter().map(|&(s, w)| ([s, 0.0], w)).collect(),
         3 => TRI6.to_vec(),
-        _ => tensor_gauss_3(2)
+        _ => tensor_gauss(3, 2)
             .into_iter()
             .map(|q| ([q.xi[0], q.xi[1]], q.weight))
             .collect(),

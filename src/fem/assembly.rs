@@ -34,16 +34,18 @@ impl Volumetric {
 
     /// Whether `cell`'s bulk part is the cell's mean dilatation (B-bar).
     pub fn cell_mean(self, cell: &Cell) -> bool {
-        self == Volumetric::Mean && !is_simplex(cell)
+        self == Volumetric::Mean && !is_linear_simplex(cell)
     }
 
     /// Whether `cell`'s bulk part is its patch's mean (a simplex).
     pub fn patch_mean(self, cell: &Cell) -> bool {
-        self == Volumetric::Mean && is_simplex(cell)
+        self == Volumetric::Mean && is_linear_simplex(cell)
     }
 }
 
-fn is_simplex(cell: &Cell) -> bool {
+/// A 3-node triangle or a 4-node tetrahedron: one divergence per cell, so its mean dilatation is
+/// a patch's; a second-order simplex takes its own cell's mean (P2–P0, docs/method.md §19.2).
+fn is_linear_simplex(cell: &Cell) -> bool {
     matches!(cell, Cell::Tri3(_) | Cell::Tet4(_))
 }
 

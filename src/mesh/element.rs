@@ -2,10 +2,10 @@
 //! functions, their physical gradients and the Jacobian determinant at a quadrature point.
 
 use super::quadrature::{
-    kept, prism_rule, pyramid_collapsed_27, tensor_gauss, tensor_gauss_3, tet_duffy, tet_duffy_27, triangle_duffy,
-    QuadPoint, HEX_GAUSS_2X2X2, PRISM_6POINT, PYRAMID_8POINT, QUAD_GAUSS_2X2, TET_4POINT, TET_CENTROID, TRI_3POINT,
-    TRI_6POINT, TRI_CENTROID,
+    prism_rule, pyramid_collapsed_27, tensor_gauss, tet_duffy, triangle_duffy, QuadPoint, HEX_GAUSS_2X2X2,
+    PRISM_6POINT, PYRAMID_8POINT, QUAD_GAUSS_2X2, TET_4POINT, TET_CENTROID, TRI_3POINT, TRI_6POINT, TRI_CENTROID,
 };
+use super::second_order::reference_nodes;
 use crate::mesh::{Cell, CellKind};
 use std::sync::OnceLock;
 
@@ -43,8 +43,7 @@ pub fn reference(cell: &Cell, xi: [f64; 3]) -> (usize, [f64; MAX_NODES], [[f64; 
             (3, v, g)
         }
         Cell::Quad4(_) => {
-            const CORNERS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
-            for (a, c) in CORNERS.iter().enumerate() {
+            for (a, c) in reference_nodes(CellKind::Quad4).iter().enumerate() {
                 let (sx, sy) = (1.0 + c[0] * x, 1.0 + c[1] * y);
                 v[a] = 0.25 * sx * sy;
                 g[a] = [0.25 * c[0] * sy, 0.25 * c[1] * sx, 0.0];
@@ -57,17 +56,7 @@ pub fn reference(cell: &Cell, xi: [f64; 3]) -> (usize, [f64; MAX_NODES], [[f64; 
             (4, v, g)
         }
         Cell::Hex8(_) => {
-            const CORNERS: [[f64; 3]; 8] = [
-                [-1.0, -1.0, -1.0],
-                [1.0, -1.0, -1.0],
-                [1.0, 1.0, -1.0],
-                [-1.0, 1.0, -1.0],
-                [-1.0, -1.0, 1.0],
-                [1.0, -1.0, 1.0],
-                [1.0, 1.0, 1.0],
-                [-1.0, 1.0, 1.0],
-            ];
-            for (a, c) in CORNERS.iter().enumerate() {
+            for (a, c) in reference_nodes(CellKind::Hex8).iter().enumerate() {
                 let (sx, sy, sz) = (1.0 + c[0] * x, 1.0 + c[1] * y, 1.0 + c[2] * z);
                 v[a] = 0.125 * sx * sy * sz;
                 g[a] = [0.125 * c[0] * sy * sz, 0.125 * c[1] * sx * sz, 0.125 * c[2] * sx * sy];
@@ -94,11 +83,11 @@ pub fn reference(cell: &Cell, xi: [f64; 3]) -> (usize, [f64; MAX_NODES], [[f64; 
             // P1 on the triangles, and Σ N_a = 1, Σ ξ_a N_a = ξ, Σ η_a N_a = η, N_4 = ζ (linear
             // completeness). Its gradients are bounded but have no limit at the apex, where the
             // value along the axis (u = v = 0) is taken; no quadrature point lies there.
-            const CORNERS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
             let s = 1.0 - z;
             // (u, v) of the collapsed coordinates; `v` holds the values
             let (cu, cv) = if s.abs() > 1e-14 { (x / s, y / s) } else { (0.0, 0.0) };
-            for (a, c) in CORNERS.iter().enumerate() {
+            // the base corners (ξ_a, η_a): the quadrangle's
+            for (a, c) in reference_nodes(CellKind::Quad4).iter().enumerate() {
                 let (su, sv) = (1.0 + c[0] * cu, 1.0 + c[1] * cv);
                 v[a] = 0.25 * s * su * sv;
                 g[a] = [0.25 * c[0] * sv, 0.25 * c[1] * su, 0.25 * (c[0] * c[1] * cu * cv - 1.0)];
@@ -199,10 +188,10 @@ pub fn stiffness_rule(cell: &Cell) -> &'static [QuadPoint] {
         CellKind::Prism6 => &PRISM_6POINT,
         CellKind::Pyr5 => &PYRAMID_8POINT,
         CellKind::Tri6 => &TRI_6POINT,
-        CellKind::Quad8 | CellKind::Quad9 => kept(&GAUSS_3X3, || tensor_gauss(3, 2)),
+        CellKind::Quad8 | CellKind::Quad9 => GAUSS_3X3.get_or_init(|| tensor_gauss(3, 2)),
         CellKind::Tet10 => &TET_4POINT,
-        CellKind::Hex20 | CellKind::Hex27 => kept(&GAUSS_3X3X3, || tensor_gauss(3, 3)),
-        CellKind::Prism15 | CellKind::Prism18 => kept(&PRISM_18, || prism_rule(&TRI_6POINT, 3)),
+        CellKind::Hex20 | CellKind::Hex27 => GAUSS_3X3X3.get_or_init(|| tensor_gauss(3, 3)),
+        CellKind::Prism15 | CellKind::Prism18 => PRISM_18.get_or_init(|| prism_rule(&TRI_6POINT, 3)),
     }
 }
 
@@ -213,7 +202,7 @@ pub fn load_rule(cell: &Cell) -> &'static [QuadPoint] {
     match cell.kind() {
         CellKind::Tri3 => &TRI_3POINT,
         CellKind::Tet4 => &TET_4POINT,
-        CellKind::Tet10 => kept(&TET_27, tet_duffy_27),
+        CellKind::Tet10 => TET_27.get_or_init(|| tet_duffy(3)),
         _ => stiffness_rule(cell),
     }
 }
@@ -223,9 +212,9 @@ pub fn load_rule(cell: &Cell) -> &'static [QuadPoint] {
 pub fn error_rule(cell: &Cell) -> Vec<QuadPoint> {
     match cell.kind() {
         CellKind::Tri3 => TRI_6POINT.to_vec(),
-        CellKind::Quad4 => tensor_gauss_3(2),
-        CellKind::Tet4 => tet_duffy_27(),
-        CellKind::Hex8 => tensor_gauss_3(3),
+        CellKind::Quad4 => tensor_gauss(3, 2),
+        CellKind::Tet4 => tet_duffy(3),
+        CellKind::Hex8 => tensor_gauss(3, 3),
         // the triangle's 6-point rule times 3-point Gauss in ζ
         CellKind::Prism6 => prism_rule(&TRI_6POINT, 3),
         CellKind::Pyr5 => pyramid_collapsed_27(),

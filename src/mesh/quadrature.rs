@@ -159,14 +159,6 @@ pub fn gauss(n: usize) -> &'static [(f64, f64)] {
     }
 }
 
-/// A rule made once and kept for the run (the second-order cells' tensor and collapsed rules).
-pub fn kept(
-    slot: &'static std::sync::OnceLock<Vec<QuadPoint>>,
-    make: impl FnOnce() -> Vec<QuadPoint>,
-) -> &'static [QuadPoint] {
-    slot.get_or_init(make)
-}
-
 /// The 6-point rule on the reference triangle ([`TRI6`], exact for quartics) as quadrature points.
 pub const TRI_6POINT: [QuadPoint; 6] = [
     qp(TRI6[0].0[0], TRI6[0].0[1], 0.0, TRI6[0].1),
@@ -203,15 +195,9 @@ pub fn triangle_duffy(n: usize) -> Vec<QuadPoint> {
     out
 }
 
-/// A collapsed (Duffy) tensor rule on the reference tetrahedron from 3 Gauss points per
-/// direction: 27 points, positive weights, exact for polynomials of degree 3 (used for error
-/// integrals, where its cost does not matter).
-pub fn tet_duffy_27() -> Vec<QuadPoint> {
-    tet_duffy(3)
-}
-
-/// The collapsed rule on the reference tetrahedron from n Gauss points per direction (n³
-/// points, exact for degree 2n − 3).
+/// The collapsed (Duffy) rule on the reference tetrahedron from n Gauss points per direction (n³
+/// points, positive weights, exact for degree 2n − 3: n = 3 for error integrals on 4-node
+/// tetrahedra, where its cost does not matter).
 pub fn tet_duffy(n: usize) -> Vec<QuadPoint> {
     let mut out = Vec::with_capacity(n * n * n);
     for &(a, wa) in gauss(n) {
@@ -232,12 +218,7 @@ pub fn tet_duffy(n: usize) -> Vec<QuadPoint> {
     out
 }
 
-/// 3×3 (×3) Gauss on [−1, 1]^d (error integrals on quadrilaterals and hexahedra).
-pub fn tensor_gauss_3(dim: usize) -> Vec<QuadPoint> {
-    tensor_gauss(3, dim)
-}
-
-/// n × n (× n) Gauss on [−1, 1]^d.
+/// n × n (× n) Gauss on [−1, 1]^d (n = 3: error integrals on quadrilaterals and hexahedra).
 pub fn tensor_gauss(n: usize, dim: usize) -> Vec<QuadPoint> {
     let mut out = Vec::new();
     for &(a, wa) in gauss(n) {
@@ -290,7 +271,7 @@ mod tests {
         let t2: f64 = TET_4POINT.iter().map(|p| p.weight * p.xi[0] * p.xi[0]).sum();
         let t11: f64 = TET_4POINT.iter().map(|p| p.weight * p.xi[0] * p.xi[1]).sum();
         assert!((t2 - 1.0 / 60.0).abs() < 1e-15 && (t11 - 1.0 / 120.0).abs() < 1e-15);
-        let d = tet_duffy_27();
+        let d = tet_duffy(3);
         let vol: f64 = d.iter().map(|p| p.weight).sum();
         // ∫_tet ξ ζ² = 2!·1!/(3+3)! ·... = 1/360 (Dirichlet integral a!b!c!/(a+b+c+3)!)
         let xz2: f64 = d.iter().map(|p| p.weight * p.xi[0] * p.xi[2] * p.xi[2]).sum();

@@ -101,29 +101,6 @@ pub fn edge_area_vector<const D: usize>(a: &[f64; D], b: &[f64; D]) -> ([f64; 3]
     ([d[1], -d[0], 0.0], norm(&d))
 }
 
-/// A face's map at the reference point `xi` of its reference cell (`Tri3` or `Quad4`, element.rs):
-/// the shape values and the area vector ∂x/∂ξ × ∂x/∂η (the outward normal times dA/dξdη).
-pub fn face_area_vector<const D: usize>(
-    points: &[[f64; D]],
-    face: &Facet,
-    xi: [f64; 3],
-) -> ([f64; MAX_NODES], [f64; 3]) {
-    let reference_cell = match face.len() {
-        3 => Cell::Tri3([0, 1, 2]),
-        _ => Cell::Quad4([0, 1, 2, 3]),
-    };
-    let (n, value, grad) = reference(&reference_cell, xi);
-    let (mut t1, mut t2) = ([0.0; 3], [0.0; 3]);
-    for a in 0..n {
-        let p = points[face.nodes()[a]];
-        for k in 0..D {
-            t1[k] += grad[a][0] * p[k];
-            t2[k] += grad[a][1] * p[k];
-        }
-    }
-    (value, cross(t1, t2))
-}
-
 /// The reference cell of a face: a triangle or a quadrangle of the face's nodes' count.
 fn face_reference(face: &Facet) -> Cell {
     let kind = match (face.corners().len(), face.len()) {
@@ -133,14 +110,13 @@ fn face_reference(face: &Facet) -> Cell {
         (4, 8) => CellKind::Quad8,
         _ => CellKind::Quad9,
     };
-    let local: Vec<usize> = (0..face.len()).collect();
-    Cell::new(kind, &local)
+    Cell::new(kind, &[0, 1, 2, 3, 4, 5, 6, 7, 8][..face.len()])
 }
 
 /// A quadrature rule on a facet's reference: on an edge, s ∈ [0, 1] with weights summing to 1
 /// (3-point Gauss: quintics); on a face, its reference cell's (the 3-point rule or 2 × 2 Gauss
 /// on first-order faces, the 6-point rule or 3 × 3 Gauss on second-order ones, docs/method.md §19.2).
-pub(crate) fn facet_rule(f: &Facet) -> &'static [QuadPoint] {
+pub fn facet_rule(f: &Facet) -> &'static [QuadPoint] {
     const EDGE: [QuadPoint; 3] = [
         QuadPoint {
             xi: [EDGE_GAUSS_3[0].0, 0.0, 0.0],
@@ -167,7 +143,7 @@ pub(crate) fn facet_rule(f: &Facet) -> &'static [QuadPoint] {
 /// its second; a face: its reference cell's ξ, η): the shape values, the area vector (the
 /// outward normal times ds/ds_ref: (dy, −dx)/ds on an edge, ∂x/∂ξ × ∂x/∂η on a face) and the
 /// point, as x₀ + Σ_a N_a (x_a − x₀) (a point of a facet in a plane x_k = c gets exactly c).
-pub(crate) fn facet_map<const D: usize>(
+pub fn facet_map<const D: usize>(
     points: &[[f64; D]],
     f: &Facet,
     xi: [f64; 3],
@@ -229,7 +205,8 @@ pub(crate) fn corner_basis(f: &Facet, xi: [f64; 3]) -> [f64; 4] {
 /// own — so that every node's normal is a mean of its facets' normals.
 pub(crate) fn facet_integrals<const D: usize>(points: &[[f64; D]], f: &Facet) -> (Vec<f64>, Vec<[f64; 3]>, f64) {
     let x = |i: usize| points[f.nodes()[i]];
-    if f.is_second_order() {
+    // a bilinear face (2 × 2 Gauss, its corner functions its own) or a second-order facet
+    if f.is_second_order() || f.len() == 4 {
         let (n, m) = (f.len(), f.corners().len());
         let (mut w, mut nv, mut measure) = (vec![0.0; n], vec![[0.0; 3]; n], 0.0);
         for q in facet_rule(f) {
@@ -259,22 +236,7 @@ pub(crate) fn facet_integrals<const D: usize>(points: &[[f64; D]], f: &Facet) ->
             let share = [a[0] / 6.0, a[1] / 6.0, a[2] / 6.0];
             (vec![area / 3.0; 3], vec![share; 3], area)
         }
-        _ => {
-            // bilinear face: 2×2 Gauss on [−1, 1]²
-            let (mut w, mut nv, mut area) = (vec![0.0; 4], vec![[0.0; 3]; 4], 0.0);
-            for q in &QUAD_GAUSS_2X2 {
-                let (value, dn) = face_area_vector(points, f, q.xi);
-                let da = norm(&dn) * q.weight;
-                area += da;
-                for a in 0..4 {
-                    w[a] += value[a] * da;
-                    for k in 0..3 {
-                        nv[a][k] += value[a] * dn[k] * q.weight;
-                    }
-                }
-            }
-            (w, nv, area)
-        }
+        _ => unreachable!("a face of 4 nodes or more takes the rule above"),
     }
 }
 

@@ -179,7 +179,7 @@ type Terms = Vec<(usize, f64)>;
 /// row `normal(k)` over its faces' nodes (none: a row of its own node).
 fn spread_rows<const D: usize>(
     rows: &mut ContactNodes<D>,
-    spread: &[Vec<(usize, f64)>],
+    spread: &[Terms],
     normal: impl Fn(usize) -> usize,
     dofs: &DofMap<D>,
 ) {
@@ -445,7 +445,7 @@ pub fn build<const D: usize>(
     tied_rows(&mut rows, &mut master_terms, &tied);
     let (mut nodes, kept) = ContactNodes::from_rows(&rows.nodes, &rows.weights, &rows.directions, dofs);
     let master_terms: Vec<Vec<(usize, f64)>> = kept.iter().map(|&r| master_terms[r].clone()).collect();
-    let spread: Vec<Vec<(usize, f64)>> = kept.iter().map(|&r| rows.spread[r].clone()).collect();
+    let spread: Vec<Terms> = kept.iter().map(|&r| rows.spread[r].clone()).collect();
     for (k, terms) in master_terms.iter().enumerate() {
         nodes.add_master_terms(k, terms, dofs);
     }

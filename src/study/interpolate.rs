@@ -415,7 +415,7 @@ pub fn reference_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x
         let (n, v, g) = reference(cell, xi);
         map_at(cell, points, n, &v, &g)
     };
-    let simplex = matches!(cell, Cell::Tri3(_) | Cell::Tet4(_));
+    let linear_simplex = matches!(cell, Cell::Tri3(_) | Cell::Tet4(_));
     let start = reference_centroid(cell);
     let Some(xi) = newton(map, x, start, size) else {
         return ([0.0; 3], f64::INFINITY);
@@ -426,7 +426,7 @@ pub fn reference_coordinates<const D: usize>(cell: &Cell, points: &[[f64; D]], x
         // Newton failed (a degenerate cell): unusable
         return (xi, f64::INFINITY);
     }
-    let dist = if simplex {
+    let dist = if linear_simplex {
         let s = shape_at(cell, points, xi);
         (0..nodes.len())
             .map(|a| {

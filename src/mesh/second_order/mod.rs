@@ -196,29 +196,11 @@ pub fn reference_nodes(kind: CellKind) -> &'static [[f64; 3]] {
 /// checked against `vtkCell::GetParametricCoords` of VTK 9.
 fn vtk_nodes(kind: CellKind) -> Vec<Vec<usize>> {
     let corners = (0..kind.corners()).map(|c| vec![c]);
-    let edges: &[[usize; 2]] = match kind {
-        CellKind::Tri6 => &[[0, 1], [1, 2], [2, 0]],
-        CellKind::Quad8 | CellKind::Quad9 => &[[0, 1], [1, 2], [2, 3], [3, 0]],
-        CellKind::Tet10 => &[[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]],
-        CellKind::Hex20 | CellKind::Hex27 => &[
-            [0, 1],
-            [1, 2],
-            [2, 3],
-            [3, 0],
-            [4, 5],
-            [5, 6],
-            [6, 7],
-            [7, 4],
-            [0, 4],
-            [1, 5],
-            [2, 6],
-            [3, 7],
-        ],
-        CellKind::Prism15 | CellKind::Prism18 => {
-            &[[0, 1], [1, 2], [2, 0], [3, 4], [4, 5], [5, 3], [0, 3], [1, 4], [2, 5]]
-        }
-        _ => &[],
-    };
+    // VTK lists its midside nodes in the order of hvi's first-order edge tables (kind.rs), read in
+    // VTK's own corner numbering: 01, 12, 20 (23, 30 on a quadrangle), then a tetrahedron's 03, 13,
+    // 23, a hexahedron's top 45, 56, 67, 74 and verticals 04, 15, 26, 37, a prism's top 34, 45, 53
+    // and verticals 03, 14, 25
+    let edges: &[[usize; 2]] = if kind.order() == 2 { kind.linear_edges() } else { &[] };
     let faces: &[&[usize]] = match kind {
         CellKind::Quad9 => &[&[0, 1, 2, 3]],
         // x = 0, x = 1, y = 0, y = 1, z = 0, z = 1 in VTK's parametric coordinates, then the centre

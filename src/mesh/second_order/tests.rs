@@ -4,16 +4,10 @@ use super::*;
 use crate::mesh::element::{reference, shape_at, stiffness_rule};
 use crate::mesh::Cell;
 
-const SECOND_ORDER: [CellKind; 8] = [
-    CellKind::Tri6,
-    CellKind::Quad8,
-    CellKind::Quad9,
-    CellKind::Tet10,
-    CellKind::Hex20,
-    CellKind::Hex27,
-    CellKind::Prism15,
-    CellKind::Prism18,
-];
+/// The second-order kinds.
+fn second_order() -> impl Iterator<Item = CellKind> {
+    CellKind::ALL.into_iter().filter(|k| k.order() == 2)
+}
 
 fn reference_cell(kind: CellKind) -> Cell {
     Cell::new(kind, &(0..kind.nodes()).collect::<Vec<_>>())
@@ -48,7 +42,7 @@ fn inside(kind: CellKind, n: usize) -> Vec<[f64; 3]> {
 /// the O(h²) truncation and round-off 1e-16/1e-6).
 #[test]
 fn shape_functions_are_nodal_complete_and_consistent() {
-    for kind in SECOND_ORDER {
+    for kind in second_order() {
         let cell = reference_cell(kind);
         let nodes = reference_nodes(kind);
         for (b, &x) in nodes.iter().enumerate() {
