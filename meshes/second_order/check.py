@@ -5,6 +5,7 @@
   * the physical groups (name, dimension, tag) are the intended ones;
   * ring_* and cylinder_*: every node of the Inner / Outer groups' elements (corners and
     midside / face nodes) lies on r = 1 / r = 2 (max |r - R| printed, must be < 1e-12);
+  * hertz_3d_*: every node of the Gamma3 elements lies on z = 0 (to 1e-12), in 0 <= x, y <= 0.16;
   * every edge node of a boundary facet is at its edge's midpoint (of the arc in (r, θ, z) on
     r = 1 / r = 2, else of the segment), every face node of a quadrangle on Inner / Outer at its
     centre, to 1e-8 (also checks the facets' high-order node order);
@@ -39,6 +40,9 @@ RECT = {(1, 1): "Gamma1", (1, 2): "Gamma2", (1, 3): "Gamma3", (1, 4): "Gamma2_to
         (2, 5): "Omega"}
 PYR = {(2, 1): "Gamma1", (2, 2): "Gamma2", (2, 3): "Gamma3", (3, 5): "Omega"}
 MIXED = {(1, 1): "Gamma1", (1, 2): "Gamma2", (1, 3): "Gamma3", (2, 5): "Omega"}
+HERTZ2D = {(1, 3): "Gamma3", (1, 4): "Symmetry", (1, 5): "Base", (1, 6): "Free", (2, 7): "Omega"}
+HERTZ3D = {(2, 3): "Gamma3", (2, 4): "SymX", (2, 5): "SymY", (2, 6): "Base", (2, 7): "Free",
+           (3, 8): "Omega"}
 
 RING_AREA = 0.75 * math.pi
 # file prefix -> (top-dim types, boundary types, groups, exact measure)
@@ -58,6 +62,8 @@ EXPECT = {
     "pyramid13": ({11, 17, 19}, {9, 16}, PYR, 0.5),
     "pyramid14": ({11, 12, 14}, {9, 10}, PYR, 0.5),
     "mixed_order": ({2, 9}, {1, 8}, MIXED, 2.0),
+    "hertz_2d_p2": ({9}, {8}, HERTZ2D, 2.0 * 2.0),
+    "hertz_3d_tet10": ({11}, {9}, HERTZ3D, 1.5 ** 3),
 }
 
 # faces (corner indices, gmsh local numbering) of the cells, to find the cell of a boundary facet
@@ -213,6 +219,16 @@ def check(path):
             dev[gname] = max(abs(math.hypot(xyz[v][0], xyz[v][1]) - R) for v in nodes)
             if dev[gname] >= 1e-12:
                 errors.append(f"{gname}: a node {dev[gname]:.3g} off r = {R}")
+
+    # hertz_3d_*: every node of the Gamma3 elements on z = 0 (to 1e-12), in 0 <= x, y <= 0.16
+    if key == "hertz_3d_tet10" and (2, 3) in groups:
+        nodes = set()
+        for ent in gmsh.model.getEntitiesForPhysicalGroup(2, 3):
+            for t in gmsh.model.mesh.getElementTypes(2, ent):
+                nodes.update(int(v) for v in gmsh.model.mesh.getElementsByType(t, ent)[1])
+        if max(abs(xyz[v][2]) for v in nodes) >= 1e-12 or not all(
+                0 <= xyz[v][i] <= 0.16 for v in nodes for i in (0, 1)):
+            errors.append("Gamma3: a node off z = 0 or outside 0 <= x, y <= 0.16")
 
     # high-order nodes where they belong: every edge node of a boundary facet at its edge's midpoint
     # (on an edge with both ends on r = 1 or both on r = 2, the midpoint of the arc in (r, θ, z);

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates every .msh file in this folder (second-order gmsh meshes, MSH 4.1 ASCII) from
-# ../ring.geo, ../rectangle.geo, ../pyramid.geo and cylinder.geo here (needs gmsh: `pip install gmsh`,
+# ../ring.geo, ../rectangle.geo, ../pyramid.geo, ../../examples/gallery/hertz_3d/hertz_3d.geo and
+# cylinder.geo here (needs gmsh: `pip install gmsh`,
 # and python3 with the gmsh module for mixed_order.msh and the checks at the end).
 # Run from anywhere: bash meshes/second_order/generate.sh
 set -euo pipefail
@@ -94,6 +95,14 @@ gmsh.write(sys.argv[1])
 gmsh.finalize()
 PY
 echo "wrote mixed_order.msh ($(wc -c <mixed_order.msh) bytes)"
+
+# 5. The 3D Hertz contact quarter block (../../examples/gallery/hertz_3d/hertz_3d.geo), tet10:
+#    hf = element size near the contact patch, a/7 = 0.014 and a/10 = 0.01 (a = 0.1, the contact
+#    radius; the gallery's linear mesh uses a/14 = 0.007), hc at its default 0.3. gmsh prints 8
+#    harmless warnings "Skipping unknown volume 10 in physical volume 8" (also for the linear mesh):
+#    the .geo's v() from BooleanFragments lists surface tags too; Omega is volume 1 alone.
+m3 ../../examples/gallery/hertz_3d/hertz_3d.geo hertz_3d_tet10_a7.msh -setnumber hf 0.014 -order 2
+m3 ../../examples/gallery/hertz_3d/hertz_3d.geo hertz_3d_tet10_a10.msh -setnumber hf 0.01 -order 2
 
 # Element types, groups, nodes on the circles, orientation: check.py (fails the script on an error).
 python3 check.py

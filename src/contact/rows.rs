@@ -114,32 +114,29 @@ fn clusters<const D: usize>(part: &BoundaryPart<D>, points: &[[f64; D]]) -> Vec<
     out
 }
 
-/// The rows of a part made of second-order faces (docs/method.md §19.3): one at each vertex p,
-/// its multiplier in the span of the corners' first-order functions ψ_p (positive, summing to
-/// 1): the weight D_p = ∫ψ_p ds, the direction the mean of n weighted by ψ_p, and the row
-/// u_ν = Σ_i c_pi d·u_i with c_pi = ∫ψ_p N_i ds / D_p over the nodes i of p's faces (N_i their own
-/// functions) — a uniform pressure then loads node i with ∫N_i p ds, the patch test. On a body
-/// of revolution the measure is 2πr ds.
-fn vertex_rows<const D: usize>(part: &BoundaryPart<D>, points: &[[f64; D]]) -> Vec<Candidate<D>> {
-    use crate::mesh::topology::{corner_basis, facet_map, facet_rule};
-    // per vertex: D_p, ∫ψ_p n ds and the (node, ∫ψ_p N_i ds) of its faces' nodes
+/// The rows of a part made of second-order faces (docs/method.md §19.3): one at each node j of
+/// the faces, its multiplier function ψ_j the first-order function of j on the faces split at
+/// their midside nodes ([`crate::mesh::topology::row_rule`]): the weight D_j = ∫ψ_j ds, the
+/// direction the mean of n weighted by ψ_j, and the row u_ν = Σ_i c_ji d·u_i with
+/// c_ji = ∫ψ_j N_i ds / D_j over the nodes i of j's faces (N_i their own functions) — a uniform
+/// pressure then loads node i with ∫N_i p ds, the patch test. On a body of revolution the
+/// measure is 2πr ds.
+fn node_rows<const D: usize>(part: &BoundaryPart<D>, points: &[[f64; D]]) -> Vec<Candidate<D>> {
+    use crate::mesh::topology::{facet_map, row_rule};
+    // per node: D_j, ∫ψ_j n ds and the (node, ∫ψ_j N_i ds) of its faces' nodes
     type Sums = (f64, [f64; 3], Vec<(usize, f64)>);
     let mut at: std::collections::BTreeMap<usize, Sums> = Default::default();
     for f in &part.facets {
         let nodes = f.nodes();
-        for q in facet_rule(f) {
-            let (value, dn, x) = facet_map(points, f, q.xi);
-            let psi = corner_basis(f, q.xi);
+        for (xi, weight, psi) in row_rule(f) {
+            let (value, dn, x) = facet_map(points, f, xi);
             let revolved = if part.revolved {
                 2.0 * std::f64::consts::PI * x[0]
             } else {
                 1.0
             };
-            let (da, scale) = (
-                crate::mesh::vector::norm(&dn) * q.weight * revolved,
-                q.weight * revolved,
-            );
-            for (a, &p) in f.corners().iter().enumerate() {
+            let (da, scale) = (crate::mesh::vector::norm(&dn) * weight * revolved, weight * revolved);
+            for (a, &p) in nodes.iter().enumerate() {
                 let (w, nv, terms) = at.entry(p).or_default();
                 *w += psi[a] * da;
                 for k in 0..3 {
@@ -154,7 +151,9 @@ fn vertex_rows<const D: usize>(part: &BoundaryPart<D>, points: &[[f64; D]]) -> V
             }
         }
     }
+    // a 6-node triangle's midside nodes carry no row (ψ = 0 there)
     at.into_iter()
+        .filter(|(_, (weight, _, _))| *weight > 0.0)
         .map(|(node, (weight, nv, mut terms))| {
             terms.sort_unstable_by_key(|t| t.0);
             terms.iter_mut().for_each(|t| t.1 /= weight);
@@ -214,7 +213,7 @@ pub fn build<const D: usize>(groups: &[GroupRows<D>], points: &[[f64; D]], lengt
     let mut never = Vec::new();
     for (gi, g) in groups.iter().enumerate() {
         let candidates = if g.part.facets.iter().any(|f| f.is_second_order()) {
-            vertex_rows(g.part, points)
+            node_rows(g.part, points)
         } else {
             clusters(g.part, points)
         };

@@ -82,6 +82,15 @@ pub fn local_stiffness<const D: usize>(
     // ∫ ∂ᵢN_a (nl values) and |c|, for the cell's mean dilatation
     let mut mean = [0.0; 3 * 27];
     let mut measure = 0.0;
+    // per node pair a ≤ b: Σ_q w ∂ᵢN_a ∂ⱼN_b (row-major 3 × 3); on the stack up to 8 nodes
+    let pairs = n * (n + 1) / 2;
+    let (mut small, mut large) = ([[0.0; 9]; 36], Vec::new());
+    let grams: &mut [[f64; 9]] = if pairs <= small.len() {
+        &mut small[..pairs]
+    } else {
+        large.resize(pairs, [0.0; 9]);
+        &mut large
+    };
     // a body of revolution's triangle: its hoop terms N_a N_b / r times r are quadratic, which
     // the 3-point rule integrates exactly (the centroid alone lost an order on the thick cylinder)
     let rule = match cell {
@@ -108,28 +117,59 @@ pub fn local_stiffness<const D: usize>(
                 }
             }
         }
+        // the pairs' Σ_q w ∂ᵢN_a ∂ⱼN_b, shared by every tensor
+        let mut pair = 0;
         for a in 0..n {
-            let ga = s.grad[a];
+            let wa: [f64; D] = std::array::from_fn(|i| w * s.grad[a][i]);
             for b in a..n {
                 let gb = s.grad[b];
-                let dot: f64 = (0..D).map(|r| ga[r] * gb[r]).sum();
-                for (c, km) in cs.iter().zip(out.iter_mut()) {
-                    let lambda = if deviatoric { -2.0 * c.mu / 3.0 } else { c.lambda };
-                    for i in 0..D {
-                        let row = (D * a + i) * nl + D * b;
-                        for j in 0..D {
-                            let mut v = lambda * ga[i] * gb[j] + c.mu * ga[j] * gb[i];
-                            if i == j {
-                                v += c.mu * dot;
-                            }
-                            if axisymmetric {
+                for i in 0..D {
+                    for j in 0..D {
+                        grams[pair][3 * i + j] += wa[i] * gb[j];
+                    }
+                }
+                pair += 1;
+            }
+        }
+        if axisymmetric {
+            // the hoop terms, pointwise (2D only)
+            for (c, km) in cs.iter().zip(out.iter_mut()) {
+                let lambda = if deviatoric { -2.0 * c.mu / 3.0 } else { c.lambda };
+                for a in 0..n {
+                    for b in a..n {
+                        let (ga, gb) = (s.grad[a], s.grad[b]);
+                        for i in 0..D {
+                            let row = (D * a + i) * nl + D * b;
+                            for j in 0..D {
                                 let (ha, hb) = (hoop(a, i), hoop(b, j));
-                                v += lambda * (ga[i] * hb + ha * gb[j] + ha * hb) + 2.0 * c.mu * ha * hb;
+                                km[row + j] +=
+                                    w * (lambda * (ga[i] * hb + ha * gb[j] + ha * hb) + 2.0 * c.mu * ha * hb);
                             }
-                            km[row + j] += w * v;
                         }
                     }
                 }
+            }
+        }
+    }
+    // K[(a,i),(b,j)] = λ G_ij + μ (G_ji + δᵢⱼ tr G), G the pair's gram
+    for (c, km) in cs.iter().zip(out.iter_mut()) {
+        let lambda = if deviatoric { -2.0 * c.mu / 3.0 } else { c.lambda };
+        let mut pair = 0;
+        for a in 0..n {
+            for b in a..n {
+                let g = &grams[pair];
+                let trace: f64 = (0..D).map(|r| g[4 * r]).sum();
+                for i in 0..D {
+                    let row = (D * a + i) * nl + D * b;
+                    for j in 0..D {
+                        let mut v = lambda * g[3 * i + j] + c.mu * g[3 * j + i];
+                        if i == j {
+                            v += c.mu * trace;
+                        }
+                        km[row + j] += v;
+                    }
+                }
+                pair += 1;
             }
         }
     }

@@ -2,7 +2,7 @@
 //! facets with outward normals and nodal quadrature weights (docs/method.md §2, §8).
 
 use super::element::{reference, MAX_NODES};
-use super::quadrature::{QuadPoint, EDGE_GAUSS_3, TRI_3POINT};
+use super::quadrature::{tensor_gauss, QuadPoint, EDGE_GAUSS_3, TRI_3POINT};
 use super::vector::{cross, norm};
 use super::{fmt_point, Facet, GroupSelector, Mesh, MeshError, PhysicalGroup};
 use super::{Cell, CellKind};
@@ -193,6 +193,66 @@ pub(crate) fn corner_basis(f: &Facet, xi: [f64; 3]) -> [f64; 4] {
         2 => out[..2].copy_from_slice(&[1.0 - xi[0], xi[0]]),
         3 => out[..3].copy_from_slice(&reference(&Cell::Tri3([0, 1, 2]), xi).1[..3]),
         _ => out.copy_from_slice(&reference(&Cell::Quad4([0, 1, 2, 3]), xi).1[..4]),
+    }
+    out
+}
+
+/// The contact rows' multiplier functions on a second-order facet (docs/method.md §19.3) with
+/// the rule that integrates them: the facet split at its midside (and centre) nodes into 2
+/// edges, 4 triangles or 4 quadrangles, ψ_j the first-order function of node j on that split
+/// (P1-iso-P2: positive, Σ_j ψ_j = 1), and on each piece its reference rule scaled by 1/4 (an
+/// edge's halves: 1/2) — exact for ψ_j N_i on a flat facet. An 8-node quadrangle has no centre
+/// node: the centre's function is shared equally by its four edge nodes. Returns (point in the
+/// facet's reference coordinates, weight, ψ at it).
+pub(crate) fn row_rule(f: &Facet) -> Vec<([f64; 3], f64, [f64; 9])> {
+    let mut out = Vec::new();
+    if f.dim() == 1 {
+        // nodes: ends s = 0, 1, midpoint s = 1/2
+        for q in facet_rule(f) {
+            for half in [0.0, 0.5] {
+                let s = half + 0.5 * q.xi[0];
+                let mut psi = [0.0; 9];
+                (psi[0], psi[1], psi[2]) = (
+                    (1.0 - 2.0 * s).max(0.0),
+                    (2.0 * s - 1.0).max(0.0),
+                    1.0 - (2.0 * s - 1.0).abs(),
+                );
+                out.push(([s, 0.0, 0.0], 0.5 * q.weight, psi));
+            }
+        }
+        return out;
+    }
+    if f.corners().len() == 3 || f.len() == 8 {
+        // a 6-node triangle: rows at its corners only, ψ their first-order functions
+        for q in facet_rule(f) {
+            let mut psi = [0.0; 9];
+            psi[..4].copy_from_slice(&corner_basis(f, q.xi));
+            out.push((q.xi, q.weight, psi));
+        }
+        return out;
+    }
+    // each piece: its nodes (facet-local) at the corners of the piece's reference cell
+    const SPLIT: [[usize; 4]; 4] = [[0, 4, 8, 7], [4, 1, 5, 8], [8, 5, 2, 6], [7, 8, 6, 3]];
+    let (pieces, piece_cell, rule, corners) = (&SPLIT, Cell::Quad4([0, 1, 2, 3]), tensor_gauss(3, 2), 4);
+    let nodes = crate::mesh::second_order::reference_nodes(face_reference(f).kind());
+    for piece in pieces {
+        for q in &rule {
+            let hats = reference(&piece_cell, q.xi).1;
+            let (mut xi, mut psi) = ([0.0; 3], [0.0; 9]);
+            for (k, &node) in piece[..corners].iter().enumerate() {
+                let at = if node < nodes.len() { nodes[node] } else { [0.0; 3] };
+                for c in 0..2 {
+                    xi[c] += hats[k] * at[c];
+                }
+                psi[node] += hats[k];
+            }
+            if f.len() == 8 {
+                // the 8-node quadrangle's missing centre: its function to the edge nodes
+                let centre = std::mem::take(&mut psi[8]);
+                (4..8).for_each(|e| psi[e] += 0.25 * centre);
+            }
+            out.push((xi, 0.25 * q.weight, psi));
+        }
     }
     out
 }

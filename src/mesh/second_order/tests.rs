@@ -139,3 +139,53 @@ fn vtk_orders_match_vtk_documentation() {
     assert_eq!(derived(CellKind::Prism6).vtk_order, [0, 2, 1, 3, 5, 4]);
     assert_eq!(derived(CellKind::Quad9).vtk_order, (0..9).collect::<Vec<_>>());
 }
+
+/// The contact rows' functions on second-order facets (docs/method.md §19.3,
+/// `topology::row_rule`): on each kind they sum to 1 at every point of the rule, are
+/// non-negative, and integrate to the table's weights.
+#[test]
+fn contact_row_functions_are_a_positive_partition_with_the_tabled_weights() {
+    use crate::mesh::topology::row_rule;
+    use crate::mesh::Facet;
+    // (facet, its reference measure, each node's weight as a share of it)
+    let cases: [(Facet, f64, Vec<f64>); 4] = [
+        (Facet::with_corners(&[0, 1, 2], 2), 1.0, vec![0.25, 0.25, 0.5]),
+        (
+            Facet::with_corners(&[0, 1, 2, 3, 4, 5, 6, 7, 8], 4),
+            4.0,
+            [[1.0 / 16.0; 4], [1.0 / 8.0; 4]]
+                .concat()
+                .into_iter()
+                .chain([0.25])
+                .collect(),
+        ),
+        (
+            Facet::with_corners(&[0, 1, 2, 3, 4, 5], 3),
+            0.5,
+            vec![1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 0.0, 0.0, 0.0],
+        ),
+        (
+            Facet::with_corners(&[0, 1, 2, 3, 4, 5, 6, 7], 4),
+            4.0,
+            [vec![0.25; 4], vec![0.0; 4]].concat(),
+        ),
+    ];
+    for (f, measure, shares) in cases {
+        let mut weights = vec![0.0; f.len()];
+        for (_, w, psi) in row_rule(&f) {
+            let sum: f64 = psi[..f.len()].iter().sum();
+            assert!((sum - 1.0).abs() < 1e-14, "{} nodes: Σψ = {sum}", f.len());
+            assert!(psi.iter().all(|&p| p >= -1e-15), "{} nodes: ψ {psi:?}", f.len());
+            for (a, wa) in weights.iter_mut().enumerate() {
+                *wa += w * psi[a];
+            }
+        }
+        for (a, (w, s)) in weights.iter().zip(&shares).enumerate() {
+            assert!(
+                (w / measure - s).abs() < 1e-14,
+                "{} nodes: node {a} weight {w} against {s}",
+                f.len()
+            );
+        }
+    }
+}
