@@ -57,6 +57,20 @@ fn run_mesh<const D: usize>(scene: &Scene, mesh: Mesh<D>, symmetry_factor: f64) 
     }
 }
 
+/// The relative errors of a run's a and p₀ (fitted) against Hertz of dimension `dim`, after
+/// checking that the pushed base's reaction balances the contact force to 1e-9.
+fn balanced_errors(label: &str, c: &Contact, dim: usize, e_star: f64) -> (f64, f64) {
+    assert!(
+        (c.reaction - c.force).abs() <= 1e-9 * c.force,
+        "{label}: reaction {} against the contact force {}",
+        c.reaction,
+        c.force
+    );
+    let (a_hertz, p0_hertz) = hertz(dim, c.force, e_star);
+    let (a, p0) = common::hertz_fit(&c.pressures);
+    (a / a_hertz - 1.0, p0 / p0_hertz - 1.0)
+}
+
 /// Hertz for a rigid cylinder (2D, plane strain, P per unit length) or sphere (3D, total force
 /// P) of radius 1 on a half-space of E* = E/(1 − ν²): the contact half-width or radius a and the
 /// peak pressure p₀. 2D: a² = 4P/(πE*), p₀ = 2P/(πa); 3D: a³ = 3P/(4E*), p₀ = 3P/(2πa²).
@@ -372,15 +386,7 @@ fn hertz_sphere_as_a_body_of_revolution_within_one_percent() {
         )
         .unwrap();
         let c = run_scene::<2>(&scene, "hertz_2d", mesh, 1.0);
-        assert!(
-            (c.reaction - c.force).abs() <= 1e-9 * c.force,
-            "{mesh}: reaction {} against the contact force {}",
-            c.reaction,
-            c.force
-        );
-        let (a_hertz, p0_hertz) = hertz(3, c.force, e_star);
-        let (a, p0) = common::hertz_fit(&c.pressures);
-        let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
+        let (ea, ep) = balanced_errors(mesh, &c, 3, e_star);
         eprintln!(
             "axisymmetric {mesh}: {} nodes, P = {:.5e}, a {:+.2} %, p₀ {:+.2} %",
             c.pressures.len(),
@@ -576,15 +582,7 @@ fn hertz_3d_on_second_order_cells() {
     for (label, mesh, tolerance) in cases {
         let unknowns = 3 * mesh.points.len();
         let c = run_mesh::<3>(&scene, mesh, 4.0);
-        assert!(
-            (c.reaction - c.force).abs() <= 1e-9 * c.force,
-            "{label}: reaction {} against the contact force {}",
-            c.reaction,
-            c.force
-        );
-        let (a_hertz, p0_hertz) = hertz(3, c.force, e_star);
-        let (a, p0) = common::hertz_fit(&c.pressures);
-        let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
+        let (ea, ep) = balanced_errors(label, &c, 3, e_star);
         eprintln!(
             "{label}: {unknowns} unknowns, {} rows on the sphere, a {:+.2} %, p₀ {:+.2} %",
             c.pressures.len(),
