@@ -46,7 +46,8 @@ pub struct Rows<const D: usize> {
     pub motion: Vec<Option<(usize, [f64; D])>>,
     pub terms: Vec<Vec<LawTerm>>,
     /// A row of second-order faces (docs/method.md §19.3): u_ν = Σ_i c_i d·u_i over the nodes of
-    /// its vertex's faces, as (node, c_i) with Σ c_i = 1; empty for a row u_ν = d·u of its node.
+    /// its node's faces, as (node, c_i) with Σ c_i = 1 (its gap and layer the same means of the
+    /// nodes' ones); empty for a row u_ν = d·u of its node.
     pub spread: Vec<Vec<(usize, f64)>>,
     /// Rows dropped because their normal never meets the obstacle: (node, group).
     pub never_touching: Vec<(usize, usize)>,
@@ -219,7 +220,7 @@ pub fn build<const D: usize>(groups: &[GroupRows<D>], points: &[[f64; D]], lengt
         };
         for c in candidates {
             let x = &points[c.node];
-            let (direction, gap, motion) = match g.obstacle {
+            let (direction, mut gap, motion) = match g.obstacle {
                 None => (c.normal, 0.0, None),
                 Some(o) => {
                     let gap = o
@@ -228,11 +229,30 @@ pub fn build<const D: usize>(groups: &[GroupRows<D>], points: &[[f64; D]], lengt
                     (gap.direction, gap.gap, g.motion.map(|m| (m, gap.motion)))
                 }
             };
+            let k = g.part.local(c.node).expect("a node of the part");
+            let mut layer = g.layer[k];
+            if !c.spread.is_empty() {
+                // a spread row's gap and layer are its weighted ones, Σ_i c_i g_i (docs/method.md
+                // §19.3): the row is a weighted mean of u_ν, so is its bound
+                let (mut weighted_gap, mut weighted_layer) = (0.0, 0.0);
+                for &(i, ci) in &c.spread {
+                    if let Some(o) = g.obstacle {
+                        let gi = o.gap(&points[i], &c.normal, g.along_obstacle, length);
+                        weighted_gap += ci * gi.map_or(f64::INFINITY, |v| v.gap);
+                    }
+                    weighted_layer += ci * g.layer[g.part.local(i).expect("a node of the part")];
+                }
+                if g.obstacle.is_some() {
+                    gap = weighted_gap;
+                }
+                if weighted_layer.is_finite() {
+                    layer = weighted_layer;
+                }
+            }
             if !gap.is_finite() {
                 never.push((c.node, gi));
                 continue;
             }
-            let k = g.part.local(c.node).expect("a node of the part");
             let terms = match g.law {
                 // a row with an initial gap never touched: its law is one-sided
                 Some((given, one_sided)) => vec![LawTerm {
@@ -248,7 +268,7 @@ pub fn build<const D: usize>(groups: &[GroupRows<D>], points: &[[f64; D]], lengt
                 direction,
                 group: gi,
                 gap,
-                layer: g.layer[k],
+                layer,
                 motion,
                 terms,
                 spread: c.spread,
