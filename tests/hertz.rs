@@ -557,7 +557,7 @@ fn nearly_incompressible_sphere_as_a_body_of_revolution(mesh: &str) {
 /// gallery's geometry (meshes/second_order/hertz_3d_tet10_a{7,10}.msh: element size a/7 and a/10
 /// on the contact) and the graded hexahedra above (h = 0.16/6 = a/3.8 on the patch) raised to 27
 /// nodes: a and p₀ within 1.5 % of Hertz and the reaction equal to the contact force. Measured:
-/// tetrahedra a/7 a +1.05 %, p₀ +0.19 %; a/10 +0.56 %, +0.23 %; hexahedra +0.96 %, +0.53 %. The
+/// tetrahedra a/7 a +1.05 %, p₀ −0.14 %; a/10 +0.57 %, −0.05 %; hexahedra +0.96 %, +0.53 %. The
 /// issue asks 1 %; a/7 misses it in a by 0.05 %, so the bound is 1.5 % (a/7 is the coarsest
 /// mesh with 30 rows in contact). With the bound taken at the row's node instead of its weighted
 /// gap (before) the tetrahedra's pressures scattered and a/10 was +3.7 % off.

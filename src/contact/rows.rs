@@ -152,7 +152,7 @@ fn node_rows<const D: usize>(part: &BoundaryPart<D>, points: &[[f64; D]]) -> Vec
             }
         }
     }
-    // a 6-node triangle's midside nodes carry no row (ψ = 0 there)
+    // an 8-node quadrangle's midside nodes carry no row (ψ = 0 there)
     at.into_iter()
         .filter(|(_, (weight, _, _))| *weight > 0.0)
         .map(|(node, (weight, nv, mut terms))| {

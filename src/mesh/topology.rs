@@ -201,9 +201,9 @@ pub(crate) fn corner_basis(f: &Facet, xi: [f64; 3]) -> [f64; 4] {
 /// the rule that integrates them: the facet split at its midside (and centre) nodes into 2
 /// edges, 4 triangles or 4 quadrangles, ψ_j the first-order function of node j on that split
 /// (P1-iso-P2: positive, Σ_j ψ_j = 1), and on each piece its reference rule scaled by 1/4 (an
-/// edge's halves: 1/2) — exact for ψ_j N_i on a flat facet. An 8-node quadrangle has no centre
-/// node: the centre's function is shared equally by its four edge nodes. Returns (point in the
-/// facet's reference coordinates, weight, ψ at it).
+/// edge's halves: 1/2) — exact for ψ_j N_i on a flat facet. An 8-node quadrangle (no centre
+/// node) takes its corners' bilinear functions instead, rows at its corners only (measured:
+/// docs/method.md §19.3). Returns (point in the facet's reference coordinates, weight, ψ at it).
 pub(crate) fn row_rule(f: &Facet) -> Vec<([f64; 3], f64, [f64; 9])> {
     let mut out = Vec::new();
     if f.dim() == 1 {
@@ -222,8 +222,8 @@ pub(crate) fn row_rule(f: &Facet) -> Vec<([f64; 3], f64, [f64; 9])> {
         }
         return out;
     }
-    if f.corners().len() == 3 || f.len() == 8 {
-        // a 6-node triangle: rows at its corners only, ψ their first-order functions
+    if f.len() == 8 {
+        // an 8-node quadrangle: rows at its corners only, ψ their bilinear functions
         for q in facet_rule(f) {
             let mut psi = [0.0; 9];
             psi[..4].copy_from_slice(&corner_basis(f, q.xi));
@@ -233,7 +233,17 @@ pub(crate) fn row_rule(f: &Facet) -> Vec<([f64; 3], f64, [f64; 9])> {
     }
     // each piece: its nodes (facet-local) at the corners of the piece's reference cell
     const SPLIT: [[usize; 4]; 4] = [[0, 4, 8, 7], [4, 1, 5, 8], [8, 5, 2, 6], [7, 8, 6, 3]];
-    let (pieces, piece_cell, rule, corners) = (&SPLIT, Cell::Quad4([0, 1, 2, 3]), tensor_gauss(3, 2), 4);
+    const TSPLIT: [[usize; 4]; 4] = [[0, 3, 5, 0], [3, 1, 4, 0], [5, 4, 2, 0], [4, 5, 3, 0]];
+    let (pieces, piece_cell, rule, corners) = if f.corners().len() == 3 {
+        (
+            &TSPLIT,
+            Cell::Tri3([0, 1, 2]),
+            crate::mesh::quadrature::TRI_6POINT.to_vec(),
+            3,
+        )
+    } else {
+        (&SPLIT, Cell::Quad4([0, 1, 2, 3]), tensor_gauss(3, 2), 4)
+    };
     let nodes = crate::mesh::second_order::reference_nodes(face_reference(f).kind());
     for piece in pieces {
         for q in &rule {

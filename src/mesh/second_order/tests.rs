@@ -162,7 +162,7 @@ fn contact_row_functions_are_a_positive_partition_with_the_tabled_weights() {
         (
             Facet::with_corners(&[0, 1, 2, 3, 4, 5], 3),
             0.5,
-            vec![1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 0.0, 0.0, 0.0],
+            [[1.0 / 12.0; 3], [0.25; 3]].concat(),
         ),
         (
             Facet::with_corners(&[0, 1, 2, 3, 4, 5, 6, 7], 4),
