@@ -237,8 +237,8 @@ pub fn build<const D: usize>(groups: &[GroupRows<D>], points: &[[f64; D]], lengt
                 let (mut weighted_gap, mut weighted_layer) = (0.0, 0.0);
                 for &(i, ci) in &c.spread {
                     if let Some(o) = g.obstacle {
-                        let gi = o.gap(&points[i], &c.normal, g.along_obstacle, length);
-                        weighted_gap += ci * gi.map_or(f64::INFINITY, |v| v.gap);
+                        let at_i = o.gap(&points[i], &c.normal, g.along_obstacle, length);
+                        weighted_gap += ci * at_i.map_or(f64::INFINITY, |v| v.gap);
                     }
                     weighted_layer += ci * g.layer[g.part.local(i).expect("a node of the part")];
                 }

@@ -79,6 +79,7 @@ pub fn local_stiffness<const D: usize>(
     let project = volumetric.cell_mean(cell);
     // the pointwise bulk part leaves λ as λ − K = −2μ/3 where the bulk part is a mean's
     let deviatoric = volumetric.projects(cell);
+    let lambda_of = |c: &Isotropic| if deviatoric { -2.0 * c.mu / 3.0 } else { c.lambda };
     // ∫ ∂ᵢN_a (nl values) and |c|, for the cell's mean dilatation
     let mut mean = [0.0; 3 * 27];
     let mut measure = 0.0;
@@ -134,7 +135,7 @@ pub fn local_stiffness<const D: usize>(
         if axisymmetric {
             // the hoop terms, pointwise (2D only)
             for (c, km) in cs.iter().zip(out.iter_mut()) {
-                let lambda = if deviatoric { -2.0 * c.mu / 3.0 } else { c.lambda };
+                let lambda = lambda_of(c);
                 for a in 0..n {
                     for b in a..n {
                         let (ga, gb) = (s.grad[a], s.grad[b]);
@@ -153,7 +154,7 @@ pub fn local_stiffness<const D: usize>(
     }
     // K[(a,i),(b,j)] = λ G_ij + μ (G_ji + δᵢⱼ tr G), G the pair's gram
     for (c, km) in cs.iter().zip(out.iter_mut()) {
-        let lambda = if deviatoric { -2.0 * c.mu / 3.0 } else { c.lambda };
+        let lambda = lambda_of(c);
         let mut pair = 0;
         for a in 0..n {
             for b in a..n {

@@ -250,16 +250,10 @@ pub(crate) fn row_rule(f: &Facet) -> Vec<([f64; 3], f64, [f64; 9])> {
             let hats = reference(&piece_cell, q.xi).1;
             let (mut xi, mut psi) = ([0.0; 3], [0.0; 9]);
             for (k, &node) in piece[..corners].iter().enumerate() {
-                let at = if node < nodes.len() { nodes[node] } else { [0.0; 3] };
                 for c in 0..2 {
-                    xi[c] += hats[k] * at[c];
+                    xi[c] += hats[k] * nodes[node][c];
                 }
                 psi[node] += hats[k];
-            }
-            if f.len() == 8 {
-                // the 8-node quadrangle's missing centre: its function to the edge nodes
-                let centre = std::mem::take(&mut psi[8]);
-                (4..8).for_each(|e| psi[e] += 0.25 * centre);
             }
             out.push((xi, 0.25 * q.weight, psi));
         }
