@@ -237,8 +237,10 @@ pub fn build<const D: usize>(groups: &[GroupRows<D>], points: &[[f64; D]], lengt
                 let (mut weighted_gap, mut weighted_layer) = (0.0, 0.0);
                 for &(i, ci) in &c.spread {
                     if let Some(o) = g.obstacle {
-                        let at_i = o.gap(&points[i], &c.normal, g.along_obstacle, length);
-                        weighted_gap += ci * at_i.map_or(f64::INFINITY, |v| v.gap);
+                        let at_i = o
+                            .gap(&points[i], &c.normal, g.along_obstacle, length)
+                            .map_err(|e| format!("{}: {e}", g.key))?;
+                        weighted_gap += ci * at_i.gap;
                     }
                     weighted_layer += ci * g.layer[g.part.local(i).expect("a node of the part")];
                 }
