@@ -1,7 +1,7 @@
 //! Shared helpers of the integration tests.
 #![allow(dead_code)]
 
-use hvi::mesh::structured::{rectangle, CellShape};
+use hvi::mesh::structured::{block, rectangle, CellShape, SolidShape};
 use hvi::mesh::{Cell, Facet, Mesh, PhysicalGroup};
 use hvi::scene::Scene;
 use std::process::{Command, Output};
@@ -271,4 +271,80 @@ pub fn bound_pressures<const D: usize>(
         }
     }
     pressures
+}
+
+/// Hertz for a rigid cylinder (2D, plane strain, P per unit length) or sphere (3D, total force
+/// P) of radius 1 on a half-space of E* = E/(1 − ν²): the contact half-width or radius a and the
+/// peak pressure p₀. 2D: a² = 4P/(πE*), p₀ = 2P/(πa); 3D: a³ = 3P/(4E*), p₀ = 3P/(2πa²).
+pub fn hertz(dim: usize, p: f64, e_star: f64) -> (f64, f64) {
+    use std::f64::consts::PI;
+    if dim == 2 {
+        let a = (4.0 * p / (PI * e_star)).sqrt();
+        (a, 2.0 * p / (PI * a))
+    } else {
+        let a = (3.0 * p / (4.0 * e_star)).cbrt();
+        (a, 3.0 * p / (2.0 * PI * a * a))
+    }
+}
+
+/// The gallery's 3D Hertz quarter (hertz_3d.toml: 1.5 × 1.5 × 1.5, δ = 0.01, groups Gamma3,
+/// SymX, SymY, Base) as a graded structured hexahedral mesh: along each axis `fine` cells of
+/// h = 0.16/fine over the contact patch (0, 0.16), then cells growing by `ratio` to 1.5. Built
+/// from [`block`] by a monotone map of each axis and the rotation (x, y, z) → (x, z, −y), which
+/// takes block's y = 0 face to the top z = 0 and keeps every hexahedron's orientation.
+pub fn hertz_3d_hexahedra(fine: usize, ratio: f64) -> Mesh<3> {
+    let (patch, side) = (0.16, 1.5);
+    let mut axis = vec![0.0];
+    let h = patch / fine as f64;
+    let mut step = h;
+    while *axis.last().unwrap() < side - 1e-12 {
+        let last = *axis.last().unwrap();
+        if last >= patch - 1e-12 {
+            step *= ratio;
+        }
+        axis.push((last + step).min(side));
+    }
+    // the last cell is cut at the side; fold it into its neighbour if it is a sliver
+    if axis.len() > 2 && axis[axis.len() - 1] - axis[axis.len() - 2] < 0.5 * step {
+        let n = axis.len();
+        axis.remove(n - 2);
+    }
+    let n = axis.len() - 1;
+    let mut mesh = block([1.0; 3], [n; 3], SolidShape::Hex);
+    let at = |s: f64| axis[(s * n as f64).round() as usize];
+    for x in &mut mesh.points {
+        *x = [at(x[0]), at(x[2]), -at(x[1])];
+    }
+    let points = mesh.points.clone();
+    let face = |name: &str, tag: i32, on: &dyn Fn(&[f64; 3]) -> bool| PhysicalGroup {
+        dim: 2,
+        tag,
+        name: Some(name.to_string()),
+        facets: mesh
+            .groups
+            .iter()
+            .filter(|g| g.dim == 2)
+            .flat_map(|g| g.facets.iter())
+            .filter(|f| f.nodes().iter().all(|&p| on(&points[p])))
+            .fold(Vec::new(), |mut v, f| {
+                if !v.iter().any(|g: &hvi::mesh::Facet| g.nodes() == f.nodes()) {
+                    v.push(*f);
+                }
+                v
+            }),
+        cells: Vec::new(),
+        nodes: Vec::new(),
+    };
+    let e = 1e-12;
+    let groups = vec![
+        face("Gamma3", 3, &|x| {
+            x[2].abs() < e && x[0] <= patch + e && x[1] <= patch + e
+        }),
+        face("SymX", 4, &|x| x[0].abs() < e),
+        face("SymY", 5, &|x| x[1].abs() < e),
+        face("Base", 6, &|x| (x[2] + side).abs() < e),
+    ];
+    let body = mesh.groups.iter().find(|g| g.dim == 3).unwrap().clone();
+    mesh.groups = groups.into_iter().chain([body]).collect();
+    mesh
 }

@@ -7,8 +7,7 @@
 mod common;
 
 use hvi::app::solve_in_memory;
-use hvi::mesh::structured::{block, SolidShape};
-use hvi::mesh::{read_mesh, Mesh, PhysicalGroup};
+use hvi::mesh::{read_mesh, Mesh};
 use hvi::scene::Scene;
 use std::path::{Path, PathBuf};
 
@@ -66,23 +65,9 @@ fn balanced_errors(label: &str, c: &Contact, dim: usize, e_star: f64) -> (f64, f
         c.reaction,
         c.force
     );
-    let (a_hertz, p0_hertz) = hertz(dim, c.force, e_star);
+    let (a_hertz, p0_hertz) = common::hertz(dim, c.force, e_star);
     let (a, p0) = common::hertz_fit(&c.pressures);
     (a / a_hertz - 1.0, p0 / p0_hertz - 1.0)
-}
-
-/// Hertz for a rigid cylinder (2D, plane strain, P per unit length) or sphere (3D, total force
-/// P) of radius 1 on a half-space of E* = E/(1 − ν²): the contact half-width or radius a and the
-/// peak pressure p₀. 2D: a² = 4P/(πE*), p₀ = 2P/(πa); 3D: a³ = 3P/(4E*), p₀ = 3P/(2πa²).
-fn hertz(dim: usize, p: f64, e_star: f64) -> (f64, f64) {
-    use std::f64::consts::PI;
-    if dim == 2 {
-        let a = (4.0 * p / (PI * e_star)).sqrt();
-        (a, 2.0 * p / (PI * a))
-    } else {
-        let a = (3.0 * p / (4.0 * e_star)).cbrt();
-        (a, 3.0 * p / (2.0 * PI * a * a))
-    }
 }
 
 /// Plane strain, E = 1, ν = 0.3, R = 1: a² = 4PR/(πE*), p₀ = 2P/(πa), with P the force per unit
@@ -109,7 +94,7 @@ fn hertz_2d_cylinder_half_width_and_peak_pressure_within_one_percent() {
             c.force
         );
         let p = c.force;
-        let (a_hertz, p0_hertz) = hertz(2, p, e_star);
+        let (a_hertz, p0_hertz) = common::hertz(2, p, e_star);
         let (a, p0) = common::hertz_fit(&c.pressures);
         let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
         eprintln!(
@@ -160,7 +145,7 @@ fn hertz_2d_with_the_circle_obstacle_agrees_with_the_bound() {
     for (direction, tol) in [("body", 1e-9), ("obstacle", 1e-2)] {
         let c = run_scene::<2>(&with(direction), "hertz_2d", mesh, 2.0);
         let (a, p0) = common::hertz_fit(&c.pressures);
-        let (a_hertz, p0_hertz) = hertz(2, c.force, e_star);
+        let (a_hertz, p0_hertz) = common::hertz(2, c.force, e_star);
         eprintln!(
             "circle, direction {direction}: P = {:.6e} (bound {:.6e}), a = {a:.5} (bound {a_b:.5}, Hertz {a_hertz:.5}), p₀ = {p0:.5} (bound {p0_b:.5}, Hertz {p0_hertz:.5})",
             c.force, bound.force
@@ -195,7 +180,7 @@ fn hertz_3d_sphere_contact_radius_within_3_percent_and_peak_pressure_within_5() 
         c.force
     );
     let p = c.force;
-    let (a_hertz, p0_hertz) = hertz(3, p, e_star);
+    let (a_hertz, p0_hertz) = common::hertz(3, p, e_star);
     let (a, p0) = common::hertz_fit(&c.pressures);
     let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
     eprintln!(
@@ -272,7 +257,7 @@ fn hertz_under_force_control_matches_hertz_and_the_displacement_control() {
         } else {
             (3, 0.03, 0.05)
         };
-        let (a_hertz, p0_hertz) = hertz(dim, p, e_star);
+        let (a_hertz, p0_hertz) = common::hertz(dim, p, e_star);
         eprintln!(
             "{entry} under force control: P = {p:.6e}, δ = {:.10e}, a = {a:.5} (Hertz {a_hertz:.5}), p₀ = {p0:.5} (Hertz {p0_hertz:.5})",
             forced.motion
@@ -347,7 +332,7 @@ fn nearly_incompressible(label: &str, entry: &str, extra: &[&str], dim: usize, r
             overrides.push(format!("material.formulation=\"{formulation}\""));
             let scene = Scene::load(Some(&gallery(entry, &format!("{entry}.toml"))), &overrides).unwrap();
             let c = run(&scene);
-            let (a_hertz, p0_hertz) = hertz(dim, c.force, e_star);
+            let (a_hertz, p0_hertz) = common::hertz(dim, c.force, e_star);
             let (a, p0) = common::hertz_fit(&c.pressures);
             let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
             eprintln!(
@@ -398,68 +383,6 @@ fn hertz_sphere_as_a_body_of_revolution_within_one_percent() {
     }
 }
 
-/// The gallery's 3D Hertz quarter (hertz_3d.toml: 1.5 × 1.5 × 1.5, δ = 0.01, groups Gamma3,
-/// SymX, SymY, Base) as a graded structured hexahedral mesh: along each axis `fine` cells of
-/// h = 0.16/fine over the contact patch (0, 0.16), then cells growing by `ratio` to 1.5. Built
-/// from [`block`] by a monotone map of each axis and the rotation (x, y, z) → (x, z, −y), which
-/// takes block's y = 0 face to the top z = 0 and keeps every hexahedron's orientation.
-fn hertz_3d_hexahedra(fine: usize, ratio: f64) -> Mesh<3> {
-    let (patch, side) = (0.16, 1.5);
-    let mut axis = vec![0.0];
-    let h = patch / fine as f64;
-    let mut step = h;
-    while *axis.last().unwrap() < side - 1e-12 {
-        let last = *axis.last().unwrap();
-        if last >= patch - 1e-12 {
-            step *= ratio;
-        }
-        axis.push((last + step).min(side));
-    }
-    // the last cell is cut at the side; fold it into its neighbour if it is a sliver
-    if axis.len() > 2 && axis[axis.len() - 1] - axis[axis.len() - 2] < 0.5 * step {
-        let n = axis.len();
-        axis.remove(n - 2);
-    }
-    let n = axis.len() - 1;
-    let mut mesh = block([1.0; 3], [n; 3], SolidShape::Hex);
-    let at = |s: f64| axis[(s * n as f64).round() as usize];
-    for x in &mut mesh.points {
-        *x = [at(x[0]), at(x[2]), -at(x[1])];
-    }
-    let points = mesh.points.clone();
-    let face = |name: &str, tag: i32, on: &dyn Fn(&[f64; 3]) -> bool| PhysicalGroup {
-        dim: 2,
-        tag,
-        name: Some(name.to_string()),
-        facets: mesh
-            .groups
-            .iter()
-            .filter(|g| g.dim == 2)
-            .flat_map(|g| g.facets.iter())
-            .filter(|f| f.nodes().iter().all(|&p| on(&points[p])))
-            .fold(Vec::new(), |mut v, f| {
-                if !v.iter().any(|g: &hvi::mesh::Facet| g.nodes() == f.nodes()) {
-                    v.push(*f);
-                }
-                v
-            }),
-        cells: Vec::new(),
-        nodes: Vec::new(),
-    };
-    let e = 1e-12;
-    let groups = vec![
-        face("Gamma3", 3, &|x| {
-            x[2].abs() < e && x[0] <= patch + e && x[1] <= patch + e
-        }),
-        face("SymX", 4, &|x| x[0].abs() < e),
-        face("SymY", 5, &|x| x[1].abs() < e),
-        face("Base", 6, &|x| (x[2] + side).abs() < e),
-    ];
-    let body = mesh.groups.iter().find(|g| g.dim == 3).unwrap().clone();
-    mesh.groups = groups.into_iter().chain([body]).collect();
-    mesh
-}
-
 /// 3D Hertz at ν = 0.4999 on hexahedra: the graded structured quarter above (h = 0.16/12 =
 /// 0.0133 ≈ a/7.6 on the patch, cells growing by 1.3 beyond it; 15 625 nodes) with mean
 /// dilatation (B-bar per cell, chosen by `formulation = "auto"`, docs/method.md §8.4): a and p₀
@@ -468,7 +391,7 @@ fn hertz_3d_hexahedra(fine: usize, ratio: f64) -> Mesh<3> {
 #[test]
 fn hertz_3d_nearly_incompressible_on_hexahedra_with_mean_dilatation() {
     nearly_incompressible("3D hexahedra", "hertz_3d", &[], 3, |scene| {
-        let c = run_mesh::<3>(scene, hertz_3d_hexahedra(12, 1.3), 4.0);
+        let c = run_mesh::<3>(scene, common::hertz_3d_hexahedra(12, 1.3), 4.0);
         // to rounding: K's entries carry λ ≈ 5 000 μ, and the sums of K u lose about as many
         // digits (measured 1.3e-9 on the plain element, 1e-10 and below elsewhere)
         assert!(
@@ -499,7 +422,7 @@ fn the_sphere_as_a_body_of_revolution_matches_the_3d_run() {
     );
     let half_push = text.replace("value = [\"0.01*t\"]", "value = [\"0.005*t\"]");
     let solid_scene = Scene::from_toml_str(&half_push, "hertz_3d with δ = 0.005").unwrap();
-    let solid = run_mesh::<3>(&solid_scene, hertz_3d_hexahedra(16, 1.3), 4.0);
+    let solid = run_mesh::<3>(&solid_scene, common::hertz_3d_hexahedra(16, 1.3), 4.0);
     let p = solid.force;
     let text =
         force_controlled_text("hertz_2d", "y", "0.004", p).replace("plane = \"strain\"", "plane = \"axisymmetric\"");
@@ -510,7 +433,7 @@ fn the_sphere_as_a_body_of_revolution_matches_the_3d_run() {
         "the meridian's base carries {} against P = {p}",
         revolved.reaction
     );
-    let (a_hertz, p0_hertz) = hertz(3, p, e_star);
+    let (a_hertz, p0_hertz) = common::hertz(3, p, e_star);
     let (a3, p3) = common::hertz_fit(&solid.pressures);
     let (a2, p2) = common::hertz_fit(&revolved.pressures);
     eprintln!(
@@ -575,7 +498,7 @@ fn hertz_3d_on_second_order_cells() {
     let tet10 =
         |s: &str| read_mesh::<3>(&dir.join(format!("hertz_3d_tet10_{s}.msh"))).unwrap_or_else(|e| panic!("{e}"));
     let hexahedra =
-        |fine: usize, complete: bool| hvi::mesh::structured::elevate(&hertz_3d_hexahedra(fine, 1.3), complete);
+        |fine: usize, complete: bool| hvi::mesh::structured::elevate(&common::hertz_3d_hexahedra(fine, 1.3), complete);
     // (label, mesh, whether a is asserted)
     let cases = [
         ("tet10 a/7", tet10("a7"), true),
@@ -653,7 +576,7 @@ fn nearly_incompressible_hertz_on_second_order_cells() {
             Box::new(|scene: &Scene| {
                 run_mesh::<3>(
                     scene,
-                    hvi::mesh::structured::elevate(&hertz_3d_hexahedra(6, 1.3), true),
+                    hvi::mesh::structured::elevate(&common::hertz_3d_hexahedra(6, 1.3), true),
                     4.0,
                 )
             }),
@@ -668,7 +591,7 @@ fn nearly_incompressible_hertz_on_second_order_cells() {
             ];
             let scene = Scene::load(Some(&gallery(entry, &format!("{entry}.toml"))), &overrides).unwrap();
             let c = run(&scene);
-            let (a_hertz, p0_hertz) = hertz(*dim, c.force, e_star);
+            let (a_hertz, p0_hertz) = common::hertz(*dim, c.force, e_star);
             let (a, p0) = common::hertz_fit(&c.pressures);
             let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
             eprintln!(
