@@ -218,8 +218,9 @@ fn two_bodies_match_faer_on_1_and_2_ranks() {
 }
 
 /// Second-order cells under PETSc (docs/method.md §19): the paper's example on gmsh's 9-node
-/// quadrangles and the gallery's Hertz on 6-node triangles — contact rows over their faces' nodes
-/// (§19.3) — on 1 and 2 ranks give the serial Γ₃ to 1e-10.
+/// quadrangles and the gallery's Hertz on 6-node triangles and on 10-node tetrahedra — contact
+/// rows over their faces' nodes with the weighted gap (§19.3) — on 1 and 2 ranks give the serial
+/// Γ₃ to 1e-10.
 #[test]
 fn second_order_meshes_match_faer_on_1_and_2_ranks() {
     for (mesh, scene) in [
@@ -227,6 +228,10 @@ fn second_order_meshes_match_faer_on_1_and_2_ranks() {
         (
             "meshes/second_order/hertz_2d_p2_a8.msh",
             Some("examples/gallery/hertz_2d/hertz_2d.toml"),
+        ),
+        (
+            "meshes/second_order/hertz_3d_tet10_a7.msh",
+            Some("examples/gallery/hertz_3d/hertz_3d.toml"),
         ),
     ] {
         for (np, (du, df)) in compare(mesh, scene, "mumps") {

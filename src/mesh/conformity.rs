@@ -312,9 +312,11 @@ impl<const D: usize> Mesh<D> {
 }
 
 /// True if two orientations of one facet are opposite (as the facets of two cells on its two
-/// sides are): the second runs through the nodes in the reverse cyclic order.
+/// sides are): the second runs through the corners in the reverse cyclic order. The corners
+/// alone carry the orientation; a second-order facet lists its midside nodes after them in an
+/// order of its own (docs/method.md §19.1), which reversed is no cyclic reversal of the list.
 fn opposite(a: &Facet, b: &Facet) -> bool {
-    let (a, b) = (a.nodes(), b.nodes());
+    let (a, b) = (a.corners(), b.corners());
     let n = a.len();
     if b.len() != n {
         return false;
@@ -550,6 +552,38 @@ mod tests {
             d.iter().any(|d| d.severe && d.message.contains("more than two")),
             "{d:?}"
         );
+    }
+
+    /// Second-order cells list their midside nodes after the corners in an order of their own:
+    /// two cells on the two sides of a face hold it in opposite orientations all the same
+    /// (before the corners alone were compared, every interior face of a 3D second-order mesh
+    /// was a fold); a cell listed twice is still one.
+    #[test]
+    fn second_order_meshes_conform_and_their_folds_are_found() {
+        use crate::mesh::structured::elevate;
+        let mut meshes = Vec::new();
+        for complete in [true, false] {
+            for shape in [SolidShape::Hex, SolidShape::Tet, SolidShape::Prism] {
+                meshes.push(elevate(&block([2.0, 1.0, 1.0], [2, 2, 2], shape), complete));
+            }
+        }
+        for mut m in meshes {
+            let kind = m.cells[0].kind();
+            assert!(m.defects().is_empty(), "{kind:?}: {:?}", m.defects());
+            m.cells.push(m.cells[3]);
+            m.cell_tags.push(99);
+            let d = m.defects();
+            assert!(
+                d.iter().any(|d| d.severe && d.message.contains("same side")),
+                "{kind:?}: {d:?}"
+            );
+        }
+        for shape in [CellShape::Tri, CellShape::Quad] {
+            for complete in [true, false] {
+                let m = elevate(&rectangle(2.0, 1.0, 2, 2, shape), complete);
+                assert!(m.defects().is_empty(), "{:?}: {:?}", m.cells[0].kind(), m.defects());
+            }
+        }
     }
 
     #[test]
