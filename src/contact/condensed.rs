@@ -19,6 +19,7 @@ use crate::fem::DofMap;
 use crate::linalg::dense::{matvec_row_major, symmetrise_row_major, DenseCholesky};
 use crate::linalg::{Counters, Factor, Forward, ForwardColumns, LinearSolver};
 use crate::mesh::BoundaryPart;
+use rustc_hash::FxHashMap as HashMap;
 use std::sync::Arc;
 
 /// The contact nodes with their nodal quadrature weights w_p, normals ν_p, and the rows of C
@@ -39,6 +40,11 @@ pub struct ContactNodes<const D: usize> {
     pub clamped_nodes: Vec<usize>,
 }
 
+/// A row whose free part keeps less than this share of its length off the span of its node's
+/// earlier rows is dependent on them: a dependent row leaves round-off (1e-16), the weakest
+/// independent rows of the tests two walls a few degrees apart (1e-2).
+const DEPENDENT_ROW: f64 = 1e-8;
+
 impl<const D: usize> ContactNodes<D> {
     /// The contact nodes of a boundary part; nodes whose normal displacement is fully
     /// prescribed are set aside (they would make W singular).
@@ -48,7 +54,11 @@ impl<const D: usize> ContactNodes<D> {
 
     /// The contact rows u_ν = d_p·u at `nodes` (a node may carry several rows, docs/method.md
     /// §14) with their weights and directions; rows whose direction is fully prescribed are set
-    /// aside. Also returns the indices of the rows kept.
+    /// aside, and so is a row whose free part at its node lies in the span of the free parts of
+    /// that node's earlier rows (docs/method.md §17.3: a node on a symmetry plane of a curved
+    /// zone, whose mean normal leans off the plane, has one free component for its normal and
+    /// its tangential row; both kept, W would be singular). Also returns the indices of the rows
+    /// kept.
     pub fn from_rows(
         nodes: &[usize],
         weights: &[f64],
@@ -64,6 +74,8 @@ impl<const D: usize> ContactNodes<D> {
             prescribed: Vec::new(),
             clamped_nodes: Vec::new(),
         };
+        // per node, an orthonormal basis of its kept rows' free parts
+        let mut spans: HashMap<usize, Vec<[f64; D]>> = HashMap::default();
         for (k, &p) in nodes.iter().enumerate() {
             let nu = directions[k];
             let row: Vec<(usize, f64)> = (0..D).filter_map(|c| dofs.get(p, c).map(|d| (d, nu[c]))).collect();
@@ -71,6 +83,23 @@ impl<const D: usize> ContactNodes<D> {
                 out.clamped_nodes.push(p);
                 continue;
             }
+            // the free part's component off the node's earlier rows (Gram–Schmidt, twice)
+            let span = spans.entry(p).or_default();
+            let mut free: [f64; D] = std::array::from_fn(|c| if dofs.get(p, c).is_some() { nu[c] } else { 0.0 });
+            let size = free.iter().map(|v| v * v).sum::<f64>().sqrt();
+            for _ in 0..2 {
+                for b in span.iter() {
+                    let along: f64 = (0..D).map(|c| free[c] * b[c]).sum();
+                    for c in 0..D {
+                        free[c] -= along * b[c];
+                    }
+                }
+            }
+            let rest = free.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if rest <= DEPENDENT_ROW * size {
+                continue;
+            }
+            span.push(free.map(|v| v / rest));
             let fixed = (0..D)
                 .filter(|&c| dofs.get(p, c).is_none() && nu[c] != 0.0)
                 .map(|c| (dofs.index(p, c), nu[c]))
@@ -657,5 +686,20 @@ mod trailing_tests {
         let (nodes, factor) = case("oblique");
         assert!(!nodes.trailing_block_applies());
         assert!(SplitSweeps::off_trailing_block(&nodes, factor, true).is_none());
+    }
+
+    /// A node with y prescribed and rows along n = (cos α, sin α) and t = (sin α, −cos α): both
+    /// have free parts, along x alone, so t is set aside; with both components free both stay,
+    /// and a row along n again at the free node is set aside too.
+    #[test]
+    fn a_row_dependent_on_its_nodes_earlier_rows_is_set_aside() {
+        let mut dofs = DofMap::<2>::new(2, &[]);
+        dofs.prescribe(0, 1);
+        let a = 0.05f64;
+        let (n, t) = ([a.cos(), a.sin()], [a.sin(), -a.cos()]);
+        let (rows, kept) = ContactNodes::from_rows(&[0, 0, 1, 1, 1], &[1.0; 5], &[n, t, n, t, n], &dofs);
+        assert_eq!(kept, vec![0, 2, 3]);
+        assert_eq!(rows.nodes, vec![0, 1, 1]);
+        assert!(rows.clamped_nodes.is_empty());
     }
 }
