@@ -44,15 +44,8 @@ fn one<const D: usize>(scene: &Scene, mesh: Mesh<D>, symmetry: f64) -> (f64, usi
     let state = sink.steps.last().unwrap().contact.as_ref().unwrap();
     let force = symmetry * state.force.iter().sum::<f64>();
     let pressures = common::bound_pressures(&sim, &sink);
-    let (a, p0) = common::hertz_fit(&pressures);
-    let (a_hertz, p0_hertz) = common::hertz(D, force, 1.0 / (1.0 - 0.3f64 * 0.3));
-    (
-        seconds,
-        unknowns,
-        pressures.len(),
-        a / a_hertz - 1.0,
-        p0 / p0_hertz - 1.0,
-    )
+    let (ea, ep) = common::hertz_errors(force, &pressures, D, 1.0 / (1.0 - 0.3f64 * 0.3));
+    (seconds, unknowns, pressures.len(), ea, ep)
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

@@ -254,6 +254,14 @@ pub fn hertz_fit(pressures: &[(f64, f64)]) -> (f64, f64) {
     ((intercept / -slope).sqrt(), intercept.sqrt())
 }
 
+/// The relative errors of a run's a and p₀ (the fit of its rows' `pressures`) against Hertz of
+/// dimension `dim` for its total force P: (a/a_Hertz − 1, p₀/p₀_Hertz − 1).
+pub fn hertz_errors(force: f64, pressures: &[(f64, f64)], dim: usize, e_star: f64) -> (f64, f64) {
+    let (a_hertz, p0_hertz) = hertz(dim, force, e_star);
+    let (a, p0) = hertz_fit(pressures);
+    (a / a_hertz - 1.0, p0 / p0_hertz - 1.0)
+}
+
 /// (r, pressure λ_p / w_p) of every contact row on its bound at the last step, r the distance of
 /// its node from the axis through the origin along the last coordinate (Hertz's r).
 pub fn bound_pressures<const D: usize>(

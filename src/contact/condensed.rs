@@ -78,14 +78,14 @@ impl<const D: usize> ContactNodes<D> {
         let mut spans: HashMap<usize, Vec<[f64; D]>> = HashMap::default();
         for (k, &p) in nodes.iter().enumerate() {
             let nu = directions[k];
-            let row: Vec<(usize, f64)> = (0..D).filter_map(|c| dofs.get(p, c).map(|d| (d, nu[c]))).collect();
-            if row.iter().all(|(_, v)| v.abs() < 1e-12) {
+            // the direction's free part at its node (zero on prescribed components)
+            let mut free: [f64; D] = std::array::from_fn(|c| if dofs.get(p, c).is_some() { nu[c] } else { 0.0 });
+            if free.iter().all(|v| v.abs() < 1e-12) {
                 out.clamped_nodes.push(p);
                 continue;
             }
-            // the free part's component off the node's earlier rows (Gram–Schmidt, twice)
+            // its component off the node's earlier rows (Gram–Schmidt, twice)
             let span = spans.entry(p).or_default();
-            let mut free: [f64; D] = std::array::from_fn(|c| if dofs.get(p, c).is_some() { nu[c] } else { 0.0 });
             let size = free.iter().map(|v| v * v).sum::<f64>().sqrt();
             for _ in 0..2 {
                 for b in span.iter() {
@@ -100,6 +100,7 @@ impl<const D: usize> ContactNodes<D> {
                 continue;
             }
             span.push(free.map(|v| v / rest));
+            let row = (0..D).filter_map(|c| dofs.get(p, c).map(|d| (d, nu[c]))).collect();
             let fixed = (0..D)
                 .filter(|&c| dofs.get(p, c).is_none() && nu[c] != 0.0)
                 .map(|c| (dofs.index(p, c), nu[c]))
