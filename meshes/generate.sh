@@ -117,15 +117,28 @@ python3 check_orientation.py cook/*.msh | grep -E '^[^ ]|ERROR'
 # Two bodies of one mesh touching at a point (tests/two_body_hertz.rs, docs/method.md §18), in the
 # subfolder two_bodies/ (then checked like the files here): two cylinders R1 = 1 and R2 = 2 (2D,
 # quarter disks, P1 triangles of 0.002 = a/25 near the contact) and two spheres R1 = R2 = 2 (3D,
-# quarters of hemispheres, tetrahedra of 0.01 = a/10 near the contact).
+# quarters of hemispheres, tetrahedra of 0.01 = a/10 near the contact). Their second-order meshes
+# (docs/method.md §18.6): the cylinders in 6-node triangles of a/8 and a/16, the spheres in 10-node
+# tetrahedra of a/7 and a/10, and the gallery's punch on its pad (../examples/gallery/two_bodies)
+# in 6-node triangles and 9-node quadrangles (tests/petsc.rs). check_orientation.py reads
+# first-order files only.
 (
     cd two_bodies
     gmsh -2 cylinders.geo -format msh41 -o cylinders_p1.msh >/dev/null
     echo "wrote two_bodies/cylinders_p1.msh ($(wc -c <cylinders_p1.msh) bytes)"
     gmsh -3 spheres.geo -format msh41 -o spheres_p1.msh >/dev/null
     echo "wrote two_bodies/spheres_p1.msh ($(wc -c <spheres_p1.msh) bytes)"
+    for a in 8 16; do
+        gmsh -2 cylinders.geo -setnumber hf "$(python3 -c "print(0.05 / $a)")" -order 2 -format msh41 \
+            -o "cylinders_p2_a$a.msh" >/dev/null
+        echo "wrote two_bodies/cylinders_p2_a$a.msh ($(wc -c <"cylinders_p2_a$a.msh") bytes)"
+    done
+    gmsh -3 spheres.geo -setnumber hf 0.0143 -order 2 -format msh41 -o spheres_tet10_a7.msh >/dev/null
+    gmsh -3 spheres.geo -setnumber hf 0.01 -order 2 -format msh41 -o spheres_tet10_a10.msh >/dev/null
+    gmsh -2 ../../examples/gallery/two_bodies/two_bodies.geo -order 2 -format msh41 -o gallery_o2.msh >/dev/null
+    echo "wrote two_bodies/spheres_tet10_a7.msh, spheres_tet10_a10.msh, gallery_o2.msh"
 )
-python3 check_orientation.py two_bodies/*.msh | grep -E '^[^ ]|ERROR'
+python3 check_orientation.py two_bodies/*_p1.msh | grep -E '^[^ ]|ERROR'
 
 # Orientation, boundary groups and the slabs' (x, y) grids of every MSH 4.1 ASCII file here: one
 # line per file (OK or FAILED) and any ERROR lines; fails the script if any check fails.

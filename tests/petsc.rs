@@ -219,8 +219,9 @@ fn two_bodies_match_faer_on_1_and_2_ranks() {
 
 /// Second-order cells under PETSc (docs/method.md §19): the paper's example on gmsh's 9-node
 /// quadrangles and the gallery's Hertz on 6-node triangles and on 10-node tetrahedra — contact
-/// rows over their faces' nodes with the weighted gap (§19.3) — on 1 and 2 ranks give the serial
-/// Γ₃ to 1e-10.
+/// rows over their faces' nodes with the weighted gap (§19.3) — and the gallery's punch on its
+/// pad (two bodies, memory, Coulomb friction; §18.6) on 6-node triangles and 9-node quadrangles,
+/// on 1 and 2 ranks give the serial Γ₃ to 1e-10.
 #[test]
 fn second_order_meshes_match_faer_on_1_and_2_ranks() {
     for (mesh, scene) in [
@@ -232,6 +233,10 @@ fn second_order_meshes_match_faer_on_1_and_2_ranks() {
         (
             "meshes/second_order/hertz_3d_tet10_a7.msh",
             Some("examples/gallery/hertz_3d/hertz_3d.toml"),
+        ),
+        (
+            "meshes/two_bodies/gallery_o2.msh",
+            Some("examples/gallery/two_bodies/two_bodies.toml"),
         ),
     ] {
         for (np, (du, df)) in compare(mesh, scene, "mumps") {

@@ -1,7 +1,8 @@
 //! Contact between two deformable bodies of one mesh (docs/method.md §18):
 //! a `[[contact]]` section with `target` pairs its group (the slave surface) with the target (the
 //! master surface); each paired slave node carries the mortar row u_ν = (Σ c_i u_i − u_S)·n ≤ g
-//! (docs/method.md §18.2).
+//! (docs/method.md §18.2); each test runs on first-order meshes and on their second-order ones
+//! (§18.6).
 
 mod common;
 
@@ -108,8 +109,23 @@ fn stacked_blocks_with_non_matching_meshes_pass_the_patch_test_either_way() {
             &format!("group = \"{slave}\"\ntarget = \"{master}\""),
         );
         let mesh = stacked((8, 4, CellShape::Quad), (7, 4, CellShape::Tri), 1.0);
-        patch_test(&text, mesh, &format!("{slave} on {master}"));
+        for (order, mesh) in orders(mesh) {
+            patch_test(&text, mesh, &format!("{slave} on {master}, {order}"));
+        }
     }
+}
+
+/// A mesh of first-order cells and its second-order meshes (docs/method.md §18.6): `elevate`'s
+/// complete (9-node quadrangles, 27-node hexahedra) and serendipity ones (8 and 20 nodes; 6-node
+/// triangles and 10-node tetrahedra in both), each named.
+fn orders<const D: usize>(mesh: hvi::mesh::Mesh<D>) -> [(&'static str, hvi::mesh::Mesh<D>); 3] {
+    use hvi::mesh::structured::elevate;
+    let (complete, serendipity) = (elevate(&mesh, true), elevate(&mesh, false));
+    [
+        ("first order", mesh),
+        ("second order", complete),
+        ("serendipity", serendipity),
+    ]
 }
 
 /// The contact patch test in 3D: hexahedra (4 × 3 faces across the interface) below, tetrahedra
@@ -136,7 +152,9 @@ fn stacked_boxes_with_non_matching_meshes_pass_the_patch_test_either_way() {
             block([2.0, 1.0, 1.0], [3, 2, 2], SolidShape::Tet),
             1.0,
         );
-        patch_test(&text, mesh, &format!("{slave} on {master} (3D)"));
+        for (order, mesh) in orders(mesh) {
+            patch_test(&text, mesh, &format!("{slave} on {master} (3D), {order}"));
+        }
     }
 }
 
@@ -161,8 +179,14 @@ fn a_block_dragged_over_another_slides_with_coulomb_friction() {
          [solver]\ntolerance = 1e-13\n"
     );
     let scene = Scene::from_toml_str(&text, "dragged blocks").unwrap_or_else(|e| panic!("{e}"));
-    let mesh = stacked((16, 4, CellShape::Quad), (13, 4, CellShape::Tri), 1.0);
-    let (sim, stats, sink) = solve_in_memory(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
+    for (order, mesh) in orders(stacked((16, 4, CellShape::Quad), (13, 4, CellShape::Tri), 1.0)) {
+        dragged_blocks_balance(&scene, mesh, MU, order);
+    }
+}
+
+/// The dragged blocks' run on `mesh`: see [`a_block_dragged_over_another_slides_with_coulomb_friction`].
+fn dragged_blocks_balance(scene: &Scene, mesh: hvi::mesh::Mesh<2>, mu: f64, order: &str) {
+    let (sim, stats, sink) = solve_in_memory(scene, mesh).unwrap_or_else(|e| panic!("{e}"));
     let c = sim.contact.as_ref().unwrap();
     let m = c.nodes.len();
     assert_eq!(c.friction.as_ref().expect("friction rows").normal_row.len(), m);
@@ -170,10 +194,10 @@ fn a_block_dragged_over_another_slides_with_coulomb_friction() {
         let state = step.contact.as_ref().unwrap();
         let normal: f64 = state.force[..m].iter().sum();
         let tangential: f64 = state.force[m..].iter().sum();
-        assert!(normal > 0.0, "t = {}: the blocks are pressed", step.time);
+        assert!(normal > 0.0, "{order}, t = {}: the blocks are pressed", step.time);
         assert!(
-            (tangential.abs() - MU * normal).abs() <= 1e-10 * MU * normal,
-            "t = {}: friction {tangential:e} against μ × {normal:e}",
+            (tangential.abs() - mu * normal).abs() <= 1e-10 * mu * normal,
+            "{order}, t = {}: friction {tangential:e} against μ × {normal:e}",
             step.time
         );
         let forces = c.group_forces(state, None);
@@ -182,7 +206,7 @@ fn a_block_dragged_over_another_slides_with_coulomb_friction() {
         for k in 0..2 {
             assert!(
                 (on_slave[k] + on_master[k]).abs() <= 1e-12 * normal,
-                "t = {}: the two sides' forces along {k}: {:e} and {:e}",
+                "{order}, t = {}: the two sides' forces along {k}: {:e} and {:e}",
                 step.time,
                 on_slave[k],
                 on_master[k]
@@ -193,13 +217,13 @@ fn a_block_dragged_over_another_slides_with_coulomb_friction() {
             let bottom = common::reaction(&stats, "LowerBottom", axis, step.time);
             assert!(
                 (top + on_slave[k]).abs() <= 1e-10 * normal,
-                "t = {}: the upper body's balance along {axis}: reaction {top:e}, contact {:e}",
+                "{order}, t = {}: the upper body's balance along {axis}: reaction {top:e}, contact {:e}",
                 step.time,
                 on_slave[k]
             );
             assert!(
                 (bottom - on_slave[k]).abs() <= 1e-10 * normal,
-                "t = {}: the lower body's balance along {axis}: reaction {bottom:e}, contact {:e}",
+                "{order}, t = {}: the lower body's balance along {axis}: reaction {bottom:e}, contact {:e}",
                 step.time,
                 -on_slave[k]
             );
@@ -227,13 +251,17 @@ fn tied_blocks_are_the_merged_block() {
          [[dirichlet]]\ngroup = \"Gamma2_top\"\ncomponents = [\"x\", \"y\"]\nvalue = [\"0.01*t\", \"0.005*t\"]\n"
     );
     let scene = |text: &str| Scene::from_toml_str(text, "tied").unwrap_or_else(|e| panic!("{e}"));
-    let (a, _, sink_a) = solve_in_memory(
-        &scene(&tied),
-        stacked((8, 4, CellShape::Quad), (8, 4, CellShape::Quad), 1.0),
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
-    let one = hvi::mesh::structured::rectangle(2.0, 2.0, 8, 8, CellShape::Quad);
-    let (b, _, sink_b) = solve_in_memory(&scene(&merged), one).unwrap_or_else(|e| panic!("{e}"));
+    let stack = orders(stacked((8, 4, CellShape::Quad), (8, 4, CellShape::Quad), 1.0));
+    let one = orders(hvi::mesh::structured::rectangle(2.0, 2.0, 8, 8, CellShape::Quad));
+    for ((order, stack), (_, one)) in stack.into_iter().zip(one) {
+        tied_is_merged(&scene(&tied), stack, &scene(&merged), one, order);
+    }
+}
+
+/// The tied stack `a` against the merged block `b`: see [`tied_blocks_are_the_merged_block`].
+fn tied_is_merged(tied: &Scene, stack: hvi::mesh::Mesh<2>, merged: &Scene, one: hvi::mesh::Mesh<2>, order: &str) {
+    let (a, _, sink_a) = solve_in_memory(tied, stack).unwrap_or_else(|e| panic!("{e}"));
+    let (b, _, sink_b) = solve_in_memory(merged, one).unwrap_or_else(|e| panic!("{e}"));
     let ua = a.dofs.to_nodal(&sink_a.steps.last().unwrap().displacement);
     let ub = b.dofs.to_nodal(&sink_b.steps.last().unwrap().displacement);
     let largest = ub.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -247,7 +275,10 @@ fn tied_blocks_are_the_merged_block() {
             .expect("every node of the stack is a node of the merged block");
         worst = worst.max((u[0] - ub[q][0]).abs().max((u[1] - ub[q][1]).abs()));
     }
-    assert!(worst < 1e-10 * largest, "tied against merged: {worst:e} of {largest:e}");
+    assert!(
+        worst < 1e-10 * largest,
+        "{order}: tied against merged: {worst:e} of {largest:e}"
+    );
 }
 
 /// The non-matching stack as an MSH 2.2 file and [`SCENE`] written into `dir`: (mesh, scene).
@@ -480,14 +511,16 @@ fn stacked_cylinders_of_revolution_pass_the_patch_test() {
     let text = SCENE.replace("plane = \"strain\"", "plane = \"axisymmetric\"");
     let scene = Scene::from_toml_str(&text, "stacked cylinders").unwrap_or_else(|e| panic!("{e}"));
     let mesh = stacked((8, 4, CellShape::Quad), (7, 4, CellShape::Tri), 1.0);
-    let (sim, _, sink) = solve_in_memory(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
-    let delta = 0.01;
-    let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
-    let error = common::nodal_error(&sim.mesh.points, &u, |x| {
-        [0.3 * delta * x[0] / 2.0, -delta * x[1] / 2.0]
-    });
-    assert!(error < 1e-10 * delta, "nodal error {error:e} of δ");
-    assert_slave_pressures(&sim, &sink, delta / 2.0, "cylinders");
+    for (order, mesh) in orders(mesh) {
+        let (sim, _, sink) = solve_in_memory(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
+        let delta = 0.01;
+        let u = sim.dofs.to_nodal(&sink.steps.last().unwrap().displacement);
+        let error = common::nodal_error(&sim.mesh.points, &u, |x| {
+            [0.3 * delta * x[0] / 2.0, -delta * x[1] / 2.0]
+        });
+        assert!(error < 1e-10 * delta, "{order}: nodal error {error:e} of δ");
+        assert_slave_pressures(&sim, &sink, delta / 2.0, &format!("cylinders, {order}"));
+    }
 }
 
 /// Coulomb friction between two bodies in 3D: the tetrahedral box dragged diagonally over the
@@ -516,7 +549,14 @@ fn boxes_dragged_over_each_other_slide_with_coulomb_friction() {
         block([2.0, 1.0, 1.0], [5, 2, 2], SolidShape::Tet),
         1.0,
     );
-    let (sim, _, sink) = solve_in_memory(&scene, mesh).unwrap_or_else(|e| panic!("{e}"));
+    for (order, mesh) in orders(mesh) {
+        boxes_slide(&scene, mesh, MU, order);
+    }
+}
+
+/// The dragged boxes' run on `mesh`: see [`boxes_dragged_over_each_other_slide_with_coulomb_friction`].
+fn boxes_slide(scene: &Scene, mesh: hvi::mesh::Mesh<3>, mu: f64, order: &str) {
+    let (sim, _, sink) = solve_in_memory(scene, mesh).unwrap_or_else(|e| panic!("{e}"));
     let c = sim.contact.as_ref().unwrap();
     let m = c.nodes.len();
     for step in &sink.steps[sink.steps.len() - 2..] {
@@ -531,16 +571,16 @@ fn boxes_dragged_over_each_other_slide_with_coulomb_friction() {
             per_node[p] += state.force[m + k].powi(2);
         }
         let friction: f64 = per_node.iter().map(|v| v.sqrt()).sum();
-        assert!(normal > 0.0, "t = {}: the boxes are pressed", step.time);
+        assert!(normal > 0.0, "{order}, t = {}: the boxes are pressed", step.time);
         assert!(
-            (friction - MU * normal).abs() <= 1e-10 * MU * normal,
-            "t = {}: friction {friction:e} against μ × {normal:e}",
+            (friction - mu * normal).abs() <= 1e-10 * mu * normal,
+            "{order}, t = {}: friction {friction:e} against μ × {normal:e}",
             step.time
         );
         for k in 0..3 {
             assert!(
                 (on_slave[k] + on_master[k]).abs() <= 1e-12 * normal,
-                "t = {}: the two sides along {k}",
+                "{order}, t = {}: the two sides along {k}",
                 step.time
             );
         }

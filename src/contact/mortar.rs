@@ -14,9 +14,16 @@
 //! by Sutherland–Hodgman and cut into triangles), so that the integrands are smooth on every piece
 //! and the rules are exact on flat surfaces. Written by hand: no crate does segment-to-segment
 //! mortar integration.
+//!
+//! On a slave surface of second-order faces (docs/method.md §18.6) a dual basis does not exist
+//! for every face (a 6-node triangle's corners have ∫ N_p = 0); ψ_p is then the contact rows'
+//! positive function of §19.3 (first order on the face split at its midside nodes), the overlap
+//! is cut along the split as well, and the slave side of the row is the same weighted mean of
+//! the slave nodes as a one-body row's (`Rows::spread`, src/contact/rows.rs).
 
 use super::pairing::{closest, facet_at, SurfacePair};
 use crate::mesh::quadrature::{tensor_gauss, EDGE_GAUSS_3, TRI6};
+use crate::mesh::topology::{piece_rule, row_functions, row_pieces};
 use crate::mesh::Facet;
 use nalgebra::DMatrix;
 use std::collections::HashMap;
@@ -47,7 +54,7 @@ struct Sums<const D: usize> {
     gap: [f64; D],
 }
 
-/// A quadrature rule on a facet's reference domain: (ξ, weight).
+/// A quadrature rule on a first-order facet's reference domain: (ξ, weight).
 fn facet_rule(f: &Facet) -> Vec<([f64; 2], f64)> {
     match f.len() {
         2 => EDGE_GAUSS_3.iter().map(|&(s, w)| ([s, 0.0], w)).collect(),
@@ -68,8 +75,8 @@ fn revolved_factor<const D: usize>(x: &[f64; D], revolved: bool) -> f64 {
     }
 }
 
-/// The dual basis of facet `f`: ψ_j = Σ_k A_jk N_k with A = D M⁻¹ (M the facet's mass matrix, D
-/// its row sums), so that ∫ ψ_j N_k = δ_jk ∫ N_j on the facet.
+/// The dual basis of a first-order facet `f`: ψ_j = Σ_k A_jk N_k with A = D M⁻¹ (M the facet's
+/// mass matrix, D its row sums), so that ∫ ψ_j N_k = δ_jk ∫ N_j on the facet.
 fn dual_basis<const D: usize>(points: &[[f64; D]], f: &Facet, revolved: bool) -> DMatrix<f64> {
     let n = f.len();
     let mut mass = DMatrix::<f64>::zeros(n, n);
@@ -90,9 +97,49 @@ fn dual_basis<const D: usize>(points: &[[f64; D]], f: &Facet, revolved: bool) ->
     lumped * inverse
 }
 
-/// The reference domain of a facet as a convex polygon, counter-clockwise (2D: the interval).
+/// The multiplier functions ψ_j of a slave facet: the dual basis of a first-order facet, the
+/// contact rows' functions of a second-order one (docs/method.md §18.6).
+enum Multipliers {
+    Dual(DMatrix<f64>),
+    Rows,
+}
+
+impl Multipliers {
+    fn of<const D: usize>(points: &[[f64; D]], f: &Facet, revolved: bool) -> Self {
+        if f.is_second_order() {
+            Multipliers::Rows
+        } else {
+            Multipliers::Dual(dual_basis(points, f, revolved))
+        }
+    }
+
+    /// ψ_j at reference point `xi` of facet `f`, whose shape values there are `shape`.
+    fn at(&self, f: &Facet, xi: [f64; 2], shape: &[f64; 9]) -> [f64; 9] {
+        match self {
+            Multipliers::Dual(a) => std::array::from_fn(|j| {
+                if j < f.len() {
+                    (0..f.len()).map(|l| a[(j, l)] * shape[l]).sum()
+                } else {
+                    0.0
+                }
+            }),
+            Multipliers::Rows => row_functions(f, xi),
+        }
+    }
+
+    /// The pieces of the facet's reference domain on which every ψ_j is smooth.
+    fn pieces(&self, f: &Facet) -> Vec<Vec<[f64; 2]>> {
+        match self {
+            Multipliers::Dual(_) => vec![domain(f)],
+            Multipliers::Rows => row_pieces(f),
+        }
+    }
+}
+
+/// The reference domain of a first-order facet as a convex polygon, counter-clockwise (2D: the
+/// interval).
 fn domain(f: &Facet) -> Vec<[f64; 2]> {
-    match f.len() {
+    match f.corners().len() {
         2 => vec![[0.0, 0.0], [1.0, 0.0]],
         3 => vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
         _ => vec![[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]],
@@ -125,37 +172,38 @@ fn clip_polygon(subject: &[[f64; 2]], clip: &[[f64; 2]]) -> Vec<[f64; 2]> {
 }
 
 /// The quadrature points, in the slave facet's reference coordinates, of the part of slave facet
-/// `s` over master facet `m` (empty if they do not overlap).
-fn overlap<const D: usize>(points: &[[f64; D]], s: &Facet, m: &Facet) -> Vec<([f64; 2], f64)> {
-    let corners: Vec<[f64; 2]> = m.nodes().iter().map(|&q| closest(points, s, &points[q])).collect();
-    if s.len() == 2 {
-        let (lo, hi) = (
-            corners[0][0].min(corners[1][0]).max(0.0),
-            corners[0][0].max(corners[1][0]).min(1.0),
-        );
-        if hi - lo <= 1e-12 {
-            return Vec::new();
-        }
-        return EDGE_GAUSS_3
-            .iter()
-            .map(|&(t, w)| ([lo + t * (hi - lo), 0.0], w * (hi - lo)))
-            .collect();
-    }
-    let polygon = clip_polygon(&corners, &domain(s));
+/// `s` over master facet `m` (empty if they do not overlap), piece by piece of `pieces` (the
+/// slave domain, or its split): the master's corners projected onto the slave cut it (on a
+/// curved master face the cut between them is taken straight in the slave's coordinates).
+fn overlap<const D: usize>(
+    points: &[[f64; D]],
+    s: &Facet,
+    m: &Facet,
+    pieces: &[Vec<[f64; 2]>],
+) -> Vec<([f64; 2], f64)> {
+    let corners: Vec<[f64; 2]> = m.corners().iter().map(|&q| closest(points, s, &points[q])).collect();
     let mut rule = Vec::new();
-    for k in 1..polygon.len().saturating_sub(1) {
-        let (a, b, c) = (polygon[0], polygon[k], polygon[k + 1]);
-        let (e, f) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
-        let det = (e[0] * f[1] - e[1] * f[0]).abs();
-        if det <= 1e-14 {
-            continue;
+    if s.dim() == 1 {
+        for piece in pieces {
+            let (lo, hi) = (
+                corners[0][0].min(corners[1][0]).max(piece[0][0]),
+                corners[0][0].max(corners[1][0]).min(piece[1][0]),
+            );
+            if hi - lo > 1e-12 {
+                rule.extend(piece_rule(&[[lo, 0.0], [hi, 0.0]]));
+            }
         }
-        rule.extend(TRI6.iter().map(|&(xi, w)| {
-            (
-                [a[0] + xi[0] * e[0] + xi[1] * f[0], a[1] + xi[0] * e[1] + xi[1] * f[1]],
-                w * det,
-            )
-        }));
+        return rule;
+    }
+    for piece in pieces {
+        let polygon = clip_polygon(&corners, piece);
+        for k in 1..polygon.len().saturating_sub(1) {
+            let (a, b, c) = (polygon[0], polygon[k], polygon[k + 1]);
+            let det = ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).abs();
+            if det > 1e-14 {
+                rule.extend(piece_rule(&[a, b, c]));
+            }
+        }
     }
     rule
 }
@@ -178,6 +226,7 @@ pub fn rows<const D: usize>(points: &[[f64; D]], pair: &SurfacePair<D>, revolved
         };
         slave.nodes.len()
     ];
+    let mut support = vec![0.0; slave.nodes.len()];
     for s in &slave.facets {
         let local: Vec<usize> = s
             .nodes()
@@ -194,11 +243,22 @@ pub fn rows<const D: usize>(points: &[[f64; D]], pair: &SurfacePair<D>, revolved
         if queue.is_empty() {
             continue;
         }
-        let psi = dual_basis(points, s, revolved);
+        let psi = Multipliers::of(points, s, revolved);
+        let pieces = psi.pieces(s);
+        // each slave node's whole support ∫ψ_p, against which its share over the master is read
+        for piece in &pieces {
+            for (xi, w) in piece_rule(piece) {
+                let at = facet_at(points, s, xi);
+                let dw = w * at.measure() * revolved_factor(&at.point, revolved);
+                for (&k, value) in local.iter().zip(psi.at(s, xi, &at.shape)) {
+                    support[k] += value * dw;
+                }
+            }
+        }
         let mut seen: Vec<usize> = queue.clone();
         while let Some(mi) = queue.pop() {
             let m = &master.facets[mi];
-            let rule = overlap(points, s, m);
+            let rule = overlap(points, s, m, &pieces);
             if rule.is_empty() {
                 continue;
             }
@@ -206,8 +266,12 @@ pub fn rows<const D: usize>(points: &[[f64; D]], pair: &SurfacePair<D>, revolved
                 let at = facet_at(points, s, xi);
                 let on = facet_at(points, m, closest(points, m, &at.point));
                 let dw = w * at.measure() * revolved_factor(&at.point, revolved);
+                let values = psi.at(s, xi, &at.shape);
                 for (j, &k) in local.iter().enumerate() {
-                    let psi_j: f64 = (0..s.len()).map(|l| psi[(j, l)] * at.shape[l]).sum::<f64>() * dw;
+                    let psi_j = values[j] * dw;
+                    if psi_j == 0.0 {
+                        continue;
+                    }
                     let sum = &mut sums[k];
                     sum.share += psi_j;
                     for c in 0..D {
@@ -235,7 +299,7 @@ pub fn rows<const D: usize>(points: &[[f64; D]], pair: &SurfacePair<D>, revolved
         .enumerate()
         .map(|(k, sum)| {
             let projection = pair.projections[k].as_ref()?;
-            if sum.share < LEAST_SHARE * slave.weights[k] {
+            if sum.share <= 0.0 || sum.share < LEAST_SHARE * support[k] {
                 return None;
             }
             let mut terms: Vec<(usize, f64)> = sum.master.iter().map(|&(q, v)| (q, v / sum.share)).collect();

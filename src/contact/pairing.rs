@@ -1,7 +1,8 @@
 //! Pairing two surfaces of the mesh for contact between deformable bodies (docs/method.md §18.1):
 //! each node of the slave surface S is projected onto the master surface M, in the reference
 //! configuration (small strain, small sliding: once per run). A projection is the closest point
-//! x_M(ξ) = Σ N_i(ξ) x_i on a facet of M whose reference coordinates ξ lie in the facet (within
+//! x_M(ξ) = Σ N_i(ξ) x_i (first- or second-order facets: docs/method.md §18.6) on a facet of M
+//! whose reference coordinates ξ lie in the facet (within
 //! [`INSIDE`], or [`RIM_CONE`]); its gap is g₀ = (x_S − x_M)·n, n the master facet's outward unit
 //! normal there (positive: apart; negative: the slave node starts inside the master body).
 //!
@@ -11,9 +12,9 @@
 //! bounding boxes (src/contact/facet_grid.rs), nearest first.
 
 use super::facet_grid::FacetGrid;
-use crate::mesh::element::reference;
+use crate::mesh::topology::facet_shape;
 use crate::mesh::vector::{self, distance, dot, norm};
-use crate::mesh::{BoundaryPart, Cell, Facet};
+use crate::mesh::{BoundaryPart, Facet};
 
 /// How far outside a facet's reference domain (in reference units) a projection still counts as
 /// on it, clamped onto the facet's edge: a node of S above an edge or the rim of M projects onto
@@ -83,8 +84,8 @@ pub enum PairingError {
 /// A facet's geometry at reference coordinates ξ (an edge: ξ₀ ∈ [0, 1] from its first node; a
 /// triangle: the unit triangle; a quadrilateral: [−1, 1]²).
 pub(crate) struct FacetAt<const D: usize> {
-    /// The facet's shape values N_i(ξ), in the order of its nodes (the first `len` of 4).
-    pub shape: [f64; 4],
+    /// The facet's shape values N_i(ξ), in the order of its nodes (the first `len` of 9).
+    pub shape: [f64; 9],
     /// x(ξ) = Σ N_i(ξ) x_i.
     pub point: [f64; D],
     /// ∂x/∂ξ₀ and ∂x/∂ξ₁ (zero on an edge).
@@ -120,30 +121,16 @@ fn cross<const D: usize>(t: &[[f64; D]; 2]) -> [f64; 3] {
     vector::cross(std::array::from_fn(|k| t[0][k]), std::array::from_fn(|k| t[1][k]))
 }
 
-/// The geometry of facet `f` at ξ.
+/// The geometry of facet `f` at ξ, of first or second order.
 pub(crate) fn facet_at<const D: usize>(points: &[[f64; D]], f: &Facet, xi: [f64; 2]) -> FacetAt<D> {
-    let nodes = f.nodes();
-    if nodes.len() == 2 {
-        let (a, b) = (points[nodes[0]], points[nodes[1]]);
-        return FacetAt {
-            shape: [1.0 - xi[0], xi[0], 0.0, 0.0],
-            point: std::array::from_fn(|k| (1.0 - xi[0]) * a[k] + xi[0] * b[k]),
-            tangents: [std::array::from_fn(|k| b[k] - a[k]), [0.0; D]],
-        };
-    }
-    let cell = if nodes.len() == 3 {
-        Cell::Tri3([0, 1, 2])
-    } else {
-        Cell::Quad4([0, 1, 2, 3])
-    };
-    let (n, value, grad) = reference(&cell, [xi[0], xi[1], 0.0]);
+    let (n, value, grad) = facet_shape(f, [xi[0], xi[1], 0.0]);
     let mut at = FacetAt {
         shape: std::array::from_fn(|i| if i < n { value[i] } else { 0.0 }),
         point: [0.0; D],
         tangents: [[0.0; D]; 2],
     };
-    for i in 0..n {
-        let p = points[nodes[i]];
+    for (i, &node) in f.nodes().iter().enumerate() {
+        let p = points[node];
         for k in 0..D {
             at.point[k] += value[i] * p[k];
             at.tangents[0][k] += grad[i][0] * p[k];
@@ -155,9 +142,10 @@ pub(crate) fn facet_at<const D: usize>(points: &[[f64; D]], f: &Facet, xi: [f64;
 
 /// The reference coordinates of the closest point to `x` of the surface through facet `f`
 /// (extended beyond its edges), by Gauss–Newton: exact in one step on an edge or a triangle, a
-/// few on a warped quadrilateral (to 1e-12 in reference units).
+/// few on a warped quadrilateral or a curved second-order facet (to 1e-12 in reference units).
 pub(crate) fn closest<const D: usize>(points: &[[f64; D]], f: &Facet, x: &[f64; D]) -> [f64; 2] {
-    let mut xi = match f.len() {
+    let affine = f.len() <= 3 && !f.is_second_order();
+    let mut xi = match f.corners().len() {
         2 => [0.5, 0.0],
         3 => [1.0 / 3.0, 1.0 / 3.0],
         _ => [0.0, 0.0],
@@ -168,7 +156,7 @@ pub(crate) fn closest<const D: usize>(points: &[[f64; D]], f: &Facet, x: &[f64; 
         // normal equations of the tangents: (TᵀT) Δξ = Tᵀ r
         let (a00, a01, a11) = (dot(&t[0], &t[0]), dot(&t[0], &t[1]), dot(&t[1], &t[1]));
         let (b0, b1) = (dot(&t[0], &r), dot(&t[1], &r));
-        let step = if f.len() == 2 {
+        let step = if f.dim() == 1 {
             [b0 / a00, 0.0]
         } else {
             let det = a00 * a11 - a01 * a01;
@@ -176,10 +164,11 @@ pub(crate) fn closest<const D: usize>(points: &[[f64; D]], f: &Facet, x: &[f64; 
         };
         xi[0] += step[0];
         xi[1] += step[1];
-        // an edge or a triangle is affine: one step is exact; a quadrilateral's steps shrink
-        // quadratically to round-off, which in reference units is 1e-16 times the point's
-        // distance over the facet's size (so an absolute 1e-14 could never be met far away)
-        if f.len() < 4 || step[0].abs().max(step[1].abs()) < 1e-12 {
+        // an edge or a triangle is affine: one step is exact; a quadrilateral's or a curved
+        // facet's steps shrink quadratically to round-off, which in reference units is 1e-16
+        // times the point's distance over the facet's size (so an absolute 1e-14 could never be
+        // met far away)
+        if affine || step[0].abs().max(step[1].abs()) < 1e-12 {
             break;
         }
     }
@@ -192,14 +181,14 @@ pub(crate) fn closest<const D: usize>(points: &[[f64; D]], f: &Facet, x: &[f64; 
 fn project<const D: usize>(points: &[[f64; D]], f: &Facet, x: &[f64; D]) -> Option<FacetAt<D>> {
     let xi = closest(points, f, x);
     // how far outside the reference domain, in reference units
-    let outside = match f.len() {
+    let outside = match f.corners().len() {
         2 => (-xi[0]).max(xi[0] - 1.0),
         3 => (-xi[0]).max(-xi[1]).max(xi[0] + xi[1] - 1.0),
         _ => ((xi[0].abs() - 1.0).max(xi[1].abs() - 1.0)) / 2.0,
     };
     if outside > INSIDE {
         let away = distance(x, &facet_at(points, f, xi).point);
-        let nodes = f.nodes();
+        let nodes = f.corners();
         let size = (0..nodes.len())
             .flat_map(|i| (0..i).map(move |j| (i, j)))
             .map(|(i, j)| distance(&points[nodes[i]], &points[nodes[j]]))
@@ -209,7 +198,7 @@ fn project<const D: usize>(points: &[[f64; D]], f: &Facet, x: &[f64; D]) -> Opti
         }
     }
     // onto the facet: a point just beyond its edge is the edge's
-    let xi = match f.len() {
+    let xi = match f.corners().len() {
         2 => [xi[0].clamp(0.0, 1.0), 0.0],
         3 => {
             let (a, b) = (xi[0].max(0.0), xi[1].max(0.0));

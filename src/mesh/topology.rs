@@ -139,6 +139,25 @@ pub fn facet_rule(f: &Facet) -> &'static [QuadPoint] {
     }
 }
 
+/// A facet's shape functions at the reference point `xi` (an edge: s ∈ [0, 1] from its first
+/// corner; a face: its reference cell's ξ, η): their number, values and reference gradients.
+pub(crate) fn facet_shape(f: &Facet, xi: [f64; 3]) -> (usize, [f64; MAX_NODES], [[f64; 3]; MAX_NODES]) {
+    if f.dim() > 1 {
+        return reference(&face_reference(f), xi);
+    }
+    let s = xi[0];
+    let (mut v, mut g) = ([0.0; MAX_NODES], [[0.0; 3]; MAX_NODES]);
+    if f.len() == 2 {
+        v[..2].copy_from_slice(&[1.0 - s, s]);
+        (g[0][0], g[1][0]) = (-1.0, 1.0);
+    } else {
+        // the 3-node line: its ends, then its midpoint
+        v[..3].copy_from_slice(&[(1.0 - s) * (1.0 - 2.0 * s), s * (2.0 * s - 1.0), 4.0 * s * (1.0 - s)]);
+        (g[0][0], g[1][0], g[2][0]) = (4.0 * s - 3.0, 4.0 * s - 1.0, 4.0 - 8.0 * s);
+    }
+    (f.len(), v, g)
+}
+
 /// A facet's map at the reference point `xi` (an edge: s = ξ ∈ [0, 1] from its first corner to
 /// its second; a face: its reference cell's ξ, η): the shape values, the area vector (the
 /// outward normal times ds/ds_ref: (dy, −dx)/ds on an edge, ∂x/∂ξ × ∂x/∂η on a face) and the
@@ -148,21 +167,7 @@ pub fn facet_map<const D: usize>(
     f: &Facet,
     xi: [f64; 3],
 ) -> ([f64; MAX_NODES], [f64; 3], [f64; D]) {
-    let (n, value, grad) = if f.dim() == 1 {
-        let s = xi[0];
-        let (mut v, mut g) = ([0.0; MAX_NODES], [[0.0; 3]; MAX_NODES]);
-        if f.len() == 2 {
-            v[..2].copy_from_slice(&[1.0 - s, s]);
-            (g[0][0], g[1][0]) = (-1.0, 1.0);
-        } else {
-            // the 3-node line: its ends, then its midpoint
-            v[..3].copy_from_slice(&[(1.0 - s) * (1.0 - 2.0 * s), s * (2.0 * s - 1.0), 4.0 * s * (1.0 - s)]);
-            (g[0][0], g[1][0], g[2][0]) = (4.0 * s - 3.0, 4.0 * s - 1.0, 4.0 - 8.0 * s);
-        }
-        (f.len(), v, g)
-    } else {
-        reference(&face_reference(f), xi)
-    };
+    let (n, value, grad) = facet_shape(f, xi);
     let nodes = f.nodes();
     let x0 = points[nodes[0]];
     let (mut t1, mut t2, mut x) = ([0.0; 3], [0.0; 3], x0);
@@ -197,68 +202,150 @@ pub(crate) fn corner_basis(f: &Facet, xi: [f64; 3]) -> [f64; 4] {
     out
 }
 
-/// The contact rows' multiplier functions on a second-order facet (docs/method.md §19.3) with
-/// the rule that integrates them: the facet split at its midside (and centre) nodes into 2
-/// edges, 4 triangles or 4 quadrangles, ψ_j the first-order function of node j on that split
-/// (P1-iso-P2: positive, Σ_j ψ_j = 1), and on each piece its reference rule scaled by 1/4 (an
-/// edge's halves: 1/2) — exact for ψ_j N_i on a flat facet. An 8-node quadrangle (no centre
-/// node) takes its corners' bilinear functions instead, rows at its corners only (measured:
-/// docs/method.md §19.3). Returns (point in the facet's reference coordinates, weight, ψ at it).
-pub(crate) fn row_rule(f: &Facet) -> Vec<([f64; 3], f64, [f64; 9])> {
-    let mut out = Vec::new();
+/// The pieces of a second-order facet on which its contact rows' multiplier functions are of
+/// first order (docs/method.md §19.3), each as its corners (facet-local nodes, counter-clockwise
+/// on a face): an edge's halves, a 9-node quadrangle's or a 6-node triangle's quarters split at
+/// the midside and centre nodes, an 8-node quadrangle whole (its corners' bilinear functions).
+fn piece_nodes(f: &Facet) -> &'static [&'static [usize]] {
+    match (f.dim(), f.len()) {
+        (1, _) => &[&[0, 2], &[2, 1]],
+        (_, 8) => &[&[0, 1, 2, 3]],
+        (_, 9) => &[&[0, 4, 8, 7], &[4, 1, 5, 8], &[8, 5, 2, 6], &[7, 8, 6, 3]],
+        _ => &[&[0, 3, 5], &[3, 1, 4], &[5, 4, 2], &[4, 5, 3]],
+    }
+}
+
+/// The reference coordinates of node `a` of a second-order facet (an edge: s ∈ [0, 1]).
+fn reference_point(f: &Facet, a: usize) -> [f64; 2] {
     if f.dim() == 1 {
-        // nodes: ends s = 0, 1, midpoint s = 1/2
-        for q in facet_rule(f) {
-            for half in [0.0, 0.5] {
-                let s = half + 0.5 * q.xi[0];
-                let mut psi = [0.0; 9];
-                (psi[0], psi[1], psi[2]) = (
-                    (1.0 - 2.0 * s).max(0.0),
-                    (2.0 * s - 1.0).max(0.0),
-                    1.0 - (2.0 * s - 1.0).abs(),
-                );
-                out.push(([s, 0.0, 0.0], 0.5 * q.weight, psi));
-            }
-        }
-        return out;
+        return [[0.0, 1.0, 0.5][a], 0.0];
     }
-    if f.len() == 8 {
-        // an 8-node quadrangle: rows at its corners only, ψ their bilinear functions
-        for q in facet_rule(f) {
-            let mut psi = [0.0; 9];
-            psi[..4].copy_from_slice(&corner_basis(f, q.xi));
-            out.push((q.xi, q.weight, psi));
+    let x = crate::mesh::second_order::reference_nodes(face_reference(f).kind())[a];
+    [x[0], x[1]]
+}
+
+/// The pieces of [`piece_nodes`] as polygons in the facet's reference coordinates: an interval
+/// (two points) on an edge, a counter-clockwise triangle or axis-aligned quadrangle on a face.
+pub(crate) fn row_pieces(f: &Facet) -> Vec<Vec<[f64; 2]>> {
+    piece_nodes(f)
+        .iter()
+        .map(|piece| piece.iter().map(|&a| reference_point(f, a)).collect())
+        .collect()
+}
+
+/// The first-order functions of a piece's corners at `xi` and how far inside the piece `xi` lies
+/// (the least of them; negative outside): an interval's (1 − t, t), a triangle's barycentric
+/// coordinates, an axis-aligned quadrangle's bilinear functions (corners from its lower left).
+fn piece_functions(piece: &[[f64; 2]], xi: [f64; 2]) -> ([f64; 4], f64) {
+    let mut hats = [0.0; 4];
+    match piece.len() {
+        2 => {
+            let t = (xi[0] - piece[0][0]) / (piece[1][0] - piece[0][0]);
+            hats[..2].copy_from_slice(&[1.0 - t, t]);
         }
-        return out;
+        3 => {
+            let (p, e, g) = (piece[0], sub2(piece[1], piece[0]), sub2(piece[2], piece[0]));
+            let r = sub2(xi, p);
+            let det = e[0] * g[1] - e[1] * g[0];
+            let (b1, b2) = ((r[0] * g[1] - r[1] * g[0]) / det, (e[0] * r[1] - e[1] * r[0]) / det);
+            hats[..3].copy_from_slice(&[1.0 - b1 - b2, b1, b2]);
+        }
+        _ => {
+            let (lo, hi) = (piece[0], piece[2]);
+            let u = (xi[0] - lo[0]) / (hi[0] - lo[0]);
+            let v = (xi[1] - lo[1]) / (hi[1] - lo[1]);
+            hats = [(1.0 - u) * (1.0 - v), u * (1.0 - v), u * v, (1.0 - u) * v];
+        }
     }
-    // each piece: its nodes (facet-local) at the corners of the piece's reference cell
-    const SPLIT: [[usize; 4]; 4] = [[0, 4, 8, 7], [4, 1, 5, 8], [8, 5, 2, 6], [7, 8, 6, 3]];
-    const TSPLIT: [[usize; 4]; 4] = [[0, 3, 5, 0], [3, 1, 4, 0], [5, 4, 2, 0], [4, 5, 3, 0]];
-    let (pieces, piece_cell, rule, corners) = if f.corners().len() == 3 {
-        (
-            &TSPLIT,
-            Cell::Tri3([0, 1, 2]),
-            crate::mesh::quadrature::TRI_6POINT.to_vec(),
-            3,
-        )
-    } else {
-        (&SPLIT, Cell::Quad4([0, 1, 2, 3]), tensor_gauss(3, 2), 4)
+    let inside = match piece.len() {
+        2 => hats[0].min(hats[1]),
+        3 => hats[0].min(hats[1]).min(hats[2]),
+        // the bilinear functions' least is not the distance inside: the coordinates' is
+        _ => {
+            let (lo, hi) = (piece[0], piece[2]);
+            let u = (xi[0] - lo[0]) / (hi[0] - lo[0]);
+            let v = (xi[1] - lo[1]) / (hi[1] - lo[1]);
+            u.min(1.0 - u).min(v).min(1.0 - v)
+        }
     };
-    let nodes = crate::mesh::second_order::reference_nodes(face_reference(f).kind());
-    for piece in pieces {
-        for q in &rule {
-            let hats = reference(&piece_cell, q.xi).1;
-            let (mut xi, mut psi) = ([0.0; 3], [0.0; 9]);
-            for (k, &node) in piece[..corners].iter().enumerate() {
-                for c in 0..2 {
-                    xi[c] += hats[k] * nodes[node][c];
-                }
-                psi[node] += hats[k];
-            }
-            out.push((xi, 0.25 * q.weight, psi));
+    (hats, inside)
+}
+
+fn sub2(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+    [a[0] - b[0], a[1] - b[1]]
+}
+
+/// The contact rows' multiplier functions ψ_j of a second-order facet at its reference point
+/// `xi` (docs/method.md §19.3): the first-order function of node j on the piece of
+/// [`row_pieces`] that holds `xi` (beyond the facet, the nearest piece's, extended) —
+/// P1-iso-P2, positive on the facet, Σ_j ψ_j = 1; on an 8-node quadrangle its corners' bilinear
+/// functions (its midside nodes carry no row).
+pub(crate) fn row_functions(f: &Facet, xi: [f64; 2]) -> [f64; 9] {
+    let pieces = row_pieces(f);
+    let (k, (hats, _)) = pieces
+        .iter()
+        .map(|piece| piece_functions(piece, xi))
+        .enumerate()
+        .max_by(|a, b| a.1 .1.total_cmp(&b.1 .1))
+        .expect("a facet has pieces");
+    let mut psi = [0.0; 9];
+    for (&a, h) in piece_nodes(f)[k].iter().zip(hats) {
+        psi[a] += h;
+    }
+    psi
+}
+
+/// A rule on a piece (an interval, a triangle or an axis-aligned quadrangle of reference
+/// coordinates): 3-point Gauss, the 6-point rule, 3 × 3 Gauss mapped onto it, weights scaled by
+/// its measure — exact for quintics on an interval or a triangle and bicubics on a quadrangle.
+pub(crate) fn piece_rule(piece: &[[f64; 2]]) -> Vec<([f64; 2], f64)> {
+    match piece.len() {
+        2 => {
+            let (a, b) = (piece[0][0], piece[1][0]);
+            EDGE_GAUSS_3
+                .iter()
+                .map(|&(t, w)| ([a + t * (b - a), 0.0], w * (b - a).abs()))
+                .collect()
+        }
+        3 => {
+            let (p, e, g) = (piece[0], sub2(piece[1], piece[0]), sub2(piece[2], piece[0]));
+            let det = (e[0] * g[1] - e[1] * g[0]).abs();
+            crate::mesh::quadrature::TRI6
+                .iter()
+                .map(|&(q, w)| {
+                    (
+                        [p[0] + q[0] * e[0] + q[1] * g[0], p[1] + q[0] * e[1] + q[1] * g[1]],
+                        w * det,
+                    )
+                })
+                .collect()
+        }
+        _ => {
+            let (lo, hi) = (piece[0], piece[2]);
+            let scale = [(hi[0] - lo[0]) / 2.0, (hi[1] - lo[1]) / 2.0];
+            tensor_gauss(3, 2)
+                .into_iter()
+                .map(|q| {
+                    (
+                        [lo[0] + (q.xi[0] + 1.0) * scale[0], lo[1] + (q.xi[1] + 1.0) * scale[1]],
+                        q.weight * (scale[0] * scale[1]).abs(),
+                    )
+                })
+                .collect()
         }
     }
-    out
+}
+
+/// The contact rows' multiplier functions on a second-order facet (docs/method.md §19.3,
+/// [`row_functions`]) with the rule that integrates them piece by piece ([`piece_rule`]) — exact
+/// for ψ_j N_i on a flat facet. Returns (point in the facet's reference coordinates, weight, ψ
+/// at it).
+pub(crate) fn row_rule(f: &Facet) -> Vec<([f64; 3], f64, [f64; 9])> {
+    row_pieces(f)
+        .iter()
+        .flat_map(|piece| piece_rule(piece))
+        .map(|(xi, w)| ([xi[0], xi[1], 0.0], w, row_functions(f, xi)))
+        .collect()
 }
 
 /// Quadrature of one facet: for each node, ∫ N_a ds and ∫ N_a n ds (n the outward unit normal,

@@ -331,12 +331,6 @@ pub fn build<const D: usize>(
                     "{key}: the surfaces {} (group) and {} (target)",
                     part.label, master.label
                 );
-                if part.facets.iter().chain(&master.facets).any(|f| f.is_second_order()) {
-                    return Err(SolveError::Setup(format!(
-                        "{origin}: {names} are made of second-order faces: contact between two bodies is posed on \
-                         first-order faces only for now (docs/method.md §19.3); mesh the bodies with -order 1"
-                    )));
-                }
                 Some(SurfacePair::new(&mesh.points, part.clone(), master).map_err(|e| {
                     SolveError::Setup(format!(
                         "{origin}: {names} {}",
@@ -446,10 +440,11 @@ pub fn build<const D: usize>(
     let (mut nodes, kept) = ContactNodes::from_rows(&rows.nodes, &rows.weights, &rows.directions, dofs);
     let master_terms: Vec<Vec<(usize, f64)>> = kept.iter().map(|&r| master_terms[r].clone()).collect();
     let spread: Vec<Terms> = kept.iter().map(|&r| rows.spread[r].clone()).collect();
+    // the slave side first: a spread row replaces its node's terms (docs/method.md §18.6)
+    spread_rows(&mut nodes, &spread, |k| k, dofs);
     for (k, terms) in master_terms.iter().enumerate() {
         nodes.add_master_terms(k, terms, dofs);
     }
-    spread_rows(&mut nodes, &spread, |k| k, dofs);
     let pick = |v: &[f64]| -> Vec<f64> { kept.iter().map(|&k| v[k]).collect() };
     let gap = pick(&rows.gap);
     let layer = pick(&rows.layer);
@@ -612,10 +607,10 @@ fn friction_rows<const D: usize>(
     let (mut rows, kept) = ContactNodes::from_rows(&all_nodes, &weights, &directions, dofs);
     // the rows of contact with another body: the master nodes' share of each direction
     let normal_row = |r: usize| if r < m { r } else { with[r - m].0 };
+    spread_rows(&mut rows, spread, |k| normal_row(kept[k]), dofs);
     for (k, &r) in kept.iter().enumerate() {
         rows.add_master_terms(k, &master_terms[normal_row(r)], dofs);
     }
-    spread_rows(&mut rows, spread, |k| normal_row(kept[k]), dofs);
     if kept[..m.min(kept.len())] != (0..m).collect::<Vec<_>>()[..] {
         return Err(SolveError::Setup(format!(
             "{origin}: the contact rows changed when their tangential rows were added (a bug: please report it)"

@@ -189,3 +189,49 @@ fn contact_row_functions_are_a_positive_partition_with_the_tabled_weights() {
         }
     }
 }
+
+/// The contact rows' functions at any point (`topology::row_functions`, which the mortar rows of
+/// two bodies evaluate at their overlap's points, docs/method.md §18.6) are those of the rule:
+/// first order on the split, so ψ_j at node k is δ_jk on the split kinds (an 8-node quadrangle's
+/// midside node gets half of each of its corners), and they sum to 1 beyond the facet too.
+#[test]
+fn contact_row_functions_are_nodal_on_the_split() {
+    use crate::mesh::topology::row_functions;
+    use crate::mesh::Facet;
+    let edge = [[0.0, 0.0], [1.0, 0.0], [0.5, 0.0]];
+    let kinds: [(Facet, Vec<[f64; 2]>); 4] = [
+        (Facet::with_corners(&[0, 1, 2], 2), edge.to_vec()),
+        (
+            Facet::with_corners(&[0, 1, 2, 3, 4, 5, 6, 7, 8], 4),
+            reference_nodes(CellKind::Quad9).iter().map(|x| [x[0], x[1]]).collect(),
+        ),
+        (
+            Facet::with_corners(&[0, 1, 2, 3, 4, 5], 3),
+            reference_nodes(CellKind::Tri6).iter().map(|x| [x[0], x[1]]).collect(),
+        ),
+        (
+            Facet::with_corners(&[0, 1, 2, 3, 4, 5, 6, 7], 4),
+            reference_nodes(CellKind::Quad8).iter().map(|x| [x[0], x[1]]).collect(),
+        ),
+    ];
+    for (f, nodes) in kinds {
+        for (k, &x) in nodes.iter().enumerate() {
+            let psi = row_functions(&f, x);
+            for (j, &v) in psi[..f.len()].iter().enumerate() {
+                let want = match (f.len(), k < 4) {
+                    // an 8-node quadrangle's midside node k lies between corners k − 4 and k − 3
+                    (8, false) if j == k - 4 || j == (k - 3) % 4 => 0.5,
+                    (8, false) => 0.0,
+                    _ => f64::from(u8::from(j == k)),
+                };
+                assert!((v - want).abs() < 1e-14, "{} nodes: ψ_{j} at node {k} = {v}", f.len());
+            }
+        }
+        let beyond = row_functions(&f, [1.3, -0.2]);
+        assert!(
+            (beyond.iter().sum::<f64>() - 1.0).abs() < 1e-14,
+            "{} nodes beyond",
+            f.len()
+        );
+    }
+}
