@@ -254,13 +254,14 @@ fn hertz_two_cylinders_on_6_node_triangles_within_1_percent_and_converging() {
 }
 
 /// The two spheres on gmsh's 10-node tetrahedra (docs/method.md §18.6: the slave's 6-node
-/// triangles with the split multipliers, the master's curved 6-node triangles clipped by their
-/// corners): meshes/two_bodies/spheres_tet10_a7.msh and _a10.msh (hf = a/7, a/10). Every slave
-/// node of the patch pairs, a and p₀ within 1 % at a/10 (the issue's) and a's error falls from
-/// a/7 to a/10 by at least the ratio of the sizes (first order). Measured: a/7 (79 734 unknowns,
-/// 210 slave nodes in contact) a +1.40 %, p₀ −0.54 %; a/10 (152 811, 391) a +0.77 %, p₀ −0.37 %
-/// (1.8× for a 1.43× finer mesh); a/5 (not committed) +2.30 %, −0.76 %. The linear tetrahedra
-/// at a/10 (21 105 unknowns): +0.12 %, +0.76 %.
+/// triangles with the transformed dual multipliers of §19.3, the master's curved 6-node
+/// triangles clipped by their corners): meshes/two_bodies/spheres_tet10_a7.msh and _a10.msh
+/// (hf = a/7, a/10). Every slave node of the patch pairs, a and p₀ within 1 % at a/10 (the
+/// issue's) and a's error falls from a/7 to a/10 by at least the ratio of the sizes (first
+/// order). Measured: a/7 (79 734 unknowns, 226 slave nodes in contact) a +0.33 %, p₀ −0.35 %;
+/// a/10 (152 811, 413) a +0.15 %, p₀ −0.23 % (2.2× for a 1.43× finer mesh). With the split
+/// multipliers (before): +1.40 % and +0.77 % in a. The linear tetrahedra at a/10 (21 105
+/// unknowns): +0.12 %, +0.76 %.
 #[test]
 fn hertz_two_spheres_on_10_node_tetrahedra_within_1_percent_and_converging() {
     let (c7, _, _, ea7, _) = spheres("spheres_tet10_a7.msh");

@@ -15,15 +15,17 @@
 //! and the rules are exact on flat surfaces. Written by hand: no crate does segment-to-segment
 //! mortar integration.
 //!
-//! On a slave surface of second-order faces (docs/method.md §18.6) a dual basis does not exist
-//! for every face (a 6-node triangle's corners have ∫ N_p = 0); ψ_p is then the contact rows'
-//! positive function of §19.3 (first order on the face split at its midside nodes), the overlap
-//! is cut along the split as well, and the slave side of the row is the same weighted mean of
-//! the slave nodes as a one-body row's (`Rows::spread`, src/contact/rows.rs).
+//! On a slave facet of second order (docs/method.md §18.6) ψ_p is the contact rows' function of
+//! §19.3 (`topology::row_functions`): on a face the dual basis of its own functions, transformed
+//! first on 6-node triangles and 8-node quadrangles (whose corners have ∫ N_p ≤ 0), taken on the
+//! reference face; on a 3-node edge the first-order functions of its halves (the overlap is cut
+//! at its midpoint too). These are not biorthogonal to N, so the slave side of the row is the
+//! weighted mean of the slave nodes of a one-body row (`Rows::spread`, src/contact/rows.rs) — on
+//! an affine 9-node quadrangle the node's own.
 
 use super::pairing::{closest, facet_at, SurfacePair};
 use crate::mesh::quadrature::{tensor_gauss, EDGE_GAUSS_3, TRI6};
-use crate::mesh::topology::{piece_rule, row_functions, row_pieces};
+use crate::mesh::topology::row_functions;
 use crate::mesh::Facet;
 use nalgebra::DMatrix;
 use std::collections::HashMap;
@@ -54,9 +56,10 @@ struct Sums<const D: usize> {
     gap: [f64; D],
 }
 
-/// A quadrature rule on a first-order facet's reference domain: (ξ, weight).
+/// A quadrature rule on a facet's reference domain: (ξ, weight) — exact for the products of two
+/// functions of a flat facet of either order.
 fn facet_rule(f: &Facet) -> Vec<([f64; 2], f64)> {
-    match f.len() {
+    match f.corners().len() {
         2 => EDGE_GAUSS_3.iter().map(|&(s, w)| ([s, 0.0], w)).collect(),
         3 => TRI6.to_vec(),
         _ => tensor_gauss(3, 2)
@@ -64,6 +67,18 @@ fn facet_rule(f: &Facet) -> Vec<([f64; 2], f64)> {
             .map(|q| ([q.xi[0], q.xi[1]], q.weight))
             .collect(),
     }
+}
+
+/// A rule over a whole slave facet exact for its multiplier functions times its own: the
+/// facet's rule, on a 3-node edge its halves' (docs/method.md §19.3).
+fn whole_rule(f: &Facet) -> Vec<([f64; 2], f64)> {
+    if f.dim() == 1 && f.is_second_order() {
+        return crate::mesh::topology::row_rule(f)
+            .into_iter()
+            .map(|(xi, w, _)| ([xi[0], xi[1]], w))
+            .collect();
+    }
+    facet_rule(f)
 }
 
 /// The measure factor at a point x: 2πr on a body of revolution, else 1.
@@ -126,18 +141,9 @@ impl Multipliers {
             Multipliers::Rows => row_functions(f, xi),
         }
     }
-
-    /// The pieces of the facet's reference domain on which every ψ_j is smooth.
-    fn pieces(&self, f: &Facet) -> Vec<Vec<[f64; 2]>> {
-        match self {
-            Multipliers::Dual(_) => vec![domain(f)],
-            Multipliers::Rows => row_pieces(f),
-        }
-    }
 }
 
-/// The reference domain of a first-order facet as a convex polygon, counter-clockwise (2D: the
-/// interval).
+/// The reference domain of a facet as a convex polygon, counter-clockwise (2D: the interval).
 fn domain(f: &Facet) -> Vec<[f64; 2]> {
     match f.corners().len() {
         2 => vec![[0.0, 0.0], [1.0, 0.0]],
@@ -172,38 +178,49 @@ fn clip_polygon(subject: &[[f64; 2]], clip: &[[f64; 2]]) -> Vec<[f64; 2]> {
 }
 
 /// The quadrature points, in the slave facet's reference coordinates, of the part of slave facet
-/// `s` over master facet `m` (empty if they do not overlap), piece by piece of `pieces` (the
-/// slave domain, or its split): the master's corners projected onto the slave cut it (on a
-/// curved master face the cut between them is taken straight in the slave's coordinates).
-fn overlap<const D: usize>(
-    points: &[[f64; D]],
-    s: &Facet,
-    m: &Facet,
-    pieces: &[Vec<[f64; 2]>],
-) -> Vec<([f64; 2], f64)> {
+/// `s` over master facet `m` (empty if they do not overlap): the master's corners projected onto
+/// the slave cut it (on a curved master face the cut between two of them is taken straight in the
+/// slave's coordinates).
+fn overlap<const D: usize>(points: &[[f64; D]], s: &Facet, m: &Facet) -> Vec<([f64; 2], f64)> {
     let corners: Vec<[f64; 2]> = m.corners().iter().map(|&q| closest(points, s, &points[q])).collect();
-    let mut rule = Vec::new();
     if s.dim() == 1 {
-        for piece in pieces {
+        // a 3-node slave edge's functions are first order on its halves: cut at its midpoint too
+        let halves: &[(f64, f64)] = if s.is_second_order() {
+            &[(0.0, 0.5), (0.5, 1.0)]
+        } else {
+            &[(0.0, 1.0)]
+        };
+        let mut rule = Vec::new();
+        for &(from, to) in halves {
             let (lo, hi) = (
-                corners[0][0].min(corners[1][0]).max(piece[0][0]),
-                corners[0][0].max(corners[1][0]).min(piece[1][0]),
+                corners[0][0].min(corners[1][0]).max(from),
+                corners[0][0].max(corners[1][0]).min(to),
             );
             if hi - lo > 1e-12 {
-                rule.extend(piece_rule(&[[lo, 0.0], [hi, 0.0]]));
+                rule.extend(
+                    EDGE_GAUSS_3
+                        .iter()
+                        .map(|&(t, w)| ([lo + t * (hi - lo), 0.0], w * (hi - lo))),
+                );
             }
         }
         return rule;
     }
-    for piece in pieces {
-        let polygon = clip_polygon(&corners, piece);
-        for k in 1..polygon.len().saturating_sub(1) {
-            let (a, b, c) = (polygon[0], polygon[k], polygon[k + 1]);
-            let det = ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).abs();
-            if det > 1e-14 {
-                rule.extend(piece_rule(&[a, b, c]));
-            }
+    let polygon = clip_polygon(&corners, &domain(s));
+    let mut rule = Vec::new();
+    for k in 1..polygon.len().saturating_sub(1) {
+        let (a, b, c) = (polygon[0], polygon[k], polygon[k + 1]);
+        let (e, f) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
+        let det = (e[0] * f[1] - e[1] * f[0]).abs();
+        if det <= 1e-14 {
+            continue;
         }
+        rule.extend(TRI6.iter().map(|&(xi, w)| {
+            (
+                [a[0] + xi[0] * e[0] + xi[1] * f[0], a[1] + xi[0] * e[1] + xi[1] * f[1]],
+                w * det,
+            )
+        }));
     }
     rule
 }
@@ -244,21 +261,18 @@ pub fn rows<const D: usize>(points: &[[f64; D]], pair: &SurfacePair<D>, revolved
             continue;
         }
         let psi = Multipliers::of(points, s, revolved);
-        let pieces = psi.pieces(s);
         // each slave node's whole support ∫ψ_p, against which its share over the master is read
-        for piece in &pieces {
-            for (xi, w) in piece_rule(piece) {
-                let at = facet_at(points, s, xi);
-                let dw = w * at.measure() * revolved_factor(&at.point, revolved);
-                for (&k, value) in local.iter().zip(psi.at(s, xi, &at.shape)) {
-                    support[k] += value * dw;
-                }
+        for (xi, w) in whole_rule(s) {
+            let at = facet_at(points, s, xi);
+            let dw = w * at.measure() * revolved_factor(&at.point, revolved);
+            for (&k, value) in local.iter().zip(psi.at(s, xi, &at.shape)) {
+                support[k] += value * dw;
             }
         }
         let mut seen: Vec<usize> = queue.clone();
         while let Some(mi) = queue.pop() {
             let m = &master.facets[mi];
-            let rule = overlap(points, s, m, &pieces);
+            let rule = overlap(points, s, m);
             if rule.is_empty() {
                 continue;
             }

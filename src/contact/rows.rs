@@ -116,8 +116,9 @@ fn clusters<const D: usize>(part: &BoundaryPart<D>, points: &[[f64; D]]) -> Vec<
 }
 
 /// The rows of a part made of second-order faces (docs/method.md §19.3): one at each node j of
-/// the faces, its multiplier function ψ_j the first-order function of j on the faces split at
-/// their midside nodes ([`crate::mesh::topology::row_rule`]): the weight D_j = ∫ψ_j ds, the
+/// the faces, its multiplier function ψ_j that of [`crate::mesh::topology::row_functions`] (on a
+/// face the dual basis of its own or transformed functions, on an edge the split's first-order
+/// functions; [`crate::mesh::topology::row_rule`] integrates them): the weight D_j = ∫ψ_j ds, the
 /// direction the mean of n weighted by ψ_j, and the row u_ν = Σ_i c_ji d·u_i with
 /// c_ji = ∫ψ_j N_i ds / D_j over the nodes i of j's faces (N_i their own functions) — a uniform
 /// pressure then loads node i with ∫N_i p ds, the patch test. On a body of revolution the
@@ -152,7 +153,7 @@ fn node_rows<const D: usize>(part: &BoundaryPart<D>, points: &[[f64; D]]) -> Vec
             }
         }
     }
-    // an 8-node quadrangle's midside nodes carry no row (ψ = 0 there)
+    // a row's weight is positive by construction (§19.3); keep the guard against a degenerate face
     at.into_iter()
         .filter(|(_, (weight, _, _))| *weight > 0.0)
         .map(|(node, (weight, nv, mut terms))| {

@@ -2,7 +2,7 @@
 //! facets with outward normals and nodal quadrature weights (docs/method.md §2, §8).
 
 use super::element::{reference, MAX_NODES};
-use super::quadrature::{tensor_gauss, QuadPoint, EDGE_GAUSS_3, TRI_3POINT};
+use super::quadrature::{QuadPoint, EDGE_GAUSS_3, TRI_3POINT};
 use super::vector::{cross, norm};
 use super::{fmt_point, Facet, GroupSelector, Mesh, MeshError, PhysicalGroup};
 use super::{Cell, CellKind};
@@ -202,149 +202,101 @@ pub(crate) fn corner_basis(f: &Facet, xi: [f64; 3]) -> [f64; 4] {
     out
 }
 
-/// The pieces of a second-order facet on which its contact rows' multiplier functions are of
-/// first order (docs/method.md §19.3), each as its corners (facet-local nodes, counter-clockwise
-/// on a face): an edge's halves, a 9-node quadrangle's or a 6-node triangle's quarters split at
-/// the midside and centre nodes, an 8-node quadrangle whole (its corners' bilinear functions).
-fn piece_nodes(f: &Facet) -> &'static [&'static [usize]] {
-    match (f.dim(), f.len()) {
-        (1, _) => &[&[0, 2], &[2, 1]],
-        (_, 8) => &[&[0, 1, 2, 3]],
-        (_, 9) => &[&[0, 4, 8, 7], &[4, 1, 5, 8], &[8, 5, 2, 6], &[7, 8, 6, 3]],
-        _ => &[&[0, 3, 5], &[3, 1, 4], &[5, 4, 2], &[4, 5, 3]],
-    }
-}
+/// The transformation of a 6-node triangle's and an 8-node quadrangle's basis before its dual is
+/// taken (Popp, Wohlmuth, Gee & Wall 2012; docs/method.md §19.3): each corner's function gains α
+/// of its two edges' ones, each edge's keeps 1 − 2α. Their own functions' lumped weights are zero
+/// or negative at the corners (no dual basis); with α = 1/5 they become 2/15 and 1/5 of a
+/// triangle, 1/20 and 1/5 of a quadrangle. Measured (Hertz 3D, a and p₀ against the closed form,
+/// tests/hertz.rs): 10-node tetrahedra a/7 and a/10 with α = 0.1: −0.10 %, +0.03 % and −0.03 %,
+/// +0.08 %; 0.2: +0.02 %, +0.03 % and +0.00 %, +0.09 %; 0.3: +0.31 %, −0.05 % and +0.25 %,
+/// −0.03 %. 20-node hexahedra a/3.8, a/5.1, a/6.3: with 0.1 the corners' weights stay negative
+/// (no rows there: p₀ −6.3 to −6.4 %); 0.2: a +1.95, +0.60, +0.31 %, p₀ −1.04, −0.30, −0.19 %;
+/// 0.3: a +1.79, +1.05, +0.20 %, p₀ −2.27, −1.21, −0.57 %.
+pub const TRANSFORMED_ALPHA: f64 = 0.2;
 
-/// The reference coordinates of node `a` of a second-order facet (an edge: s ∈ [0, 1]).
-fn reference_point(f: &Facet, a: usize) -> [f64; 2] {
-    if f.dim() == 1 {
-        return [[0.0, 1.0, 0.5][a], 0.0];
-    }
-    let x = crate::mesh::second_order::reference_nodes(face_reference(f).kind())[a];
-    [x[0], x[1]]
-}
-
-/// The pieces of [`piece_nodes`] as polygons in the facet's reference coordinates: an interval
-/// (two points) on an edge, a counter-clockwise triangle or axis-aligned quadrangle on a face.
-pub(crate) fn row_pieces(f: &Facet) -> Vec<Vec<[f64; 2]>> {
-    piece_nodes(f)
-        .iter()
-        .map(|piece| piece.iter().map(|&a| reference_point(f, a)).collect())
-        .collect()
-}
-
-/// The first-order functions of a piece's corners at `xi` and how far inside the piece `xi` lies
-/// (the least of them; negative outside): an interval's (1 − t, t), a triangle's barycentric
-/// coordinates, an axis-aligned quadrangle's bilinear functions (corners from its lower left).
-fn piece_functions(piece: &[[f64; 2]], xi: [f64; 2]) -> ([f64; 4], f64) {
-    let mut hats = [0.0; 4];
-    match piece.len() {
-        2 => {
-            let t = (xi[0] - piece[0][0]) / (piece[1][0] - piece[0][0]);
-            hats[..2].copy_from_slice(&[1.0 - t, t]);
-        }
-        3 => {
-            let (p, e, g) = (piece[0], sub2(piece[1], piece[0]), sub2(piece[2], piece[0]));
-            let r = sub2(xi, p);
-            let det = e[0] * g[1] - e[1] * g[0];
-            let (b1, b2) = ((r[0] * g[1] - r[1] * g[0]) / det, (e[0] * r[1] - e[1] * r[0]) / det);
-            hats[..3].copy_from_slice(&[1.0 - b1 - b2, b1, b2]);
-        }
-        _ => {
-            let (lo, hi) = (piece[0], piece[2]);
-            let u = (xi[0] - lo[0]) / (hi[0] - lo[0]);
-            let v = (xi[1] - lo[1]) / (hi[1] - lo[1]);
-            hats = [(1.0 - u) * (1.0 - v), u * (1.0 - v), u * v, (1.0 - u) * v];
-        }
-    }
-    let inside = match piece.len() {
-        2 => hats[0].min(hats[1]),
-        3 => hats[0].min(hats[1]).min(hats[2]),
-        // the bilinear functions' least is not the distance inside: the coordinates' is
-        _ => {
-            let (lo, hi) = (piece[0], piece[2]);
-            let u = (xi[0] - lo[0]) / (hi[0] - lo[0]);
-            let v = (xi[1] - lo[1]) / (hi[1] - lo[1]);
-            u.min(1.0 - u).min(v).min(1.0 - v)
-        }
-    };
-    (hats, inside)
-}
-
-fn sub2(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
-    [a[0] - b[0], a[1] - b[1]]
-}
-
-/// The contact rows' multiplier functions ψ_j of a second-order facet at its reference point
-/// `xi` (docs/method.md §19.3): the first-order function of node j on the piece of
-/// [`row_pieces`] that holds `xi` (beyond the facet, the nearest piece's, extended) —
-/// P1-iso-P2, positive on the facet, Σ_j ψ_j = 1; on an 8-node quadrangle its corners' bilinear
-/// functions (its midside nodes carry no row).
+/// The contact rows' multiplier functions ψ_j of a second-order facet at its reference point `xi`
+/// (docs/method.md §19.3). On a 3-node edge, the split functions of [`edge_row_functions`]. On a
+/// face, the dual basis of the face's own functions N, transformed first where their lumped
+/// weights are not positive — ψ = A T N(ξ), with N' = T N ([`TRANSFORMED_ALPHA`] on 6-node
+/// triangles and 8-node quadrangles, T = I on 9-node quadrangles) and
+/// A = D' M'⁻¹ (M' the reference facet's mass matrix of N', D' its row sums), so that
+/// ∫ψ_j N'_k = δ_jk ∫N'_j on an affine facet. Σ_j ψ_j = 1 and the weights ∫ψ_j = ∫N'_j are
+/// positive; ψ_j itself changes sign.
 pub(crate) fn row_functions(f: &Facet, xi: [f64; 2]) -> [f64; 9] {
-    let pieces = row_pieces(f);
-    let (k, (hats, _)) = pieces
-        .iter()
-        .map(|piece| piece_functions(piece, xi))
-        .enumerate()
-        .max_by(|a, b| a.1 .1.total_cmp(&b.1 .1))
-        .expect("a facet has pieces");
-    let mut psi = [0.0; 9];
-    for (&a, h) in piece_nodes(f)[k].iter().zip(hats) {
-        psi[a] += h;
+    use std::sync::OnceLock;
+    if f.dim() == 1 {
+        return edge_row_functions(xi[0]);
     }
+    // B = A T per face kind: 6-node triangle, 8- and 9-node quadrangle
+    static B: [OnceLock<[[f64; 9]; 9]>; 3] = [const { OnceLock::new() }; 3];
+    let n = f.len();
+    let kind = match n {
+        6 => 0,
+        8 => 1,
+        _ => 2,
+    };
+    let b = B[kind].get_or_init(|| {
+        let edges: &[(usize, usize, usize)] = match kind {
+            0 => &[(3, 0, 1), (4, 1, 2), (5, 2, 0)],
+            1 => &[(4, 0, 1), (5, 1, 2), (6, 2, 3), (7, 3, 0)],
+            _ => &[],
+        };
+        let mut t = nalgebra::DMatrix::<f64>::identity(n, n);
+        for &(e, c1, c2) in edges {
+            t[(e, e)] = 1.0 - 2.0 * TRANSFORMED_ALPHA;
+            t[(c1, e)] = TRANSFORMED_ALPHA;
+            t[(c2, e)] = TRANSFORMED_ALPHA;
+        }
+        let mut mass = nalgebra::DMatrix::<f64>::zeros(n, n);
+        for q in facet_rule(f) {
+            let v = facet_shape(f, q.xi).1;
+            let v = &t * nalgebra::DVector::from_fn(n, |i, _| v[i]);
+            mass += &v * v.transpose() * q.weight;
+        }
+        let lumped = nalgebra::DMatrix::from_diagonal(&nalgebra::DVector::from_fn(n, |i, _| mass.row(i).sum()));
+        let b = lumped
+            * mass
+                .try_inverse()
+                .expect("the transformed basis is independent: its mass matrix is invertible")
+            * t;
+        std::array::from_fn(|j| std::array::from_fn(|k| if j < n && k < n { b[(j, k)] } else { 0.0 }))
+    });
+    let v = facet_shape(f, [xi[0], xi[1], 0.0]).1;
+    std::array::from_fn(|j| (0..n).map(|k| b[j][k] * v[k]).sum())
+}
+
+/// The contact rows' functions of a 3-node edge at s ∈ [0, 1] (ends, then midpoint): the
+/// first-order functions of the edge split at its midpoint — positive, so that on a body of
+/// revolution the node on the axis keeps a positive weight ∫ψ 2πr ds, which no dual basis of the
+/// edge's own functions has there (∫N 2πr ds is 0 at that node). docs/method.md §19.3.
+fn edge_row_functions(s: f64) -> [f64; 9] {
+    let mut psi = [0.0; 9];
+    (psi[0], psi[1], psi[2]) = (
+        (1.0 - 2.0 * s).max(0.0),
+        (2.0 * s - 1.0).max(0.0),
+        1.0 - (2.0 * s - 1.0).abs(),
+    );
     psi
 }
 
-/// A rule on a piece (an interval, a triangle or an axis-aligned quadrangle of reference
-/// coordinates): 3-point Gauss, the 6-point rule, 3 × 3 Gauss mapped onto it, weights scaled by
-/// its measure — exact for quintics on an interval or a triangle and bicubics on a quadrangle.
-pub(crate) fn piece_rule(piece: &[[f64; 2]]) -> Vec<([f64; 2], f64)> {
-    match piece.len() {
-        2 => {
-            let (a, b) = (piece[0][0], piece[1][0]);
-            EDGE_GAUSS_3
-                .iter()
-                .map(|&(t, w)| ([a + t * (b - a), 0.0], w * (b - a).abs()))
-                .collect()
-        }
-        3 => {
-            let (p, e, g) = (piece[0], sub2(piece[1], piece[0]), sub2(piece[2], piece[0]));
-            let det = (e[0] * g[1] - e[1] * g[0]).abs();
-            crate::mesh::quadrature::TRI6
-                .iter()
-                .map(|&(q, w)| {
-                    (
-                        [p[0] + q[0] * e[0] + q[1] * g[0], p[1] + q[0] * e[1] + q[1] * g[1]],
-                        w * det,
-                    )
-                })
-                .collect()
-        }
-        _ => {
-            let (lo, hi) = (piece[0], piece[2]);
-            let scale = [(hi[0] - lo[0]) / 2.0, (hi[1] - lo[1]) / 2.0];
-            tensor_gauss(3, 2)
-                .into_iter()
-                .map(|q| {
-                    (
-                        [lo[0] + (q.xi[0] + 1.0) * scale[0], lo[1] + (q.xi[1] + 1.0) * scale[1]],
-                        q.weight * (scale[0] * scale[1]).abs(),
-                    )
-                })
-                .collect()
-        }
-    }
-}
-
-/// The contact rows' multiplier functions on a second-order facet (docs/method.md §19.3,
-/// [`row_functions`]) with the rule that integrates them piece by piece ([`piece_rule`]) — exact
-/// for ψ_j N_i on a flat facet. Returns (point in the facet's reference coordinates, weight, ψ
-/// at it).
+/// The contact rows' multiplier functions on a second-order facet ([`row_functions`]) at the
+/// points of a rule exact for ψ_j N_i on a flat facet (on an edge, its halves' rules: ψ is first
+/// order on each): (point in the facet's reference coordinates, weight, ψ at it).
 pub(crate) fn row_rule(f: &Facet) -> Vec<([f64; 3], f64, [f64; 9])> {
-    row_pieces(f)
+    if f.dim() == 1 {
+        return [0.0, 0.5]
+            .iter()
+            .flat_map(|&half| {
+                facet_rule(f).iter().map(move |q| {
+                    let s = half + 0.5 * q.xi[0];
+                    ([s, 0.0, 0.0], 0.5 * q.weight, edge_row_functions(s))
+                })
+            })
+            .collect();
+    }
+    facet_rule(f)
         .iter()
-        .flat_map(|piece| piece_rule(piece))
-        .map(|(xi, w)| ([xi[0], xi[1], 0.0], w, row_functions(f, xi)))
+        .map(|q| (q.xi, q.weight, row_functions(f, [q.xi[0], q.xi[1]])))
         .collect()
 }
 
