@@ -183,6 +183,10 @@ fn clip_polygon(subject: &[[f64; 2]], clip: &[[f64; 2]]) -> Vec<[f64; 2]> {
 /// slave's coordinates).
 fn overlap<const D: usize>(points: &[[f64; D]], s: &Facet, m: &Facet) -> Vec<([f64; 2], f64)> {
     let corners: Vec<[f64; 2]> = m.corners().iter().map(|&q| closest(points, s, &points[q])).collect();
+    // a corner with no foot on a curved slave facet's extension: no overlap to integrate
+    if corners.iter().flatten().any(|v| !v.is_finite()) {
+        return Vec::new();
+    }
     if s.dim() == 1 {
         // a 3-node slave edge's functions are first order on its halves: cut at its midpoint too
         let halves: &[(f64, f64)] = if s.is_second_order() {
@@ -257,9 +261,6 @@ pub fn rows<const D: usize>(points: &[[f64; D]], pair: &SurfacePair<D>, revolved
             .collect();
         queue.sort_unstable();
         queue.dedup();
-        if queue.is_empty() {
-            continue;
-        }
         let psi = Multipliers::of(points, s, revolved);
         // each slave node's whole support ∫ψ_p, against which its share over the master is read
         for (xi, w) in whole_rule(s) {
@@ -268,6 +269,9 @@ pub fn rows<const D: usize>(points: &[[f64; D]], pair: &SurfacePair<D>, revolved
             for (&k, value) in local.iter().zip(psi.at(s, xi, &at.shape)) {
                 support[k] += value * dw;
             }
+        }
+        if queue.is_empty() {
+            continue;
         }
         let mut seen: Vec<usize> = queue.clone();
         while let Some(mi) = queue.pop() {

@@ -180,6 +180,10 @@ pub(crate) fn closest<const D: usize>(points: &[[f64; D]], f: &Facet, x: &[f64; 
 /// there, the point and the outward unit normal.
 fn project<const D: usize>(points: &[[f64; D]], f: &Facet, x: &[f64; D]) -> Option<FacetAt<D>> {
     let xi = closest(points, f, x);
+    // a curved facet's extension can fold far from it, where Gauss–Newton has no foot to find
+    if !xi.iter().all(|v| v.is_finite()) {
+        return None;
+    }
     // how far outside the reference domain, in reference units
     let outside = match f.corners().len() {
         2 => (-xi[0]).max(xi[0] - 1.0),
