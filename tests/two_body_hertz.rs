@@ -69,9 +69,19 @@ fn run<const D: usize>(scene: &str, file: &str, symmetry_factor: f64) -> Contact
     }
 }
 
-/// Hertz's (a, p₀) fitted to a run's pressures (`common::hertz_fit`), printed beside Hertz's
-/// values: (a, p₀, a's relative error, p₀'s).
-fn against_hertz(label: &str, c: &Contact, f: f64, (a_hertz, p0_hertz): (f64, f64)) -> (f64, f64, f64, f64) {
+/// Runs `scene` on `file` ([`run`]), asserts its balance under the total force `f`
+/// ([`assert_balance`]) and fits Hertz's (a, p₀) to its pressures (`common::hertz_fit`), printed
+/// beside Hertz's values: (the run, a, p₀, a's relative error, p₀'s).
+fn against_hertz<const D: usize>(
+    scene: &str,
+    file: &str,
+    symmetry_factor: f64,
+    f: f64,
+    (a_hertz, p0_hertz): (f64, f64),
+) -> (Contact, f64, f64, f64, f64) {
+    let c = run::<D>(scene, file, symmetry_factor);
+    assert_balance(file, &c, f);
+    let label = file;
     let (a, p0) = common::hertz_fit(&c.pressures);
     let (ea, ep) = (a / a_hertz - 1.0, p0 / p0_hertz - 1.0);
     eprintln!(
@@ -83,7 +93,7 @@ fn against_hertz(label: &str, c: &Contact, f: f64, (a_hertz, p0_hertz): (f64, f6
         100.0 * ea,
         100.0 * ep
     );
-    (a, p0, ea, ep)
+    (c, a, p0, ea, ep)
 }
 
 /// The scene of the bodies "Lower" and "Upper" with their materials (E, ν), `model` the lines of
@@ -181,10 +191,7 @@ fn cylinders(file: &str) -> (Contact, f64, f64, f64, f64) {
         "y",
         f / 2.0,
     );
-    let c = run::<2>(&text, file, 2.0);
-    assert_balance(file, &c, f);
-    let (a, p0, ea, ep) = against_hertz(file, &c, f, (a_hertz, p0_hertz));
-    (c, a, p0, ea, ep)
+    against_hertz::<2>(&text, file, 2.0, f, (a_hertz, p0_hertz))
 }
 
 /// Two equal spheres R1 = R2 = 2, E = 1.40625e7, ν = 0.25, pressed together by F = 1e4: Hertz's
@@ -226,10 +233,7 @@ fn spheres(file: &str) -> (Contact, f64, f64, f64, f64) {
     let p0_hertz = 3.0 * f / (2.0 * PI * a_hertz * a_hertz);
     // the quarter model carries a quarter of the force
     let text = scene("", (e, nu), (e, nu), &[("SymX", "x"), ("SymY", "y")], "z", f / 4.0);
-    let c = run::<3>(&text, file, 4.0);
-    assert_balance(file, &c, f);
-    let (a, p0, ea, ep) = against_hertz(file, &c, f, (a_hertz, p0_hertz));
-    (c, a, p0, ea, ep)
+    against_hertz::<3>(&text, file, 4.0, f, (a_hertz, p0_hertz))
 }
 
 /// The two cylinders on gmsh's 6-node triangles (docs/method.md §18.6: the mortar rows with

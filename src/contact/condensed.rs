@@ -140,7 +140,8 @@ impl<const D: usize> ContactNodes<D> {
     }
 
     /// Makes row k (direction d) the row Σ_q c_q d·u_q over `terms` ((q, c_q), its own node among
-    /// them) instead of d·u of its node: a row of second-order faces (docs/method.md §19.3).
+    /// them) instead of d·u of its node: a row of second-order faces (docs/method.md §19.3). It
+    /// replaces every term of the row, so a pair's master terms are added after it (§18.6).
     pub fn spread(&mut self, k: usize, terms: &[(usize, f64)], dofs: &DofMap<D>) {
         self.rows[k].clear();
         self.prescribed[k].clear();

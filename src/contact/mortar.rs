@@ -25,7 +25,7 @@
 
 use super::pairing::{closest, facet_at, SurfacePair};
 use crate::mesh::quadrature::{tensor_gauss, EDGE_GAUSS_3, TRI6};
-use crate::mesh::topology::row_functions;
+use crate::mesh::topology::{dual_of, row_functions};
 use crate::mesh::Facet;
 use nalgebra::DMatrix;
 use std::collections::HashMap;
@@ -104,12 +104,7 @@ fn dual_basis<const D: usize>(points: &[[f64; D]], f: &Facet, revolved: bool) ->
             }
         }
     }
-    let lumped = DMatrix::from_diagonal(&nalgebra::DVector::from_fn(n, |i, _| mass.row(i).sum()));
-    let inverse = mass
-        .clone()
-        .try_inverse()
-        .expect("a facet of positive measure has a positive definite mass matrix");
-    lumped * inverse
+    dual_of(mass)
 }
 
 /// The multiplier functions ψ_j of a slave facet: the dual basis of a first-order facet, the

@@ -236,16 +236,16 @@ pub(crate) fn row_functions(f: &Facet, xi: [f64; 2]) -> [f64; 9] {
         _ => 2,
     };
     let b = B[kind].get_or_init(|| {
-        let edges: &[(usize, usize, usize)] = match kind {
-            0 => &[(3, 0, 1), (4, 1, 2), (5, 2, 0)],
-            1 => &[(4, 0, 1), (5, 1, 2), (6, 2, 3), (7, 3, 0)],
-            _ => &[],
-        };
         let mut t = nalgebra::DMatrix::<f64>::identity(n, n);
-        for &(e, c1, c2) in edges {
-            t[(e, e)] = 1.0 - 2.0 * TRANSFORMED_ALPHA;
-            t[(c1, e)] = TRANSFORMED_ALPHA;
-            t[(c2, e)] = TRANSFORMED_ALPHA;
+        if n != 9 {
+            // each midside node e between corners c: N'_c += α N_e, N'_e = (1 − 2α) N_e
+            let face = face_reference(f).kind();
+            for e in f.corners().len()..n {
+                t[(e, e)] = 1.0 - 2.0 * TRANSFORMED_ALPHA;
+                for &c in crate::mesh::second_order::corner_support(face, e) {
+                    t[(c, e)] = TRANSFORMED_ALPHA;
+                }
+            }
         }
         let mut mass = nalgebra::DMatrix::<f64>::zeros(n, n);
         for q in facet_rule(f) {
@@ -253,16 +253,23 @@ pub(crate) fn row_functions(f: &Facet, xi: [f64; 2]) -> [f64; 9] {
             let v = &t * nalgebra::DVector::from_fn(n, |i, _| v[i]);
             mass += &v * v.transpose() * q.weight;
         }
-        let lumped = nalgebra::DMatrix::from_diagonal(&nalgebra::DVector::from_fn(n, |i, _| mass.row(i).sum()));
-        let b = lumped
-            * mass
-                .try_inverse()
-                .expect("the transformed basis is independent: its mass matrix is invertible")
-            * t;
+        let b = dual_of(mass) * t;
         std::array::from_fn(|j| std::array::from_fn(|k| if j < n && k < n { b[(j, k)] } else { 0.0 }))
     });
     let v = facet_shape(f, [xi[0], xi[1], 0.0]).1;
     std::array::from_fn(|j| (0..n).map(|k| b[j][k] * v[k]).sum())
+}
+
+/// The coefficients A = D M⁻¹ of the dual basis ψ_j = Σ_k A_jk φ_k of functions φ with the mass
+/// matrix M (D its row sums, the lumped weights, which must be positive): ∫ψ_j φ_k = δ_jk D_j
+/// (Wohlmuth 2000; docs/method.md §18.2, §19.3).
+pub(crate) fn dual_of(mass: nalgebra::DMatrix<f64>) -> nalgebra::DMatrix<f64> {
+    let n = mass.nrows();
+    let lumped = nalgebra::DMatrix::from_diagonal(&nalgebra::DVector::from_fn(n, |i, _| mass.row(i).sum()));
+    lumped
+        * mass
+            .try_inverse()
+            .expect("independent functions on a facet of positive measure: an invertible mass matrix")
 }
 
 /// The contact rows' functions of a 3-node edge at s ∈ [0, 1] (ends, then midpoint): the
