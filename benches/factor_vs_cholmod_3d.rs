@@ -472,7 +472,7 @@ fn step_matrix(sim: &Simulation<3>) -> SymmetricMatrix {
                 &[sim.materials.list()[0].elasticity.tensor(), IDENTITY_TENSOR],
             );
             let b0 = m.kernel_value(0, 0.0);
-            k_a.plus_scaled(0.5 * sim.time.step() * b0, &k_b)
+            k_a.plus_scaled(0.5 * sim.time.first_step() * b0, &k_b)
                 .with_identity_rows(&sim.dofs)
         }
     }

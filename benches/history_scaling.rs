@@ -46,10 +46,10 @@ fn whole_run(sim: &Simulation<2>) -> hvi::solver::RunStats {
 fn seconds_per_step(sim: &Simulation<2>) -> f64 {
     let mut stepper = Stepper::prepare(sim).expect("prepare");
     let start = Instant::now();
-    for _ in 0..=sim.time.steps {
-        stepper.advance().expect("step");
+    for _ in 0..=sim.time.steps().unwrap() {
+        stepper.advance_next().expect("step");
     }
-    start.elapsed().as_secs_f64() / (sim.time.steps + 1) as f64
+    start.elapsed().as_secs_f64() / (sim.time.steps().unwrap() + 1) as f64
 }
 
 fn vm_hwm_kib() -> u64 {
@@ -132,11 +132,11 @@ fn per_step(c: &mut Criterion) {
                 let mut left = iters;
                 while left > 0 {
                     let mut stepper = Stepper::prepare(&sim).expect("prepare");
-                    stepper.advance().expect("step 0");
+                    stepper.advance_next().expect("step 0");
                     let chunk = left.min(n as u64);
                     let start = Instant::now();
                     for _ in 0..chunk {
-                        stepper.advance().expect("step");
+                        stepper.advance_next().expect("step");
                     }
                     total += start.elapsed();
                     left -= chunk;

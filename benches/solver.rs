@@ -65,12 +65,12 @@ fn phases(c: &mut Criterion) {
                 || {
                     let mut s = Stepper::prepare(&sim).unwrap();
                     for _ in 0..n / 2 {
-                        s.advance().unwrap();
+                        s.advance_next().unwrap();
                     }
                     s
                 },
                 |s| {
-                    s.advance().unwrap();
+                    s.advance_next().unwrap();
                 },
                 BatchSize::LargeInput,
             )

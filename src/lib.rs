@@ -39,3 +39,4 @@ pub mod plot;
 pub mod scene;
 pub mod solver;
 pub mod study;
+pub mod time;

@@ -194,7 +194,7 @@ fn scene_directory_holds_exactly_the_listed_scenes() {
 fn every_scene_parses_and_runs_with_finite_results() {
     for (name, _) in SCENES {
         let scene = load(name, &steps(4));
-        assert_eq!(scene.time.steps, 4);
+        assert_eq!(scene.time.steps, Some(4));
         let (sim, stats, sink) = run(name, &scene, mesh("rect_q1_h8.msh"));
         assert_eq!(sink.steps.len(), 5, "{name}: frames");
         assert_eq!(stats.frames_written, 5, "{name}: frames");
@@ -221,7 +221,7 @@ fn every_scene_runs_as_shipped_on_the_documented_mesh() {
     for (name, _) in SCENES {
         let scene = load(name, &[]);
         let (_, stats, sink) = run(name, &scene, mesh("rect_q1_h16.msh"));
-        assert_eq!(sink.steps.len(), scene.time.steps + 1, "{name}");
+        assert_eq!(sink.steps.len(), scene.time.steps.unwrap() + 1, "{name}");
         assert!(all_finite(&sink), "{name}: non-finite values");
         assert!(stats.max_contact_residual <= scene.solver.tolerance, "{name}");
     }
@@ -436,7 +436,9 @@ fn every_example_scene_equals_its_neutral_twin() {
 
 /// Full runs over N = 1000 steps on a tiny mesh: the paper kernel (0.5 + s)² as `polynomial`
 /// (recursive moments) and as `expression` (direct sum), and a Prony series as `exponential`
-/// (recursive accumulators) and as `expression`; without and with contact.
+/// (recursive accumulators) and as `expression`; without and with contact. The trapezoid for
+/// all (an expression has no exact rule; the exact rule's recursions are tested against the
+/// integrals they stand for in src/history/tests.rs).
 #[test]
 fn recursive_history_equals_direct_sum_over_1000_steps() {
     let n = 1000;
@@ -464,7 +466,8 @@ fn recursive_history_equals_direct_sum_over_1000_steps() {
         ),
     ];
     for base in ["memory_only.toml", "full.toml"] {
-        let scene = load(base, &steps(n));
+        let mut scene = load(base, &steps(n));
+        scene.time.quadrature = Some(hvi::scene::QuadratureSpec::Trapezoid);
         for (kernel, expression) in &cases {
             let mut recursive = scene.clone();
             recursive.memory = vec![kernel.clone().into()];
@@ -565,9 +568,15 @@ fn separable_history_is_independent_of_n_and_the_direct_sum_grows() {
         assert_eq!(stats.contact_solves, 0, "{name}: memory only");
         (sim.dofs.n(), stats)
     };
+    // one vector per kernel term, and the last step's displacement (the trapezoid's weight of
+    // u_{n−1} needs k_n, the exact rule's carry needs u_{n−1}: docs/method.md §20.2)
     for (name, vectors, algorithm) in [
-        ("memory_only.toml", 3, "recursive (polynomial moments)"),
-        ("memory_prony.toml", 2, "recursive (exponential accumulators)"),
+        ("memory_only.toml", 3 + 1, "recursive (polynomial moments)"),
+        (
+            "memory_prony.toml",
+            2 + 1,
+            "recursive (exponential accumulators, exact)",
+        ),
     ] {
         let (n_dof, s10) = bytes(name, 10);
         let (_, s1000) = bytes(name, 1000);
@@ -575,7 +584,7 @@ fn separable_history_is_independent_of_n_and_the_direct_sum_grows() {
         assert_eq!(
             s10.history_bytes,
             vectors * n_dof * 8,
-            "{name}: one vector per kernel term"
+            "{name}: one vector per kernel term and u_{{n−1}}"
         );
         assert_eq!(
             s1000.history_bytes, s10.history_bytes,
@@ -589,8 +598,12 @@ fn separable_history_is_independent_of_n_and_the_direct_sum_grows() {
     let (n_dof, s10) = bytes("memory_expression.toml", 10);
     let (_, s1000) = bytes("memory_expression.toml", 1000);
     assert_eq!(s10.history_algorithm.as_deref(), Some("direct sum"));
-    assert_eq!(s10.history_bytes, 11 * n_dof * 8, "every u_n kept");
-    assert_eq!(s1000.history_bytes, 1001 * n_dof * 8, "every u_n kept");
+    assert_eq!(s10.history_bytes, (11 + 1) * n_dof * 8, "every u_n kept, and u_{{n−1}}");
+    assert_eq!(
+        s1000.history_bytes,
+        (1001 + 1) * n_dof * 8,
+        "every u_n kept, and u_{{n−1}}"
+    );
 }
 
 /// The plan of every scene lists exactly the effects the scene names; `summary.json`'s

@@ -1,5 +1,7 @@
 //! Viscoelastic kernels with their own tensors and the relaxation modulus (docs/method.md §15):
-//! relaxation and creep against closed forms (order 2 in k, 2D and 3D), the channel reduction
+//! relaxation and creep against closed forms on the paper's trapezoid (`time.quadrature =
+//! "trapezoid"`: order 2 in k, 2D and 3D; the exact rule, the default for Prony terms, is tested
+//! in tests/time_scales.rs), the channel reduction
 //! (one channel against two channels, the identity against the default), and the errors of the
 //! new keys.
 
@@ -151,7 +153,7 @@ fn shear_relaxation_matches_g_of_t_at_order_two() {
         let (mut ks, mut errs) = (vec![], vec![]);
         for steps in [8usize, 16, 32, 64] {
             let text = format!(
-                "{}[time]\nfinal_time = 1.0\nsteps = {steps}\n{}",
+                "{}[time]\nfinal_time = 1.0\nsteps = {steps}\nquadrature = \"trapezoid\"\n{}",
                 relaxing_material(Some("strain"), &bulk, &shear),
                 prescribed(&["Gamma1", "Gamma2", "Gamma3"], &[&format!("{gamma:e}*y"), "0"])
             );
@@ -164,7 +166,7 @@ fn shear_relaxation_matches_g_of_t_at_order_two() {
             let k = 1.0 / steps as f64;
             let mut err: f64 = 0.0;
             for n in 0..=steps {
-                let t = sim.time.time(n);
+                let t = sim.time.grid().unwrap().time(n);
                 let r = reaction(&stats, "Gamma3", "x", t);
                 let discrete = -length * gamma * (shear.at(0.0) + trapezoid(&|s| shear.rate(s), n, k));
                 assert!(
@@ -220,7 +222,7 @@ fn volumetric_relaxation_in_3d_matches_kappa_of_t_at_order_two() {
         for steps in [8usize, 16, 32, 64] {
             let e = format!("{eps0:e}");
             let text = format!(
-                "{}[time]\nfinal_time = 1.0\nsteps = {steps}\n{}",
+                "{}[time]\nfinal_time = 1.0\nsteps = {steps}\nquadrature = \"trapezoid\"\n{}",
                 relaxing_material(None, &bulk, &shear),
                 prescribed(
                     &["Gamma1", "Gamma2", "Gamma3", "Sides"],
@@ -232,7 +234,7 @@ fn volumetric_relaxation_in_3d_matches_kappa_of_t_at_order_two() {
             let k = 1.0 / steps as f64;
             let mut err: f64 = 0.0;
             for n in 0..=steps {
-                let t = sim.time.time(n);
+                let t = sim.time.grid().unwrap().time(n);
                 let r = reaction(&stats, "Gamma1", "x", t);
                 let discrete = -3.0 * eps0 * (bulk.at(0.0) + trapezoid(&|s| bulk.rate(s), n, k));
                 assert!(
@@ -275,7 +277,7 @@ fn volumetric_relaxation_in_plane_strain_gives_the_mean_stress() {
     for steps in [8usize, 16, 32, 64] {
         let e = format!("{eps0:e}");
         let text = format!(
-            "{}[time]\nfinal_time = 1.0\nsteps = {steps}\n{}",
+            "{}[time]\nfinal_time = 1.0\nsteps = {steps}\nquadrature = \"trapezoid\"\n{}",
             relaxing_material(Some("strain"), &bulk, &shear),
             prescribed(&["Gamma1", "Gamma2", "Gamma3"], &[&format!("{e}*x"), &format!("{e}*y")])
         );
@@ -283,7 +285,7 @@ fn volumetric_relaxation_in_plane_strain_gives_the_mean_stress() {
         let k = 1.0 / steps as f64;
         let mut err: f64 = 0.0;
         for n in 0..=steps {
-            let t = sim.time.time(n);
+            let t = sim.time.grid().unwrap().time(n);
             let r = reaction(&stats, "Gamma1", "x", t);
             let (kt, gt) = (
                 bulk.at(0.0) + trapezoid(&|s| bulk.rate(s), n, k),
@@ -418,7 +420,7 @@ fn creep_of_a_standard_linear_solid_in_plane_strain() {
     let (bulk, shear) = sls();
     let text = |steps: usize| {
         format!(
-            "{}[time]\nfinal_time = 2.0\nsteps = {steps}\n\
+            "{}[time]\nfinal_time = 2.0\nsteps = {steps}\nquadrature = \"trapezoid\"\n\
              [[dirichlet]]\ngroup = \"Gamma1\"\ncomponents = [\"x\"]\n\
              [[dirichlet]]\ngroup = \"Gamma3\"\ncomponents = [\"y\"]\n\
              [[traction]]\ngroup = \"Right\"\nvalue = [\"{SIGMA0:e}\", \"0\"]\n",
@@ -480,7 +482,7 @@ fn creep_of_a_standard_linear_solid_in_3d() {
     let (bulk, shear) = sls();
     let text = |steps: usize| {
         format!(
-            "{}[time]\nfinal_time = 2.0\nsteps = {steps}\n\
+            "{}[time]\nfinal_time = 2.0\nsteps = {steps}\nquadrature = \"trapezoid\"\n\
              [[dirichlet]]\ngroup = \"Gamma1\"\ncomponents = [\"x\"]\n\
              [[dirichlet]]\ngroup = \"Gamma3\"\ncomponents = [\"y\"]\n\
              [[dirichlet]]\ngroup = \"Z0\"\ncomponents = [\"z\"]\n\
@@ -622,8 +624,8 @@ fn a_kernel_on_a_equals_own_moduli_with_one_or_two_channels() {
     for (what, s, channels) in [("one own-moduli tensor", one, 1), ("two own-moduli terms", two, 2)] {
         let (sb, stats, b) = solve_in_memory(&s, mesh()).unwrap();
         assert_eq!(sb.materials.memory().unwrap().channels().len(), channels, "{what}");
-        // the two kernels share their exponential atoms: 2 accumulators, not 4
-        assert_eq!(stats.history_bytes, 2 * sb.dofs.n() * 8, "{what}");
+        // the two kernels share their exponential atoms: 2 accumulators, not 4, and u_{n−1}
+        assert_eq!(stats.history_bytes, (2 + 1) * sb.dofs.n() * 8, "{what}");
         let (du, dl) = run_difference(&a, &b);
         eprintln!(
             "A·b vs {what} ({channels} channel(s)): relative difference of u {du:.2e}, of contact forces {dl:.2e}"
@@ -857,7 +859,7 @@ fn a_time_step_too_large_for_a_relaxing_material_is_refused_with_the_bound() {
     };
     let text = |steps: usize| {
         format!(
-            "{}[time]\nfinal_time = 1.0\nsteps = {steps}\n{}",
+            "{}[time]\nfinal_time = 1.0\nsteps = {steps}\nquadrature = \"trapezoid\"\n{}",
             relaxing_material(Some("strain"), &bulk, &shear),
             prescribed(&["Gamma1"], &["0", "0"])
         ) + "[[traction]]\ngroup = \"Gamma2\"\nvalue = [\"0.01\", \"0\"]\n"
@@ -887,13 +889,13 @@ fn a_time_step_too_large_for_a_relaxing_material_is_refused_with_the_bound() {
     assert!(sink.steps.iter().all(|s| s.displacement.iter().all(|v| v.is_finite())));
     // the same check guards a scene changed in code, which the set-up checks again
     let mut changed = scene(&text(58));
-    changed.time.steps = 3;
+    changed.time.steps = Some(3);
     let err = Simulation::new(&changed, small()).err().expect("refused").to_string();
     assert_contains(&err, &["the scene's `time.steps` = 3", "time.steps ≥ 4"]);
     // 3D: the same bound (the shear modulus limits it in any dimension)
     let text3 = |steps: usize| {
         format!(
-            "{}[time]\nfinal_time = 1.0\nsteps = {steps}\n{}",
+            "{}[time]\nfinal_time = 1.0\nsteps = {steps}\nquadrature = \"trapezoid\"\n{}",
             relaxing_material(None, &bulk, &shear),
             prescribed(&["Gamma1"], &["0", "0", "0"])
         )
@@ -902,13 +904,24 @@ fn a_time_step_too_large_for_a_relaxing_material_is_refused_with_the_bound() {
     assert!(Simulation::new(&scene(&text3(58)), block([1.0; 3], [1, 1, 1], SolidShape::Hex)).is_ok());
     // a kernel far too negative for any reasonable N says so
     let huge = format!(
-        "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n{TIME}\
+        "[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.3\n{TIME}quadrature = \"trapezoid\"\n\
          [memory]\nkind = \"exponential\"\nterms = [{{ coefficient = -1e12, relaxation_time = 1.0 }}]\n"
     );
     assert_contains(
         &scene_error(&huge),
         &["`time.steps` = 4", "more than 10⁸ time steps", "far too negative"],
     );
+    // the exact rule's share of it is not positive either (c τ (1 − φ(k/τ)) ≈ −1e11 at k = 1/4)
+    assert_contains(
+        &scene_error(&huge.replace("quadrature = \"trapezoid\"\n", "")),
+        &[
+            "`time.steps` = 4",
+            "not positive definite",
+            "check their signs and sizes",
+        ],
+    );
+    // while the exact rule keeps the relaxation modulus above positive on every step, N = 1 included
+    assert!(Simulation::new(&scene(&text(1).replace("quadrature = \"trapezoid\"\n", "")), small()).is_ok());
 }
 
 /// The TOML examples of docs/scenes.md "Viscoelastic memory" are valid scenes (with a `[time]` added)

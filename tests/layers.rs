@@ -18,8 +18,8 @@ use std::path::{Path, PathBuf};
 /// no cycle forms) and from any layer below; never from above.
 const LAYERS: &[&[&str]] = &[
     // expressions of position, time and state: parsed once, evaluated everywhere; the global
-    // allocator's clean end on an allocation failure
-    &["expr", "alloc"],
+    // allocator's clean end on an allocation failure; the time levels of a run and automatic steps
+    &["expr", "alloc", "time"],
     // the geometry: reference cells, their maps and quadrature, meshes and their readers
     &["mesh"],
     // sparse and dense linear algebra: storage, ordering, the Cholesky factor

@@ -152,7 +152,7 @@ fn overrides_set_values_and_create_sections() {
         "traction.0.group=Gamma2",
     ])
     .unwrap();
-    assert_eq!(s.time.steps, 64);
+    assert_eq!(s.time.steps, Some(64));
     assert_eq!(s.material.plane, Some(hvi::scene::Plane::Strain));
     assert!(s.contact.first().unwrap().law.as_ref().unwrap().one_sided);
     // a section the scene does not have
@@ -194,5 +194,5 @@ fn the_effective_scene_round_trips() {
     let s = with(&["time.steps=7"]).unwrap();
     let again = Scene::from_toml_str(&s.to_toml_string(), "round trip").unwrap();
     assert_eq!(again.to_toml_string(), s.to_toml_string());
-    assert_eq!(again.time.steps, 7);
+    assert_eq!(again.time.steps, Some(7));
 }

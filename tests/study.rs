@@ -19,7 +19,7 @@ use hvi::study::{
 /// The embedded default scene (the paper's example) with N steps.
 fn paper_scene(steps: usize) -> Scene {
     let mut scene = Scene::load(None, &[format!("time.steps={steps}")]).unwrap_or_else(|e| panic!("{e}"));
-    scene.time.steps = steps;
+    scene.time.steps = Some(steps);
     scene
 }
 

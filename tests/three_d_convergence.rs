@@ -325,8 +325,15 @@ fn kernel(s: f64) -> f64 {
 /// The unit cube (2 × 2 × 2 hexahedra) with u = (ε₀ x, 0, 0) prescribed on every face,
 /// optionally with the memory kernel b(s) = c e^{−s/τ}, N steps on [0, 1].
 fn relaxation_scene(steps: usize, memory: bool) -> hvi::scene::Scene {
-    let mut toml =
-        format!("[material]\nyoungs_modulus = {E}\npoisson_ratio = {NU}\n[time]\nfinal_time = 1.0\nsteps = {steps}\n");
+    relaxation_scene_with(steps, memory, "trapezoid")
+}
+
+/// [`relaxation_scene`] with the memory's `quadrature` ("trapezoid" or "exact").
+fn relaxation_scene_with(steps: usize, memory: bool, quadrature: &str) -> hvi::scene::Scene {
+    let mut toml = format!(
+        "[material]\nyoungs_modulus = {E}\npoisson_ratio = {NU}\n[time]\nfinal_time = 1.0\nsteps = {steps}\n\
+         quadrature = \"{quadrature}\"\n"
+    );
     if memory {
         toml += &format!(
             "[memory]\nkind = \"exponential\"\nterms = [ {{ coefficient = {C}, relaxation_time = {TAU} }} ]\n"
@@ -356,7 +363,9 @@ fn relaxation_scene(steps: usize, memory: bool) -> hvi::scene::Scene {
 /// round-off; its error to the closed form cτ(1 − e^{−T/τ}) is (k²/12)(b'(T) − b'(0)) + O(k⁴),
 /// i.e. order 2 in k with the constant (c/τ)(1 − e^{−T/τ})/12 ≈ 0.134 (relative to the
 /// reaction: ≈ 0.090 k²). That leading constant puts the relative error at N = 64 at
-/// 2.2 × 10⁻⁵, so the 10⁻⁵ bound needs N = 128 (5.5 × 10⁻⁶); N = 8 … 128 is run.
+/// 2.2 × 10⁻⁵, so the 10⁻⁵ bound needs N = 128 (5.5 × 10⁻⁶); N = 8 … 128 is run. The exact rule
+/// integrates the held strain exactly: its reaction is the closed form to round-off at every N
+/// (docs/method.md §20.2).
 #[test]
 fn relaxation_with_a_prescribed_displacement_matches_its_closed_form() {
     let (l, m) = lame();
@@ -418,15 +427,25 @@ fn relaxation_with_a_prescribed_displacement_matches_its_closed_form() {
         let trapezoid =
             k * (0.5 * kernel(0.0) + (1..steps).map(|i| kernel(i as f64 * k)).sum::<f64>() + 0.5 * kernel(t_end));
         let discrete = -EPS0 * (stiff + trapezoid);
-        let r = reaction(&stats, "Gamma1", "x", sim.time.time(steps));
+        let r = reaction(&stats, "Gamma1", "x", sim.time.final_time());
         assert!(
             (r - discrete).abs() <= 1e-13 * discrete.abs(),
             "N = {steps}: reaction {r:.15e}, trapezoidal value {discrete:.15e}"
         );
         for c in ["y", "z"] {
-            let v = reaction(&stats, "Gamma1", c, sim.time.time(steps));
+            let v = reaction(&stats, "Gamma1", c, sim.time.final_time());
             assert!(v.abs() <= 1e-15, "N = {steps}: Gamma1 {c} reaction {v}");
         }
+        let (_, exact_stats, _) = solve_in_memory(
+            &relaxation_scene_with(steps, true, "exact"),
+            block([1.0; 3], [2, 2, 2], SolidShape::Hex),
+        )
+        .unwrap();
+        let exact = reaction(&exact_stats, "Gamma1", "x", t_end);
+        assert!(
+            (exact - closed).abs() <= 1e-13 * closed.abs(),
+            "N = {steps}: the exact rule's reaction {exact:.15e} against the closed form {closed:.15e}"
+        );
         let err = (r - closed).abs() / closed.abs();
         ks.push(k);
         errs.push(err);

@@ -38,7 +38,7 @@ fn default_scene_runs_on_gamma123_mesh_and_equals_the_top_side_load() {
         let scene = Scene::load(None, &steps).unwrap();
         let (_, stats, ours) = solve_in_memory(&scene, paper_groups_only(shape)).expect("runs on Gamma1/2/3 only");
         let mut old = top_only_scene();
-        old.time.steps = 8;
+        old.time.steps = Some(8);
         let (_, _, theirs) = solve_in_memory(&old, rectangle(2.0, 1.0, 16, 8, shape)).unwrap();
         assert_eq!(ours.steps.len(), theirs.steps.len());
         let scale = theirs

@@ -168,13 +168,7 @@ pub(crate) fn check_scene_report<const D: usize>(scene_path: Option<&Path>, sim:
         sim.dofs.n_free(),
         sim.dofs.n_prescribed()
     );
-    let _ = writeln!(
-        out,
-        "  time: T = {}, {} steps of k = {:.4e}",
-        sim.time.final_time,
-        sim.time.steps,
-        sim.time.step()
-    );
+    let _ = writeln!(out, "  time: {}", sim.time.describe());
     let counts = sim.materials.cell_counts(sim.mesh.cells.len());
     let _ = writeln!(out, "  materials (docs/method.md §8.5):");
     for (m, count) in sim.materials.list().iter().zip(counts) {
@@ -192,11 +186,12 @@ pub(crate) fn check_scene_report<const D: usize>(scene_path: Option<&Path>, sim:
     out
 }
 
-/// True when the memory's share of the step matrix, Σ_j (k/2) b_j(0) T_j, has a negative
-/// eigenvalue (b(0) < 0, a relaxing material): K is then softer than K_A in some strain.
+/// True when the memory's share of the step matrix, Σ_j β_j T_j, has a negative eigenvalue at
+/// the first step (b(0) < 0, a relaxing material): K is then softer than K_A in some strain.
 fn softening_memory<const D: usize>(sim: &Simulation<D>) -> bool {
+    let k = sim.time.first_step();
     sim.materials.list().iter().filter_map(|m| m.memory.as_ref()).any(|m| {
-        let s = m.step_share(sim.time.step());
+        let s = m.step_share(k, sim.rules);
         s.mu < 0.0 || 2.0 * s.mu + D as f64 * s.lambda < 0.0
     })
 }

@@ -231,7 +231,7 @@ impl<const D: usize> FileSink<D> {
             None => None,
         };
         let progress = progress.then(|| {
-            let bar = indicatif::ProgressBar::new(sim.time.steps as u64 + 1);
+            let bar = indicatif::ProgressBar::new(sim.time.steps().map_or(0, |n| n as u64 + 1));
             bar.set_style(
                 indicatif::ProgressStyle::with_template(
                     "{spinner} step {pos}/{len} [{bar:30}] {elapsed_precise} eta {eta} {msg}",

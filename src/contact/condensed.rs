@@ -324,6 +324,15 @@ pub trait Condensation: Send {
     /// Completes it: u = K⁻¹ (rhs − Cᵀ λ) for the rhs of the last [`Self::free_normal`].
     fn recover(&mut self, lambda: &[f64], u: &mut [f64], counters: &Counters);
 
+    /// The step matrix is now `ratio` times the one condensed (docs/method.md §20.3): W and Q
+    /// follow (W/ratio, ratio·Q), while the solves go on with the factor condensed — the caller
+    /// divides the right-hand side and λ by the matrix's scale.
+    fn rescale(&mut self, ratio: f64) {
+        let s = self.stiffness_mut();
+        s.w.iter_mut().for_each(|v| *v /= ratio);
+        s.q.iter_mut().for_each(|v| *v *= ratio);
+    }
+
     /// y = W x (W = C K⁻¹ Cᵀ, whether or not it was formed).
     fn apply_w(&self, x: &[f64], y: &mut [f64]) {
         let s = self.stiffness();
@@ -376,6 +385,9 @@ pub struct SplitSweeps {
     columns: Columns,
     stiffness: DenseNormalStiffness,
     y: Forward,
+    /// The step matrix over the one factorised (docs/method.md §20.3): W by triangular solves
+    /// with L_cc is divided by it.
+    scale: f64,
 }
 
 /// How the split sweeps reach the contact rows from a forward-swept vector.
@@ -422,6 +434,7 @@ impl SplitSweeps {
             factor,
             columns,
             stiffness,
+            scale: 1.0,
         }
     }
 }
@@ -463,9 +476,21 @@ impl Condensation for SplitSweeps {
     /// W x from W where it was formed, else by two triangular solves with L_cc.
     fn apply_w(&self, x: &[f64], y: &mut [f64]) {
         match &self.columns {
-            Columns::Trailing(t) if self.stiffness.w.is_empty() => t.apply_w(x, y),
+            Columns::Trailing(t) if self.stiffness.w.is_empty() => {
+                t.apply_w(x, y);
+                if self.scale != 1.0 {
+                    y.iter_mut().for_each(|v| *v /= self.scale);
+                }
+            }
             _ => matvec_row_major(&self.stiffness.w, self.stiffness.m, x, y),
         }
+    }
+
+    fn rescale(&mut self, ratio: f64) {
+        let s = &mut self.stiffness;
+        s.w.iter_mut().for_each(|v| *v /= ratio);
+        s.q.iter_mut().for_each(|v| *v *= ratio);
+        self.scale *= ratio;
     }
 }
 

@@ -29,15 +29,19 @@ impl BodyMaterial {
         if self.elasticity.plane == Some(PlaneModel::Stress) {
             return None;
         }
-        let long_term = self.memory.as_ref().and_then(|m| m.long_term_share(None)).map(|s| {
-            let a = self.elasticity.tensor();
-            let (lambda, mu) = (a.lambda + s.lambda, a.mu + s.mu);
-            if mu > 0.0 {
-                (lambda + 2.0 * mu / 3.0) / mu
-            } else {
-                f64::INFINITY
-            }
-        });
+        let long_term = self
+            .memory
+            .as_ref()
+            .and_then(|m| m.long_term_share(None, crate::material::Rules::TRAPEZOID))
+            .map(|s| {
+                let a = self.elasticity.tensor();
+                let (lambda, mu) = (a.lambda + s.lambda, a.mu + s.mu);
+                if mu > 0.0 {
+                    (lambda + 2.0 * mu / 3.0) / mu
+                } else {
+                    f64::INFINITY
+                }
+            });
         Some((self.elasticity.bulk_to_shear(), long_term))
     }
 }

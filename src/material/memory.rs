@@ -12,6 +12,24 @@
 
 use super::elasticity::{Elasticity, Isotropic, PlaneModel, IDENTITY_TENSOR};
 use super::kernel::RelaxationKernel;
+use super::quadrature::{self, Quadrature, Rules};
+
+/// The share of u_n in one term's memory integral over a step of size k, by its rule: its
+/// kernel's atoms' `current` weights (src/material/quadrature.rs).
+fn term_share(kernel: &RelaxationKernel, k: f64, rules: Rules) -> f64 {
+    match kernel {
+        RelaxationKernel::Exponentials { terms } => terms
+            .iter()
+            .map(|&(c, tau)| c * quadrature::exponential(rules.exponential, k, tau).current)
+            .sum(),
+        RelaxationKernel::Polynomial { coefficients } => coefficients
+            .iter()
+            .enumerate()
+            .map(|(d, a)| a * quadrature::monomial(rules.polynomial, k, d).current)
+            .sum(),
+        RelaxationKernel::General { .. } => 0.5 * k * kernel.value(0.0),
+    }
+}
 
 /// Relative tolerance below which two tensors count as proportional (their 2 × 2 determinant
 /// against the product of their norms): round-off of a tensor written out in decimals, far
@@ -317,23 +335,63 @@ impl Memory {
         self.terms.iter().zip(w).map(|(t, w)| w * t.kernel.value(s)).sum()
     }
 
-    /// The memory share of the step matrix's tensor, Σ_j (k/2) b_j(0) T_j: K = K_A + Σ_j
-    /// (k/2) b_j(0) K_{T_j} is the stiffness of A plus this (docs/method.md §15.3).
-    pub fn step_share(&self, k: f64) -> Isotropic {
+    /// β_j of every channel j: the share of u_n in the memory of a step of size k, so that the step
+    /// matrix is K = K_A + Σ_j β_j K_j (docs/method.md §3, §20.2). With the trapezoid for every
+    /// atom it is (k/2) b_j(0), computed as the uniform scheme always did; otherwise each atom's
+    /// weight of u_n by its rule ([`quadrature`]).
+    pub fn step_coefficients(&self, k: f64, rules: Rules) -> Vec<f64> {
+        let all_trapezoid = self.terms.iter().all(|t| match &t.kernel {
+            RelaxationKernel::Exponentials { .. } => rules.exponential == Quadrature::Trapezoid,
+            RelaxationKernel::Polynomial { .. } => rules.polynomial == Quadrature::Trapezoid,
+            RelaxationKernel::General { .. } => true,
+        });
+        (0..self.channels.len())
+            .map(|j| {
+                if all_trapezoid {
+                    return 0.5 * k * self.kernel_value(j, 0.0);
+                }
+                self.terms
+                    .iter()
+                    .zip(&self.channels[j].weights)
+                    .map(|(t, w)| w * term_share(&t.kernel, k, rules))
+                    .sum()
+            })
+            .collect()
+    }
+
+    /// The memory share of the step matrix's tensor, Σ_j β_j T_j: K = K_A + Σ_j β_j K_{T_j} is the
+    /// stiffness of A plus this (docs/method.md §15.3).
+    pub fn step_share(&self, k: f64, rules: Rules) -> Isotropic {
         let mut s = Isotropic { lambda: 0.0, mu: 0.0 };
-        for (j, c) in self.channels.iter().enumerate() {
-            let d = 0.5 * k * self.kernel_value(j, 0.0);
-            s.lambda += d * c.tensor.lambda;
-            s.mu += d * c.tensor.mu;
+        for (c, beta) in self.channels.iter().zip(self.step_coefficients(k, rules)) {
+            s.lambda += beta * c.tensor.lambda;
+            s.mu += beta * c.tensor.mu;
         }
         s
     }
 
-    /// The largest time step k for which the step tensor A + Σ_j (k/2) b_j(0) T_j stays positive
-    /// definite on symmetric D × D tensors (eigenvalues 2μ and 2μ + Dλ), with the margin
-    /// [`STABILITY_MARGIN`]: each eigenvalue at least that fraction of A's; `None`: every k.
+    /// The step tensor A + Σ_j β_j T_j's eigenvalues on symmetric D × D tensors, (2μ, 2μ + Dλ),
+    /// each over A's: the step matrix is positive definite when both are above
+    /// [`STABILITY_MARGIN`] (docs/method.md §15.3).
+    pub fn step_stiffness_ratio(&self, a: Isotropic, dim: usize, k: f64, rules: Rules) -> f64 {
+        let s = self.step_share(k, rules);
+        let d = dim as f64;
+        let (mu, lambda) = (a.mu + s.mu, a.lambda + s.lambda);
+        let at0 = [2.0 * a.mu, 2.0 * a.mu + d * a.lambda];
+        let at_k = [2.0 * mu, 2.0 * mu + d * lambda];
+        at_k.iter()
+            .zip(&at0)
+            .map(|(x, x0)| x / x0)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// With the trapezoid for every atom, the largest time step k for which the step tensor
+    /// A + Σ_j (k/2) b_j(0) T_j stays positive definite (linear in k) with the margin
+    /// [`STABILITY_MARGIN`]: each eigenvalue at least that fraction of A's; `None`: every k. The
+    /// exact rule's share is not linear in k (and for a relaxation modulus positive for every k):
+    /// ask [`Self::step_stiffness_ratio`] at the steps of the run.
     pub fn largest_stable_step(&self, a: Isotropic, dim: usize) -> Option<f64> {
-        let v = self.step_share(1.0); // the share per unit k: ½ Σ_j b_j(0) T_j
+        let v = self.step_share(1.0, Rules::TRAPEZOID); // the share per unit k: ½ Σ_j b_j(0) T_j
         let d = dim as f64;
         [
             (2.0 * a.mu, 2.0 * v.mu),
@@ -346,11 +404,12 @@ impl Memory {
     }
 
     /// The long-term memory tensor Σ_j T_j ∫₀^∞ b_j: as the continuum has it (`k` None), or as the
-    /// scheme's trapezoid weights sum it on steps of k, k (b_j(0)/2 + Σ_{n≥1} b_j(nk)), which for
-    /// a term c e^{−s/τ} is c τ (r/2) coth(r/2), r = k/τ: the relaxation over-integrated by about
-    /// r²/12 (docs/method.md §15.3). None unless every kernel is a Prony series (the others do not
-    /// decay).
-    pub fn long_term_share(&self, k: Option<f64>) -> Option<Isotropic> {
+    /// scheme sums it on steps of k: exactly with the exact rule, and with the trapezoid's
+    /// weights k (b_j(0)/2 + Σ_{n≥1} b_j(nk)), which for a term c e^{−s/τ} is c τ (r/2) coth(r/2),
+    /// r = k/τ: the relaxation over-integrated by about r²/12 (docs/method.md §15.3). None unless
+    /// every kernel is a Prony series (the others do not decay).
+    pub fn long_term_share(&self, k: Option<f64>, rules: Rules) -> Option<Isotropic> {
+        let k = k.filter(|_| rules.exponential == Quadrature::Trapezoid);
         let integral = |kernel: &RelaxationKernel| match kernel {
             RelaxationKernel::Exponentials { terms } => Some(
                 terms
@@ -376,21 +435,21 @@ impl Memory {
 
     /// The long-term tensor's eigenvalues on symmetric D × D tensors, (2μ, 2μ + Dλ), of A plus
     /// [`Self::long_term_share`]: the continuum's (`k` None) or the scheme's on steps of k.
-    pub fn long_term_eigenvalues(&self, a: Isotropic, dim: usize, k: Option<f64>) -> Option<[f64; 2]> {
-        let s = self.long_term_share(k)?;
+    pub fn long_term_eigenvalues(&self, a: Isotropic, dim: usize, k: Option<f64>, rules: Rules) -> Option<[f64; 2]> {
+        let s = self.long_term_share(k, rules)?;
         let (mu, lambda) = (a.mu + s.mu, a.lambda + s.lambda);
         Some([2.0 * mu, 2.0 * mu + dim as f64 * lambda])
     }
 
     /// How far (relative, the larger of the two eigenvalues) the scheme's long-term moduli on
     /// steps of k are from the continuum's; None without Prony kernels or when the continuum's
-    /// long-term tensor is not positive.
-    pub fn long_term_error(&self, a: Isotropic, dim: usize, k: f64) -> Option<f64> {
-        let exact = self.long_term_eigenvalues(a, dim, None)?;
+    /// long-term tensor is not positive. Zero with the exact rule.
+    pub fn long_term_error(&self, a: Isotropic, dim: usize, k: f64, rules: Rules) -> Option<f64> {
+        let exact = self.long_term_eigenvalues(a, dim, None, rules)?;
         if exact.iter().any(|&e| e <= 0.0) {
             return None;
         }
-        let discrete = self.long_term_eigenvalues(a, dim, Some(k))?;
+        let discrete = self.long_term_eigenvalues(a, dim, Some(k), rules)?;
         Some(
             discrete
                 .iter()
@@ -401,10 +460,17 @@ impl Memory {
     }
 
     /// The largest step whose long-term eigenvalues are within `tolerance` (relative) of the
-    /// continuum's (bisection; the scheme's over-integration grows with k). None where
+    /// continuum's (bisection; the trapezoid's over-integration grows with k). None where
     /// [`Self::long_term_error`] is.
-    pub fn largest_accurate_step(&self, a: Isotropic, dim: usize, tolerance: f64, k_max: f64) -> Option<f64> {
-        let off = |k: f64| self.long_term_error(a, dim, k);
+    pub fn largest_accurate_step(
+        &self,
+        a: Isotropic,
+        dim: usize,
+        tolerance: f64,
+        k_max: f64,
+        rules: Rules,
+    ) -> Option<f64> {
+        let off = |k: f64| self.long_term_error(a, dim, k, rules);
         if off(k_max)? <= tolerance {
             return Some(k_max);
         }
@@ -418,6 +484,33 @@ impl Memory {
             }
         }
         Some(lo)
+    }
+
+    /// The smallest relaxation time of the Prony terms (None without them).
+    pub fn shortest_relaxation_time(&self) -> Option<f64> {
+        self.terms
+            .iter()
+            .filter_map(|t| match &t.kernel {
+                RelaxationKernel::Exponentials { terms } => terms.iter().map(|&(_, tau)| tau).reduce(f64::min),
+                _ => None,
+            })
+            .reduce(f64::min)
+    }
+
+    /// True if some term is an expression kernel (no exact rule: its history is the direct sum).
+    pub fn has_expression_kernel(&self) -> bool {
+        self.terms
+            .iter()
+            .any(|t| matches!(t.kernel, RelaxationKernel::General { .. }))
+    }
+
+    /// The scalar c with every memory tensor T_j = c_j A and one channel: then K = (1 + β c) K_A
+    /// for every step, a multiple of one matrix (docs/method.md §20.3). None otherwise.
+    pub fn proportional_to_elasticity(&self, a: Isotropic) -> Option<f64> {
+        match &self.channels[..] {
+            [one] => proportional(one.tensor, a),
+            _ => None,
+        }
     }
 
     /// A one-line description: the terms, and how many channels they make.

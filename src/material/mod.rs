@@ -4,7 +4,9 @@
 pub mod elasticity;
 pub mod kernel;
 pub mod memory;
+pub mod quadrature;
 
 pub use elasticity::{Elasticity, Isotropic, PlaneModel, IDENTITY_TENSOR};
 pub use kernel::RelaxationKernel;
 pub use memory::{Channel, Memory, MemoryTensor, MemoryTerm, Prony, LONG_TERM_TOLERANCE};
+pub use quadrature::{Quadrature, Rules};

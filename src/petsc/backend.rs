@@ -326,7 +326,7 @@ impl<'p, const D: usize> PetscBackend<'p, D> {
         let memory = sim
             .materials
             .memory()
-            .map(|m| 0.5 * sim.time.step() * m.kernel_value(0, 0.0));
+            .and_then(|m| m.step_coefficients(sim.time.first_step(), sim.rules).first().copied());
         let matrix = self
             .assemble(sim, Tensors::Step(memory), true)
             .map_err(|e| e.to_string())?;

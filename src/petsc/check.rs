@@ -259,12 +259,12 @@ fn predict<const D: usize>(
     let all = sim.dofs.n() as f64;
     let m = sim.contact.as_ref().map_or(0, |c| c.nodes.len()) as f64;
     let history = sim.materials.memory().map_or(0.0, |b| {
-        let h = History::new(b, backend.unknowns().len(), sim.time.step());
+        let h = History::new(b, backend.unknowns().len(), sim.rules);
         if h.bytes_held() > 0 {
             h.bytes_held() as f64
         } else {
             // the direct sum keeps every step's displacement
-            8.0 * local * (sim.time.steps + 1) as f64
+            8.0 * local * sim.time.steps().map_or(1, |n| n + 1) as f64
         }
     });
     // Step vectors (≈ 8 over the rank's unknowns, PETSc's work vectors included); over all

@@ -4,6 +4,7 @@
 mod error;
 mod material;
 mod overrides;
+mod time;
 mod types;
 mod validate;
 
@@ -12,6 +13,7 @@ pub use crate::expr::{
 };
 pub use error::SceneError;
 pub use material::MaterialError;
+pub use time::MOST_STEPS;
 pub use types::*;
 
 use std::path::Path;

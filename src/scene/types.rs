@@ -541,12 +541,42 @@ impl Scene {
     }
 }
 
-/// Uniform time steps on [0, T].
-#[derive(Clone, Debug, Serialize, Deserialize)]
+/// The time levels on [0, T] (docs/method.md §20, docs/scenes.md "Time steps"): exactly one way
+/// of stepping — `steps` (uniform), `first_step` with `steps_per_decade` or `growth`
+/// (geometric), `times` (listed) or `tolerance` (automatic, with `first_step`, `min_step`,
+/// `max_step` optional); checked by src/scene/time.rs.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TimeSpec {
     pub final_time: f64,
-    pub steps: usize,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steps: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub first_step: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steps_per_decade: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub growth: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub times: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tolerance: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_step: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_step: Option<f64>,
+    /// The memory integral's rule over a step (docs/method.md §20.2); absent: exact for Prony
+    /// terms and relaxation moduli, the paper's trapezoid for polynomial kernels.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quadrature: Option<QuadratureSpec>,
+}
+
+/// `time.quadrature`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum QuadratureSpec {
+    Trapezoid,
+    Exact,
 }
 
 /// A traction density on a boundary group: either its components (`value`) or a pressure p,
@@ -900,8 +930,14 @@ pub enum OutputField {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputSpec {
-    #[serde(default = "default_every")]
-    pub every: usize,
+    /// Every n-th step is written (and the last); absent: every step, or with `times` none but
+    /// those.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub every: Option<usize>,
+    /// Times at which frames are written: levels of the run (a step is split, or an automatic
+    /// step lands, to reach them; docs/method.md §20.1).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub times: Vec<f64>,
     #[serde(default = "default_fields")]
     pub fields: Vec<OutputField>,
     /// zlib compression of the `.vtu`/`.vtp` files: `false` (default), `true` (level
@@ -952,9 +988,6 @@ impl OutputSpec {
     }
 }
 
-fn default_every() -> usize {
-    1
-}
 fn default_fields() -> Vec<OutputField> {
     vec![
         OutputField::Displacement,
@@ -967,7 +1000,8 @@ fn default_fields() -> Vec<OutputField> {
 impl Default for OutputSpec {
     fn default() -> Self {
         OutputSpec {
-            every: default_every(),
+            every: None,
+            times: Vec::new(),
             fields: default_fields(),
             compress: None,
             active_scalar: None,

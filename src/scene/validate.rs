@@ -65,7 +65,18 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
         },
         "memory.terms" => vec!["coefficient", "relaxation_time"],
         "memory.tensor" => vec!["bulk", "shear"],
-        "time" => vec!["final_time", "steps"],
+        "time" => vec![
+            "final_time",
+            "steps",
+            "first_step",
+            "steps_per_decade",
+            "growth",
+            "times",
+            "tolerance",
+            "min_step",
+            "max_step",
+            "quadrature",
+        ],
         "traction" => vec!["group", "value", "pressure"],
         "dirichlet" => vec!["group", "components", "value"],
         "force_control" => vec!["group", "component", "force"],
@@ -111,7 +122,7 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
             "dense_newton_limit",
             "without",
         ],
-        "output" => vec!["every", "fields", "compress", "active_scalar"],
+        "output" => vec!["every", "times", "fields", "compress", "active_scalar"],
         _ => return None,
     })
 }
@@ -241,31 +252,12 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
     for c in scene.constants() {
         check_material(&c, origin)?;
     }
-    let t = &scene.time;
-    if !(t.final_time.is_finite() && t.final_time > 0.0) {
-        return Err(invalid(
-            origin,
-            "time.final_time",
-            t.final_time,
-            "the final time must be positive",
-        ));
-    }
-    if t.steps == 0 {
-        return Err(invalid(origin, "time.steps", 0, "at least one time step is needed"));
-    }
-    if t.steps > 100_000_000 {
-        return Err(invalid(
-            origin,
-            "time.steps",
-            t.steps,
-            "more than 10⁸ steps is surely a typo",
-        ));
-    }
+    let stepping = super::time::check(scene, origin)?;
     for c in scene.constants() {
         for (i, spec) in c.memory.iter().enumerate() {
             check_memory(spec, origin, &c.memory_key(i))?;
         }
-        check_memory_model(scene, &c, origin)?;
+        check_memory_model(scene, &c, origin, &stepping)?;
     }
     for (i, dc) in scene.dirichlet.iter().enumerate() {
         if dc.components.is_empty() {
@@ -498,9 +490,6 @@ pub fn check_values(scene: &Scene, origin: &str) -> Result<(), SceneError> {
             ));
         }
     }
-    if scene.output.every == 0 {
-        return Err(invalid(origin, "output.every", 0, "write every n-th step with n ≥ 1"));
-    }
     match &scene.output.compress {
         None | Some(toml::Value::Boolean(_)) => {}
         Some(toml::Value::Integer(l)) if (0..=9).contains(l) => {}
@@ -655,7 +644,12 @@ fn check_material(m: &Constants, origin: &str) -> Result<(), SceneError> {
 /// moduli only when ∝ A (a relaxation modulus only when bulk and shear relax proportionally), and
 /// a time step within the bound a relaxing memory sets. The dimension is the scene's: 2 with
 /// `material.plane` (a 2D mesh requires it), 3 without.
-fn check_memory_model(scene: &Scene, c: &Constants, origin: &str) -> Result<(), SceneError> {
+fn check_memory_model(
+    scene: &Scene,
+    c: &Constants,
+    origin: &str,
+    stepping: &crate::time::Stepping,
+) -> Result<(), SceneError> {
     use crate::material::PlaneModel;
     let plane = scene.material.plane.map(|p| match p {
         super::Plane::Stress => PlaneModel::Stress,
@@ -667,7 +661,7 @@ fn check_memory_model(scene: &Scene, c: &Constants, origin: &str) -> Result<(), 
     if let Some(m) = memory {
         let dim = if plane.is_some() { 2 } else { 3 };
         scene
-            .check_time_step(&m, elasticity.tensor(), dim)
+            .check_time_step(&m, elasticity.tensor(), dim, stepping)
             .map_err(|e| bad(e.of(c, !scene.materials.is_empty())))?;
     }
     Ok(())

@@ -185,8 +185,9 @@ fn body_diameter<const D: usize>(points: &[[f64; D]]) -> f64 {
         .sqrt()
 }
 
-/// A relaxation the time step does not resolve: the scheme's long-term moduli, which set the
-/// creep's end value, are off (docs/method.md §15.3; not positive at all is refused).
+/// A relaxation the time step does not resolve with the trapezoid: the scheme's long-term moduli,
+/// which set the creep's end value, are off (docs/method.md §15.3; not positive at all is
+/// refused). The exact rule sums them exactly: nothing to say.
 fn unresolved_relaxation<const D: usize>(
     scene: &Scene,
     sim: &Simulation<D>,
@@ -194,23 +195,25 @@ fn unresolved_relaxation<const D: usize>(
     which: &str,
 ) -> Option<String> {
     let m = material.memory.as_ref()?;
-    let (a, k) = (material.elasticity.tensor(), sim.time.step());
+    let (a, k) = (material.elasticity.tensor(), sim.time.largest_step());
     let off = m
-        .long_term_error(a, D, k)
+        .long_term_error(a, D, k, sim.rules)
         .filter(|&off| off > crate::material::LONG_TERM_TOLERANCE)?;
     let needed = m
-        .largest_accurate_step(a, D, crate::material::LONG_TERM_TOLERANCE, k)
-        .map_or(String::new(), |k1| {
-            format!(
+        .largest_accurate_step(a, D, crate::material::LONG_TERM_TOLERANCE, k, sim.rules)
+        .map_or(String::new(), |k1| match scene.time.steps {
+            Some(_) => format!(
                 "; time.steps ≥ {} bring them within 1 %",
                 (scene.time.final_time / k1).ceil()
-            )
+            ),
+            None => format!("; steps below {k1:e} bring them within 1 %"),
         });
     Some(format!(
-        "the time step k = {k:e} does not resolve the relaxation of {which}: the scheme's long-term moduli are {:.1} % \
-         off the material's (the trapezoid rule over-integrates each relaxation term by about (k/τ)²/12 of its \
-         strength, which a small long-term modulus feels most), and a creep under a constant load ends at the \
-         displacement those moduli give{needed} (docs/method.md §15.3)",
+        "the time step k = {k:e} does not resolve the relaxation of {which} with time.quadrature = \"trapezoid\": the \
+         scheme's long-term moduli are {:.1} % off the material's (the trapezoid rule over-integrates each relaxation \
+         term by about (k/τ)²/12 of its strength, which a small long-term modulus feels most), and a creep under a \
+         constant load ends at the displacement those moduli give{needed}; time.quadrature = \"exact\" sums them \
+         exactly on any steps (docs/method.md §15.3, §20.2)",
         100.0 * off
     ))
 }

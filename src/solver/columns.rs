@@ -22,6 +22,13 @@ impl PrescribedColumns {
         PrescribedColumns { columns }
     }
 
+    /// Every column times `ratio` (the step matrix rescaled, docs/method.md §20.3).
+    pub(super) fn scale(&mut self, ratio: f64) {
+        for (_, col) in &mut self.columns {
+            col.iter_mut().for_each(|(_, v)| *v *= ratio);
+        }
+    }
+
     /// The number of columns.
     pub(super) fn len(&self) -> usize {
         self.columns.len()

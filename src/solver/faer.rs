@@ -65,7 +65,7 @@ impl<const D: usize> FaerBackend<D> {
     ) -> Result<StepOperator, SolveError> {
         let (points, cells) = (&sim.mesh.points, &sim.mesh.cells);
         let channels = sim.materials.memory().map_or(0, |m| m.channels().len());
-        if channels != memory.len() {
+        if !memory.is_empty() && channels != memory.len() {
             return Err(SolveError::Setup(format!(
                 "the step matrix names {} memory channels and the materials' memories have {channels}",
                 memory.len()
@@ -148,10 +148,25 @@ impl<const D: usize> Backend<D> for FaerBackend<D> {
                 };
                 StepOperator::factored(sim, symbolic, system_matrix(sim, k_a), counters, stats)
             }
-            Some(_) => Err(SolveError::Setup(
-                "the faer backend factors one step matrix with memory per run (its K_j are held in node blocks only)"
-                    .into(),
-            )),
+            Some(symbolic) => {
+                // another step size (docs/method.md §20.3): K_A and the K_j are assembled again
+                // (they are not held beside the factors, §9.3) and summed with the new β
+                let (points, cells) = (&sim.mesh.points, &sim.mesh.cells);
+                let mut assembled = timed(&mut stats.phases.assembly, || {
+                    sim.materials.assemble(cells, points, &sim.dofs, true, true)
+                });
+                let k_b = assembled.split_off(1);
+                let k_a = assembled.pop().expect("K_A");
+                let k_step = timed(&mut stats.phases.assembly, || {
+                    let mut sum = k_a;
+                    for (kb, c) in k_b.iter().zip(memory) {
+                        sum = sum.plus_scaled(*c, kb);
+                    }
+                    sum
+                });
+                drop(k_b);
+                StepOperator::factored(sim, symbolic, system_matrix(sim, &k_step), counters, stats)
+            }
         }
     }
 

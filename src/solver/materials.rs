@@ -55,8 +55,12 @@ fn material<const D: usize>(
     let scene_error = |e: scene::MaterialError| SolveError::Setup(format!("the scene's {e}"));
     let (elasticity, memory) = c.model(plane).map_err(scene_error)?;
     if let Some(m) = &memory {
+        let stepping = scene
+            .time
+            .stepping(&scene.origin)
+            .map_err(|e| SolveError::Setup(e.to_string()))?;
         scene
-            .check_time_step(m, elasticity.tensor(), D)
+            .check_time_step(m, elasticity.tensor(), D, &stepping)
             .map_err(|e| scene_error(e.of(c, several)))?;
     }
     let name = match c.group {

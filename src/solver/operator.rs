@@ -30,6 +30,9 @@ pub struct StepOperator {
     pub(super) lifting: Option<Lifting>,
     /// The responses of the rigid parameters (force control, pins; docs/method.md §7.7).
     pub(super) rigid: Option<super::rigid::RigidResponses>,
+    /// The step matrix is this times the matrix factorised (docs/method.md §20.3): the solves
+    /// divide the right-hand side's free rows and the contact forces by it.
+    pub(super) scale: f64,
 }
 
 /// A step matrix as a factor is built from it (docs/method.md §7): identity rows at the
@@ -115,6 +118,7 @@ impl StepOperator {
             condensed,
             lifting,
             rigid,
+            scale: 1.0,
         })
     }
 
@@ -138,7 +142,24 @@ impl StepOperator {
             condensed,
             lifting,
             rigid: None,
+            scale: 1.0,
         }
+    }
+
+    /// Makes this the operator of `scale` times the matrix factorised (docs/method.md §20.3): the
+    /// condensed W and Q and the rigid parameters' responses follow, by O(m²) work.
+    pub(super) fn rescale_to(&mut self, scale: f64) {
+        if scale == self.scale {
+            return;
+        }
+        let ratio = scale / self.scale;
+        if let Some(c) = &mut self.condensed {
+            c.rescale(ratio);
+        }
+        if let Some(r) = &mut self.rigid {
+            r.rescale(ratio);
+        }
+        self.scale = scale;
     }
 }
 

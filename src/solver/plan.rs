@@ -16,8 +16,24 @@ pub struct Effect {
 #[derive(Clone, Debug)]
 pub struct Plan {
     pub effects: Vec<Effect>,
-    pub factorisations: usize,
+    pub factorisations: Factorisations,
     pub solves_per_step: usize,
+}
+
+/// How many step matrices a run factorises (docs/method.md §20.3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Factorisations {
+    /// Every step matrix is a multiple of K_A: one factorisation, whatever the steps.
+    Proportional,
+    /// A fixed grid: its distinct step matrices after step 0, the factorisations the run makes
+    /// of them, and whether step 0 may need K_A's own (a loaded step 0 with memory).
+    Counted {
+        distinct: usize,
+        built: usize,
+        step_zero: bool,
+    },
+    /// Automatic steps: one per distinct size met (held on the ladder k₁ 2^j).
+    PerSize,
 }
 
 /// The materials: the 2D model, and per material E, ν and the formulation (its name first when
@@ -125,7 +141,6 @@ impl Plan {
                 ),
             });
         }
-        let mut factorisations = 1;
         let mut solves_per_step = 1;
         if let Some(memory) = sim.materials.memory() {
             // the accumulated atoms of all kernels: one vector per distinct relaxation time and
@@ -147,11 +162,18 @@ impl Plan {
                     crate::material::RelaxationKernel::General { .. } => direct = true,
                 }
             }
-            let vectors = taus.len() + degree + if direct { sim.time.steps + 1 } else { 0 };
+            let levels = sim.time.steps().map_or(0, |n| n + 1);
+            let vectors = taus.len() + degree + 1 + if direct { levels } else { 0 };
+            let rule = |q: crate::material::Quadrature| match q {
+                crate::material::Quadrature::Exact => " (exact for u linear over each step)",
+                crate::material::Quadrature::Trapezoid => " (trapezoid)",
+            };
+            let exponential = format!("recursive exponential sums{}", rule(sim.rules.exponential));
+            let polynomial = format!("recursive polynomial moments{}", rule(sim.rules.polynomial));
             let algo: Vec<&str> = [
-                (!taus.is_empty()).then_some("recursive exponential sums"),
-                (degree > 0).then_some("recursive polynomial moments"),
-                direct.then_some("direct sum"),
+                (!taus.is_empty()).then_some(exponential.as_str()),
+                (degree > 0).then_some(polynomial.as_str()),
+                direct.then_some("direct sum (trapezoid; every step's displacement kept)"),
             ]
             .into_iter()
             .flatten()
@@ -163,10 +185,11 @@ impl Plan {
             let mut described = Vec::new();
             for m in sim.materials.list() {
                 let Some(own) = &m.memory else { continue };
-                let bound = match own.largest_stable_step(m.elasticity.tensor(), d) {
+                let trapezoid = sim.rules == crate::material::Rules::TRAPEZOID;
+                let bound = match own.largest_stable_step(m.elasticity.tensor(), d).filter(|_| trapezoid) {
                     Some(k_max) => format!(
-                        "; b(0) < 0: K positive definite for k < {k_max:.4e} (here k = {:.4e})",
-                        sim.time.step()
+                        "; b(0) < 0: K positive definite for k < {k_max:.4e} (here k ≤ {:.4e})",
+                        sim.time.largest_step()
                     ),
                     None => String::new(),
                 };
@@ -288,9 +311,29 @@ impl Plan {
                 ),
             });
         }
-        if sim.materials.memory().is_some() {
-            factorisations += 1; // possibly K_A for step 0
-        }
+        let memory = sim.materials.memory();
+        let factorisations = match (sim.proportional_memory(), sim.time.grid()) {
+            (Some(_), _) => Factorisations::Proportional,
+            (None, Some(grid)) => {
+                let future: Vec<(usize, Vec<f64>)> = grid
+                    .size_runs()
+                    .into_iter()
+                    .map(|(n, k)| (n, memory.map_or(Vec::new(), |m| m.step_coefficients(k, sim.rules))))
+                    .collect();
+                let (distinct, built) = super::operators::Operators::count(false, &future);
+                Factorisations::Counted {
+                    distinct,
+                    built,
+                    step_zero: memory.is_some(),
+                }
+            }
+            (None, None) if memory.is_none() => Factorisations::Counted {
+                distinct: 1,
+                built: 1,
+                step_zero: false,
+            },
+            (None, None) => Factorisations::PerSize,
+        };
         if sim.is_static() {
             solves_per_step = 0;
         }
@@ -304,6 +347,15 @@ impl Plan {
     /// The names of the effects in force.
     pub fn effect_names(&self) -> Vec<String> {
         self.effects.iter().map(|e| e.name.to_string()).collect()
+    }
+}
+
+/// The note on step 0's own factorisation.
+fn step_zero_note(with: bool) -> &'static str {
+    if with {
+        ", and a second of K_A alone if step 0 has a load (docs/method.md §3)"
+    } else {
+        ""
     }
 }
 
@@ -326,13 +378,35 @@ impl fmt::Display for Plan {
                 self.solves_per_step
             )?;
         }
-        if self.factorisations == 1 {
-            writeln!(f, "  factorisations: 1")
-        } else {
-            writeln!(
+        let step_zero = " (and one of K_A alone if step 0 has a load, docs/method.md §3)";
+        match self.factorisations {
+            Factorisations::Proportional => writeln!(
                 f,
-                "  factorisations: 1, and a second of K_A alone if step 0 has a load (docs/method.md §3)"
-            )
+                "  factorisations: 1 — the memory is proportional to A, so every step matrix is a multiple of K_A \
+                 whatever the steps (docs/method.md §20.3)"
+            ),
+            Factorisations::Counted {
+                distinct: 1,
+                built: 1,
+                step_zero,
+            } => writeln!(f, "  factorisations: 1{}", if step_zero { step_zero_note(step_zero) } else { "" }),
+            Factorisations::Counted {
+                distinct,
+                built,
+                step_zero: zero,
+            } => writeln!(
+                f,
+                "  factorisations: {built}, of {distinct} distinct step matrices (one per step size; at most {} held at \
+                 once, docs/method.md §20.3){}",
+                super::operators::CAPACITY,
+                if zero { step_zero } else { "" }
+            ),
+            Factorisations::PerSize => writeln!(
+                f,
+                "  factorisations: one per distinct step size the automatic steps meet (sizes k₁·2^j, about 3.3 a \
+                 decade; at most {} held at once, docs/method.md §20.3)",
+                super::operators::CAPACITY
+            ),
         }
     }
 }

@@ -168,6 +168,16 @@ impl RigidResponses {
         }
     }
 
+    /// The step matrix is now `ratio` times the one the responses were made with (docs/method.md
+    /// §20.3): v_i stay (the lifting of e_i scales with K), K_a, Q D_a and S scale with it.
+    pub(super) fn rescale(&mut self, ratio: f64) {
+        self.columns.scale(ratio);
+        self.s_plus.iter_mut().for_each(|v| *v /= ratio);
+        for col in &mut self.q_d {
+            col.iter_mut().for_each(|v| *v *= ratio);
+        }
+    }
+
     /// k.
     fn k(&self) -> usize {
         self.v.len()

@@ -16,42 +16,7 @@ use crate::scene::{self, Expr, Scene};
 /// nodes ordered last tripled the factor (docs/method.md §9.9), so larger pairs keep METIS's order.
 pub const PAIR_LAST_UNKNOWNS: usize = 1500;
 
-/// Uniform time steps t_n = n k, k = T / N (docs/method.md §2).
-#[derive(Clone, Copy, Debug)]
-pub struct TimeGrid {
-    pub final_time: f64,
-    pub steps: usize,
-}
-
-impl TimeGrid {
-    /// k = T / N.
-    pub fn step(&self) -> f64 {
-        self.final_time / self.steps as f64
-    }
-    /// The steps at which data are checked before a run ([`Simulation::check_data`], the
-    /// comparison of prescribed values in [`Dirichlet::new`]): every step up to 16 steps, else
-    /// t_0, t_1, t_N and evenly spaced steps between (16 in all at most).
-    pub fn sample(&self) -> Vec<usize> {
-        let steps = self.steps;
-        let mut at: Vec<usize> = if steps <= 16 {
-            (0..=steps).collect()
-        } else {
-            (0..14).map(|i| 1 + i * (steps - 1) / 13).chain([0]).collect()
-        };
-        at.sort_unstable();
-        at.dedup();
-        at
-    }
-
-    /// t_n (exactly T at n = N).
-    pub fn time(&self, n: usize) -> f64 {
-        if n == self.steps {
-            self.final_time
-        } else {
-            n as f64 * self.step()
-        }
-    }
-}
+pub use crate::time::{Schedule, TimeGrid};
 
 pub use super::contact::ContactSetup;
 
@@ -65,8 +30,12 @@ pub struct Simulation<const D: usize> {
     pub materials: Materials,
     pub loads: Loads<D>,
     pub contact: Option<ContactSetup<D>>,
-    pub time: TimeGrid,
-    pub output_every: usize,
+    /// The time levels: a fixed grid, or automatic steps (docs/method.md §20).
+    pub time: Schedule,
+    /// The memory's rule over a step per kind of kernel (`time.quadrature`, docs/method.md §20.2).
+    pub rules: crate::material::Rules,
+    /// `output.every` (None: every step, or only `output.times` when they are given).
+    pub output_every: Option<usize>,
     pub threads: usize,
     /// How a step is condensed onto the contact normals.
     pub condensation: scene::CondensationKind,
@@ -123,6 +92,46 @@ fn axis_nodes<const D: usize>(scene: &Scene, mesh: &Mesh<D>) -> Result<Option<Ve
     ))
 }
 
+/// The 2D model of the scene on a mesh of dimension D (None: 3D).
+fn plane_model<const D: usize>(scene: &Scene, origin: &str) -> Result<Option<PlaneModel>, SolveError> {
+    Ok(match (D, scene.material.plane) {
+        (2, Some(p)) => Some(match p {
+            scene::Plane::Stress => PlaneModel::Stress,
+            scene::Plane::Strain => PlaneModel::Strain,
+            scene::Plane::Axisymmetric => PlaneModel::Axisymmetric,
+        }),
+        (2, None) => {
+            return Err(SolveError::Setup(format!(
+                "{origin} is a 2D mesh: say which 2D model in the scene, material.plane = \"stress\", \"strain\" or \"axisymmetric\""
+            )))
+        }
+        (_, Some(_)) if scene.origin == scene::DEFAULT_SCENE_ORIGIN => {
+            return Err(SolveError::Setup(format!(
+                "{origin} is a 3D mesh, but no scene was given and the embedded default is the paper's 2D example \
+                 (examples/paper.toml, plane strain); a 3D body needs a scene of its own: --scene \
+                 examples/slab.toml (the paper's example on a slab) or one of yours (docs/scenes.md)"
+            )))
+        }
+        (_, Some(_)) => {
+            return Err(SolveError::Setup(format!(
+                "{origin} is a 3D mesh, but the scene {} sets material.plane: plane stress and plane strain are 2D \
+                 models; remove material.plane for a 3D body",
+                scene.origin
+            )))
+        }
+        (_, None) => None,
+    })
+}
+
+/// c when the run's one memory channel's tensor is c A of its one material: every step matrix is
+/// then (1 + c β) K_A (docs/method.md §20.3).
+fn proportional_memory(materials: &crate::fem::materials::Materials) -> Option<f64> {
+    match (materials.list(), materials.memory()) {
+        ([one], Some(m)) => m.proportional_to_elasticity(one.elasticity.tensor()),
+        _ => None,
+    }
+}
+
 impl<const D: usize> Simulation<D> {
     /// Whether the state of step 0 stands for every step (one solve for the run): no memory and
     /// nothing that changes in time — loads, prescribed values, forces, a moving obstacle
@@ -143,11 +152,11 @@ impl<const D: usize> Simulation<D> {
     pub fn new(scene: &Scene, mesh: Mesh<D>) -> Result<Self, SolveError> {
         let origin = mesh.path.display().to_string();
         let clamped: Option<GroupSelector> = scene.clamped_group();
-        let time = TimeGrid {
-            final_time: scene.time.final_time,
-            steps: scene.time.steps,
-        };
-        let times: Vec<f64> = time.sample().into_iter().map(|n| time.time(n)).collect();
+        let times = scene
+            .time
+            .stepping(&scene.origin)
+            .map_err(|e| SolveError::Setup(e.to_string()))?
+            .sample_times(scene.time.final_time);
         // the nodes of the contact groups and their targets: the contact may hold what the
         // prescribed components leave free (docs/method.md §7.7, §18), the body on either side of
         // a pair; a group that is not there is reported by the contact
@@ -167,34 +176,9 @@ impl<const D: usize> Simulation<D> {
             &times,
             &scene.origin,
         )?;
-        let plane = match (D, scene.material.plane) {
-            (2, Some(p)) => Some(match p {
-                scene::Plane::Stress => PlaneModel::Stress,
-                scene::Plane::Strain => PlaneModel::Strain,
-                scene::Plane::Axisymmetric => PlaneModel::Axisymmetric,
-            }),
-            (2, None) => {
-                return Err(SolveError::Setup(format!(
-                    "{origin} is a 2D mesh: say which 2D model in the scene, material.plane = \"stress\", \"strain\" or \"axisymmetric\""
-                )))
-            }
-            (_, Some(_)) if scene.origin == scene::DEFAULT_SCENE_ORIGIN => {
-                return Err(SolveError::Setup(format!(
-                    "{origin} is a 3D mesh, but no scene was given and the embedded default is the paper's 2D example \
-                     (examples/paper.toml, plane strain); a 3D body needs a scene of its own: --scene \
-                     examples/slab.toml (the paper's example on a slab) or one of yours (docs/scenes.md)"
-                )))
-            }
-            (_, Some(_)) => {
-                return Err(SolveError::Setup(format!(
-                    "{origin} is a 3D mesh, but the scene {} sets material.plane: plane stress and plane strain are 2D \
-                     models; remove material.plane for a 3D body",
-                    scene.origin
-                )))
-            }
-            (_, None) => None,
-        };
+        let plane = plane_model::<D>(scene, &origin)?;
         let materials = super::materials::build(scene, &mesh, plane)?;
+        let time = super::schedule::build(scene, &materials, proportional_memory(&materials).is_some())?;
         let axisymmetric = plane == Some(PlaneModel::Axisymmetric);
         let mut loads = if axisymmetric {
             Loads::axisymmetric()
@@ -238,6 +222,7 @@ impl<const D: usize> Simulation<D> {
             loads,
             contact,
             time,
+            rules: scene.time.rules(),
             output_every: scene.output.every,
             threads: 1,
             condensation: scene.solver.condensation,
@@ -296,9 +281,23 @@ impl<const D: usize> Simulation<D> {
         self.contact.as_ref().is_some_and(|c| c.friction.is_some())
     }
 
-    /// True if step n is written (every `output_every`-th step and always the last).
+    /// c when every step matrix is (1 + c β) K_A: one memory channel ∝ A of the one material
+    /// (docs/method.md §20.3).
+    pub fn proportional_memory(&self) -> Option<f64> {
+        proportional_memory(&self.materials)
+    }
+
+    /// True if level n of a fixed grid is written: every `output.every`-th (every one without
+    /// `output.every` and `output.times`), each output time, and always the last.
     pub fn is_output_step(&self, n: usize) -> bool {
-        n.is_multiple_of(self.output_every) || n == self.time.steps
+        let Some(grid) = self.time.grid() else {
+            return false;
+        };
+        let every = self
+            .output_every
+            .or((!grid.has_marks()).then_some(1))
+            .is_some_and(|e| n.is_multiple_of(e));
+        every || grid.is_marked(n) || n == grid.steps()
     }
 
     /// The loads and prescribed values evaluated on their groups before anything is factorised
@@ -308,11 +307,14 @@ impl<const D: usize> Simulation<D> {
     /// stops the run at that step (the time loop evaluates them every step).
     pub fn check_data(&self) -> Result<(), SolveError> {
         let varies = self.loads.is_time_dependent() || self.dirichlet.is_time_dependent();
-        let at = if varies { self.time.sample() } else { vec![0] };
+        let at = if varies {
+            self.time.sample()
+        } else {
+            vec![(Some(0), 0.0)]
+        };
         let mut load = vec![0.0; self.dofs.n()];
         let mut prescribed = vec![0.0; self.dofs.n()];
-        for n in at {
-            let t = self.time.time(n);
+        for (n, t) in at {
             let failed = |detail| SolveError::NonFiniteLoad {
                 step: n,
                 time: t,

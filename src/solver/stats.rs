@@ -49,13 +49,24 @@ pub struct RunStats {
     /// nodes on it are counted.
     #[serde(skip)]
     pub contact_bound: bool,
+    /// Steps after step 0 (accepted ones, with automatic steps).
     pub steps: usize,
+    /// The first step's size (every step's on a uniform grid).
     pub time_step: f64,
+    /// The smallest and largest step taken, and how many sizes (docs/method.md §20).
+    pub smallest_step: f64,
+    pub largest_step: f64,
+    pub distinct_steps: usize,
+    /// Automatic steps taken back for their error (docs/method.md §20.4).
+    pub rejected_steps: usize,
     pub final_time: f64,
     pub effects: Vec<String>,
     pub history_algorithm: Option<String>,
     pub history_bytes: usize,
     pub factorisations: usize,
+    /// Distinct step matrices factorised (docs/method.md §20.3; besides the factorisations, which
+    /// also count `hvi check`'s).
+    pub step_matrices: usize,
     /// Whole solves (one forward and one backward sweep over the factor).
     pub solves: usize,
     /// Sparse forward sweeps forming G = L⁻¹ P Cᵀ (one per contact node, once per factor).

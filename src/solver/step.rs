@@ -14,6 +14,8 @@ use crate::linalg::Counters;
 /// What one solve of a step reads and writes.
 pub(super) struct StepSolve<'a> {
     pub step: usize,
+    /// t_n.
+    pub time: f64,
     pub rhs: &'a [f64],
     /// The prescribed part of u_ν (None when it is zero).
     pub offset: Option<&'a [f64]>,
@@ -36,6 +38,7 @@ pub(super) fn solve<const D: usize>(
     backend: &dyn Backend<D>,
     StepSolve {
         step,
+        time: t,
         rhs,
         offset,
         rigid_loads,
@@ -46,7 +49,27 @@ pub(super) fn solve<const D: usize>(
     counters: &Counters,
     stats: &mut RunStats,
 ) -> Result<Option<ContactOutcome>, SolveError> {
-    let t = sim.time.time(step);
+    // K = s M with M factorised (docs/method.md §20.3): M u = rhs/s at the free rows, the
+    // contact forces λ/s
+    let scale = operator.scale;
+    let scaled: Vec<f64>;
+    let solved_rhs: &[f64] = if scale == 1.0 {
+        rhs
+    } else {
+        let held = backend.held_unknowns();
+        scaled = rhs
+            .iter()
+            .enumerate()
+            .map(|(k, &v)| {
+                if sim.dofs.is_prescribed(held.map_or(k, |h| h[k])) {
+                    v
+                } else {
+                    v / scale
+                }
+            })
+            .collect();
+        &scaled
+    };
     // p̂ = P(t) − R⁰: what the rigid parameters must balance
     let balance = match &operator.rigid {
         Some(rigid) => {
@@ -63,7 +86,7 @@ pub(super) fn solve<const D: usize>(
         (Some(setup), Some(op), Some((state, cache))) => {
             let mut d = vec![0.0; setup.condensed_rows().len()];
             timed(&mut stats.phases.forward_sweep, || {
-                op.free_normal(rhs, &mut d, counters)
+                op.free_normal(solved_rhs, &mut d, counters)
             });
             if let Some(g) = offset {
                 setup.condensed_rows().prescribed_offset(g, &mut d);
@@ -82,7 +105,7 @@ pub(super) fn solve<const D: usize>(
                         setup,
                         op.as_ref(),
                         operator.rigid.is_some(),
-                        step,
+                        (step, t),
                         &q,
                         (&mut *state, &mut *cache),
                     )
@@ -97,7 +120,12 @@ pub(super) fn solve<const D: usize>(
                 rigid.solve_values(p, &moved);
             }
             timed(&mut stats.phases.backward_sweep, || {
-                op.recover(&state.force, u, counters)
+                if scale == 1.0 {
+                    op.recover(&state.force, u, counters)
+                } else {
+                    let force: Vec<f64> = state.force.iter().map(|f| f / scale).collect();
+                    op.recover(&force, u, counters)
+                }
             });
             if let Some(rigid) = &operator.rigid {
                 rigid.add_motion(u);
@@ -107,7 +135,7 @@ pub(super) fn solve<const D: usize>(
         }
         _ => {
             timed(&mut stats.phases.backward_sweep, || {
-                operator.solver.solve(rhs, u, counters)
+                operator.solver.solve(solved_rhs, u, counters)
             });
             if let (Some(rigid), Some(p)) = (&mut operator.rigid, &balance) {
                 rigid.solve_values(p, &[]);
@@ -184,15 +212,16 @@ fn contact_solve<const D: usize>(
     setup: &ContactSetup<D>,
     op: &dyn Condensation,
     op_singular: bool,
-    step: usize,
+    (step, t): (usize, f64),
     q: &[f64],
     (state, cache): (&mut ContactState, &mut SolverCache),
 ) -> Result<ContactOutcome, SolveError> {
     // a moving obstacle moves the laws' origins and the bounds (docs/method.md §14.2)
-    let t = sim.time.time(step);
-    let moved = setup
-        .gaps_at(t)
-        .map_err(|detail| SolveError::NonFiniteLoad { step, time: t, detail })?;
+    let moved = setup.gaps_at(t).map_err(|detail| SolveError::NonFiniteLoad {
+        step: Some(step),
+        time: t,
+        detail,
+    })?;
     let (offset, bound) = match &moved {
         Some((o, g)) => (Some(&o[..]), Some(&g[..])),
         None => (setup.gap.as_deref(), setup.bound.as_deref()),
@@ -298,8 +327,13 @@ pub(super) fn lift<const D: usize>(
 ) {
     let held = backend.held_unknowns();
     let global = |k: usize| held.map_or(k, |u| u[k]);
+    // the columns of the matrix factorised: K's are `op.scale` times them (docs/method.md §20.3)
     match (g, &op.lifting) {
-        (Some(g), Some(Lifting::Columns(columns))) => columns.lift(g, &sim.dofs, rhs),
+        (Some(g), Some(Lifting::Columns(columns))) if op.scale == 1.0 => columns.lift(g, &sim.dofs, rhs),
+        (Some(g), Some(Lifting::Columns(columns))) => {
+            let scaled: Vec<f64> = g.iter().map(|v| v * op.scale).collect();
+            columns.lift(&scaled, &sim.dofs, rhs)
+        }
         (Some(g), Some(Lifting::Products { memory })) => {
             // K g with g zero at the free unknowns is Σ_j K_ij g_j over the prescribed j.
             let g_held: Vec<f64> = (0..rhs.len()).map(|k| g[global(k)]).collect();
@@ -312,7 +346,7 @@ pub(super) fn lift<const D: usize>(
             }
             for (k, (r, v)) in rhs.iter_mut().zip(&kg).enumerate() {
                 if !sim.dofs.is_prescribed(global(k)) {
-                    *r -= v;
+                    *r -= op.scale * v;
                 }
             }
         }

@@ -75,7 +75,12 @@ pub fn run_spec_with(
     let base = Scene::load(scene_path.as_deref(), &overrides).map_err(|e| e.to_string())?;
     let make_scene = |steps: usize| {
         let mut s = base.clone();
-        s.time.steps = steps;
+        s.time = crate::scene::TimeSpec {
+            final_time: s.time.final_time,
+            steps: Some(steps),
+            quadrature: s.time.quadrature,
+            ..Default::default()
+        };
         s
     };
     // Generated meshes: the paper's rectangle (quad, tri) or its slab (0,2)×(0,1)×(0,0.25) with

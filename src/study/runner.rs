@@ -30,12 +30,13 @@ pub enum Keep {
 }
 
 impl Keep {
-    fn wants<const D: usize>(&self, sim: &Simulation<D>, n: usize, t: f64) -> bool {
-        let tol = 1e-9 * sim.time.final_time.abs().max(1.0);
+    fn wants<const D: usize>(&self, sim: &Simulation<D>, view: &StepView) -> bool {
+        let t = view.time;
+        let tol = 1e-9 * sim.time.final_time().abs().max(1.0);
         match self {
-            Keep::Output => sim.is_output_step(n),
+            Keep::Output => view.output,
             Keep::All => true,
-            Keep::Final => n == sim.time.steps,
+            Keep::Final => t == sim.time.final_time(),
             Keep::Times(ts) => ts.iter().any(|s| (s - t).abs() <= tol),
             Keep::MultiplesOf(dt) => {
                 let q = t / dt;
@@ -140,8 +141,8 @@ struct KeepSink<'a, const D: usize> {
 
 impl<const D: usize> FrameSink<D> for KeepSink<'_, D> {
     fn step_done(&mut self, sim: &Simulation<D>, view: &StepView) {
-        let last = view.step == sim.time.steps;
-        let wanted = self.keep.wants(sim, view.step, view.time);
+        let last = view.time == sim.time.final_time();
+        let wanted = self.keep.wants(sim, view);
         if wanted || last {
             let nodal = sim.dofs.to_nodal(view.displacement);
             if last {
@@ -195,9 +196,9 @@ pub fn run_with<const D: usize>(
     Ok(RunRecord {
         label: options.label.clone(),
         h,
-        k: sim.time.step(),
-        steps: sim.time.steps,
-        final_time: sim.time.final_time,
+        k: stats.largest_step,
+        steps: stats.steps,
+        final_time: sim.time.final_time(),
         nodes: sim.mesh.points.len(),
         unknowns: sim.dofs.n_free(),
         final_displacement,
