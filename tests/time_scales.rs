@@ -368,3 +368,50 @@ fn bulk_and_shear_creep_at_their_own_times() {
     assert!(stats.factorisations <= 40, "{} factorisations", stats.factorisations);
     assert_eq!(stats.factorisations, stats.step_matrices, "each step matrix once");
 }
+
+/// ε_xx of the asphalt cube under σ(t) = σ₀ for t < t₁, 0 until t₂, σ₀ after (unloaded and
+/// reloaded), by superposition: σ₀ (D(t) − H(t − t₁) D(t − t₁) + H(t − t₂) D(t − t₂)).
+fn unloaded_and_reloaded(d: &Compliance, t: f64, t1: f64, t2: f64) -> f64 {
+    let h = |s: f64| if s >= 0.0 { d.at(s) } else { 0.0 };
+    SIGMA0 * (d.at(t) - h(t - t1) + h(t - t2))
+}
+
+/// A load history with jumps, on automatic steps (docs/method.md §20.4): the asphalt cube pulled
+/// by σ₀, unloaded at t₁ = 10 s and pulled again at t₂ = 10³ s, to T = 10⁶ s. The steps find the
+/// jumps alone (steps rejected there, and cut to below the relaxation times the jump excites),
+/// and every accepted step is within 2·10⁻³ of the largest strain of the closed form (measured
+/// 9.7e-4 in 532 steps, 35 rejected). Steps growing geometrically from the same first step, more
+/// of them, are not (3.9e-2 in 936): their steps across the jumps are as long as the times then.
+#[test]
+fn automatic_steps_follow_a_load_that_jumps() {
+    let d = Compliance::of(E_INF, &ASPHALT);
+    let (t1, t2) = (10.0, 1e3);
+    let stress = format!("{SIGMA0:e}*(t < {t1:e} || t >= {t2:e})");
+    let material = proportional_material(None, E_INF, &ASPHALT);
+    let largest = SIGMA0 * d.at(1e6);
+    let worst = |time: &str| {
+        let text = uniaxial_scene(&material, time, &stress);
+        let (sim, stats, sink) = solve_in_memory(&scene(&text), cube()).unwrap();
+        let run = strains(&sim, &sink);
+        let worst = run
+            .iter()
+            .map(|&(t, e)| ((e - unloaded_and_reloaded(&d, t, t1, t2)).abs() / largest, t))
+            .fold((0.0f64, 0.0), |w, x| if x.0 > w.0 { x } else { w });
+        (worst, run.len() - 1, stats)
+    };
+    let ((error, at), steps, stats) = worst("final_time = 1e6\ntolerance = 1e-4");
+    eprintln!(
+        "jumps, automatic steps: {steps} steps ({} rejected), {} factorisation(s); worst {error:.2e} of the largest \
+         strain at t = {at:e}",
+        stats.rejected_steps, stats.factorisations
+    );
+    assert!(stats.rejected_steps > 0, "the jumps cut the steps");
+    assert_eq!(stats.factorisations, 1);
+    assert!(error < 2e-3, "automatic steps: {error:e} at t = {at:e}");
+    let growth = 10f64.powf(1.0 / (2.0 * steps as f64 / 14.0));
+    let geometric = format!("final_time = 1e6\nfirst_step = 1.5e-8\ngrowth = {growth}");
+    let ((error, at), steps_geometric, _) = worst(&geometric);
+    eprintln!("jumps, geometric steps: {steps_geometric} steps; worst {error:.2e} at t = {at:e}");
+    assert!(steps_geometric > steps, "{steps_geometric} against {steps}");
+    assert!(error > 2e-3, "geometric steps miss the jumps: {error:e}");
+}

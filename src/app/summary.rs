@@ -70,10 +70,27 @@ pub fn report(stats: &RunStats, out: &Path) -> String {
     use std::fmt::Write;
     let mut s = String::new();
     let p = &stats.phases;
+    // one size for every step (a uniform grid), or the range and how many sizes (docs/method.md §20)
+    let steps = if stats.distinct_steps <= 1 {
+        format!("{} steps of k = {:.4e}", stats.steps, stats.time_step)
+    } else {
+        format!(
+            "{} steps from k = {:.3e} to {:.3e} ({} sizes{})",
+            stats.steps,
+            stats.smallest_step,
+            stats.largest_step,
+            stats.distinct_steps,
+            if stats.rejected_steps > 0 {
+                format!(", {} rejected", stats.rejected_steps)
+            } else {
+                String::new()
+            }
+        )
+    };
     let _ = writeln!(
         s,
-        "hvi: {} steps of k = {:.4e} to T = {} on {} nodes / {} cells ({} unknowns, {} contact nodes)",
-        stats.steps, stats.time_step, stats.final_time, stats.nodes, stats.cells, stats.unknowns, stats.contact_nodes
+        "hvi: {steps} to T = {} on {} nodes / {} cells ({} unknowns, {} contact nodes)",
+        stats.final_time, stats.nodes, stats.cells, stats.unknowns, stats.contact_nodes
     );
     let _ = writeln!(s, "  effects: {}", stats.effects.join(", "));
     if !stats.newton_iterations.is_empty() {

@@ -18,6 +18,24 @@ pub enum RelaxationKernel {
     General { expression: Box<Expr> },
 }
 
+/// A coefficient as the plan shows it: six significant digits, in exponent form far from 1.
+pub(super) fn short(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    if (1e-3..1e5).contains(&x.abs()) {
+        let digits = (5 - x.abs().log10().floor() as i32).max(0) as usize;
+        let s = format!("{x:.digits$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    } else {
+        format!("{x:.5e}")
+    }
+}
+
 impl RelaxationKernel {
     /// b(s).
     pub fn value(&self, s: f64) -> f64 {
@@ -36,15 +54,18 @@ impl RelaxationKernel {
                     .iter()
                     .enumerate()
                     .map(|(j, c)| match j {
-                        0 => format!("{c}"),
-                        1 => format!("{c}·s"),
-                        _ => format!("{c}·s^{j}"),
+                        0 => short(*c),
+                        1 => format!("{}·s", short(*c)),
+                        _ => format!("{}·s^{j}", short(*c)),
                     })
                     .collect();
                 format!("polynomial b(s) = {}", terms.join(" + "))
             }
             RelaxationKernel::Exponentials { terms } => {
-                let t: Vec<String> = terms.iter().map(|(c, tau)| format!("{c}·exp(−s/{tau})")).collect();
+                let t: Vec<String> = terms
+                    .iter()
+                    .map(|(c, tau)| format!("{}·exp(−s/{})", short(*c), short(*tau)))
+                    .collect();
                 format!("Prony series b(s) = {}", t.join(" + "))
             }
             RelaxationKernel::General { expression } => format!("b(s) = {} (direct sum)", expression.source()),

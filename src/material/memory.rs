@@ -11,7 +11,7 @@
 //! ([`Memory::from_relaxation_modulus`]): A = G(0), B = G′.
 
 use super::elasticity::{Elasticity, Isotropic, PlaneModel, IDENTITY_TENSOR};
-use super::kernel::RelaxationKernel;
+use super::kernel::{short, RelaxationKernel};
 use super::quadrature::{self, Quadrature, Rules};
 
 /// The share of u_n in one term's memory integral over a step of size k, by its rule: its
@@ -62,7 +62,7 @@ impl MemoryTensor {
         match self {
             MemoryTensor::Identity => "I".into(),
             MemoryTensor::Elasticity => "A".into(),
-            MemoryTensor::Moduli { bulk, shear } => format!("(κ = {bulk}, G = {shear})"),
+            MemoryTensor::Moduli { bulk, shear } => format!("(κ = {}, G = {})", short(*bulk), short(*shear)),
         }
     }
 }

@@ -367,6 +367,7 @@ impl<const D: usize> FrameSink<D> for PieceSink<'_, D> {
                     let tables = StepView {
                         step,
                         time: view.time,
+                        output: view.output,
                         displacement: &u,
                         memory_displacement: None,
                         contact: view.contact,

@@ -51,12 +51,17 @@ impl Constants<'_> {
                 long_term: p.long_term,
                 terms: p.terms.iter().map(|t| (t.modulus, t.relaxation_time)).collect(),
             };
-            return Memory::from_relaxation_modulus(&prony(&r.bulk), &prony(&r.shear), plane).map_err(|e| {
-                MaterialError {
+            let Some((bulk, shear)) = r.bulk_and_shear() else {
+                return Err(MaterialError {
                     key: self.key("relaxation_modulus"),
-                    value: "(bulk and shear terms)".into(),
-                    fix: format!("with material.plane = \"stress\": {e}"),
-                }
+                    value: "(incomplete)".into(),
+                    fix: "give bulk and shear, or youngs and poisson_ratio".into(),
+                });
+            };
+            return Memory::from_relaxation_modulus(&prony(&bulk), &prony(&shear), plane).map_err(|e| MaterialError {
+                key: self.key("relaxation_modulus"),
+                value: "(bulk and shear terms)".into(),
+                fix: format!("with material.plane = \"stress\": {e}"),
             });
         }
         let elasticity = Elasticity {

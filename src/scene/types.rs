@@ -266,12 +266,45 @@ fn is_auto(f: &Formulation) -> bool {
     *f == Formulation::Auto
 }
 
-/// Bulk and shear relaxation moduli κ(t), G(t), each a Prony series.
+/// Bulk and shear relaxation moduli κ(t), G(t), each a Prony series; or Young's relaxation
+/// modulus E(t) with a constant Poisson's ratio (bulk and shear then relax alike: κ = E/(3(1 − 2ν)),
+/// G = E/(2(1 + ν)), docs/method.md §15.2). Checked by `validate::check_material`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RelaxationModulusSpec {
-    pub bulk: PronySeriesSpec,
-    pub shear: PronySeriesSpec,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bulk: Option<PronySeriesSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shear: Option<PronySeriesSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub youngs: Option<PronySeriesSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub poisson_ratio: Option<f64>,
+}
+
+impl RelaxationModulusSpec {
+    /// κ(t) and G(t): as given, or from E(t) and ν (each term's moduli by the same factors, so that
+    /// they are proportional to the bit). None when neither form is complete.
+    pub fn bulk_and_shear(&self) -> Option<(PronySeriesSpec, PronySeriesSpec)> {
+        match (&self.bulk, &self.shear, &self.youngs, self.poisson_ratio) {
+            (Some(b), Some(s), None, None) => Some((b.clone(), s.clone())),
+            (None, None, Some(e), Some(nu)) => {
+                let scaled = |factor: f64| PronySeriesSpec {
+                    long_term: factor * e.long_term,
+                    terms: e
+                        .terms
+                        .iter()
+                        .map(|t| ModulusTermSpec {
+                            modulus: factor * t.modulus,
+                            relaxation_time: t.relaxation_time,
+                        })
+                        .collect(),
+                };
+                Some((scaled(1.0 / (3.0 * (1.0 - 2.0 * nu))), scaled(1.0 / (2.0 * (1.0 + nu)))))
+            }
+            _ => None,
+        }
+    }
 }
 
 /// f(t) = f∞ + Σ_m f_m e^{−t/τ_m}.

@@ -52,9 +52,13 @@ fn allowed_keys(path: &str, table: &toml::Table) -> Option<Vec<&'static str>> {
             "formulation",
             "memory",
         ],
-        "material.relaxation_modulus" => vec!["bulk", "shear"],
-        "material.relaxation_modulus.bulk" | "material.relaxation_modulus.shear" => vec!["long_term", "terms"],
-        "material.relaxation_modulus.bulk.terms" | "material.relaxation_modulus.shear.terms" => {
+        "material.relaxation_modulus" => vec!["bulk", "shear", "youngs", "poisson_ratio"],
+        "material.relaxation_modulus.bulk"
+        | "material.relaxation_modulus.shear"
+        | "material.relaxation_modulus.youngs" => vec!["long_term", "terms"],
+        "material.relaxation_modulus.bulk.terms"
+        | "material.relaxation_modulus.shear.terms"
+        | "material.relaxation_modulus.youngs.terms" => {
             vec!["modulus", "relaxation_time"]
         }
         "memory" => match kind {
@@ -552,7 +556,47 @@ fn check_material(m: &Constants, origin: &str) -> Result<(), SceneError> {
                 ),
             ));
         }
-        for (part, p) in [("bulk", &r.bulk), ("shear", &r.shear)] {
+        let given = match (&r.bulk, &r.shear, &r.youngs, r.poisson_ratio) {
+            (Some(b), Some(s), None, None) => vec![("bulk", b), ("shear", s)],
+            (None, None, Some(e), Some(nu)) => {
+                if !(nu > -1.0 && nu < 0.5) {
+                    return Err(invalid(
+                        origin,
+                        &m.key("relaxation_modulus.poisson_ratio"),
+                        nu,
+                        "Poisson's ratio must lie in (−1, 0.5)",
+                    ));
+                }
+                vec![("youngs", e)]
+            }
+            _ => {
+                let keys: Vec<&str> = [
+                    ("bulk", r.bulk.is_some()),
+                    ("shear", r.shear.is_some()),
+                    ("youngs", r.youngs.is_some()),
+                    ("poisson_ratio", r.poisson_ratio.is_some()),
+                ]
+                .iter()
+                .filter(|(_, g)| *g)
+                .map(|(k, _)| *k)
+                .collect();
+                let with = if keys.is_empty() {
+                    "nothing".to_string()
+                } else {
+                    keys.join(", ")
+                };
+                return Err(invalid(
+                    origin,
+                    &m.key("relaxation_modulus"),
+                    format!("(with {with})"),
+                    "give the bulk and shear relaxation moduli, relaxation_modulus = { bulk = { long_term = κ∞, \
+                     terms = [...] }, shear = { ... } }, or Young's relaxation modulus with a constant Poisson's \
+                     ratio, relaxation_modulus = { youngs = { long_term = E∞, terms = [...] }, poisson_ratio = ν } \
+                     (docs/scenes.md)",
+                ));
+            }
+        };
+        for (part, p) in given {
             let at = m.key(&format!("relaxation_modulus.{part}"));
             if !(p.long_term.is_finite() && p.long_term >= 0.0) {
                 return Err(invalid(
@@ -594,7 +638,8 @@ fn check_material(m: &Constants, origin: &str) -> Result<(), SceneError> {
             }
         }
         let value = |p: &super::PronySeriesSpec| p.long_term + p.terms.iter().map(|t| t.modulus).sum::<f64>();
-        let (k0, g0) = (value(&r.bulk), value(&r.shear));
+        let (bulk, shear) = r.bulk_and_shear().expect("a complete form, checked above");
+        let (k0, g0) = (value(&bulk), value(&shear));
         let e0 = 9.0 * k0 * g0 / (3.0 * k0 + g0);
         if !(k0.is_finite() && g0.is_finite() && e0.is_finite() && e0 > 0.0) {
             return Err(invalid(

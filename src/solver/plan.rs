@@ -378,7 +378,7 @@ impl fmt::Display for Plan {
                 self.solves_per_step
             )?;
         }
-        let step_zero = " (and one of K_A alone if step 0 has a load, docs/method.md §3)";
+        let step_zero = "; and one of K_A alone if step 0 has a load (docs/method.md §3)";
         match self.factorisations {
             Factorisations::Proportional => writeln!(
                 f,
@@ -396,8 +396,8 @@ impl fmt::Display for Plan {
                 step_zero: zero,
             } => writeln!(
                 f,
-                "  factorisations: {built}, of {distinct} distinct step matrices (one per step size; at most {} held at \
-                 once, docs/method.md §20.3){}",
+                "  factorisations: {built}, of {distinct} distinct step matrices (one per step size, at most {} held at \
+                 once: docs/method.md §20.3){}",
                 super::operators::CAPACITY,
                 if zero { step_zero } else { "" }
             ),

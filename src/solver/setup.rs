@@ -288,7 +288,7 @@ impl<const D: usize> Simulation<D> {
     }
 
     /// True if level n of a fixed grid is written: every `output.every`-th (every one without
-    /// `output.every` and `output.times`), each output time, and always the last.
+    /// `output.every` and `output.times`), each output time, and always t = 0 and the last.
     pub fn is_output_step(&self, n: usize) -> bool {
         let Some(grid) = self.time.grid() else {
             return false;
@@ -297,7 +297,7 @@ impl<const D: usize> Simulation<D> {
             .output_every
             .or((!grid.has_marks()).then_some(1))
             .is_some_and(|e| n.is_multiple_of(e));
-        every || grid.is_marked(n) || n == grid.steps()
+        n == 0 || every || grid.is_marked(n) || n == grid.steps()
     }
 
     /// The loads and prescribed values evaluated on their groups before anything is factorised
