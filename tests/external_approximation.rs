@@ -12,7 +12,7 @@ use hvi::app::solve_in_memory;
 use hvi::mesh::structured::{rectangle, CellShape};
 use hvi::mesh::Mesh;
 use hvi::scene::Scene;
-use hvi::study::{self, report, Keep, Refinement, StudyPlan};
+use hvi::study::{self, report, Keep, Refinement, StudyPlan, TimeLevel};
 
 /// The layer thickness of the study: valleys (sin < 0, g convex) are where the body reaches
 /// the bound on the right half of Γ₃, so the bound is active where Π^h g > g.
@@ -145,12 +145,13 @@ fn the_constraint_holds_at_the_nodes_and_is_violated_between_them_by_o_h2() {
 #[test]
 fn with_a_varying_bound_the_error_in_h_stays_first_order() {
     let plan = StudyPlan {
-        reference: (128, 16),
+        reference: (128, TimeLevel::Steps(16)),
         h_paths: vec![(16, vec![8, 16, 32])],
         k_paths: vec![],
         keep: Keep::Final,
     };
-    let s = study::run_plan(&plan, &mesh, &scene, &mut |_, _| {}).unwrap();
+    let uniform = |level: &TimeLevel| scene(level.steps().expect("uniform steps"));
+    let s = study::run_plan(&plan, &mesh, &uniform, &mut |_, _| {}).unwrap();
     let rows = s.rows();
     eprintln!("{}", report::markdown(&rows));
     let orders: Vec<f64> = rows

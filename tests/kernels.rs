@@ -9,13 +9,13 @@
 
 mod common;
 
-use common::{reaction, rectangle_with_sides, scene};
+use common::{reaction, rectangle_with_sides, scene, sub_group};
 use hvi::app::{solve_in_memory, MemorySink};
 use hvi::fem::norms::fitted_order;
 use hvi::fem::stress::cell_stresses;
 use hvi::material::{Channel, IDENTITY_TENSOR};
 use hvi::mesh::structured::{block, rectangle, CellShape, SolidShape};
-use hvi::mesh::{Facet, Mesh, PhysicalGroup};
+use hvi::mesh::Mesh;
 use hvi::scene::{Scene, DEFAULT_SCENE_TOML};
 use hvi::solver::Simulation;
 
@@ -451,29 +451,6 @@ fn creep_of_a_standard_linear_solid_in_plane_strain() {
     assert_order_two("SLS creep, plane stress", &ks, &errs);
 }
 
-/// The faces of group `from` whose nodes all satisfy `keep`, as a new group `name`.
-fn sub_group<const D: usize>(mesh: &mut Mesh<D>, from: &str, name: &str, keep: impl Fn(&[f64; D]) -> bool) {
-    let facets: Vec<Facet> = mesh
-        .groups
-        .iter()
-        .find(|g| g.name.as_deref() == Some(from))
-        .unwrap()
-        .facets
-        .iter()
-        .filter(|f| f.nodes().iter().all(|&p| keep(&mesh.points[p])))
-        .cloned()
-        .collect();
-    let tag = 100 + mesh.groups.len() as i32;
-    mesh.groups.push(PhysicalGroup {
-        dim: (D - 1) as u8,
-        tag,
-        name: Some(name.into()),
-        facets,
-        cells: vec![],
-        nodes: vec![],
-    });
-}
-
 /// 3D: the unit cube on rollers (u_x = 0 on x = 0, u_y = 0 on y = 0, u_z = 0 on z = 0), pulled by
 /// σ₀ on x = 1, the other faces free: uniaxial stress, u = ε(t) (x, −ν y, −ν z) with
 /// ε(t) = σ₀/E∞ − (σ₀/E∞ − σ₀/E₀) e^{−t E∞/(E₀τ)}.
@@ -738,7 +715,15 @@ fn bad_relaxation_moduli_name_the_key_the_value_and_the_range() {
         ),
         (
             format!("[material]\nplane = \"strain\"\nrelaxation_modulus = {{ bulk = {ok} }}\n{TIME}"),
-            vec!["bad.toml", "missing field `shear`"],
+            vec!["bad.toml", "`material.relaxation_modulus` = (with bulk)", "bulk and shear", "youngs"],
+        ),
+        (
+            format!("[material]\nplane = \"strain\"\nrelaxation_modulus = {{ youngs = {ok}, shear = {ok} }}\n{TIME}"),
+            vec!["`material.relaxation_modulus` = (with shear, youngs)", "poisson_ratio = ν"],
+        ),
+        (
+            format!("[material]\nplane = \"strain\"\nrelaxation_modulus = {{ youngs = {ok}, poisson_ratio = 0.5 }}\n{TIME}"),
+            vec!["`material.relaxation_modulus.poisson_ratio` = 0.5", "(−1, 0.5)"],
         ),
         (
             format!("[material]\nplane = \"strain\"\nyoungs_modulus = 1.0\nrelaxation_modulus = {{ bulk = {ok}, shear = {ok} }}\n{TIME}"),

@@ -851,30 +851,32 @@ fn ctrl_c_on_mpirun_stops_every_rank_with_the_interrupted_summary() {
 /// with one error naming the parameter and the fix, before writing anything.
 #[test]
 fn force_control_is_refused_by_the_petsc_backend() {
-    let tmp = tempfile::tempdir().unwrap();
-    let d = tmp.path().join("mpi").display().to_string();
-    let out = mpirun(
-        2,
+    refused_on_two_ranks(
         &[
             "solve",
             "examples/gallery/hertz_2d/hertz_2d_h1.msh",
             "--scene",
             "examples/gallery/hertz_2d/hertz_2d_force.toml",
-            "--quiet",
-            "--backend",
-            "petsc",
-            "--out",
-            &d,
         ],
-        &[],
+        &[
+            "force_control[0] (group Base, y)",
+            "PETSc backend does not support",
+            "without --backend petsc",
+        ],
     );
-    assert!(!out.status.success(), "the PETSc backend accepted force control");
+}
+
+/// `args` (a solve without its output and backend) on 2 PETSc ranks is refused with one error
+/// holding every one of `parts`, before anything is written.
+fn refused_on_two_ranks(args: &[&str], parts: &[&str]) {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path().join("mpi").display().to_string();
+    let mut all = args.to_vec();
+    all.extend(["--quiet", "--backend", "petsc", "--out", &d]);
+    let out = mpirun(2, &all, &[]);
+    assert!(!out.status.success(), "the PETSc backend accepted {}", args.join(" "));
     let (error, err) = the_one_error(&out);
-    for part in [
-        "force_control[0] (group Base, y)",
-        "PETSc backend does not support",
-        "without --backend petsc",
-    ] {
+    for part in parts {
         assert!(error.contains(part), "`{part}` missing from the error:\n{err}");
     }
     assert!(!tmp.path().join("mpi").join("summary.json").exists());
@@ -918,4 +920,49 @@ fn axisymmetric_hertz_matches_faer_on_1_and_2_ranks() {
             "np {np}: u_ν off by {du:.2e}, force by {df:.2e}"
         );
     }
+}
+
+/// Steps that grow with time (docs/method.md §20) under PETSc: the relaxation gallery, whose
+/// memory is proportional to A (one factorisation, rescaled per step size, §20.3), and the
+/// paper's example, whose memory on the identity takes a step matrix per size (a PETSc
+/// factorisation each), on steps growing 5 a decade from 10⁻³, give the serial Γ₃ on 1 and 2
+/// ranks to 1e-10; automatic steps are refused by name before anything runs.
+#[test]
+fn growing_steps_match_faer_and_automatic_steps_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let growing = |path: &str, name: &str| -> String {
+        let text = std::fs::read_to_string(path).unwrap();
+        let start = text.find("[time]").unwrap();
+        let end = start + text[start..].find("\n\n").unwrap_or(text.len() - start);
+        let final_time = text[start..end]
+            .lines()
+            .find(|l| l.starts_with("final_time"))
+            .unwrap()
+            .to_string();
+        let scene = format!(
+            "{}[time]\n{final_time}\nfirst_step = 1e-3\nsteps_per_decade = 5\n{}",
+            &text[..start],
+            &text[end..]
+        );
+        let file = tmp.path().join(name);
+        std::fs::write(&file, scene).unwrap();
+        file.display().to_string()
+    };
+    let relaxation = growing("examples/gallery/relaxation/relaxation.toml", "relaxation.toml");
+    let paper = growing("examples/paper.toml", "paper.toml");
+    for (mesh, scene) in [
+        ("examples/gallery/relaxation/relaxation.msh", &relaxation),
+        ("meshes/rect_q1_h8.msh", &paper),
+    ] {
+        for (np, (du, df)) in compare(mesh, Some(scene), "mumps") {
+            assert!(
+                du <= 1e-10 && df <= 1e-10,
+                "{scene}, np {np}: u_ν off by {du:.2e}, force by {df:.2e}"
+            );
+        }
+    }
+    refused_on_two_ranks(
+        &["solve", "meshes/rect_q1_h8.msh", "--set", "time.tolerance=1e-3"],
+        &["time.tolerance", "automatic steps", "steps_per_decade"],
+    );
 }

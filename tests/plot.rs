@@ -336,3 +336,48 @@ fn plot_draws_a_circular_obstacle() {
     assert!(svg.contains("black, hatched: the obstacle"), "no obstacle legend");
     assert!(svg.matches("stroke=\"#282828\"").count() > 20, "no obstacle outline");
 }
+
+/// A run on steps growing with time (docs/method.md §20) spans decades: `hvi plot` draws the
+/// largest u_ν over time on a logarithmic time axis (a tick at each decade), and the Γ₃ plot's
+/// default times spread in log t so that the early ones are drawn too; a uniform run keeps a
+/// linear axis.
+#[test]
+fn a_run_over_decades_gets_a_log_time_axis() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("decades");
+    let o = out.to_str().unwrap();
+    ok(&[
+        "solve",
+        "rect:8x4",
+        "--set",
+        "time.first_step=1e-4",
+        "--set",
+        "time.steps_per_decade=5",
+        "--out",
+        o,
+        "--quiet",
+    ]);
+    let plot = ok(&["plot", o]);
+    assert!(String::from_utf8_lossy(&plot.stdout).contains("history.svg"));
+    let history = std::fs::read_to_string(out.join("history.svg")).unwrap();
+    for text in [
+        "time t (logarithmic)",
+        "1e−4",
+        "1e−2",
+        "1e0",
+        "largest normal displacement u_ν on Γ₃",
+    ] {
+        assert!(history.contains(text), "no {text:?} in history.svg");
+    }
+    let gamma3 = std::fs::read_to_string(out.join("gamma3.svg")).unwrap();
+    assert!(
+        gamma3.contains("t = 1e−4") && gamma3.contains("t = 4.2e−3"),
+        "early times in gamma3.svg"
+    );
+    let uniform = dir.path().join("uniform");
+    let u = uniform.to_str().unwrap();
+    ok(&["solve", "rect:8x4", "--set", "time.steps=8", "--out", u, "--quiet"]);
+    ok(&["plot", u]);
+    let history = std::fs::read_to_string(uniform.join("history.svg")).unwrap();
+    assert!(history.contains("time t") && !history.contains("logarithmic"));
+}

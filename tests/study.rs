@@ -13,6 +13,7 @@ use hvi::mesh::Mesh;
 use hvi::scene::Scene;
 use hvi::study::{
     self, interpolate_nodal, plot, report, seminorm_errors, Keep, Locator, Refinement, RunOptions, Study, StudyPlan,
+    TimeLevel,
 };
 
 // ---- scenes (begin) ----
@@ -250,16 +251,16 @@ fn study_reports_theoretical_orders_for_a_manufactured_solution() {
 #[test]
 fn reduced_paper_study_shows_first_order_in_h_and_second_order_in_k() {
     let plan = StudyPlan {
-        reference: (64, 64),
+        reference: (64, TimeLevel::Steps(64)),
         h_paths: vec![(16, vec![8, 16, 32])],
-        k_paths: vec![(64, vec![4, 8, 16])],
+        k_paths: vec![(64, [4, 8, 16].map(TimeLevel::Steps).to_vec())],
         keep: Keep::MultiplesOf(1.0 / 16.0),
     };
     let mut seen = 0;
     let s = study::run_plan(
         &plan,
         &|n| rectangle(2.0, 1.0, 2 * n, n, CellShape::Quad),
-        &paper_scene,
+        &|level| paper_scene(level.steps().expect("uniform steps")),
         &mut |_, _| seen += 1,
     )
     .unwrap();
@@ -440,6 +441,248 @@ fn a_k_only_study_writes_its_tables() {
         .iter()
         .all(|r| r.0 == "k (h=1/16)" && (r.1 - 1.0 / 16.0).abs() < 1e-12));
     assert!(rows[1].4.unwrap() >= 1.7, "order in k {:?}", rows[1].4);
+}
+
+// ---- steps that grow with time (docs/studies.md, "Refining steps that grow with time") ----
+
+/// The creeping block of examples/creep_study_scene.toml: Young's relaxation modulus
+/// E(t) = 1 + 2 e^{−t/0.01} + e^{−t} with ν = 0.3 (one channel, one factorisation), clamped on the
+/// left, a constant downward traction on the top from t = 0, T = 10: its creep's retardation
+/// times are 0.02 and 2, so a run from a first step of 1e-4 spans five decades.
+const CREEP_SCENE: &str = include_str!("../examples/creep_study_scene.toml");
+
+/// Runs the study `text` on [`CREEP_SCENE`] with the fast term's modulus `fast` instead of 2
+/// (written beside it as creep_study_scene.toml, which `text` names or is given): the output, or
+/// the study's error.
+fn creep_study(
+    fast: f64,
+    text: &str,
+    targets: &study::Targets,
+) -> Result<(study::execute::StudyOutput, tempfile::TempDir), String> {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = CREEP_SCENE.replace("modulus = 2.0,", &format!("modulus = {fast:?},"));
+    assert!(scene.contains(&format!("modulus = {fast:?}, relaxation_time = 0.01")));
+    std::fs::write(dir.path().join("creep_study_scene.toml"), scene).unwrap();
+    let text = if text.contains("scene = ") {
+        text.to_string()
+    } else {
+        format!("scene = \"creep_study_scene.toml\"\n{text}")
+    };
+    let spec: study::spec::StudySpec = toml::from_str(&text).map_err(|e| e.to_string())?;
+    let out = dir.path().join("out");
+    let written = study::execute::run_spec_with(&spec, dir.path(), &out, &[], "creep_study.toml", targets)?;
+    Ok((written, dir))
+}
+
+/// The least-squares order of the H¹ errors at T against the parameters.
+fn fitted(rows: &[(String, f64, f64, f64, Option<f64>)]) -> f64 {
+    let (k, e): (Vec<f64>, Vec<f64>) = rows.iter().map(|r| (r.2, r.3)).unzip();
+    hvi::fem::norms::fitted_order(&k, &e)
+}
+
+/// examples/creep_study.toml: steps growing 10, 20 and 40 a decade from 1e-4 against 160 a
+/// decade; the order in the relative step r = 10^{1/s} − 1 is close to 2, the rule's order
+/// (docs/method.md §6, §20). Its tolerance path's errors fall too.
+///
+/// Measured (n = 8, T = 10): H¹ errors at T 1.61e-3, 4.19e-4, 1.17e-4, orders 1.79 and 1.77,
+/// fitted 1.78. Two things keep it below 2: the fast term (τ = 0.01, 60 to 260 times shorter than
+/// the steps near T) sees the displacement's linear interpolant only by its last increment, a
+/// backward difference of error O(τ k) — with its modulus 0.2 instead of 2 the fitted order is
+/// 1.84 (checked here), with 20 it is 1.45 —, and each level's steps are cut differently to land
+/// on the decades and on T (neighbouring s differ by up to ±0.2 in the observed order). Hence the
+/// band 1.6 … 2.2 on the fitted order, and the weak-fast-term variant at least as close to 2.
+#[test]
+fn steps_per_decade_on_prony_memory_show_second_order_in_the_relative_step() {
+    let text = include_str!("../examples/creep_study.toml");
+    let mut orders = Vec::new();
+    for fast in [2.0, 0.2] {
+        let (written, dir) = creep_study(fast, text, &study::Targets::default()).unwrap();
+        let out = dir.path().join("out");
+        let md = std::fs::read_to_string(out.join("study.md")).unwrap();
+        eprintln!("fast term's modulus {fast}:\n{}", written.report);
+        assert_eq!(
+            written.files,
+            [
+                "study.md",
+                "study.csv",
+                "gamma3.svg",
+                "error_vs_k.svg",
+                "work_precision.svg"
+            ]
+        );
+        let all = csv_rows(&out);
+        assert_eq!(all.len(), 6);
+        let (rows, tolerances) = all.split_at(3);
+        assert!(
+            tolerances.iter().all(|r| r.0 == "k by tolerance (h=1/8)")
+                && tolerances.windows(2).all(|w| w[1].3 < w[0].3),
+            "{tolerances:?}"
+        );
+        for (r, s) in rows.iter().zip([10.0f64, 20.0, 40.0]) {
+            assert_eq!(r.0, "k per decade (h=1/8)");
+            // the parameter is the relative step, not a step size
+            assert!((r.2 - (10f64.powf(1.0 / s) - 1.0)).abs() < 1e-12, "{r:?}");
+            assert!(md.contains(&format!("| 1/8 | {s}/decade |")), "{md}");
+        }
+        assert!(rows.windows(2).all(|w| w[1].3 < w[0].3), "{rows:?}");
+        let order = fitted(rows);
+        // the report's sentence names the parameter and gives the same fitted order
+        assert!(
+            md.contains("The parameter is r = 10^(1/s) − 1") && md.contains(&format!("has order {order:.3}")),
+            "{md}"
+        );
+        // the compared times are levels of every run: one a decade after the first step, and T
+        assert!(md.contains("compares t = 0.001, 0.01, 0.1, 1, 10 "), "{md}");
+        eprintln!(
+            "fast modulus {fast}: errors {:?}, observed orders {:?}, fitted {order:.3}",
+            rows.iter().map(|r| r.3).collect::<Vec<_>>(),
+            rows.iter().map(|r| r.4).collect::<Vec<_>>()
+        );
+        assert!(
+            (1.6..=2.2).contains(&order),
+            "fitted order {order} in the relative step\n{md}"
+        );
+        for o in rows.iter().filter_map(|r| r.4) {
+            assert!(o >= 1.5, "observed order {o}\n{md}");
+        }
+        orders.push(order);
+    }
+    assert!(
+        orders[1] >= orders[0] - 0.02,
+        "{orders:?}: a weaker fast term is no closer to 2"
+    );
+}
+
+/// Automatic steps to tolerances 1e-2, 1e-3, 1e-4 (no first_step: the automatic steps' own,
+/// a tenth of the shortest relaxation time) against tolerance 1e-6: the error falls with the
+/// tolerance and the steps grow. Measured: H¹ errors at T 3.76e-3, 1.13e-3, 2.61e-4 in 20, 31,
+/// 65 steps, fitted order 0.58 in the tolerance (a local error O(k³) per step held at tol gives
+/// about tol^{2/3} at T).
+#[test]
+fn a_tolerance_path_s_errors_fall_with_the_tolerance() {
+    let text = "reference = { n = 8, tolerance = 1e-6 }\n[[k_paths]]\nn = 8\ntolerance = [1e-2, 1e-3, 1e-4]\n";
+    let (written, dir) = creep_study(2.0, text, &study::Targets::default()).unwrap();
+    let out = dir.path().join("out");
+    eprintln!("{}", written.report);
+    let md = std::fs::read_to_string(out.join("study.md")).unwrap();
+    let rows = csv_rows(&out);
+    assert_eq!(rows.len(), 3);
+    assert!(rows.iter().all(|r| r.0 == "k by tolerance (h=1/8)"), "{rows:?}");
+    assert_eq!(rows.iter().map(|r| r.2).collect::<Vec<_>>(), [1e-2, 1e-3, 1e-4]);
+    assert!(
+        rows.windows(2).all(|w| w[1].3 < 0.6 * w[0].3),
+        "the error does not fall with the tolerance: {rows:?}"
+    );
+    let steps: Vec<usize> = std::fs::read_to_string(out.join("study.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(5).unwrap().parse().unwrap())
+        .collect();
+    assert!(steps.windows(2).all(|w| w[1] > w[0]), "steps {steps:?}");
+    let order = fitted(&rows);
+    eprintln!(
+        "errors {:?} in {steps:?} steps, fitted order {order:.3} in the tolerance",
+        rows.iter().map(|r| r.3).collect::<Vec<_>>()
+    );
+    assert!(
+        (0.4..=1.0).contains(&order),
+        "fitted order {order} in the tolerance\n{md}"
+    );
+    assert!(
+        md.contains("| 1/8 | tol 1e-3 |") && md.contains("The parameter is tol,") && md.contains("log(tol₁/tol₂)"),
+        "{md}"
+    );
+    // no first_step: the decades start after the automatic first step, 0.1 × 0.01
+    assert!(md.contains("compares t = 0.01, 0.1, 1, 10 "), "{md}");
+}
+
+/// Bad time levels in a study file are refused before any run, naming the file, the key, the
+/// value and the fix.
+#[test]
+fn bad_time_levels_are_refused_with_the_key_the_value_and_the_fix() {
+    let none = study::Targets::default();
+    let k = "reference = { n = 8, steps = 64 }\n[[k_paths]]\nn = 8\nsteps = [4]\n[[k_paths]]\nn = 8\n";
+    let cases: [(String, &[&str]); 11] = [
+        (
+            format!("{k}steps = [4, 8]\ntolerance = [1e-3]\n"),
+            &[
+                "`k_paths[1].tolerance`",
+                "(with k_paths[1].steps)",
+                "one way of stepping",
+            ],
+        ),
+        (
+            k.to_string(),
+            &[
+                "`k_paths[1]`",
+                "(no steps, steps_per_decade or tolerance)",
+                "exactly one",
+            ],
+        ),
+        (
+            format!("{k}steps_per_decade = [5, 10]\n"),
+            &["`k_paths[1].steps_per_decade` = [5, 10]", "add `first_step = …`"],
+        ),
+        (
+            "reference = { n = 8, steps_per_decade = 40 }\n".into(),
+            &["`reference.steps_per_decade` = 40", "first_step"],
+        ),
+        (
+            format!("first_step = 1e-4\n{k}steps_per_decade = [5, -10]\n"),
+            &[
+                "`k_paths[1].steps_per_decade[1]` = -10",
+                "positive, finite number of steps per decade",
+            ],
+        ),
+        (
+            format!("first_step = 1e-4\n{k}steps_per_decade = [5, inf]\n"),
+            &["`k_paths[1].steps_per_decade[1]` = inf", "positive, finite"],
+        ),
+        (
+            format!("{k}tolerance = [1e-3, 0.0]\n"),
+            &["`k_paths[1].tolerance[1]` = 0", "a number in (0, 1)"],
+        ),
+        (
+            format!("{k}tolerance = [nan]\n"),
+            &["`k_paths[1].tolerance[0]` = NaN", "a number in (0, 1)"],
+        ),
+        (
+            format!("{k}steps = [0, 4]\n").replace("[[k_paths]]\nn = 8\nsteps = [4]\n", ""),
+            &["`k_paths[0].steps[0]` = 0", "at least one step"],
+        ),
+        (
+            format!("first_step = 10.0\n{k}steps_per_decade = [5]\n"),
+            &["`first_step` = 10", "shorter than the scene's time.final_time = 10"],
+        ),
+        (
+            format!("first_step = -1e-3\n{k}tolerance = [1e-3]\n"),
+            &["`first_step` = -0.001", "positive, finite"],
+        ),
+    ];
+    for (text, wanted) in cases {
+        let err = creep_study(2.0, &text, &none).map(|_| ()).unwrap_err();
+        assert!(err.starts_with("creep_study.toml: "), "{err}");
+        for w in wanted {
+            assert!(err.contains(w), "{text}\nwanted `{w}` in: {err}");
+        }
+    }
+    // --target plans uniform steps only: a non-uniform k path is refused by name
+    let targets = study::Targets {
+        errors: vec![1e-3],
+        verify: false,
+    };
+    let err = creep_study(
+        2.0,
+        &format!("first_step = 1e-4\n{k}steps_per_decade = [5, 10]\n[[h_paths]]\nsteps = 64\nn = [2, 4]\n"),
+        &targets,
+    )
+    .map(|_| ())
+    .unwrap_err();
+    assert!(
+        err.contains("--target: k_paths[1] steps by steps_per_decade (5/decade)") && err.contains("uniform steps only"),
+        "{err}"
+    );
 }
 
 // ---- the target planner (docs/method.md, "Planning a run for a target error") ----

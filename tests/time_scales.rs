@@ -14,81 +14,15 @@
 
 mod common;
 
-use common::scene;
+use common::{scene, sub_group, Compliance, ASPHALT, ASPHALT_E_INF, ASPHALT_NU};
 use hvi::app::solve_in_memory;
 use hvi::mesh::structured::{block, SolidShape};
-use hvi::mesh::{Facet, Mesh, PhysicalGroup};
+use hvi::mesh::Mesh;
 
-/// (E_i [MPa], ρ_i [s]) of the asphalt concrete (Gibson et al. 2003, see the module's note).
-const ASPHALT: [(f64, f64); 12] = [
-    (1.430e1, 1.500e7),
-    (3.210e1, 8.005e5),
-    (7.420e1, 4.272e4),
-    (1.796e2, 2.280e3),
-    (4.588e2, 1.217e2),
-    (1.232e3, 6.493e0),
-    (2.956e3, 3.465e-1),
-    (5.286e3, 1.849e-2),
-    (6.531e3, 9.869e-4),
-    (5.727e3, 5.267e-5),
-    (3.848e3, 2.811e-6),
-    (2.160e3, 1.500e-7),
-];
-const E_INF: f64 = 412.8;
-const NU: f64 = 0.35;
+const E_INF: f64 = ASPHALT_E_INF;
+const NU: f64 = ASPHALT_NU;
 /// The creep test's uniaxial stress [MPa].
 const SIGMA0: f64 = 0.1;
-
-/// The Carson inverse of a Prony relaxation function: its creep compliance.
-struct Compliance {
-    long_term: f64,
-    /// (1/(s_j F′(s_j)), s_j).
-    terms: Vec<(f64, f64)>,
-}
-
-impl Compliance {
-    /// Of f(t) = `long_term` + Σ f_i e^{−t/ρ_i} for `terms` (f_i, ρ_i): one root of F in each gap
-    /// between the poles −1/ρ_i and one between the slowest pole and 0, found by bisection in log|s|.
-    fn of(long_term: f64, terms: &[(f64, f64)]) -> Self {
-        let f = |s: f64| long_term + terms.iter().map(|(fi, rho)| fi * s / (s + 1.0 / rho)).sum::<f64>();
-        let df = |s: f64| {
-            terms
-                .iter()
-                .map(|(fi, rho)| fi / rho / (s + 1.0 / rho).powi(2))
-                .sum::<f64>()
-        };
-        let mut poles: Vec<f64> = terms.iter().map(|(_, rho)| 1.0 / rho).collect();
-        poles.sort_by(f64::total_cmp);
-        let mut roots = Vec::new();
-        for i in 0..poles.len() {
-            // s in (−poles[i+1], −poles[i]), or (−poles[0], 0) as s = −e^x: F decreases in x
-            let lo = if i == 0 {
-                (poles[0] * 1e-30).ln()
-            } else {
-                poles[i - 1].ln()
-            };
-            let hi = poles[i].ln();
-            let (mut a, mut b) = (lo, hi);
-            for _ in 0..200 {
-                let mid = 0.5 * (a + b);
-                if f(-mid.exp()) > 0.0 {
-                    a = mid;
-                } else {
-                    b = mid;
-                }
-            }
-            roots.push(-(0.5 * (a + b)).exp());
-        }
-        Compliance {
-            long_term: 1.0 / long_term,
-            terms: roots.iter().map(|&s| (1.0 / (s * df(s)), s)).collect(),
-        }
-    }
-
-    fn at(&self, t: f64) -> f64 {
-        self.long_term + self.terms.iter().map(|(c, s)| c * (s * t).exp()).sum::<f64>()
-    }
-}
 
 /// The relaxation modulus of `terms` (E_i, ρ_i) with constant ν as a scene's material: κ and G
 /// in proportion to E.
@@ -107,29 +41,6 @@ fn proportional_material(plane: Option<&str>, e_inf: f64, terms: &[(f64, f64)]) 
         series(kb),
         series(kg)
     )
-}
-
-/// The faces of group `from` whose nodes all satisfy `keep`, as a new group `name`.
-fn sub_group(mesh: &mut Mesh<3>, from: &str, name: &str, keep: impl Fn(&[f64; 3]) -> bool) {
-    let facets: Vec<Facet> = mesh
-        .groups
-        .iter()
-        .find(|g| g.name.as_deref() == Some(from))
-        .unwrap()
-        .facets
-        .iter()
-        .filter(|f| f.nodes().iter().all(|&p| keep(&mesh.points[p])))
-        .cloned()
-        .collect();
-    let tag = 100 + mesh.groups.len() as i32;
-    mesh.groups.push(PhysicalGroup {
-        dim: 2,
-        tag,
-        name: Some(name.into()),
-        facets,
-        cells: vec![],
-        nodes: vec![],
-    });
 }
 
 /// The unit cube on rollers (u_x = 0 on x = 0, u_y = 0 on y = 0, u_z = 0 on z = 0), pulled by σ(t)

@@ -231,7 +231,16 @@ impl<const D: usize> FileSink<D> {
             None => None,
         };
         let progress = progress.then(|| {
-            let bar = indicatif::ProgressBar::new(sim.time.steps().map_or(0, |n| n as u64 + 1));
+            // automatic steps: a spinner with the step and its time (their number is not known)
+            let Some(steps) = sim.time.steps() else {
+                let spinner = indicatif::ProgressBar::new_spinner();
+                spinner.set_style(
+                    indicatif::ProgressStyle::with_template("{spinner} step {pos} {elapsed_precise} {msg}")
+                        .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+                );
+                return spinner;
+            };
+            let bar = indicatif::ProgressBar::new(steps as u64 + 1);
             bar.set_style(
                 indicatif::ProgressStyle::with_template(
                     "{spinner} step {pos}/{len} [{bar:30}] {elapsed_precise} eta {eta} {msg}",
@@ -282,9 +291,10 @@ impl<const D: usize> FrameSink<D> for FileSink<D> {
         crate::alloc::record_progress(self.steps_done, self.last_written);
         if let Some(bar) = &self.progress {
             bar.set_position(view.step as u64 + 1);
-            if let Some(o) = view.outcome {
-                bar.set_message(format!("{} Newton it., {} on bound", o.iterations, o.active));
-            }
+            let contact = view.outcome.map_or(String::new(), |o| {
+                format!(", {} Newton it., {} on bound", o.iterations, o.active)
+            });
+            bar.set_message(format!("t = {:.4e}{contact}", view.time));
         }
     }
 

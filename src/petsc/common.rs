@@ -130,6 +130,14 @@ pub(super) fn unsupported<const D: usize>(
              material.formulation = \"standard\" (the element then locks)"
         ));
     }
+    if let crate::time::Schedule::Automatic(_) = sim.time {
+        return Err(format!(
+            "{origin}: time.tolerance asks for automatic steps (docs/method.md §20.4), whose error estimate the \
+             PETSc backend does not distribute yet: run this scene without --backend petsc, or give the steps — \
+             time.first_step with time.steps_per_decade (steps growing with time, which run on PETSc), time.times \
+             or time.steps"
+        ));
+    }
     match sim.materials.memory() {
         Some(m) if m.channels().len() > 1 => Err(format!(
             "{origin}: the memory has {} channels (tensors that are not proportional — own bulk and shear moduli \

@@ -8,6 +8,9 @@
 //! * 2D, `gamma3.png`/`.svg`: u_ν and the contact pressure along Γ₃ against arc length (so a
 //!   vertical or curved Γ₃ works) at chosen times (`--times`; for the paper's scene the times of
 //!   its Fig. 2, docs/example.md), with the bound g in the u_ν panel.
+//! * 2D, `history.png`/`.svg` (three output times or more): the largest u_ν on Γ₃ at every output
+//!   time — an indentation's depth, a creep curve — on a logarithmic time axis when the times span
+//!   two decades or more.
 //! * 2D with friction, `gamma3_zones.png`/`.svg`: the stick, slip and separated nodes along Γ₃
 //!   at every output time (docs/method.md §17.5).
 //! * 3D, `gamma3_map.png`/`.svg`: u_ν and the pressure over Γ₃ as colour maps (with friction, a
@@ -21,6 +24,8 @@ mod deformed;
 mod error;
 
 mod gamma3;
+
+mod history;
 
 pub mod kit;
 

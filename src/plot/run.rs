@@ -212,7 +212,18 @@ pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, P
         let (wanted, why) = match &options.times {
             Some(t) => (t.clone(), "chosen times".to_string()),
             None if paper => (FIG2_TIMES.to_vec(), "the paper's Fig. 2 times".to_string()),
-            None => (evenly_spaced(&available, 6), "evenly spaced output times".to_string()),
+            None => {
+                let spread = evenly_spaced(&available, 6);
+                let positive: Vec<f64> = available.iter().copied().filter(|&t| t > 0.0).collect();
+                let log =
+                    positive.len() > 6 && positive[positive.len() - 1] / positive[0] >= super::history::LOG_AXIS_FROM;
+                let why = if log {
+                    "output times spread in log t"
+                } else {
+                    "evenly spaced output times"
+                };
+                (spread, why.to_string())
+            }
         };
         let chosen = nearest_times(&available, &wanted);
         let start = mesh.points[g3.nodes[g3.order[0]]];
@@ -244,6 +255,21 @@ pub fn plot_run(run_dir: &Path, options: &PlotOptions) -> Result<Vec<PathBuf>, P
         let (png, svg) = pictures(run_dir, "gamma3")?;
         render_gamma3(&png, Some(&svg), &figure).map_err(fail)?;
         written.extend([png, svg]);
+        // the largest u_ν over time: an indentation's depth, a creep curve
+        if g3.times.len() >= 3 {
+            let history = super::history::HistoryFigure {
+                title: format!("{name}: the largest u_ν on Γ₃ at every output time"),
+                y_label: "largest normal displacement u_ν on Γ₃".into(),
+                points: g3
+                    .times
+                    .iter()
+                    .map(|(t, rows)| (*t, rows.iter().map(|r| r.0).fold(f64::NEG_INFINITY, f64::max)))
+                    .collect(),
+            };
+            let (png, svg) = pictures(run_dir, "history")?;
+            super::history::render_history(&png, Some(&svg), &history).map_err(fail)?;
+            written.extend([png, svg]);
+        }
         // with friction: the zones at every output time (docs/method.md §17.5)
         if g3.friction.len() == g3.times.len() && !g3.friction.is_empty() {
             let zones = super::zones::ZonesFigure {
@@ -306,12 +332,19 @@ pub(super) fn is_paper_scene(scene: &Scene) -> bool {
 }
 
 /// Up to `count` of the times (t = 0, the unloaded start, left out when there are others),
-/// evenly spaced by index, always including the last.
+/// evenly spaced by index, always including the last; spread evenly in log t when they span
+/// decades (steps growing with time, docs/method.md §20), so that early times are drawn too.
 pub(super) fn evenly_spaced(times: &[f64], count: usize) -> Vec<f64> {
     let later: Vec<f64> = times.iter().copied().filter(|t| *t != 0.0).collect();
     let later = if later.is_empty() { times.to_vec() } else { later };
     if later.len() <= count {
         return later;
+    }
+    let (first, last) = (later[0], later[later.len() - 1]);
+    if first > 0.0 && last / first >= super::history::LOG_AXIS_FROM {
+        return (0..count)
+            .map(|i| first * (last / first).powf(i as f64 / (count - 1) as f64))
+            .collect();
     }
     (1..=count)
         .map(|i| later[(i * later.len()).div_ceil(count) - 1])

@@ -56,6 +56,7 @@ impl Scene {
         for o in overrides {
             overrides::apply(&mut tree, o)?;
         }
+        time::replace_stepping(&mut tree, overrides);
         validate::check_keys(&tree, origin)?;
         // Deserialise from text, so that a type error shows the offending line with its key
         // (the original text when there are no overrides, keeping the file's line numbers).

@@ -222,6 +222,47 @@ impl TimeSpec {
     }
 }
 
+/// The keys of each way of stepping (docs/scenes.md "Time steps").
+const UNIFORM: &[&str] = &["steps"];
+const GEOMETRIC: &[&str] = &["first_step", "steps_per_decade", "growth"];
+const LISTED: &[&str] = &["times"];
+const AUTOMATIC: &[&str] = &["tolerance", "first_step", "min_step", "max_step"];
+
+/// `--set` of a way of stepping replaces the scene file's (`--set time.tolerance=1e-3` on a scene
+/// with `steps = 32` asks for automatic steps instead, not for both): the file's keys of the other
+/// ways that no `--set` gives are dropped from the tree before it is read.
+pub(super) fn replace_stepping(tree: &mut toml::Value, overrides: &[String]) {
+    let set: Vec<String> = overrides
+        .iter()
+        .filter_map(|o| o.split_once('=').map(|(k, _)| k.trim().to_string()))
+        .filter_map(|k| k.strip_prefix("time.").map(str::to_string))
+        .collect();
+    let has = |k: &str| set.iter().any(|s| s == k);
+    let file_has = |tree: &toml::Value, k: &str| tree.get("time").and_then(|t| t.get(k)).is_some();
+    let mode: &[&str] = if has("tolerance") || has("min_step") || has("max_step") {
+        AUTOMATIC
+    } else if has("steps") {
+        UNIFORM
+    } else if has("times") {
+        LISTED
+    } else if has("steps_per_decade") || has("growth") {
+        GEOMETRIC
+    } else if has("first_step") && file_has(tree, "tolerance") {
+        AUTOMATIC
+    } else if has("first_step") {
+        GEOMETRIC
+    } else {
+        return;
+    };
+    if let Some(time) = tree.get_mut("time").and_then(|t| t.as_table_mut()) {
+        for key in UNIFORM.iter().chain(GEOMETRIC).chain(LISTED).chain(AUTOMATIC) {
+            if !mode.contains(key) && !has(key) {
+                time.remove(*key);
+            }
+        }
+    }
+}
+
 /// `[time]`, `time.quadrature` against the memory, and `output.times`.
 pub fn check(scene: &Scene, origin: &str) -> Result<Stepping, SceneError> {
     let stepping = scene.time.stepping(origin)?;

@@ -4,7 +4,8 @@
 //! fit, naming the figures and what would make it fit.
 //!
 //! The parts, each from what the run will allocate (bytes):
-//! * the factor: 8 per stored entry of L (faer's supernodal storage);
+//! * the factor: 8 per stored entry of L (faer's supernodal storage), times the factors of step
+//!   matrices held at once (two where steps of several sizes need their own, docs/method.md §20.3);
 //! * the matrices: K_A (kept without a memory term, for the products and K_A alone), the step
 //!   matrix while it is factorised, the memory terms' K_j (node blocks): 16 per stored entry of
 //!   K_A each;
@@ -59,7 +60,8 @@ impl MemoryEstimate {
     /// and the symbolic analysis `analysis`.
     pub fn new<const D: usize>(sim: &Simulation<D>, analysis: &Analysis, matrix_entries: usize) -> Self {
         let n = sim.dofs.n() as u64;
-        let factor = 8 * analysis.factor_entries() as u64;
+        // the step matrices' factors held at once (docs/method.md §20.3)
+        let factor = 8 * analysis.factor_entries() as u64 * super::operators::held_at_most(sim) as u64;
         let channels = sim.materials.memory().map_or(0, |m| m.channels().len()) as u64;
         let matrices = (16.0 * matrix_entries as f64 * (MATRIX_COPIES + channels.saturating_sub(1) as f64)) as u64;
         let mut parts = vec![("factor", factor), ("matrices", matrices)];

@@ -19,7 +19,7 @@ mod pairs;
 pub mod plan;
 pub mod reactions;
 pub mod rigid;
-mod schedule;
+pub mod schedule;
 pub mod setup;
 pub mod stats;
 pub mod step;

@@ -21,6 +21,30 @@ use crate::linalg::Counters;
 /// around it (a fixed grid cut to land on an output time; an automatic step cut and grown back).
 pub(crate) const CAPACITY: usize = 2;
 
+/// How many step operators `sim`'s run holds at once at most after step 0: one when every step
+/// matrix is a multiple of K_A (or there is no memory), else up to [`CAPACITY`] (a fixed grid's
+/// distinct step matrices, when fewer).
+pub(super) fn held_at_most<const D: usize>(sim: &Simulation<D>) -> usize {
+    let Some(memory) = sim.materials.memory() else {
+        return 1;
+    };
+    if sim.proportional_memory().is_some() {
+        return 1;
+    }
+    match sim.time.grid() {
+        Some(grid) => {
+            // (K_A of a loaded step 0 is dropped before step 1: not counted, as before variable steps)
+            let runs: Vec<(usize, Vec<f64>)> = grid
+                .size_runs()
+                .into_iter()
+                .map(|(n, k)| (n, memory.step_coefficients(k, sim.rules)))
+                .collect();
+            Operators::count(false, &runs).0.min(CAPACITY)
+        }
+        None => CAPACITY,
+    }
+}
+
 /// β's bits: the key of a step matrix (two steps of one size have the same bits); all zero is
 /// K_A alone, the empty key.
 fn key(beta: &[f64]) -> Vec<u64> {
@@ -97,6 +121,12 @@ impl Operators {
             None => (beta.to_vec(), None),
         };
         let k = key(&wanted);
+        // on a fixed grid, an operator no step will use again is dropped at once (K_A of a
+        // loaded step 0 after it, a landing step's after it)
+        if let Some(runs) = &self.future {
+            self.held
+                .retain(|h| h.key == k || next_use(runs, step.saturating_sub(1), &h.key) != usize::MAX);
+        }
         let at = match self.held.iter().position(|h| h.key == k) {
             Some(at) => at,
             None => {

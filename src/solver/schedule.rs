@@ -15,6 +15,13 @@ pub const FIRST_STEP_OF_SHORTEST_TIME: f64 = 0.1;
 /// the shortest relaxation time to be followed within the tolerance (docs/method.md §20.4).
 pub const SMALLEST_OF_FIRST: f64 = 1e-4;
 
+/// The automatic steps' first step when `[time]` gives none: a tenth of the shortest relaxation
+/// time of the Prony terms, at most a tenth of T (docs/method.md §20.4). Also the lower end of a
+/// study's compared times (src/study).
+pub fn default_first_step(final_time: f64, shortest_relaxation_time: Option<f64>) -> f64 {
+    (FIRST_STEP_OF_SHORTEST_TIME * shortest_relaxation_time.unwrap_or(final_time)).min(0.1 * final_time)
+}
+
 /// The schedule of `scene` for `materials`; `proportional` when every step matrix is a multiple
 /// of one (then sizes need not repeat).
 pub fn build(scene: &Scene, materials: &Materials, proportional: bool) -> Result<Schedule, SolveError> {
@@ -52,11 +59,8 @@ pub fn build(scene: &Scene, materials: &Materials, proportional: bool) -> Result
             min,
             max,
         } => {
-            let shortest = materials
-                .memory()
-                .and_then(|m| m.shortest_relaxation_time())
-                .unwrap_or(t);
-            let first_step = first.unwrap_or((FIRST_STEP_OF_SHORTEST_TIME * shortest).min(0.1 * t));
+            let shortest = materials.memory().and_then(|m| m.shortest_relaxation_time());
+            let first_step = first.unwrap_or(default_first_step(t, shortest));
             let mut stops: Vec<f64> = outputs.iter().copied().filter(|&s| s > 0.0 && s < t).collect();
             stops.sort_by(f64::total_cmp);
             stops.dedup();

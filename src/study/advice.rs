@@ -6,7 +6,7 @@ use super::target::{self, Candidate, CostModel, CostSample, ErrorModel, ErrorSam
 use super::{Keep, RunOptions, Study};
 use crate::mesh::Mesh;
 use crate::scene::Scene;
-use crate::study::spec::StudySpec;
+use crate::study::spec::{StudySpec, TimeLevels};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -33,6 +33,30 @@ pub(super) struct TargetContext<'a> {
     pub(super) wide: bool,
     /// Generated meshes are the 3D slab (n divisible by 4), not the rectangle.
     pub(super) solid: bool,
+}
+
+/// `--target` plans uniform steps only (docs/method.md §6.1): its error model is C_k k^q in the
+/// uniform step k = T/N and its cost model a cost per step, neither of which describes steps per
+/// decade or automatic steps. The study's first level that is not uniform is named in the refusal.
+pub(super) fn uniform_only(name: &str, levels: &TimeLevels) -> Result<(), String> {
+    let mut all = std::iter::once((String::from("the reference"), vec![levels.reference])).chain(
+        levels
+            .k_paths
+            .iter()
+            .enumerate()
+            .map(|(i, l)| (format!("k_paths[{i}]"), l.clone())),
+    );
+    match all.find_map(|(who, l)| Some((who, l.into_iter().find(|x| !x.is_uniform())?))) {
+        None => Ok(()),
+        Some((who, level)) => Err(format!(
+            "{name}: --target: {who} steps by {} ({}), but the planner models uniform steps only: its error model \
+             e ≈ C_h h^p + C_k k^q and its cost per step are in k = T/N (docs/method.md §6.1), and say nothing of \
+             steps per decade or automatic steps. Plan on a study whose reference and k paths give `steps`, or run \
+             this one without --target",
+            level.kind().key(),
+            level.label()
+        )),
+    }
 }
 
 /// n = 1/h of a run (h is set to 1/n by the study).

@@ -1,12 +1,15 @@
 //! Running a study file (docs/method.md §6): the plan's runs, the reference, the tables and the
-//! plots, written to the study's directory.
+//! plots, written to the study's directory. The k paths refine uniform steps, steps per decade
+//! or the tolerance of automatic steps (docs/method.md §20), each against its own parameter.
 
+use super::level::{LevelKind, TimeLevel};
 use super::report::{self};
 use super::{plot, run_plan, Keep, Refinement, RunErrors, RunRecord, StudyPlan};
 use crate::mesh::structured::{block, rectangle, CellShape, SolidShape};
 use crate::mesh::{AnyMesh, Mesh};
 use crate::scene::Scene;
 use crate::study::advice::target_sections;
+use crate::study::advice::uniform_only;
 use crate::study::advice::TargetContext;
 use crate::study::spec::published;
 use crate::study::spec::read;
@@ -73,14 +76,15 @@ pub fn run_spec_with(
     let mut overrides = spec.set.clone();
     overrides.extend_from_slice(extra);
     let base = Scene::load(scene_path.as_deref(), &overrides).map_err(|e| e.to_string())?;
-    let make_scene = |steps: usize| {
+    let levels = spec.time_levels(name, base.time.final_time, automatic_first_step(&base))?;
+    if !targets.errors.is_empty() {
+        uniform_only(name, &levels)?;
+    }
+    // the scene's own way of stepping is replaced by the level's; its final time and quadrature
+    // stay (docs/method.md §20)
+    let make_scene = |level: &TimeLevel| {
         let mut s = base.clone();
-        s.time = crate::scene::TimeSpec {
-            final_time: s.time.final_time,
-            steps: Some(steps),
-            quadrature: s.time.quadrature,
-            ..Default::default()
-        };
+        s.time = level.time_spec(&s.time, spec.first_step);
         s
     };
     // Generated meshes: the paper's rectangle (quad, tri) or its slab (0,2)×(0,1)×(0,0.25) with
@@ -153,12 +157,16 @@ pub fn run_spec_with(
         }
     }
     let solid = !three.is_empty() || (two.is_empty() && matches!(spec.shape.as_str(), "hex" | "tet"));
-    let t = base.time.final_time;
     let plan = StudyPlan {
-        reference: (spec.reference.n, spec.reference.steps),
+        reference: (spec.reference.n, levels.reference),
         h_paths: spec.h_paths.iter().map(|p| (p.steps, p.n.clone())).collect(),
-        k_paths: spec.k_paths.iter().map(|p| (p.n, p.steps.clone())).collect(),
-        keep: Keep::MultiplesOf(spec.compare_every.unwrap_or(t / 16.0)),
+        k_paths: spec
+            .k_paths
+            .iter()
+            .zip(&levels.k_paths)
+            .map(|(p, l)| (p.n, l.clone()))
+            .collect(),
+        keep: levels.keep.clone(),
     };
     let setup = Setup {
         spec,
@@ -224,7 +232,7 @@ pub(super) struct Setup<'a> {
     name: &'a str,
     targets: &'a Targets,
     base: &'a Scene,
-    make_scene: &'a dyn Fn(usize) -> Scene,
+    make_scene: &'a dyn Fn(&TimeLevel) -> Scene,
     plan: StudyPlan,
     started: Instant,
     wide: bool,
@@ -271,11 +279,11 @@ pub(super) fn run_in<const D: usize>(
     let _ = writeln!(md, "# Convergence study `{name}`\n");
     let _ = writeln!(
         md,
-        "Reference h = 1/{}, k = T/{}; errors at T: the H¹ seminorm |u_ref − u_hk|₁ and the L² norm, coarse solutions \
+        "Reference h = 1/{}, {}; errors at T: the H¹ seminorm |u_ref − u_hk|₁ and the L² norm, coarse solutions \
          carried to the reference mesh by nodal interpolation (exact for nested meshes). Meshes: {}. Wall time of \
          the study {:.1} s.\n",
         plan.reference.0,
-        plan.reference.1,
+        level_text(&plan.reference.1, spec.first_step),
         if files.is_empty() {
             format!(
                 "the paper's {}, {} {} cells",
@@ -288,6 +296,19 @@ pub(super) fn run_in<const D: usize>(
         },
         started.elapsed().as_secs_f64()
     );
+    if let (Keep::Times(times), false) = (&plan.keep, uniform_study(plan)) {
+        let _ = writeln!(
+            md,
+            "The max-over-time error compares t = {} ({}): levels of the reference and of every run whose steps are \
+             not uniform (docs/method.md §20); a run of uniform steps compares those of them on its own grid.\n",
+            times.iter().map(|t| format!("{t}")).collect::<Vec<_>>().join(", "),
+            if spec.compare_at.is_some() {
+                "compare_at"
+            } else {
+                "one a decade, and T"
+            }
+        );
+    }
     let h_rows = report::rows_of(&rows, Refinement::H);
     let k_rows = report::rows_of(&rows, Refinement::K);
     for (i, p) in spec.h_paths.iter().enumerate() {
@@ -309,18 +330,35 @@ pub(super) fn run_in<const D: usize>(
             );
         }
     }
-    for (j, p) in spec.k_paths.iter().enumerate() {
+    for (j, (p, (_, levels))) in spec.k_paths.iter().zip(&plan.k_paths).enumerate() {
         let these: Vec<_> = k_rows
             .iter()
             .filter(|r| r.path == study.paths[spec.h_paths.len() + j].name)
             .copied()
             .collect();
-        let title = format!("k refined at h = 1/{}", p.n);
-        let fit = fitted_line(study.fitted_order(&study.paths[spec.h_paths.len() + j]), "k");
+        let kind = levels[0].kind();
+        let title = match kind {
+            LevelKind::Steps => format!("k refined at h = 1/{}", p.n),
+            LevelKind::PerDecade => format!(
+                "Steps per decade refined at h = 1/{} (from k₁ = {})",
+                p.n,
+                spec.first_step.unwrap_or(f64::NAN)
+            ),
+            LevelKind::Tolerance => format!("Tolerance refined at h = 1/{}", p.n),
+        };
+        let order = study.fitted_order(&study.paths[spec.h_paths.len() + j]);
+        let fit = match kind {
+            LevelKind::Steps => fitted_line(order, "k"),
+            _ => format!(
+                "The parameter is {}. {}",
+                kind.parameter_words(),
+                fitted_line(order, kind.symbol())
+            ),
+        };
         if p.published.is_empty() {
             let _ = writeln!(md, "## {title}\n\n{}\n{fit}\n", report::path_markdown(&these));
         } else {
-            let ks: Vec<f64> = p.steps.iter().map(|s| t / *s as f64).collect();
+            let ks: Vec<f64> = levels.iter().map(|l| l.parameter(t)).collect();
             let _ = writeln!(
                 md,
                 "## {title}\n\n{}\n{fit}\n",
@@ -366,8 +404,10 @@ pub(super) fn run_in<const D: usize>(
                 })
                 .collect();
             let title = format!(
-                "u_ν along Γ₃ ({}) of the reference run, h = 1/{}, k = T/{}",
-                base.groups.contact, plan.reference.0, plan.reference.1
+                "u_ν along Γ₃ ({}) of the reference run, h = 1/{}, {}",
+                base.groups.contact,
+                plan.reference.0,
+                level_text(&plan.reference.1, spec.first_step)
             );
             plot::plot_gamma3(&out.join("gamma3.svg"), &title, &series)?;
             written.push("gamma3.svg".to_string());
@@ -398,12 +438,16 @@ pub(super) fn run_in<const D: usize>(
             extra,
             final_time: t,
             keep: &plan.keep,
-            reference: plan.reference,
+            reference: (
+                plan.reference.0,
+                plan.reference.1.steps().ok_or("--target plans uniform steps only")?,
+            ),
             mesh_files: files.keys().copied().collect(),
             wide: setup.wide,
             solid: D == 3,
         };
-        let section = target_sections(&study, &context, targets, make_mesh, make_scene)?;
+        let uniform_scene = |steps: usize| make_scene(&TimeLevel::Steps(steps));
+        let section = target_sections(&study, &context, targets, make_mesh, &uniform_scene)?;
         md.push_str(&section);
     }
     let write = |file: &str, text: &str| {
@@ -428,4 +472,35 @@ fn fitted_line(order: Option<f64>, parameter: &str) -> String {
         ),
         None => "(one run: no order)".into(),
     }
+}
+
+/// The reference's time levels as the report's first sentence names them: `k = T/64`, `80 steps
+/// per decade from k₁ = 0.0001`, `automatic steps to a tolerance of 1e-6`.
+fn level_text(level: &TimeLevel, first_step: Option<f64>) -> String {
+    match *level {
+        TimeLevel::Steps(n) => format!("k = T/{n}"),
+        TimeLevel::PerDecade(s) => format!("{s} steps per decade from k₁ = {}", first_step.unwrap_or(f64::NAN)),
+        TimeLevel::Tolerance(e) => match first_step {
+            Some(k) => format!("automatic steps to a tolerance of {e:e} from k₁ = {k}"),
+            None => format!("automatic steps to a tolerance of {e:e}"),
+        },
+    }
+}
+
+/// True when every level of the plan is uniform (the tables are then those of uniform studies).
+fn uniform_study(plan: &StudyPlan) -> bool {
+    plan.reference.1.is_uniform() && plan.k_paths.iter().all(|(_, l)| l.iter().all(TimeLevel::is_uniform))
+}
+
+/// The automatic steps' own first step for `scene` (src/solver/schedule.rs, docs/method.md §20.4):
+/// a tenth of the shortest relaxation time of its Prony terms, at most a tenth of T. The lower end
+/// of a study's compared times when a tolerance path gives no `first_step`.
+fn automatic_first_step(scene: &Scene) -> f64 {
+    let t = scene.time.final_time;
+    let shortest = scene
+        .constants()
+        .iter()
+        .filter_map(|c| c.model(None).ok()?.1?.shortest_relaxation_time())
+        .reduce(f64::min);
+    crate::solver::schedule::default_first_step(t, shortest)
 }

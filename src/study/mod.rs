@@ -4,6 +4,8 @@
 //!
 //! * [`interpolate`]: point location and interpolation of P1/Q1 fields between meshes;
 //! * [`runner`]: one run ([`run`]) and a [`Study`] that evaluates runs as they are added;
+//! * [`level`]: a run's time levels ([`TimeLevel`]: uniform, per decade, to a tolerance) and the
+//!   parameter its order is measured against;
 //! * [`report`]: Markdown and CSV tables;
 //! * [`plot`]: log–log error plots, the Γ₃ normal displacement, the deformed mesh;
 //! * [`target`]: the error and cost models of a study and the cheapest run for a target error.
@@ -33,6 +35,8 @@ mod format;
 
 pub mod interpolate;
 
+pub mod level;
+
 pub mod plot;
 
 pub mod report;
@@ -46,6 +50,8 @@ pub mod target;
 pub use advice::Targets;
 
 pub use interpolate::{boundary_sagitta, interpolate_nodal, Extension, Locator, Transfer};
+
+pub use level::TimeLevel;
 
 pub use runner::run_plan;
 

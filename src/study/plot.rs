@@ -3,6 +3,7 @@
 //! (no text, so no font is needed for the bitmap).
 
 use super::format::fraction;
+use super::level::LevelKind;
 use super::runner::{Refinement, Row};
 use crate::plot::kit::{err, sci, FONT};
 use plotters::coord::Shift;
@@ -223,64 +224,116 @@ fn group_by(rows: &[Row], key: impl Fn(&Row) -> f64, along: impl Fn(&Row) -> f64
 }
 
 /// H¹-seminorm error at T against h, one line per k (groups of ≥ 2 runs), with an O(h) guide.
-/// Returns false (and writes nothing) when no two runs share a k: nothing to draw.
+/// Returns false (and writes nothing) when no two runs share a k: nothing to draw. Runs of a
+/// level that is not uniform (steps per decade, a tolerance) are on no h line.
 pub fn plot_error_vs_h(path: &Path, rows: &[Row]) -> Result<bool, String> {
-    plot_error_against(
-        path,
-        rows,
-        |r| (r.summary.h, r.summary.k),
-        ("h", "k"),
-        ("O(h)", 1.0),
-        "the mesh size",
-    )
+    let uniform: Vec<Row> = rows.iter().filter(|r| r.summary.is_uniform()).cloned().collect();
+    let series = lines_by(&uniform, |r| (r.summary.h, r.summary.k), "k");
+    if series.is_empty() {
+        return Ok(false);
+    }
+    let guides = guide_at_finest(&series, "O(h)", 1.0).into_iter().collect::<Vec<_>>();
+    draw_error_against(path, &series, &guides, "h", "the mesh size")?;
+    Ok(true)
 }
 
 /// H¹-seminorm error at T against k, one line per h, with an O(k²) guide; false (nothing
-/// written) when no two runs share an h.
+/// written) when no two runs share an h. A k path whose levels are not uniform is a line of its
+/// own against its parameter (docs/method.md §6): the relative step 10^(1/s) − 1 of s steps per
+/// decade (the guide's slope 2 holds for it too), or the tolerance; each point labelled with its
+/// level.
 pub fn plot_error_vs_k(path: &Path, rows: &[Row]) -> Result<bool, String> {
-    plot_error_against(
-        path,
-        rows,
-        |r| (r.summary.k, r.summary.h),
-        ("k", "h"),
-        ("O(k²)", 2.0),
-        "the time step",
-    )
-}
-
-/// The H¹ error at T against the parameter `param(row).0`, one line per value of `param(row).1`.
-fn plot_error_against(
-    path: &Path,
-    rows: &[Row],
-    param: impl Fn(&Row) -> (f64, f64),
-    (x_name, line_name): (&str, &str),
-    (guide_name, guide_order): (&str, f64),
-    what: &str,
-) -> Result<bool, String> {
-    let groups = group_by(rows, |r| param(r).1, |r| param(r).0);
-    if groups.is_empty() {
+    let uniform: Vec<Row> = rows.iter().filter(|r| r.summary.is_uniform()).cloned().collect();
+    let mut series = lines_by(&uniform, |r| (r.summary.k, r.summary.h), "h");
+    let mut kinds: Vec<LevelKind> = Vec::new();
+    if !series.is_empty() {
+        kinds.push(LevelKind::Steps);
+    }
+    let mut names: Vec<&str> = Vec::new();
+    for r in rows
+        .iter()
+        .filter(|r| r.refine == Refinement::K && !r.summary.is_uniform())
+    {
+        if !names.contains(&r.path.as_str()) {
+            names.push(&r.path);
+        }
+    }
+    let mut tolerance_only = Vec::new();
+    for name in names {
+        let on: Vec<&Row> = rows.iter().filter(|r| r.path == name).collect();
+        let kind = on[0].summary.level.map_or(LevelKind::Steps, |l| l.kind());
+        if !kinds.contains(&kind) {
+            kinds.push(kind);
+        }
+        let line = Series {
+            name: name.to_string(),
+            points: on
+                .iter()
+                .map(|r| (r.summary.k, r.errors.at_final.h1_seminorm))
+                .collect(),
+            labels: on.iter().map(|r| r.summary.k_text()).collect(),
+        };
+        if kind == LevelKind::Tolerance {
+            tolerance_only.push(line);
+        } else {
+            series.push(line);
+        }
+    }
+    // the slope-2 guide through the lines of steps (uniform, per decade), not through tolerances
+    let guide = if kinds.iter().all(|k| *k == LevelKind::Steps) {
+        "O(k²)"
+    } else {
+        "slope 2"
+    };
+    let guides = guide_at_finest(&series, guide, 2.0).into_iter().collect::<Vec<_>>();
+    series.extend(tolerance_only);
+    if series.is_empty() {
         return Ok(false);
     }
-    let series: Vec<Series> = groups
+    if kinds == [LevelKind::Steps] {
+        draw_error_against(path, &series, &guides, "k", "the time step")?;
+    } else {
+        let x: Vec<&str> = kinds
+            .iter()
+            .map(|k| match k {
+                LevelKind::Steps => "k = T/N",
+                LevelKind::PerDecade => "10^(1/s) − 1 for s steps a decade",
+                LevelKind::Tolerance => "the tolerance",
+            })
+            .collect();
+        draw_error_against(path, &series, &guides, &x.join("; "), "the time levels")?;
+    }
+    Ok(true)
+}
+
+/// One line per value of `param(row).1` (groups of ≥ 2 runs), against `param(row).0`.
+fn lines_by(rows: &[Row], param: impl Fn(&Row) -> (f64, f64), line_name: &str) -> Vec<Series> {
+    group_by(rows, |r| param(r).1, |r| param(r).0)
         .iter()
         .map(|(fixed, v)| Series {
             name: format!("{line_name} = {}", fraction(*fixed)),
             points: v.iter().map(|r| (param(r).0, r.errors.at_final.h1_seminorm)).collect(),
             labels: vec![],
         })
-        .collect();
-    let guides = guide_at_finest(&series, guide_name, guide_order)
-        .into_iter()
-        .collect::<Vec<_>>();
+        .collect()
+}
+
+/// The H¹ error at T of the series against `x_name`.
+fn draw_error_against(
+    path: &Path,
+    series: &[Series],
+    guides: &[Guide],
+    x_name: &str,
+    what: &str,
+) -> Result<(), String> {
     loglog_svg(
         path,
         &format!("H¹-seminorm error at T against {what}"),
         x_name,
         "|u_ref − u_hk|₁ at T",
-        &series,
-        &guides,
-    )?;
-    Ok(true)
+        series,
+        guides,
+    )
 }
 
 /// Work–precision: H¹ error at T against wall time, one line per refinement path, each point
@@ -310,7 +363,8 @@ pub fn plot_work_precision(path: &Path, rows: &[Row]) -> Result<bool, String> {
                     .iter()
                     .map(|r| match r.refine {
                         Refinement::H => format!("h={}", fraction(r.summary.h)),
-                        Refinement::K => format!("k={}", fraction(r.summary.k)),
+                        Refinement::K if r.summary.is_uniform() => format!("k={}", fraction(r.summary.k)),
+                        Refinement::K => r.summary.k_text(),
                     })
                     .collect(),
             }

@@ -30,7 +30,9 @@ fn mb(bytes: Option<u64>) -> Option<f64> {
     bytes.map(|b| b as f64 / (1024.0 * 1024.0))
 }
 
-/// The rows as CSV (header [`CSV_COLUMNS`]; empty fields where there is no value).
+/// The rows as CSV (header [`CSV_COLUMNS`]; empty fields where there is no value). `k` is the
+/// parameter of the time orders: T/N, the relative step of steps per decade, or the tolerance
+/// (docs/method.md §6).
 pub fn csv(rows: &[Row]) -> String {
     // through the csv crate: a path's name is quoted when it needs to be (RFC 4180)
     let mut writer = ::csv::WriterBuilder::new()
@@ -72,7 +74,8 @@ fn ord(o: Option<f64>) -> String {
     o.map_or("–".to_string(), |o| format!("{o:.2}"))
 }
 
-/// The rows as one Markdown table (same columns as the CSV, h and k as fractions).
+/// The rows as one Markdown table (same columns as the CSV, h and k as fractions; a level that
+/// is not uniform as the level, `10/decade` or `tol 1e-3`).
 pub fn markdown(rows: &[Row]) -> String {
     let mut s = String::new();
     let _ = writeln!(
@@ -91,7 +94,7 @@ pub fn markdown(rows: &[Row]) -> String {
             "| {} | {} | {} | {} | {} | {} | {:.6e} | {} | {:.6e} | {} | {:.6e} | {} | {:.2} | {:.3} | {:.3} | {:.3} | {:.2} | {:.3} | {} | {} |",
             r.path,
             fraction(m.h),
-            fraction(m.k),
+            m.k_text(),
             m.nodes,
             m.unknowns,
             m.steps,
@@ -119,7 +122,7 @@ pub fn markdown(rows: &[Row]) -> String {
             Some(format!(
                 "h = {}, k = {}: {} reference nodes outside its mesh, the farthest by {:.3e} (allowed {:.3e})",
                 fraction(r.summary.h),
-                fraction(r.summary.k),
+                r.summary.k_text(),
                 e.points,
                 e.farthest,
                 e.allowed
@@ -141,20 +144,34 @@ pub fn markdown(rows: &[Row]) -> String {
 }
 
 /// A compact table of one path: its parameter, the H¹ and L² errors at T with the observed
-/// order between neighbouring runs, and the max-over-time H¹ error.
+/// order between neighbouring runs, and the max-over-time H¹ error. A path whose levels are not
+/// uniform shows each level (`10/decade`, `tol 1e-3`) and its number of steps.
 pub fn path_markdown(rows: &[&Row]) -> String {
     let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "| h | k | H¹ error at T | order | L² error at T | L² order | max_t H¹ error | order |"
-    );
-    let _ = writeln!(s, "|---|---|--:|--:|--:|--:|--:|--:|");
-    for r in rows {
+    let uniform = rows.iter().all(|r| r.summary.is_uniform());
+    if uniform {
         let _ = writeln!(
             s,
-            "| {} | {} | {:.6e} | {} | {:.6e} | {} | {:.6e} | {} |",
+            "| h | k | H¹ error at T | order | L² error at T | L² order | max_t H¹ error | order |"
+        );
+        let _ = writeln!(s, "|---|---|--:|--:|--:|--:|--:|--:|");
+    } else {
+        let _ = writeln!(
+            s,
+            "| h | level | steps | H¹ error at T | order | L² error at T | L² order | max_t H¹ error | order |"
+        );
+        let _ = writeln!(s, "|---|---|--:|--:|--:|--:|--:|--:|--:|");
+    }
+    for r in rows {
+        let level = if uniform {
+            r.summary.k_text()
+        } else {
+            format!("{} | {}", r.summary.k_text(), r.summary.steps)
+        };
+        let _ = writeln!(
+            s,
+            "| {} | {level} | {:.6e} | {} | {:.6e} | {} | {:.6e} | {} |",
             fraction(r.summary.h),
-            fraction(r.summary.k),
             r.errors.at_final.h1_seminorm,
             ord(r.order),
             r.errors.at_final.l2,
@@ -192,7 +209,7 @@ pub fn comparison_markdown(rows: &[&Row], published: &[Published]) -> String {
             s,
             "| {} | {} | {e:.6e} | {} | {pe} | {po} | {ratio} | {:.6e} | {} |",
             fraction(r.summary.h),
-            fraction(r.summary.k),
+            r.summary.k_text(),
             ord(r.order),
             r.errors.h1_max_over_time,
             ord(r.max_order)

@@ -5,8 +5,11 @@
 //! memory. [`Study`] holds a reference (a finer run, or an exact field) and evaluates each run
 //! against it as it is added: the H¹-seminorm and L² errors at T, the largest H¹ error over the
 //! output times both share, and then the observed orders along each refinement path.
+//! [`run_plan`] runs a [`StudyPlan`], whose k paths may step uniformly, by steps per decade or
+//! to a tolerance ([`TimeLevel`], docs/method.md §20).
 
 use super::interpolate::{boundary_sagitta, Extension, Locator};
+use super::level::TimeLevel;
 use super::seminorm_errors;
 use crate::fem::norms::{errors, FieldErrors};
 use crate::mesh::Mesh;
@@ -23,7 +26,8 @@ pub enum Keep {
     All,
     /// Only the last step.
     Final,
-    /// The steps at these times (matched to 1e-9 T).
+    /// The steps at these times (matched to 1e-9 of each time: a run over decades has its
+    /// compared times as exact levels, some far below 1e-9 T).
     Times(Vec<f64>),
     /// The steps whose time is an integer multiple of this (e.g. 1/16).
     MultiplesOf(f64),
@@ -37,7 +41,7 @@ impl Keep {
             Keep::Output => view.output,
             Keep::All => true,
             Keep::Final => t == sim.time.final_time(),
-            Keep::Times(ts) => ts.iter().any(|s| (s - t).abs() <= tol),
+            Keep::Times(ts) => ts.iter().any(|s| (s - t).abs() <= 1e-9 * s.abs()),
             Keep::MultiplesOf(dt) => {
                 let q = t / dt;
                 (q - q.round()).abs() * dt.abs() <= tol
@@ -71,8 +75,11 @@ pub struct RunRecord<const D: usize> {
     pub label: String,
     /// Mesh size (the longest cell edge unless set by [`RunOptions::h`]).
     pub h: f64,
-    /// Time step T / N.
+    /// Time step T / N (the largest step); in a study's run of a level that is not uniform, the
+    /// level's parameter ([`TimeLevel::parameter`]).
     pub k: f64,
+    /// The time level a study gave the run (None outside a [`StudyPlan`]).
+    pub level: Option<TimeLevel>,
     pub steps: usize,
     pub final_time: f64,
     pub nodes: usize,
@@ -99,6 +106,7 @@ impl<const D: usize> RunRecord<D> {
             label: self.label.clone(),
             h: self.h,
             k: self.k,
+            level: self.level,
             steps: self.steps,
             nodes: self.nodes,
             unknowns: self.unknowns,
@@ -115,7 +123,10 @@ impl<const D: usize> RunRecord<D> {
 pub struct RunSummary {
     pub label: String,
     pub h: f64,
+    /// The time parameter of the orders: T/N, or a non-uniform level's parameter.
     pub k: f64,
+    /// The time level a study gave the run (None outside a [`StudyPlan`]).
+    pub level: Option<TimeLevel>,
     pub steps: usize,
     pub nodes: usize,
     pub unknowns: usize,
@@ -126,6 +137,20 @@ pub struct RunSummary {
 }
 
 impl RunSummary {
+    /// The run's time level as a table writes it: k as a fraction (`1/32`) for uniform steps,
+    /// else the level (`10/decade`, `tol 1e-3`).
+    pub fn k_text(&self) -> String {
+        match self.level {
+            Some(level) if !level.is_uniform() => level.label(),
+            _ => super::format::fraction(self.k),
+        }
+    }
+
+    /// True unless a study gave the run a level that is not uniform.
+    pub fn is_uniform(&self) -> bool {
+        self.level.is_none_or(|l| l.is_uniform())
+    }
+
     /// Seconds of the time steps proper (loads, history, solves, contact, recovery).
     pub fn steps_seconds(&self) -> f64 {
         let p = &self.phases;
@@ -197,6 +222,7 @@ pub fn run_with<const D: usize>(
         label: options.label.clone(),
         h,
         k: stats.largest_step,
+        level: None,
         steps: stats.steps,
         final_time: sim.time.final_time(),
         nodes: sim.mesh.points.len(),
@@ -390,7 +416,13 @@ impl<const D: usize> Study<D> {
                     .iter()
                     .filter(|(t, _)| (t - run.final_time).abs() > tol)
                     .filter_map(|(t, u)| {
-                        let (_, u_ref) = reference.displacement_at.iter().find(|(s, _)| (s - t).abs() <= tol)?;
+                        // the nearest of the reference's kept times (times a decade apart from 1e-6
+                        // on may all lie within the tolerance of 1e-9 T)
+                        let (_, u_ref) = reference
+                            .displacement_at
+                            .iter()
+                            .filter(|(s, _)| (s - t).abs() <= tol)
+                            .min_by(|a, b| (a.0 - t).abs().total_cmp(&(b.0 - t).abs()))?;
                         Some((*t, at(u_ref, u).h1_seminorm))
                     });
                 let mut errors = with_max_over_time(at_final, run.final_time, others);
@@ -461,74 +493,103 @@ fn time_tolerance(final_time: f64) -> f64 {
 }
 
 /// A study on uniformly refined meshes: a mesh is named by n (h = 1/n), a time grid by its
-/// number of steps N (k = T/N).
+/// level: N uniform steps (k = T/N), s steps per decade or a tolerance (docs/method.md §20).
 #[derive(Clone, Debug)]
 pub struct StudyPlan {
-    /// (n, N) of the reference run.
-    pub reference: (usize, usize),
-    /// h-refinement paths: (N, [n coarse to fine]).
+    /// (n, level) of the reference run.
+    pub reference: (usize, TimeLevel),
+    /// h-refinement paths: (N, [n coarse to fine]), uniform steps.
     pub h_paths: Vec<(usize, Vec<usize>)>,
-    /// k-refinement paths: (n, [N coarse to fine]).
-    pub k_paths: Vec<(usize, Vec<usize>)>,
+    /// k-refinement paths: (n, [level coarse to fine]), the levels of one path of one kind.
+    pub k_paths: Vec<(usize, Vec<TimeLevel>)>,
     /// Which steps every run keeps (the reference too): the max over time compares the kept
-    /// times both have.
+    /// times both have. With [`Keep::Times`] those times are made levels of the reference and of
+    /// every run whose level is not uniform (its scene's `output.times`); a uniform run keeps those
+    /// on its own grid.
     pub keep: Keep,
 }
 
-/// Runs a [`StudyPlan`]: the reference first, then every distinct (n, N) once, in the order the
-/// paths name them, each evaluated and dropped (only the reference's fields are held).
-/// `make_mesh(n)` builds the mesh of h = 1/n, `make_scene(N)` the scene with N steps;
-/// `progress` sees each run (with its errors, None for the reference) as it finishes.
+/// Runs a [`StudyPlan`]: the reference first, then every distinct (n, level) once, in the order
+/// the paths name them, each evaluated and dropped (only the reference's fields are held).
+/// `make_mesh(n)` builds the mesh of h = 1/n, `make_scene(level)` the scene stepping by `level`;
+/// `progress` sees each run (with its errors, None for the reference) as it finishes. A run of a
+/// level that is not uniform reports the level's parameter as its `k` (docs/method.md §6).
 pub fn run_plan<const D: usize>(
     plan: &StudyPlan,
     make_mesh: &dyn Fn(usize) -> Mesh<D>,
-    make_scene: &dyn Fn(usize) -> Scene,
+    make_scene: &dyn Fn(&TimeLevel) -> Scene,
     progress: &mut dyn FnMut(&RunRecord<D>, Option<&RunErrors>),
 ) -> Result<Study<D>, String> {
-    let one = |n: usize, steps: usize, label: String| -> Result<RunRecord<D>, String> {
+    let one = |n: usize, level: &TimeLevel, label: String, reference: bool| -> Result<RunRecord<D>, String> {
         let options = RunOptions {
             label: label.clone(),
             h: Some(1.0 / n as f64),
             keep: plan.keep.clone(),
         };
-        run_with(make_mesh(n), &make_scene(steps), &options).map_err(|e| format!("run {label}: {e}"))
+        let mut scene = make_scene(level);
+        // the compared times are levels of every run that would not meet them otherwise
+        // (docs/method.md §20.1: output times are levels)
+        if let Keep::Times(times) = &plan.keep {
+            if reference || !level.is_uniform() {
+                let outputs = &mut scene.output.times;
+                outputs.extend(times.iter().copied());
+                outputs.sort_by(f64::total_cmp);
+                outputs.dedup();
+            }
+        }
+        let mut record = run_with(make_mesh(n), &scene, &options).map_err(|e| format!("run {label}: {e}"))?;
+        if !level.is_uniform() {
+            record.k = level.parameter(record.final_time);
+        }
+        record.level = Some(*level);
+        Ok(record)
     };
-    let label = |n: usize, steps: usize| format!("h=1/{n} N={steps}");
-    let (rn, rs) = plan.reference;
-    let reference = one(rn, rs, format!("reference {}", label(rn, rs)))?;
+    let label = |n: usize, level: &TimeLevel| format!("h=1/{n} {}", level.label());
+    let (rn, rl) = plan.reference;
+    let reference = one(rn, &rl, format!("reference {}", label(rn, &rl)), true)?;
     progress(&reference, None);
     let mut study = Study::against_run(reference);
-    let mut done: Vec<((usize, usize), usize)> = Vec::new();
+    let mut done: Vec<((usize, TimeLevel), usize)> = Vec::new();
     let mut index = |study: &mut Study<D>,
                      n: usize,
-                     steps: usize,
+                     level: TimeLevel,
                      progress: &mut dyn FnMut(&RunRecord<D>, Option<&RunErrors>)|
      -> Result<usize, String> {
-        if let Some(&(_, i)) = done.iter().find(|(key, _)| *key == (n, steps)) {
+        if let Some(&(_, i)) = done.iter().find(|(key, _)| *key == (n, level)) {
             return Ok(i);
         }
-        let record = one(n, steps, label(n, steps))?;
+        let record = one(n, &level, label(n, &level), false)?;
         let i = study.add_run(&record)?;
         progress(&record, Some(&study.runs[i].errors));
-        done.push(((n, steps), i));
+        done.push(((n, level), i));
         Ok(i)
     };
     for (steps, ns) in plan.h_paths.iter().filter(|(_, ns)| !ns.is_empty()) {
         let runs = ns
             .iter()
-            .map(|&n| index(&mut study, n, *steps, progress))
+            .map(|&n| index(&mut study, n, TimeLevel::Steps(*steps), progress))
             .collect::<Result<Vec<_>, _>>()?;
         let k = study.runs[runs[0]].summary.k;
         study.add_path(format!("h (k={})", super::format::fraction(k)), Refinement::H, runs)?;
     }
-    for (n, all_steps) in plan.k_paths.iter().filter(|(_, s)| !s.is_empty()) {
-        let runs = all_steps
+    for (n, levels) in plan.k_paths.iter().filter(|(_, s)| !s.is_empty()) {
+        let runs = levels
             .iter()
-            .map(|&s| index(&mut study, *n, s, progress))
+            .map(|&l| index(&mut study, *n, l, progress))
             .collect::<Result<Vec<_>, _>>()?;
-        study.add_path(format!("k (h=1/{n})"), Refinement::K, runs)?;
+        study.add_path(k_path_name(*n, &levels[0]), Refinement::K, runs)?;
     }
     Ok(study)
+}
+
+/// The name of a k path at h = 1/n by the kind of its levels: `k (h=1/64)` for uniform steps,
+/// `k per decade (h=1/64)`, `k by tolerance (h=1/64)`.
+fn k_path_name(n: usize, level: &TimeLevel) -> String {
+    match level {
+        TimeLevel::Steps(_) => format!("k (h=1/{n})"),
+        TimeLevel::PerDecade(_) => format!("k per decade (h=1/{n})"),
+        TimeLevel::Tolerance(_) => format!("k by tolerance (h=1/{n})"),
+    }
 }
 
 /// The errors at T plus the largest H¹ error over the other compared times `(t, error)`.

@@ -43,30 +43,35 @@ for t, nodes in sorted(rows.items()):
     points.append((t, (r1 - q * r2) / (1 - q)))
 t_end = points[-1][0]
 top = 1.1 * max(lee_radok(t_end), points[-1][1])
+# a logarithmic time axis (the steps grow with time, docs/method.md §20): t = 0 left out
+points = [(t, a) for t, a in points if t > 0]
+lo, hi = math.floor(math.log10(points[0][0])), math.ceil(math.log10(t_end))
 
 W, H, L, B, T, RM = 640, 400, 80, 50, 40, 20
-X = lambda t: L + (W - L - RM) * t / t_end
+X = lambda t: L + (W - L - RM) * (math.log10(t) - lo) / (hi - lo)
 Y = lambda a: H - B - (H - B - T) * a / top
 out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" font-family="sans-serif" font-size="13">',
        f'<rect width="{W}" height="{H}" fill="white"/>',
        f'<text x="{W/2}" y="22" text-anchor="middle" font-size="15">A relaxing gel under a sphere and a constant force: the contact creeps</text>',
        f'<line x1="{L}" y1="{H-B}" x2="{W-RM}" y2="{H-B}" stroke="black"/><line x1="{L}" y1="{H-B}" x2="{L}" y2="{T}" stroke="black"/>']
-for i in range(7):
-    t = t_end * i / 6
-    out.append(f'<text x="{X(t)}" y="{H-B+18}" text-anchor="middle">{t:.0f}</text>')
+for d in range(lo, hi + 1):
+    out.append(f'<line x1="{X(10**d):.1f}" y1="{T}" x2="{X(10**d):.1f}" y2="{H-B}" stroke="#eeeeee"/>')
+    out.append(f'<text x="{X(10**d):.1f}" y="{H-B+18}" text-anchor="middle">1e{d}</text>')
 for i in range(6):
     a = 0.07 * i / 5
     if a <= top:
         out.append(f'<text x="{L-6}" y="{Y(a)+4}" text-anchor="end">{a:.3f}</text>')
         out.append(f'<line x1="{L}" y1="{Y(a)}" x2="{W-RM}" y2="{Y(a)}" stroke="#dddddd"/>')
-out.append(f'<text x="{(L+W-RM)/2}" y="{H-12}" text-anchor="middle">time t (the shear relaxes with τ = 1, the creep with τ G₀/G∞ = 100)</text>')
+out.append(f'<text x="{(L+W-RM)/2}" y="{H-12}" text-anchor="middle">time t, logarithmic (the shear relaxes with τ = 1, the creep with τ G₀/G∞ = 100)</text>')
 out.append(f'<text x="18" y="{(T+H-B)/2}" transform="rotate(-90 18 {(T+H-B)/2})" text-anchor="middle">contact radius a(t)</text>')
-curve = " ".join(f"{X(t_end*s/600):.1f},{Y(lee_radok(t_end*s/600)):.1f}" for s in range(601))
+n = 600
+curve = " ".join(f"{X(10 ** (lo + (hi - lo) * s / n)):.1f},{Y(lee_radok(10 ** (lo + (hi - lo) * s / n))):.1f}"
+                 for s in range(n + 1))
 out.append(f'<polyline points="{curve}" fill="none" stroke="#1f77b4" stroke-width="2"/>')
 for t, a in points:
     out.append(f'<circle cx="{X(t):.1f}" cy="{Y(a):.1f}" r="3" fill="#d62728"/>')
-out.append(f'<line x1="{W-330}" y1="{H-B-45}" x2="{W-305}" y2="{H-B-45}" stroke="#1f77b4" stroke-width="2"/><text x="{W-298}" y="{H-B-41}">Lee &amp; Radok: a³ = (3PR/4) C(t)</text>')
-out.append(f'<circle cx="{W-318}" cy="{H-B-25}" r="3" fill="#d62728"/><text x="{W-298}" y="{H-B-21}">hvi, axisymmetric, mean dilatation</text>')
+out.append(f'<line x1="{L+20}" y1="{T+20}" x2="{L+45}" y2="{T+20}" stroke="#1f77b4" stroke-width="2"/><text x="{L+52}" y="{T+24}">Lee &amp; Radok: a³ = (3PR/4) C(t)</text>')
+out.append(f'<circle cx="{L+32}" cy="{T+40}" r="3" fill="#d62728"/><text x="{L+52}" y="{T+44}">hvi, axisymmetric, mean dilatation, 95 growing steps</text>')
 out.append("</svg>")
 open(sys.argv[2], "w").write("\n".join(out) + "\n")
 worst = max(abs(a / lee_radok(t) - 1) for t, a in points)

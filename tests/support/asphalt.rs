@@ -1,0 +1,87 @@
+//! The asphalt concrete of examples/gallery/asphalt and the creep compliance of a Prony series:
+//! the exact solutions of docs/method.md §20's tests and benchmark (tests/common.rs and
+//! benches/time_scales.rs include this file).
+#![allow(dead_code)]
+
+/// (E_i [MPa], ρ_i [s]) of the asphalt concrete of examples/gallery/asphalt: Gibson, Schwartz,
+/// Schapery & Witczak, Transportation Research Record 1860 (2003) 3–15, as transcribed in the public
+/// data file `relaxation-modulus/Gibson2003.csv` of github.com/rubensocj/viscomodule (E∞ = 412.8 MPa
+/// from the same repository; the transcription is not checked against the paper here).
+pub const ASPHALT: [(f64, f64); 12] = [
+    (1.430e1, 1.500e7),
+    (3.210e1, 8.005e5),
+    (7.420e1, 4.272e4),
+    (1.796e2, 2.280e3),
+    (4.588e2, 1.217e2),
+    (1.232e3, 6.493e0),
+    (2.956e3, 3.465e-1),
+    (5.286e3, 1.849e-2),
+    (6.531e3, 9.869e-4),
+    (5.727e3, 5.267e-5),
+    (3.848e3, 2.811e-6),
+    (2.160e3, 1.500e-7),
+];
+/// E∞ [MPa] and the Poisson's ratio held of the asphalt.
+pub const ASPHALT_E_INF: f64 = 412.8;
+pub const ASPHALT_NU: f64 = 0.35;
+
+/// The creep compliance of a Prony relaxation function f(t) = f∞ + Σ f_i e^{−t/ρ_i}: the inverse of
+/// its Carson transform F(s) = f∞ + Σ f_i s/(s + 1/ρ_i), D(t) = 1/f∞ + Σ_j e^{s_j t}/(s_j F′(s_j)) over
+/// the roots s_j < 0 of F, which interlace its poles −1/ρ_i (the exact solutions of docs/method.md
+/// §20's tests; computed here from the series, independently of hvi).
+pub struct Compliance {
+    long_term: f64,
+    /// (1/(s_j F′(s_j)), s_j).
+    terms: Vec<(f64, f64)>,
+}
+
+impl Compliance {
+    /// Of f(t) = `long_term` + Σ f_i e^{−t/ρ_i} for `terms` (f_i, ρ_i): one root of F in each gap
+    /// between the poles and one between the slowest pole and 0, by bisection in log|s|.
+    pub fn of(long_term: f64, terms: &[(f64, f64)]) -> Self {
+        let f = |s: f64| long_term + terms.iter().map(|(fi, rho)| fi * s / (s + 1.0 / rho)).sum::<f64>();
+        let df = |s: f64| {
+            terms
+                .iter()
+                .map(|(fi, rho)| fi / rho / (s + 1.0 / rho).powi(2))
+                .sum::<f64>()
+        };
+        let mut poles: Vec<f64> = terms.iter().map(|(_, rho)| 1.0 / rho).collect();
+        poles.sort_by(f64::total_cmp);
+        let mut roots = Vec::new();
+        for i in 0..poles.len() {
+            // s in (−poles[i], −poles[i−1]), or (−poles[0], 0), as s = −e^x: F decreases in x
+            let (mut a, mut b) = (
+                if i == 0 {
+                    (poles[0] * 1e-30).ln()
+                } else {
+                    poles[i - 1].ln()
+                },
+                poles[i].ln(),
+            );
+            for _ in 0..200 {
+                let mid = 0.5 * (a + b);
+                if f(-mid.exp()) > 0.0 {
+                    a = mid;
+                } else {
+                    b = mid;
+                }
+            }
+            roots.push(-(0.5 * (a + b)).exp());
+        }
+        Compliance {
+            long_term: 1.0 / long_term,
+            terms: roots.iter().map(|&s| (1.0 / (s * df(s)), s)).collect(),
+        }
+    }
+
+    /// The asphalt's uniaxial creep compliance D(t) (of its E(t)).
+    pub fn asphalt() -> Self {
+        Self::of(ASPHALT_E_INF, &ASPHALT)
+    }
+
+    /// D(t).
+    pub fn at(&self, t: f64) -> f64 {
+        self.long_term + self.terms.iter().map(|(c, s)| c * (s * t).exp()).sum::<f64>()
+    }
+}
