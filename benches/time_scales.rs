@@ -18,17 +18,15 @@
 //! Prints a markdown table (the one in README and docs/method.md §20.5).
 
 use hvi::app::solve_in_memory;
-use hvi::mesh::structured::{block, SolidShape};
-use hvi::mesh::{Facet, Mesh, PhysicalGroup};
 use hvi::scene::Scene;
 use std::path::PathBuf;
 use std::time::Instant;
 
-#[path = "../tests/support/asphalt.rs"]
-mod asphalt;
-use asphalt::{Compliance, ASPHALT};
-const E_INF: f64 = asphalt::ASPHALT_E_INF;
-const NU: f64 = asphalt::ASPHALT_NU;
+#[path = "../tests/support/creep.rs"]
+mod creep;
+use creep::{creep_cube, uniaxial_scene, Compliance, ASPHALT};
+const E_INF: f64 = creep::ASPHALT_E_INF;
+const NU: f64 = creep::ASPHALT_NU;
 const SIGMA0: f64 = 0.1;
 const TARGET: f64 = 1e-3;
 
@@ -47,32 +45,6 @@ fn material() -> String {
     )
 }
 
-fn cube() -> Mesh<3> {
-    let mut m = block([1.0; 3], [1, 1, 1], SolidShape::Hex);
-    for (from, name, axis, at) in [("Gamma2", "X1", 0, 1.0), ("Sides", "Z0", 2, 0.0)] {
-        let facets: Vec<Facet> = m
-            .groups
-            .iter()
-            .find(|g| g.name.as_deref() == Some(from))
-            .unwrap()
-            .facets
-            .iter()
-            .filter(|f| f.nodes().iter().all(|&p| (m.points[p][axis] - at).abs() < 1e-12))
-            .cloned()
-            .collect();
-        let tag = 100 + m.groups.len() as i32;
-        m.groups.push(PhysicalGroup {
-            dim: 2,
-            tag,
-            name: Some(name.into()),
-            facets,
-            cells: vec![],
-            nodes: vec![],
-        });
-    }
-    m
-}
-
 /// A way of stepping and its levels, coarse to fine: the `[time]` keys of each.
 struct Way {
     name: &'static str,
@@ -83,15 +55,14 @@ struct Way {
 type Outcome = Result<(f64, usize, usize, f64), String>;
 
 fn creep(time: &str, d: &Compliance) -> Outcome {
-    let text = format!(
-        "{}[time]\nfinal_time = 1.5e8\n{time}\n[[dirichlet]]\ngroup = \"Gamma1\"\ncomponents = [\"x\"]\n\
-         [[dirichlet]]\ngroup = \"Gamma3\"\ncomponents = [\"y\"]\n[[dirichlet]]\ngroup = \"Z0\"\ncomponents = [\"z\"]\n\
-         [[traction]]\ngroup = \"X1\"\nvalue = [\"{SIGMA0:e}\", \"0\", \"0\"]\n",
-        material()
+    let text = uniaxial_scene(
+        &material(),
+        &format!("final_time = 1.5e8\n{time}"),
+        &format!("{SIGMA0:e}"),
     );
     let scene = Scene::from_toml_str(&text, "creep.toml").map_err(|e| e.to_string())?;
     let started = Instant::now();
-    let (sim, stats, sink) = solve_in_memory(&scene, cube()).map_err(|e| e.to_string())?;
+    let (sim, stats, sink) = solve_in_memory(&scene, creep_cube()).map_err(|e| e.to_string())?;
     let seconds = started.elapsed().as_secs_f64();
     let corner = sim.mesh.points.iter().position(|p| (p[0] - 1.0).abs() < 1e-12).unwrap();
     let error = sink

@@ -6,11 +6,12 @@ use hvi::mesh::{Cell, Facet, Mesh, PhysicalGroup};
 use hvi::scene::Scene;
 use std::process::{Command, Output};
 
-// the asphalt's data and the creep compliance of a Prony series (shared with benches/time_scales.rs)
-#[path = "support/asphalt.rs"]
-mod asphalt;
+// the asphalt's data, the creep compliance of a Prony series and the creep cube (shared with
+// benches/time_scales.rs)
+#[path = "support/creep.rs"]
+mod creep;
 #[allow(unused_imports)] // (each test crate uses its share of common.rs)
-pub use asphalt::{Compliance, ASPHALT, ASPHALT_E_INF, ASPHALT_NU};
+pub use creep::{creep_cube, sub_group, uniaxial_scene, Compliance, ASPHALT, ASPHALT_E_INF, ASPHALT_NU};
 
 /// Runs the hvi binary with `args` and asserts it succeeded (the message shows its stderr).
 pub fn hvi_ok(args: &[&str]) -> Output {
@@ -361,28 +362,4 @@ pub fn hertz_3d_hexahedra(fine: usize, ratio: f64) -> Mesh<3> {
     let body = mesh.groups.iter().find(|g| g.dim == 3).unwrap().clone();
     mesh.groups = groups.into_iter().chain([body]).collect();
     mesh
-}
-
-/// The faces of group `from` whose nodes all satisfy `keep`, as a new group `name` (a side of a
-/// structured block or rectangle).
-pub fn sub_group<const D: usize>(mesh: &mut Mesh<D>, from: &str, name: &str, keep: impl Fn(&[f64; D]) -> bool) {
-    let facets: Vec<Facet> = mesh
-        .groups
-        .iter()
-        .find(|g| g.name.as_deref() == Some(from))
-        .unwrap()
-        .facets
-        .iter()
-        .filter(|f| f.nodes().iter().all(|&p| keep(&mesh.points[p])))
-        .cloned()
-        .collect();
-    let tag = 100 + mesh.groups.len() as i32;
-    mesh.groups.push(PhysicalGroup {
-        dim: (D - 1) as u8,
-        tag,
-        name: Some(name.into()),
-        facets,
-        cells: vec![],
-        nodes: vec![],
-    });
 }

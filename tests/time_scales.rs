@@ -14,10 +14,9 @@
 
 mod common;
 
-use common::{scene, sub_group, Compliance, ASPHALT, ASPHALT_E_INF, ASPHALT_NU};
+use common::{creep_cube, scene, uniaxial_scene, Compliance, ASPHALT, ASPHALT_E_INF, ASPHALT_NU};
 use hvi::app::solve_in_memory;
 use hvi::mesh::structured::{block, SolidShape};
-use hvi::mesh::Mesh;
 
 const E_INF: f64 = ASPHALT_E_INF;
 const NU: f64 = ASPHALT_NU;
@@ -40,26 +39,6 @@ fn proportional_material(plane: Option<&str>, e_inf: f64, terms: &[(f64, f64)]) 
         plane.map_or(String::new(), |p| format!("plane = \"{p}\"\n")),
         series(kb),
         series(kg)
-    )
-}
-
-/// The unit cube on rollers (u_x = 0 on x = 0, u_y = 0 on y = 0, u_z = 0 on z = 0), pulled by σ(t)
-/// on x = 1: uniaxial stress, ε_xx(t) = (σ * dD)(t) whatever the steps (the fields are linear,
-/// exact on the cells).
-fn cube() -> Mesh<3> {
-    let mut m = block([1.0; 3], [1, 1, 1], SolidShape::Hex);
-    sub_group(&mut m, "Gamma2", "X1", |p| (p[0] - 1.0).abs() < 1e-12);
-    sub_group(&mut m, "Sides", "Z0", |p| p[2].abs() < 1e-12);
-    m
-}
-
-fn uniaxial_scene(material: &str, time: &str, stress: &str) -> String {
-    format!(
-        "{material}[time]\n{time}\n\
-         [[dirichlet]]\ngroup = \"Gamma1\"\ncomponents = [\"x\"]\n\
-         [[dirichlet]]\ngroup = \"Gamma3\"\ncomponents = [\"y\"]\n\
-         [[dirichlet]]\ngroup = \"Z0\"\ncomponents = [\"z\"]\n\
-         [[traction]]\ngroup = \"X1\"\nvalue = [\"{stress}\", \"0\", \"0\"]\n"
     )
 }
 
@@ -119,7 +98,7 @@ fn asphalt_creeps_as_its_compliance_on_growing_steps() {
         "final_time = 1.5e8\nfirst_step = 1.5e-13\nsteps_per_decade = 19",
         &format!("{SIGMA0:e}"),
     );
-    let (sim, stats, sink) = solve_in_memory(&scene(&text), cube()).unwrap();
+    let (sim, stats, sink) = solve_in_memory(&scene(&text), creep_cube()).unwrap();
     let series = strains(&sim, &sink);
     assert!(series.len() <= 401, "{} steps", series.len() - 1);
     assert_eq!(stats.factorisations, 1, "one factorisation for the run");
@@ -248,7 +227,7 @@ fn bulk_and_shear_creep_at_their_own_times() {
         "final_time = 1e4\nfirst_step = 1e-7\nsteps_per_decade = 25",
         &format!("{SIGMA0:e}"),
     );
-    let (sim, stats, sink) = solve_in_memory(&scene(&text), cube()).unwrap();
+    let (sim, stats, sink) = solve_in_memory(&scene(&text), creep_cube()).unwrap();
     assert_eq!(sim.materials.memory().unwrap().channels().len(), 2);
     let (dk, dg) = (Compliance::of(bulk.0, &bulk.1), Compliance::of(shear.0, &shear.1));
     let exact = |t: f64| SIGMA0 * (dk.at(t) / 9.0 + dg.at(t) / 3.0);
@@ -302,7 +281,7 @@ fn automatic_steps_follow_a_load_that_jumps() {
     let largest = SIGMA0 * d.at(1e6);
     let worst = |time: &str| {
         let text = uniaxial_scene(&material, time, &stress);
-        let (sim, stats, sink) = solve_in_memory(&scene(&text), cube()).unwrap();
+        let (sim, stats, sink) = solve_in_memory(&scene(&text), creep_cube()).unwrap();
         let run = strains(&sim, &sink);
         let worst = run
             .iter()

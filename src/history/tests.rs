@@ -143,23 +143,31 @@ fn exact_rule_integrates_the_piecewise_linear_displacement() {
     };
     for kernel in kernels().into_iter().take(3) {
         let memory = Memory::identity(kernel, &elasticity());
-        let mut h = History::new(&memory, 1, rules);
-        let mut out = [0.0];
-        for n in 0..times.len() {
-            let k = if n == 0 { 0.0 } else { times[n] - times[n - 1] };
-            h.begin(times[n], k);
-            h.memory_load(0, &mut out);
-            let beta = memory.step_coefficients(k, rules)[0];
-            let got = out[0] + beta * us[n];
+        let algorithm = History::new(&memory, 1, rules).algorithm();
+        for (n, got) in memory_integrals(&memory, rules, &times, &us).into_iter().enumerate() {
             let want = linear_integral(&|s| memory.kernel_value(0, s), &times, &us, n);
             assert!(
                 (got - want).abs() <= 1e-12 * (1.0 + want.abs()),
-                "{} n={n}: {got} vs {want}",
-                h.algorithm()
+                "{algorithm} n={n}: {got} vs {want}"
             );
-            h.push(&[us[n]]);
         }
     }
+}
+
+/// m_n = h_n + β_n u_n of channel 0 at every level: what the step solves with.
+fn memory_integrals(memory: &Memory, rules: Rules, times: &[f64], us: &[f64]) -> Vec<f64> {
+    let mut h = History::new(memory, 1, rules);
+    let mut out = [0.0];
+    (0..times.len())
+        .map(|n| {
+            let k = if n == 0 { 0.0 } else { times[n] - times[n - 1] };
+            h.begin(times[n], k);
+            h.memory_load(0, &mut out);
+            let m = out[0] + memory.step_coefficients(k, rules)[0] * us[n];
+            h.push(&[us[n]]);
+            m
+        })
+        .collect()
 }
 
 /// A held displacement: the exact rule gives c τ (1 − e^{−t/τ}) to round-off on steps from 10⁻⁸ τ
@@ -179,20 +187,14 @@ fn exact_rule_is_exact_for_a_held_displacement_on_any_steps() {
         exponential: Quadrature::Exact,
         polynomial: Quadrature::Trapezoid,
     };
-    let mut h = History::new(&memory, 1, rules);
-    let mut out = [0.0];
-    for n in 0..times.len() {
-        let k = if n == 0 { 0.0 } else { times[n] - times[n - 1] };
-        h.begin(times[n], k);
-        h.memory_load(0, &mut out);
-        let got = out[0] + memory.step_coefficients(k, rules)[0];
+    let held = vec![1.0; times.len()];
+    for (n, got) in memory_integrals(&memory, rules, &times, &held).into_iter().enumerate() {
         let want = -2.0 * tau * -(-times[n] / tau).exp_m1();
         assert!(
             (got - want).abs() <= 4e-15 * want.abs().max(1e-300),
             "t = {:e}: {got} vs {want}",
             times[n]
         );
-        h.push(&[1.0]);
     }
     assert!(times.last().unwrap() / tau > 1e4);
 }

@@ -38,3 +38,13 @@ pub enum SceneError {
     #[error("--set {text}: {reason} (expected KEY=VALUE, e.g. --set time.steps=64)")]
     Override { text: String, reason: String },
 }
+
+/// The error of a value out of range: the scene (`origin`), the key, the value and the fix.
+pub(super) fn invalid(origin: &str, key: &str, value: impl std::fmt::Display, fix: &str) -> SceneError {
+    SceneError::Invalid {
+        origin: origin.into(),
+        key: key.into(),
+        value: value.to_string(),
+        fix: fix.into(),
+    }
+}

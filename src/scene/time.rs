@@ -1,7 +1,7 @@
 //! `[time]` and `output.times` (docs/method.md §20, docs/scenes.md "Time steps"): which way of
 //! stepping the scene asks for, its values in range, and the memory's quadrature.
 
-use super::error::SceneError;
+use super::error::{invalid, SceneError};
 use super::types::{QuadratureSpec, Scene, TimeSpec};
 use crate::material::{Quadrature, Rules};
 use crate::time::Stepping;
@@ -10,13 +10,10 @@ use crate::time::Stepping;
 /// there too).
 pub const MOST_STEPS: usize = 100_000_000;
 
-fn invalid(origin: &str, key: &str, value: impl std::fmt::Display, fix: &str) -> SceneError {
-    SceneError::Invalid {
-        origin: origin.into(),
-        key: key.into(),
-        value: value.to_string(),
-        fix: fix.into(),
-    }
+/// The keys of `pairs` (key, given) that are given, in order: what a message about keys that
+/// exclude each other names.
+pub(super) fn given_keys<'a>(pairs: &[(&'a str, bool)]) -> Vec<&'a str> {
+    pairs.iter().filter(|(_, g)| *g).map(|(k, _)| *k).collect()
 }
 
 /// A positive, finite value of `time.<key>`.
@@ -48,16 +45,12 @@ impl TimeSpec {
         if !(t.is_finite() && t > 0.0) {
             return Err(invalid(origin, "time.final_time", t, "the final time must be positive"));
         }
-        let given: Vec<&str> = [
+        let given = given_keys(&[
             ("steps", self.steps.is_some()),
             ("first_step", self.first_step.is_some() && self.tolerance.is_none()),
             ("times", self.times.is_some()),
             ("tolerance", self.tolerance.is_some()),
-        ]
-        .iter()
-        .filter(|(_, g)| *g)
-        .map(|(k, _)| *k)
-        .collect();
+        ]);
         let ways = "steps = N (uniform), first_step = k₁ with steps_per_decade = s or growth = g (steps growing \
                     with time), times = [t₁, t₂, …] (listed), or tolerance = e (automatic steps)";
         if given.len() != 1 {

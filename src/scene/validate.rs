@@ -4,7 +4,7 @@
 //! Over 600 lines because it is one pass: every value of every section, with a message that names
 //! the key, the value and the fix.
 
-use super::error::SceneError;
+use super::error::{invalid, SceneError};
 use super::types::{
     BoundSpec, Constants, ContactDirection, ContactLawSpec, LawKind, MemoryKernelSpec, MemorySpec, ObstacleSpec, Scene,
     TensorSpec, BOUND_VARIABLES,
@@ -239,15 +239,6 @@ fn walk(value: &Value, path: &str, shown: &str, origin: &str) -> Result<(), Scen
             .try_for_each(|(i, v)| walk(v, path, &format!("{shown}[{i}]"), origin)),
         Value::Array(items) => items.iter().try_for_each(|v| walk(v, path, shown, origin)),
         _ => Ok(()),
-    }
-}
-
-fn invalid(origin: &str, key: &str, value: impl std::fmt::Display, fix: &str) -> SceneError {
-    SceneError::Invalid {
-        origin: origin.into(),
-        key: key.into(),
-        value: value.to_string(),
-        fix: fix.into(),
     }
 }
 
@@ -570,16 +561,12 @@ fn check_material(m: &Constants, origin: &str) -> Result<(), SceneError> {
                 vec![("youngs", e)]
             }
             _ => {
-                let keys: Vec<&str> = [
+                let keys = super::time::given_keys(&[
                     ("bulk", r.bulk.is_some()),
                     ("shear", r.shear.is_some()),
                     ("youngs", r.youngs.is_some()),
                     ("poisson_ratio", r.poisson_ratio.is_some()),
-                ]
-                .iter()
-                .filter(|(_, g)| *g)
-                .map(|(k, _)| *k)
-                .collect();
+                ]);
                 let with = if keys.is_empty() {
                     "nothing".to_string()
                 } else {

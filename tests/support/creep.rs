@@ -1,7 +1,55 @@
-//! The asphalt concrete of examples/gallery/asphalt and the creep compliance of a Prony series:
-//! the exact solutions of docs/method.md §20's tests and benchmark (tests/common.rs and
-//! benches/time_scales.rs include this file).
+//! The asphalt concrete of examples/gallery/asphalt, the creep compliance of a Prony series, and
+//! the cube of a uniaxial creep test: the exact solutions and the test bodies of docs/method.md
+//! §20's tests and benchmark (tests/common.rs and benches/time_scales.rs include this file).
 #![allow(dead_code)]
+
+use hvi::mesh::structured::{block, SolidShape};
+use hvi::mesh::{Facet, Mesh, PhysicalGroup};
+
+/// The faces of group `from` whose nodes all satisfy `keep`, as a new group `name` (a side of a
+/// structured block or rectangle).
+pub fn sub_group<const D: usize>(mesh: &mut Mesh<D>, from: &str, name: &str, keep: impl Fn(&[f64; D]) -> bool) {
+    let facets: Vec<Facet> = mesh
+        .groups
+        .iter()
+        .find(|g| g.name.as_deref() == Some(from))
+        .unwrap()
+        .facets
+        .iter()
+        .filter(|f| f.nodes().iter().all(|&p| keep(&mesh.points[p])))
+        .cloned()
+        .collect();
+    let tag = 100 + mesh.groups.len() as i32;
+    mesh.groups.push(PhysicalGroup {
+        dim: (D - 1) as u8,
+        tag,
+        name: Some(name.into()),
+        facets,
+        cells: vec![],
+        nodes: vec![],
+    });
+}
+
+/// The unit cube (one hexahedron) of a uniaxial test: the block's groups and X1 (x = 1), Z0 (z = 0).
+pub fn creep_cube() -> Mesh<3> {
+    let mut m = block([1.0; 3], [1, 1, 1], SolidShape::Hex);
+    sub_group(&mut m, "Gamma2", "X1", |p| (p[0] - 1.0).abs() < 1e-12);
+    sub_group(&mut m, "Sides", "Z0", |p| p[2].abs() < 1e-12);
+    m
+}
+
+/// The cube on rollers (u_x = 0 on x = 0, u_y = 0 on y = 0, u_z = 0 on z = 0) pulled by the stress
+/// σ(t) (an expression of t) on x = 1: uniaxial stress, ε_xx(t) = (σ * dD)(t) whatever the steps
+/// (the fields are linear, exact on the cell). `material` and `time` are the scene's sections.
+pub fn uniaxial_scene(material: &str, time: &str, stress: &str) -> String {
+    format!(
+        "{material}[time]\n{time}\n\
+         [[dirichlet]]\ngroup = \"Gamma1\"\ncomponents = [\"x\"]\n\
+         [[dirichlet]]\ngroup = \"Gamma3\"\ncomponents = [\"y\"]\n\
+         [[dirichlet]]\ngroup = \"Z0\"\ncomponents = [\"z\"]\n\
+         [[traction]]\ngroup = \"X1\"\nvalue = [\"{stress}\", \"0\", \"0\"]\n"
+    )
+}
 
 /// (E_i [MPa], ρ_i [s]) of the asphalt concrete of examples/gallery/asphalt: Gibson, Schwartz,
 /// Schapery & Witczak, Transportation Research Record 1860 (2003) 3–15, as transcribed in the public
