@@ -286,3 +286,55 @@ fn local_error_is_the_quadratic_interpolants_excess() {
         }
     }
 }
+
+/// On uniform steps the trapezoid is the uniform scheme's arithmetic bit for bit — what keeps the
+/// paper's outputs byte-identical (docs/method.md §20.2): the recursions as they were before steps
+/// of any size (u_n's weight ω_n ∈ {½, 1} added when u_n is pushed, then the shift by k; h_n =
+/// k Σ c S), written out here, against [`History`] with `==` on every h_n.
+#[test]
+fn the_uniform_trapezoid_is_the_old_arithmetic_bit_for_bit() {
+    let k = 1.0f64 / 32.0;
+    let us: Vec<f64> = (0..100).map(|i| (0.37 * i as f64).sin() + 0.1 * i as f64 * k).collect();
+    let times: Vec<f64> = (0..us.len()).map(|n| n as f64 * k).collect();
+    let (a, terms) = ([0.25, 1.0, 1.0], [(0.5, 0.1), (0.25, 1.0)]);
+    for kernel in [
+        RelaxationKernel::Polynomial {
+            coefficients: a.to_vec(),
+        },
+        RelaxationKernel::Exponentials { terms: terms.to_vec() },
+    ] {
+        let polynomial = matches!(kernel, RelaxationKernel::Polynomial { .. });
+        let memory = Memory::identity(kernel, &elasticity());
+        let (mut moments, mut sums) = (vec![0.0f64; a.len()], vec![0.0f64; terms.len()]);
+        let mut h = History::new(&memory, 1, Rules::TRAPEZOID);
+        let mut out = [0.0];
+        for (n, &u) in us.iter().enumerate() {
+            h.begin(times[n], if n == 0 { 0.0 } else { k });
+            h.memory_load(0, &mut out);
+            let old: f64 = if polynomial {
+                a.iter().zip(&moments).map(|(c, p)| k * c * p).fold(0.0, |s, v| s + v)
+            } else {
+                terms
+                    .iter()
+                    .zip(&sums)
+                    .map(|((c, _), s)| k * c * s)
+                    .fold(0.0, |s, v| s + v)
+            };
+            assert_eq!(out[0].to_bits(), old.to_bits(), "n = {n}: {} against {old}", out[0]);
+            h.push(&[u]);
+            let omega = if n == 0 { 0.5 } else { 1.0 };
+            moments[0] += omega * u;
+            for j in (1..moments.len()).rev() {
+                let mut binom = 1.0;
+                for l in (0..j).rev() {
+                    binom = binom * (l + 1) as f64 / (j - l) as f64;
+                    let add = binom * k.powi((j - l) as i32) * moments[l];
+                    moments[j] += add;
+                }
+            }
+            for ((_, tau), s) in terms.iter().zip(sums.iter_mut()) {
+                *s = (-k / tau).exp() * (*s + omega * u);
+            }
+        }
+    }
+}
