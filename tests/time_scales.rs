@@ -305,3 +305,27 @@ fn automatic_steps_follow_a_load_that_jumps() {
     assert!(steps_geometric > steps, "{steps_geometric} against {steps}");
     assert!(error > 2e-3, "geometric steps miss the jumps: {error:e}");
 }
+
+/// Automatic steps that cannot meet the tolerance above the smallest step stop with a message that
+/// names the time, the size needed, `time.min_step` and what to do (docs/method.md §20.4): the
+/// jump of the test above with steps no shorter than a second.
+#[test]
+fn automatic_steps_below_their_smallest_are_an_error() {
+    let text = uniaxial_scene(
+        &proportional_material(None, E_INF, &ASPHALT),
+        "final_time = 1e3\ntolerance = 1e-4\nfirst_step = 1.0\nmin_step = 1.0",
+        &format!("{SIGMA0:e}*(t < 10.5)"),
+    );
+    let e = solve_in_memory(&scene(&text), creep_cube())
+        .err()
+        .expect("refused")
+        .to_string();
+    for part in [
+        "automatic steps would need a step of",
+        "time.min_step = 1.000e0",
+        "time.tolerance",
+        "output.times",
+    ] {
+        assert!(e.contains(part), "`{part}` missing from: {e}");
+    }
+}

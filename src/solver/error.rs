@@ -54,7 +54,7 @@ pub enum SolveError {
     #[error("step {step} (t = {time}) produced a non-finite {what}: the results overflow double precision or the data are not finite; check the load expressions and material data of the scene (work in units in which loads and moduli are moderate numbers)")]
     NonFinite { step: usize, time: f64, what: String },
     /// Automatic steps that cannot meet the tolerance above the smallest step (docs/method.md §20.4).
-    #[error("at t = {time:e} automatic steps would need a step of {size:.3e} to meet time.tolerance, below the smallest step time.min_step = {smallest:.3e}: the displacement changes faster there than the memory can follow at this tolerance (a load that jumps, contact that snaps); allow smaller steps (time.min_step), loosen time.tolerance, or put a time level where the load jumps (output.times)")]
+    #[error("at t = {time} automatic steps would need a step of {size:.3e} to meet time.tolerance, below the smallest step time.min_step = {smallest:.3e}: the displacement changes faster there than the memory can follow at this tolerance (a load that jumps, contact that snaps); allow smaller steps (time.min_step), loosen time.tolerance, or put a time level where the load jumps (output.times)")]
     StepTooSmall { time: f64, size: f64, smallest: f64 },
     #[error("run interrupted; {}", match last_written { Some(n) => format!("the frames up to step {n} and the .pvd listing them are valid"), None => "no frame was written".to_string() })]
     Interrupted { last_written: Option<usize> },
